@@ -1,0 +1,62 @@
+/**
+ * @file trn_config.h
+ * @brief Compile-time maxima and build options of the trn core.
+ *
+ * Works like lwIP's opt.h: if the integrator defines TRN_USER_CONFIG_H (for
+ * example `-DTRN_USER_CONFIG_H="rover_trn_opts.h"`), that header is read first
+ * and may override any value below; every value here is a guarded default; an
+ * inconsistent configuration stops the build with #error.
+ */
+#ifndef TRN_CONFIG_H
+#define TRN_CONFIG_H
+
+#ifdef TRN_USER_CONFIG_H
+#include TRN_USER_CONFIG_H
+#endif
+
+/** Largest grid side, in cells, any module accepts (x or y). */
+#ifndef TRN_MAX_DIM
+#define TRN_MAX_DIM 4096
+#endif
+
+/** Largest number of height bins of an occupancy volume. */
+#ifndef TRN_MAX_ZBINS
+#define TRN_MAX_ZBINS 128
+#endif
+
+/**
+ * Largest chamfer distance stored, in chamfer units (one face step = 3).
+ * Distances are stored in uint8_t and step weights go up to 5, so the cap
+ * must leave room: cap + 5 <= 255.
+ */
+#ifndef TRN_CHAMFER_CAP_MAX
+#define TRN_CHAMFER_CAP_MAX 250
+#endif
+
+/** Largest number of branch-and-bound pyramid levels (blocks of 2^L poses). */
+#ifndef TRN_MAX_LEVELS
+#define TRN_MAX_LEVELS 6
+#endif
+
+/** Fixed-point scale of log-likelihood tables: table units per nat. */
+#ifndef TRN_LNP_SCALE
+#define TRN_LNP_SCALE 65536
+#endif
+
+#if TRN_MAX_DIM < 8 || TRN_MAX_DIM > 32767
+#error "TRN_MAX_DIM must be in [8, 32767] (coordinates are int16_t/int32_t)"
+#endif
+#if TRN_MAX_ZBINS < 1 || TRN_MAX_ZBINS > 255
+#error "TRN_MAX_ZBINS must be in [1, 255]"
+#endif
+#if TRN_CHAMFER_CAP_MAX < 3 || TRN_CHAMFER_CAP_MAX > 250
+#error "TRN_CHAMFER_CAP_MAX must be in [3, 250] (uint8_t storage, steps up to 5)"
+#endif
+#if TRN_MAX_LEVELS < 1 || TRN_MAX_LEVELS > 10
+#error "TRN_MAX_LEVELS must be in [1, 10]"
+#endif
+#if TRN_LNP_SCALE < 1024 || TRN_LNP_SCALE > 1048576
+#error "TRN_LNP_SCALE must be in [1024, 1048576]"
+#endif
+
+#endif /* TRN_CONFIG_H */
