@@ -1,0 +1,121 @@
+/**
+ * @file localize.h
+ * @brief End-to-end terrain-matching localization (paper section 2):
+ * global DEM -> prepared map (high-pass, occupancy, chamfer transform, K,
+ * ln p table, search pyramid); local DEM or local occupancy + prior pose
+ * window -> maximum-likelihood pose, covariance (eq. 6), failure probability.
+ *
+ * Frames: poses are global-map cells (x = column, y = row). A local map is
+ * given relative to the rover: local point (x, y) sits x columns and y rows
+ * from the rover's cell, in the global map's orientation (heading is known
+ * from other sensors, paper section 2) and at the global map's cell size.
+ */
+#ifndef TRN_LOCALIZE_H
+#define TRN_LOCALIZE_H
+
+#include "trn/chamfer.h"
+#include "trn/likelihood.h"
+#include "trn/peakfit.h"
+#include "trn/terrain.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Everything that shapes a prepared map. */
+typedef struct {
+    trn_terrain_cfg_t terrain;   /**< filter and occupancy (cell_m is the map's cell) */
+    float sigma_m;               /**< inlier standard deviation s, metres */
+    float inlier_prob;           /**< a, (0, 1) */
+    uint8_t cap;                 /**< chamfer cap, chamfer units (3 per cell) */
+    int32_t levels;              /**< pyramid levels of the fast search, 1..TRN_MAX_LEVELS */
+    int32_t min_exclusion_cells; /**< least radius around the best pose excluded when
+                                      looking for the competing hypothesis, 1..TRN_MAX_DIM */
+} trn_map_cfg_t;
+
+/** A prepared global map. All pointers point into the caller's buffer. */
+typedef struct {
+    trn_map_cfg_t cfg;
+    trn_vol_u8_t dist;     /**< chamfer distances of the global occupancy */
+    trn_pyramid_t pyr;     /**< min-filtered distances for branch-and-bound */
+    trn_lnp_table_t lnp;   /**< ln p(d), with K of this map */
+    uint32_t n_occupied;   /**< occupied voxels of the global map */
+} trn_map_t;
+
+/** Result of one localization. Pose values are global cells. */
+typedef struct {
+    double x, y;                      /**< ML pose, subpixel (ix + dx, iy + dy) */
+    int32_t ix, iy;                   /**< best integer pose */
+    double sigma_x_m, sigma_y_m, rho; /**< eq. 6 fit; +inf sigmas when ill-conditioned */
+    double cov_m2[3];                 /**< var_x, var_y, cov_xy in m^2 */
+    double ll_best;                   /**< ln L at (ix, iy), nats */
+    double ll_second;                 /**< ln L of the best pose outside the exclusion zone */
+    int32_t second_x, second_y;       /**< that pose (valid when has_second) */
+    int32_t has_second;               /**< 0 when the window holds no pose outside the zone */
+    int32_t exclusion_cells;          /**< radius of the zone around (ix, iy) */
+    double failure_probability;       /**< trn_failure_probability; 0 without a second */
+    int32_t on_window_edge;           /**< best pose on the window border: truth may lie outside */
+    size_t n_points;                  /**< occupied local voxels matched */
+    trn_search_stats_t stats;         /**< work of the first search */
+} trn_loc_result_t;
+
+/** @brief Defaults used by the tools: 0.1 m cells and bins, 1 m high-pass
+ * half-width, 16 bins, s = 0.1 m, a = 0.95, cap 60 (20 cells), 4 levels,
+ * exclusion at least 2 cells. */
+void trn_map_cfg_default(trn_map_cfg_t *cfg);
+
+/** @brief Check a map configuration. @retval TRN_OK, TRN_E_NULL, TRN_E_ARG, TRN_E_SIZE. */
+trn_status_t trn_map_cfg_check(const trn_map_cfg_t *cfg);
+
+/** @brief Buffer bytes trn_map_build needs for a width x height DEM (0 if invalid). */
+size_t trn_map_bytes(const trn_map_cfg_t *cfg, int32_t width, int32_t height);
+
+/**
+ * @brief Prepare a global map from its DEM (NaN / inf = not seen).
+ * @param[out] map  filled; valid while buf lives and is unchanged.
+ * @param[in]  buf  trn_map_bytes() bytes, 16-byte aligned.
+ * @retval TRN_OK
+ * @retval TRN_E_NULL, TRN_E_SIZE, TRN_E_ARG, TRN_E_WORKSPACE
+ * @retval TRN_E_NODATA the DEM has no valid height
+ */
+trn_status_t trn_map_build(trn_map_t *map, const trn_map_cfg_t *cfg, const trn_grid_f32_t *dem,
+                           void *buf, size_t len);
+
+/** @brief Workspace bytes of trn_localize_points for this window (0 if invalid). */
+size_t trn_localize_workspace_bytes(const trn_map_t *map, const trn_window_t *win);
+
+/**
+ * @brief Localize a local occupancy (point list relative to the rover) in
+ * the prior window of rover poses.
+ * @retval TRN_OK
+ * @retval TRN_E_ILLCOND the best pose is found (ix, iy, ll_best, failure
+ *         probability are valid) but the peak has no finite covariance
+ * @retval TRN_E_NULL, TRN_E_ARG, TRN_E_SIZE, TRN_E_WORKSPACE
+ * @retval TRN_E_RANGE  window not inside the map
+ * @retval TRN_E_NODATA no points
+ */
+trn_status_t trn_localize_points(const trn_map_t *map, const trn_point_t *pts, size_t n,
+                                 const trn_window_t *win, void *ws, size_t ws_bytes,
+                                 trn_loc_result_t *out);
+
+/** @brief Workspace bytes of trn_localize_dem (0 if invalid). */
+size_t trn_localize_dem_workspace_bytes(const trn_map_t *map, int32_t width, int32_t height,
+                                        size_t max_points, const trn_window_t *win);
+
+/**
+ * @brief Localize a local DEM: high-pass and occupancy with the map's
+ * terrain configuration, then trn_localize_points.
+ * @param[in] rover_x, rover_y the rover's cell in local_dem's grid.
+ * @param[in] max_points       largest local occupancy accepted.
+ * @retval as trn_localize_points, plus TRN_E_CAPACITY (more than max_points
+ *         occupied voxels) and TRN_E_NODATA (local DEM all missing).
+ */
+trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_dem,
+                              int32_t rover_x, int32_t rover_y, size_t max_points,
+                              const trn_window_t *win, void *ws, size_t ws_bytes,
+                              trn_loc_result_t *out);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* TRN_LOCALIZE_H */

@@ -1,0 +1,624 @@
+/* likelihood.c - ln p(d) table, K, pose scoring and the two pose searches
+ * (see trn/likelihood.h). */
+#include "trn/likelihood.h"
+
+#include <math.h>
+
+#define TRN_SQRT_2PI 2.5066282746310002
+
+/* One level of distances as the scorer sees it: voxel (x, y, z) of the map
+ * is d[((z * dimy) + y + off) * dimx + x + off]; outside -> cap. */
+typedef struct {
+    const uint8_t *d;
+    int32_t dimx, dimy, nz, off;
+    uint8_t cap;
+} level_view_t;
+
+typedef struct {
+    int32_t minx, maxx, miny, maxy;
+} bbox_t;
+
+trn_status_t trn_lik_cfg_check(const trn_lik_cfg_t *cfg)
+{
+    if (cfg == NULL) {
+        return TRN_E_NULL;
+    }
+    if (!(cfg->cell_m > 0.0f && cfg->cell_m <= 1000.0f) ||
+        !(cfg->sigma_m > 0.0f && cfg->sigma_m <= 1000.0f) ||
+        !(cfg->inlier_prob > 0.0f && cfg->inlier_prob < 1.0f) || cfg->cap < 3u ||
+        cfg->cap > TRN_CHAMFER_CAP_MAX) {
+        return TRN_E_ARG;
+    }
+    return TRN_OK;
+}
+
+/* ln p1(d) for a distance in chamfer units. */
+static double ln_p1(uint32_t dc, const trn_lik_cfg_t *cfg)
+{
+    double d_m = (double)dc / 3.0 * (double)cfg->cell_m;
+    double s = (double)cfg->sigma_m;
+    return -(d_m * d_m) / (2.0 * s * s) - log(s * TRN_SQRT_2PI);
+}
+
+trn_status_t trn_outlier_density(const trn_vol_u8_t *dist, const trn_lik_cfg_t *cfg,
+                                 double *k_per_m)
+{
+    uint32_t hist[TRN_CHAMFER_CAP_MAX + 1];
+    trn_status_t st;
+    size_t i, total;
+    double k = 0.0;
+    uint32_t d;
+
+    if (dist == NULL || cfg == NULL || k_per_m == NULL) {
+        return TRN_E_NULL;
+    }
+    if ((st = trn_vol_u8_check(dist)) != TRN_OK || (st = trn_lik_cfg_check(cfg)) != TRN_OK) {
+        return st;
+    }
+    for (d = 0; d <= TRN_CHAMFER_CAP_MAX; ++d) {
+        hist[d] = 0u;
+    }
+    total = (size_t)dist->nx * (size_t)dist->ny * (size_t)dist->nz;
+    for (i = 0; i < total; ++i) {
+        uint8_t v = dist->data[i];
+        if (v > cfg->cap) {
+            return TRN_E_ARG;
+        }
+        hist[v] += 1u;
+    }
+    for (d = 0; d <= cfg->cap; ++d) {
+        if (hist[d] != 0u) {
+            k += (double)hist[d] * exp(ln_p1(d, cfg));
+        }
+    }
+    *k_per_m = k / (double)total;
+    return TRN_OK;
+}
+
+trn_status_t trn_lnp_table_build(trn_lnp_table_t *t, const trn_lik_cfg_t *cfg, double k_per_m)
+{
+    trn_status_t st;
+    uint32_t d;
+    double la, lb;
+
+    if (t == NULL || cfg == NULL) {
+        return TRN_E_NULL;
+    }
+    if ((st = trn_lik_cfg_check(cfg)) != TRN_OK) {
+        return st;
+    }
+    if (!(k_per_m > 0.0) || !isfinite(k_per_m)) {
+        return TRN_E_ARG;
+    }
+    lb = log(1.0 - (double)cfg->inlier_prob) + log(k_per_m);
+    for (d = 0; d <= TRN_CHAMFER_CAP_MAX; ++d) {
+        double v, hi, lo;
+        la = log((double)cfg->inlier_prob) + ln_p1(d <= cfg->cap ? d : cfg->cap, cfg);
+        /* ln(e^la + e^lb) without overflow or underflow */
+        hi = la > lb ? la : lb;
+        lo = la > lb ? lb : la;
+        v = (hi + log1p(exp(lo - hi))) * (double)TRN_LNP_SCALE;
+        if (v > 2.0e9) {
+            v = 2.0e9;
+        }
+        if (v < -2.0e9) {
+            v = -2.0e9;
+        }
+        t->lnp[d] = (int32_t)lround(v);
+    }
+    t->k_per_m = k_per_m;
+    t->cap = cfg->cap;
+    return TRN_OK;
+}
+
+/* ------------------------------------------------------------------ scoring */
+
+static bbox_t points_bbox(const trn_point_t *pts, size_t n)
+{
+    bbox_t b = {0, 0, 0, 0};
+    size_t i;
+    if (n > 0u) {
+        b.minx = b.maxx = pts[0].x;
+        b.miny = b.maxy = pts[0].y;
+    }
+    for (i = 1; i < n; ++i) {
+        if (pts[i].x < b.minx) { b.minx = pts[i].x; }
+        if (pts[i].x > b.maxx) { b.maxx = pts[i].x; }
+        if (pts[i].y < b.miny) { b.miny = pts[i].y; }
+        if (pts[i].y > b.maxy) { b.maxy = pts[i].y; }
+    }
+    return b;
+}
+
+static int points_z_ok(const trn_point_t *pts, size_t n, int32_t nz)
+{
+    size_t i;
+    for (i = 0; i < n; ++i) {
+        if (pts[i].z < 0 || pts[i].z >= nz) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* Sum of lnp over the points at pose (px, py) on level L. The sum is exact
+ * (int64), so the fast and checked paths agree bit for bit. */
+static int64_t score_level(const level_view_t *L, const int32_t *lnp, const trn_point_t *pts,
+                           size_t n, const bbox_t *bb, int32_t px, int32_t py)
+{
+    int64_t s = 0;
+    size_t i;
+    int32_t ox = px + L->off, oy = py + L->off;
+    if (ox + bb->minx >= 0 && ox + bb->maxx < L->dimx && oy + bb->miny >= 0 &&
+        oy + bb->maxy < L->dimy) {
+        for (i = 0; i < n; ++i) {
+            size_t idx = ((size_t)pts[i].z * (size_t)L->dimy + (size_t)(oy + pts[i].y)) *
+                             (size_t)L->dimx + (size_t)(ox + pts[i].x);
+            s += lnp[L->d[idx]];
+        }
+    } else {
+        int32_t capv = lnp[L->cap];
+        for (i = 0; i < n; ++i) {
+            int32_t x = ox + pts[i].x, y = oy + pts[i].y;
+            if (x < 0 || y < 0 || x >= L->dimx || y >= L->dimy) {
+                s += capv;
+            } else {
+                size_t idx = ((size_t)pts[i].z * (size_t)L->dimy + (size_t)y) * (size_t)L->dimx +
+                             (size_t)x;
+                s += lnp[L->d[idx]];
+            }
+        }
+    }
+    return s;
+}
+
+static level_view_t base_view(const trn_vol_u8_t *dist, uint8_t cap)
+{
+    level_view_t L;
+    L.d = dist->data;
+    L.dimx = dist->nx;
+    L.dimy = dist->ny;
+    L.nz = dist->nz;
+    L.off = 0;
+    L.cap = cap;
+    return L;
+}
+
+/* Common argument checks of the searches and the scorer. */
+static trn_status_t check_search_args(const trn_vol_u8_t *dist, const trn_lnp_table_t *t,
+                                      const trn_point_t *pts, size_t n)
+{
+    trn_status_t st;
+    if (dist == NULL || t == NULL || pts == NULL) {
+        return TRN_E_NULL;
+    }
+    if ((st = trn_vol_u8_check(dist)) != TRN_OK) {
+        return st;
+    }
+    if (t->cap < 3u || t->cap > TRN_CHAMFER_CAP_MAX) {
+        return TRN_E_ARG;
+    }
+    if (n == 0u) {
+        return TRN_E_NODATA;
+    }
+    if (!points_z_ok(pts, n, dist->nz)) {
+        return TRN_E_ARG;
+    }
+    return TRN_OK;
+}
+
+static trn_status_t check_window(const trn_window_t *win, const trn_exclusion_t *ex,
+                                 int32_t nx, int32_t ny)
+{
+    if (win == NULL) {
+        return TRN_E_NULL;
+    }
+    if (win->x0 > win->x1 || win->y0 > win->y1 || win->x0 < 0 || win->y0 < 0 ||
+        win->x1 >= nx || win->y1 >= ny) {
+        return TRN_E_RANGE;
+    }
+    if (ex != NULL && ex->radius < 0) {
+        return TRN_E_ARG;
+    }
+    return TRN_OK;
+}
+
+trn_status_t trn_score_pose(const trn_vol_u8_t *dist, const trn_lnp_table_t *t,
+                            const trn_point_t *pts, size_t n, int32_t px, int32_t py,
+                            int64_t *score)
+{
+    trn_status_t st;
+    level_view_t L;
+    bbox_t bb;
+    if (score == NULL) {
+        return TRN_E_NULL;
+    }
+    if ((st = check_search_args(dist, t, pts, n)) != TRN_OK) {
+        return st;
+    }
+    if (px < -2 * TRN_MAX_DIM || px > 2 * TRN_MAX_DIM || py < -2 * TRN_MAX_DIM ||
+        py > 2 * TRN_MAX_DIM) {
+        return TRN_E_RANGE;
+    }
+    L = base_view(dist, t->cap);
+    bb = points_bbox(pts, n);
+    *score = score_level(&L, t->lnp, pts, n, &bb, px, py);
+    return TRN_OK;
+}
+
+static int excluded(const trn_exclusion_t *ex, int32_t x, int32_t y)
+{
+    int32_t dx, dy;
+    if (ex == NULL) {
+        return 0;
+    }
+    dx = x > ex->cx ? x - ex->cx : ex->cx - x;
+    dy = y > ex->cy ? y - ex->cy : ex->cy - y;
+    return dx <= ex->radius && dy <= ex->radius;
+}
+
+/* Does (x, y, s) beat the current best? Highest score, then smallest y, x. */
+static int better(int found, const trn_best_t *b, int64_t s, int32_t x, int32_t y)
+{
+    if (!found || s > b->score) {
+        return 1;
+    }
+    if (s < b->score) {
+        return 0;
+    }
+    return y < b->y || (y == b->y && x < b->x);
+}
+
+trn_status_t trn_search_exhaustive(const trn_vol_u8_t *dist, const trn_lnp_table_t *t,
+                                   const trn_point_t *pts, size_t n, const trn_window_t *win,
+                                   const trn_exclusion_t *ex, trn_best_t *best,
+                                   trn_search_stats_t *stats)
+{
+    trn_status_t st;
+    level_view_t L;
+    bbox_t bb;
+    int32_t x, y;
+    int found = 0;
+    uint64_t scored = 0;
+
+    if (best == NULL) {
+        return TRN_E_NULL;
+    }
+    if ((st = check_search_args(dist, t, pts, n)) != TRN_OK) {
+        return st;
+    }
+    if ((st = check_window(win, ex, dist->nx, dist->ny)) != TRN_OK) {
+        return st;
+    }
+    L = base_view(dist, t->cap);
+    bb = points_bbox(pts, n);
+    for (y = win->y0; y <= win->y1; ++y) {
+        for (x = win->x0; x <= win->x1; ++x) {
+            int64_t s;
+            if (excluded(ex, x, y)) {
+                continue;
+            }
+            s = score_level(&L, t->lnp, pts, n, &bb, x, y);
+            ++scored;
+            if (better(found, best, s, x, y)) {
+                best->x = x;
+                best->y = y;
+                best->score = s;
+                found = 1;
+            }
+        }
+    }
+    if (stats != NULL) {
+        stats->poses_scored = scored;
+        stats->blocks_bounded = 0u;
+    }
+    return found ? TRN_OK : TRN_E_NODATA;
+}
+
+/* ------------------------------------------------------------------ pyramid */
+
+size_t trn_pyramid_bytes(int32_t nx, int32_t ny, int32_t nz, int32_t nlevels)
+{
+    size_t pad, per;
+    if (nx < 1 || ny < 1 || nz < 1 || nx > TRN_MAX_DIM || ny > TRN_MAX_DIM ||
+        nz > TRN_MAX_ZBINS || nlevels < 1 || nlevels > TRN_MAX_LEVELS) {
+        return 0u;
+    }
+    pad = ((size_t)1u << (unsigned)nlevels) - 1u;
+    per = ((size_t)nx + pad) * ((size_t)ny + pad) * (size_t)nz;
+    return (size_t)nlevels * TRN_ALIGN_UP(per);
+}
+
+/* Value of level `lv` (0 = base) at map coordinates (x, y, z), x, y >= -pad;
+ * outside the stored range -> cap. */
+static uint8_t pyr_get(const trn_pyramid_t *p, int32_t lv, int32_t x, int32_t y, int32_t z)
+{
+    if (lv == 0) {
+        if (x < 0 || y < 0 || x >= p->base.nx || y >= p->base.ny) {
+            return p->cap;
+        }
+        return p->base.data[TRN_VOL_IDX(&p->base, x, y, z)];
+    }
+    if (x >= p->base.nx || y >= p->base.ny || x < -p->pad || y < -p->pad) {
+        return p->cap;
+    }
+    return p->level[lv - 1][((size_t)z * (size_t)p->pny + (size_t)(y + p->pad)) * (size_t)p->pnx +
+                            (size_t)(x + p->pad)];
+}
+
+static uint8_t min_u8(uint8_t a, uint8_t b) { return a < b ? a : b; }
+
+trn_status_t trn_pyramid_build(trn_pyramid_t *p, const trn_vol_u8_t *dist, uint8_t cap,
+                               int32_t nlevels, void *buf, size_t len)
+{
+    trn_status_t st;
+    size_t need, per;
+    int32_t lv, x, y, z;
+
+    if (p == NULL || buf == NULL) {
+        return TRN_E_NULL;
+    }
+    if ((st = trn_vol_u8_check(dist)) != TRN_OK) {
+        return st;
+    }
+    if (nlevels < 1 || nlevels > TRN_MAX_LEVELS || cap < 3u || cap > TRN_CHAMFER_CAP_MAX) {
+        return TRN_E_ARG;
+    }
+    need = trn_pyramid_bytes(dist->nx, dist->ny, dist->nz, nlevels);
+    if (len < need) {
+        return TRN_E_WORKSPACE;
+    }
+    p->base = *dist;
+    p->nlevels = nlevels;
+    p->pad = (int32_t)((1u << (unsigned)nlevels) - 1u);
+    p->pnx = dist->nx + p->pad;
+    p->pny = dist->ny + p->pad;
+    p->cap = cap;
+    per = TRN_ALIGN_UP((size_t)p->pnx * (size_t)p->pny * (size_t)dist->nz);
+    for (lv = 0; lv < TRN_MAX_LEVELS; ++lv) {
+        p->level[lv] = lv < nlevels ? (uint8_t *)buf + (size_t)lv * per : NULL;
+    }
+    /* Level l at (x, y) = min of level l-1 at (x, y), (x+h, y), (x, y+h),
+     * (x+h, y+h) with h = 2^(l-1): the minimum over a 2^l x 2^l block. */
+    for (lv = 1; lv <= nlevels; ++lv) {
+        int32_t h = (int32_t)(1u << (unsigned)(lv - 1));
+        uint8_t *out = p->level[lv - 1];
+        for (z = 0; z < dist->nz; ++z) {
+            for (y = -p->pad; y < dist->ny; ++y) {
+                uint8_t *row = out + ((size_t)z * (size_t)p->pny + (size_t)(y + p->pad)) *
+                                         (size_t)p->pnx;
+                for (x = -p->pad; x < dist->nx; ++x) {
+                    uint8_t a = min_u8(pyr_get(p, lv - 1, x, y, z), pyr_get(p, lv - 1, x + h, y, z));
+                    uint8_t b = min_u8(pyr_get(p, lv - 1, x, y + h, z),
+                                       pyr_get(p, lv - 1, x + h, y + h, z));
+                    row[x + p->pad] = min_u8(a, b);
+                }
+            }
+        }
+    }
+    return TRN_OK;
+}
+
+/* ----------------------------------------------------------- branch & bound */
+
+typedef struct {
+    int32_t x, y;
+    int32_t level;
+    int64_t bound;
+} block_t;
+
+static level_view_t pyr_view(const trn_pyramid_t *p, int32_t lv)
+{
+    level_view_t L;
+    if (lv == 0) {
+        return base_view(&p->base, p->cap);
+    }
+    L.d = p->level[lv - 1];
+    L.dimx = p->pnx;
+    L.dimy = p->pny;
+    L.nz = p->base.nz;
+    L.off = p->pad;
+    L.cap = p->cap;
+    return L;
+}
+
+static int32_t ceil_div(int32_t a, int32_t b) { return (a + b - 1) / b; }
+
+size_t trn_search_bb_workspace_bytes(const trn_pyramid_t *p, const trn_window_t *win)
+{
+    int32_t bs;
+    if (p == NULL || win == NULL || p->nlevels < 1 || p->nlevels > TRN_MAX_LEVELS ||
+        win->x1 < win->x0 || win->y1 < win->y0 || win->x1 - win->x0 >= TRN_MAX_DIM ||
+        win->y1 - win->y0 >= TRN_MAX_DIM) {
+        return 0u;
+    }
+    bs = (int32_t)(1u << (unsigned)p->nlevels);
+    return TRN_ALIGN_UP((size_t)ceil_div(win->x1 - win->x0 + 1, bs) *
+                        (size_t)ceil_div(win->y1 - win->y0 + 1, bs) * sizeof(block_t));
+}
+
+/* Is every pose of block (x, y, size s) that lies in the window excluded? */
+static int block_excluded(const trn_exclusion_t *ex, const trn_window_t *w, int32_t x, int32_t y,
+                          int32_t s)
+{
+    int32_t xe = x + s - 1 < w->x1 ? x + s - 1 : w->x1;
+    int32_t ye = y + s - 1 < w->y1 ? y + s - 1 : w->y1;
+    if (ex == NULL) {
+        return 0;
+    }
+    return x >= ex->cx - ex->radius && xe <= ex->cx + ex->radius && y >= ex->cy - ex->radius &&
+           ye <= ex->cy + ex->radius;
+}
+
+/* Order for the top-level list: larger bound first, then smaller y, x. */
+static int block_before(const block_t *a, const block_t *b)
+{
+    if (a->bound != b->bound) {
+        return a->bound > b->bound;
+    }
+    return a->y < b->y || (a->y == b->y && a->x < b->x);
+}
+
+static void sift_down(block_t *a, size_t start, size_t n)
+{
+    size_t root = start;
+    while (2u * root + 1u < n) {
+        size_t child = 2u * root + 1u, swap = root;
+        block_t tmp;
+        /* max-heap on "comes later", so the sorted array runs first..last */
+        if (block_before(&a[swap], &a[child])) {
+            swap = child;
+        }
+        if (child + 1u < n && block_before(&a[swap], &a[child + 1u])) {
+            swap = child + 1u;
+        }
+        if (swap == root) {
+            return;
+        }
+        tmp = a[root];
+        a[root] = a[swap];
+        a[swap] = tmp;
+        root = swap;
+    }
+}
+
+static void sort_blocks(block_t *a, size_t n)
+{
+    size_t start, end;
+    if (n < 2u) {
+        return;
+    }
+    for (start = n / 2u; start-- > 0u;) {
+        sift_down(a, start, n);
+    }
+    for (end = n - 1u; end > 0u; --end) {
+        block_t tmp = a[0];
+        a[0] = a[end];
+        a[end] = tmp;
+        sift_down(a, 0u, end);
+    }
+}
+
+#define TRN_BB_STACK (4 * TRN_MAX_LEVELS + 4)
+
+trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
+                           const trn_point_t *pts, size_t n, const trn_window_t *win,
+                           const trn_exclusion_t *ex, void *ws, size_t ws_bytes,
+                           trn_best_t *best, trn_search_stats_t *stats)
+{
+    trn_status_t st;
+    block_t *tops;
+    block_t stack[TRN_BB_STACK];
+    size_t ntop = 0, i;
+    int32_t top_lv, bs, x, y;
+    bbox_t bb;
+    int found = 0;
+    uint64_t scored = 0, bounded = 0;
+
+    if (p == NULL || t == NULL || best == NULL || ws == NULL) {
+        return TRN_E_NULL;
+    }
+    if (p->nlevels < 1 || p->nlevels > TRN_MAX_LEVELS || p->cap != t->cap) {
+        return TRN_E_ARG;
+    }
+    if ((st = check_search_args(&p->base, t, pts, n)) != TRN_OK) {
+        return st;
+    }
+    if ((st = check_window(win, ex, p->base.nx, p->base.ny)) != TRN_OK) {
+        return st;
+    }
+    if (ws_bytes < trn_search_bb_workspace_bytes(p, win)) {
+        return TRN_E_WORKSPACE;
+    }
+    tops = (block_t *)ws;
+    bb = points_bbox(pts, n);
+    top_lv = p->nlevels;
+    bs = (int32_t)(1u << (unsigned)top_lv);
+    {
+        level_view_t L = pyr_view(p, top_lv);
+        for (y = win->y0; y <= win->y1; y += bs) {
+            for (x = win->x0; x <= win->x1; x += bs) {
+                if (block_excluded(ex, win, x, y, bs)) {
+                    continue;
+                }
+                tops[ntop].x = x;
+                tops[ntop].y = y;
+                tops[ntop].level = top_lv;
+                tops[ntop].bound = score_level(&L, t->lnp, pts, n, &bb, x, y);
+                ++bounded;
+                ++ntop;
+            }
+        }
+    }
+    sort_blocks(tops, ntop);
+    for (i = 0; i < ntop; ++i) {
+        size_t sp = 0;
+        if (found && tops[i].bound < best->score) {
+            break; /* sorted: no later block can hold a better pose */
+        }
+        stack[sp++] = tops[i];
+        while (sp > 0u) {
+            block_t e = stack[--sp];
+            block_t kids[4];
+            size_t nk = 0, a, b;
+            int32_t h, cl, k;
+            if (found && e.bound < best->score) {
+                continue;
+            }
+            h = (int32_t)(1u << (unsigned)(e.level - 1));
+            cl = e.level - 1;
+            for (k = 0; k < 4; ++k) {
+                int32_t cx = e.x + ((k & 1) ? h : 0), cy = e.y + ((k & 2) ? h : 0);
+                if (cx > win->x1 || cy > win->y1) {
+                    continue;
+                }
+                if (cl == 0) {
+                    level_view_t L0;
+                    int64_t s;
+                    if (excluded(ex, cx, cy)) {
+                        continue;
+                    }
+                    L0 = pyr_view(p, 0);
+                    s = score_level(&L0, t->lnp, pts, n, &bb, cx, cy);
+                    ++scored;
+                    if (better(found, best, s, cx, cy)) {
+                        best->x = cx;
+                        best->y = cy;
+                        best->score = s;
+                        found = 1;
+                    }
+                } else {
+                    level_view_t Lc;
+                    if (block_excluded(ex, win, cx, cy, h)) {
+                        continue;
+                    }
+                    Lc = pyr_view(p, cl);
+                    kids[nk].x = cx;
+                    kids[nk].y = cy;
+                    kids[nk].level = cl;
+                    kids[nk].bound = score_level(&Lc, t->lnp, pts, n, &bb, cx, cy);
+                    ++bounded;
+                    ++nk;
+                }
+            }
+            /* insertion sort, then push worst first so the best pops next */
+            for (a = 1; a < nk; ++a) {
+                block_t v = kids[a];
+                b = a;
+                while (b > 0u && block_before(&v, &kids[b - 1u])) {
+                    kids[b] = kids[b - 1u];
+                    --b;
+                }
+                kids[b] = v;
+            }
+            for (a = nk; a-- > 0u;) {
+                stack[sp++] = kids[a];
+            }
+        }
+    }
+    if (stats != NULL) {
+        stats->poses_scored = scored;
+        stats->blocks_bounded = bounded;
+    }
+    return found ? TRN_OK : TRN_E_NODATA;
+}

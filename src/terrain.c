@@ -1,0 +1,236 @@
+/* terrain.c - high-pass filter and occupancy (see trn/terrain.h). */
+#include "trn/terrain.h"
+
+#include <math.h>
+
+static int pos_finite_le(float v, float max) { return v > 0.0f && v <= max; }
+
+trn_status_t trn_terrain_cfg_check(const trn_terrain_cfg_t *cfg)
+{
+    if (cfg == NULL) {
+        return TRN_E_NULL;
+    }
+    if (!pos_finite_le(cfg->cell_m, 1000.0f) || !pos_finite_le(cfg->zbin_m, 1000.0f) ||
+        !(cfg->highpass_half_m >= cfg->cell_m && cfg->highpass_half_m <= 1000.0f)) {
+        return TRN_E_ARG;
+    }
+    if (cfg->nz < 1 || cfg->nz > TRN_MAX_ZBINS) {
+        return TRN_E_SIZE;
+    }
+    return TRN_OK;
+}
+
+size_t trn_highpass_workspace_bytes(int32_t width, int32_t height)
+{
+    size_t cells;
+    if (width < 1 || height < 1 || width > TRN_MAX_DIM || height > TRN_MAX_DIM) {
+        return 0u;
+    }
+    cells = (size_t)(width + 1) * (size_t)(height + 1);
+    return TRN_ALIGN_UP(cells * sizeof(double)) + TRN_ALIGN_UP(cells * sizeof(int32_t));
+}
+
+static int valid_h(float h) { return isfinite(h) ? 1 : 0; }
+
+trn_status_t trn_highpass(const trn_grid_f32_t *dem, const trn_terrain_cfg_t *cfg,
+                          trn_grid_f32_t *out, void *ws, size_t ws_bytes)
+{
+    trn_status_t st;
+    int32_t w, h, x, y, r;
+    size_t sw, cells;
+    double *sum;
+    int32_t *cnt;
+    double ref = 0.0;
+    int have_ref = 0;
+
+    if (dem == NULL || cfg == NULL || out == NULL || ws == NULL) {
+        return TRN_E_NULL;
+    }
+    if ((st = trn_grid_f32_check(dem)) != TRN_OK || (st = trn_grid_f32_check(out)) != TRN_OK) {
+        return st;
+    }
+    if ((st = trn_terrain_cfg_check(cfg)) != TRN_OK) {
+        return st;
+    }
+    w = dem->width;
+    h = dem->height;
+    if (out->width != w || out->height != h) {
+        return TRN_E_SIZE;
+    }
+    if (ws_bytes < trn_highpass_workspace_bytes(w, h)) {
+        return TRN_E_WORKSPACE;
+    }
+    sw = (size_t)w + 1u;
+    cells = sw * ((size_t)h + 1u);
+    sum = (double *)ws;
+    cnt = (int32_t *)(void *)((uint8_t *)ws + TRN_ALIGN_UP(cells * sizeof(double)));
+
+    /* Summed-area tables of (height - ref) and of the valid count; ref (the
+     * first valid height) keeps the double sums small for absolute DTMs. */
+    for (x = 0; x <= w; ++x) {
+        sum[x] = 0.0;
+        cnt[x] = 0;
+    }
+    for (y = 0; y < h; ++y) {
+        double row_s = 0.0;
+        int32_t row_c = 0;
+        size_t o = ((size_t)y + 1u) * sw;
+        sum[o] = 0.0;
+        cnt[o] = 0;
+        for (x = 0; x < w; ++x) {
+            float v = TRN_GRID_AT(dem, x, y);
+            if (valid_h(v)) {
+                if (!have_ref) {
+                    ref = (double)v;
+                    have_ref = 1;
+                }
+                row_s += (double)v - ref;
+                row_c += 1;
+            }
+            sum[o + (size_t)x + 1u] = sum[o - sw + (size_t)x + 1u] + row_s;
+            cnt[o + (size_t)x + 1u] = cnt[o - sw + (size_t)x + 1u] + row_c;
+        }
+    }
+    r = (int32_t)lroundf(cfg->highpass_half_m / cfg->cell_m);
+    for (y = 0; y < h; ++y) {
+        int32_t y0 = y - r < 0 ? 0 : y - r;
+        int32_t y1 = y + r >= h ? h - 1 : y + r;
+        size_t ra = (size_t)y0 * sw, rb = ((size_t)y1 + 1u) * sw;
+        for (x = 0; x < w; ++x) {
+            float v = TRN_GRID_AT(dem, x, y);
+            float res = NAN;
+            if (valid_h(v)) {
+                int32_t x0 = x - r < 0 ? 0 : x - r;
+                int32_t x1 = x + r >= w ? w - 1 : x + r;
+                size_t a = (size_t)x0, b = (size_t)x1 + 1u;
+                double s = sum[rb + b] - sum[rb + a] - sum[ra + b] + sum[ra + a];
+                int32_t c = cnt[rb + b] - cnt[rb + a] - cnt[ra + b] + cnt[ra + a];
+                /* c >= 1: the cell itself is valid and inside its own box. */
+                res = (float)(((double)v - ref) - s / (double)c);
+            }
+            TRN_GRID_AT(out, x, y) = res;
+        }
+    }
+    return have_ref ? TRN_OK : TRN_E_NODATA;
+}
+
+/* Bin of a filtered height, or -1 when missing. */
+static int32_t bin_of(float hp, const trn_terrain_cfg_t *cfg)
+{
+    double k;
+    if (!valid_h(hp)) {
+        return -1;
+    }
+    k = floor((double)hp / (double)cfg->zbin_m) + (double)(cfg->nz / 2);
+    if (k < 0.0) {
+        return 0;
+    }
+    if (k > (double)(cfg->nz - 1)) {
+        return cfg->nz - 1;
+    }
+    return (int32_t)k;
+}
+
+/* Occupied bin range [*lo, *hi] of cell (x, y); returns 0 when missing. */
+static int column_of(const trn_grid_f32_t *hp, const trn_terrain_cfg_t *cfg, int32_t x,
+                     int32_t y, int32_t *lo, int32_t *hi)
+{
+    static const int32_t dx[4] = {1, -1, 0, 0};
+    static const int32_t dy[4] = {0, 0, 1, -1};
+    int32_t k = bin_of(TRN_GRID_AT(hp, x, y), cfg);
+    int32_t low = k, i;
+    if (k < 0) {
+        return 0;
+    }
+    for (i = 0; i < 4; ++i) {
+        int32_t nx = x + dx[i], ny = y + dy[i];
+        if (nx >= 0 && ny >= 0 && nx < hp->width && ny < hp->height) {
+            int32_t kn = bin_of(TRN_GRID_AT(hp, nx, ny), cfg);
+            if (kn >= 0 && kn + 1 < low) {
+                low = kn + 1;
+            }
+        }
+    }
+    *lo = low;
+    *hi = k;
+    return 1;
+}
+
+trn_status_t trn_occupancy(const trn_grid_f32_t *hp, const trn_terrain_cfg_t *cfg,
+                           trn_vol_u8_t *occ, uint32_t *n_occupied)
+{
+    trn_status_t st;
+    int32_t x, y, z;
+    uint32_t n = 0;
+    size_t i, total;
+
+    if (hp == NULL || cfg == NULL || occ == NULL) {
+        return TRN_E_NULL;
+    }
+    if ((st = trn_grid_f32_check(hp)) != TRN_OK || (st = trn_vol_u8_check(occ)) != TRN_OK ||
+        (st = trn_terrain_cfg_check(cfg)) != TRN_OK) {
+        return st;
+    }
+    if (occ->nx != hp->width || occ->ny != hp->height || occ->nz != cfg->nz) {
+        return TRN_E_SIZE;
+    }
+    total = (size_t)occ->nx * (size_t)occ->ny * (size_t)occ->nz;
+    for (i = 0; i < total; ++i) {
+        occ->data[i] = 0u;
+    }
+    for (y = 0; y < hp->height; ++y) {
+        for (x = 0; x < hp->width; ++x) {
+            int32_t lo, hi;
+            if (column_of(hp, cfg, x, y, &lo, &hi)) {
+                for (z = lo; z <= hi; ++z) {
+                    occ->data[TRN_VOL_IDX(occ, x, y, z)] = 1u;
+                    ++n;
+                }
+            }
+        }
+    }
+    if (n_occupied != NULL) {
+        *n_occupied = n;
+    }
+    return n > 0u ? TRN_OK : TRN_E_NODATA;
+}
+
+trn_status_t trn_occupancy_points(const trn_grid_f32_t *hp, const trn_terrain_cfg_t *cfg,
+                                  int32_t rover_x, int32_t rover_y,
+                                  trn_point_t *pts, size_t capacity, size_t *n_points)
+{
+    trn_status_t st;
+    int32_t x, y, z;
+    size_t n = 0;
+
+    if (hp == NULL || cfg == NULL || pts == NULL || n_points == NULL) {
+        return TRN_E_NULL;
+    }
+    *n_points = 0;
+    if ((st = trn_grid_f32_check(hp)) != TRN_OK || (st = trn_terrain_cfg_check(cfg)) != TRN_OK) {
+        return st;
+    }
+    if (rover_x < -TRN_MAX_DIM || rover_x > 2 * TRN_MAX_DIM || rover_y < -TRN_MAX_DIM ||
+        rover_y > 2 * TRN_MAX_DIM) {
+        return TRN_E_ARG;
+    }
+    /* z outermost so the list comes sorted (z, y, x), the distance volume's order. */
+    for (z = 0; z < cfg->nz; ++z) {
+        for (y = 0; y < hp->height; ++y) {
+            for (x = 0; x < hp->width; ++x) {
+                int32_t lo, hi;
+                if (column_of(hp, cfg, x, y, &lo, &hi) && z >= lo && z <= hi) {
+                    if (n >= capacity) {
+                        return TRN_E_CAPACITY;
+                    }
+                    pts[n].x = (int16_t)(x - rover_x);
+                    pts[n].y = (int16_t)(y - rover_y);
+                    pts[n].z = (int16_t)z;
+                    ++n;
+                }
+            }
+        }
+    }
+    *n_points = n;
+    return n > 0u ? TRN_OK : TRN_E_NODATA;
+}

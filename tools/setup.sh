@@ -1,0 +1,131 @@
+#!/usr/bin/env bash
+# tools/setup.sh [group...] - install the Debian packages the build needs.
+#
+# Idempotent and fast when everything is present: each package is checked with
+# dpkg-query first, and apt-get runs (update, then install) only for what is
+# missing. With no argument it installs the `core` group.
+#
+#   tools/setup.sh              # = tools/setup.sh core
+#   tools/setup.sh core bench   # several groups
+#   tools/setup.sh --list       # show the groups
+#
+# To add a group: add one line to PKG_GROUPS below (and its name to
+# GROUP_ORDER). A package written `name:arch` is a Debian multiarch package of
+# a foreign architecture; the architecture is enabled automatically.
+set -euo pipefail
+
+declare -A PKG_GROUPS=(
+  # Build, host tests, aarch64 cross + qemu-user, bare-metal Cortex-R5F.
+  [core]="cmake ninja-build make gcc libc6-dev pkg-config libcmocka-dev
+          gcc-aarch64-linux-gnu binutils-aarch64-linux-gnu libc6-dev-arm64-cross
+          libcmocka-dev:arm64 qemu-user
+          gcc-arm-none-eabi binutils-arm-none-eabi libnewlib-arm-none-eabi"
+  # Benchmarks: the optional OpenCV reference in trn_bench (C++).
+  [bench]="g++ libopencv-dev"
+  # Real terrain maps (GeoTIFF DEMs) for the tools.
+  [gdal]="libgdal-dev"
+  # Plots of results.
+  [plot]="python3 python3-matplotlib"
+)
+GROUP_ORDER=(core bench gdal plot)
+
+usage() {
+  echo "usage: $0 [group...]   (default: core)"
+  echo "groups:"
+  local g
+  for g in "${GROUP_ORDER[@]}"; do
+    echo "  $g: $(echo ${PKG_GROUPS[$g]})"
+  done
+}
+
+log() { echo "setup: $*"; }
+
+# Root runs apt directly; anyone else goes through sudo.
+SUDO=()
+if [ "$(id -u)" -ne 0 ]; then
+  SUDO=(sudo)
+fi
+
+NATIVE_ARCH=$(dpkg --print-architecture)
+
+# is_installed PKG: true if PKG (native or arch:all; or exactly PKG:ARCH when
+# qualified) is installed.
+is_installed() {
+  local pkg=$1 status
+  status=$(dpkg-query -W -f='${db:Status-Status} ${Architecture}\n' "$pkg" 2>/dev/null) || return 1
+  if [[ $pkg == *:* ]]; then
+    grep -q '^installed ' <<<"$status"
+  else
+    grep -Eq "^installed (${NATIVE_ARCH}|all)\$" <<<"$status"
+  fi
+}
+
+# --- which packages are wanted --------------------------------------------
+groups=("$@")
+if [ ${#groups[@]} -eq 0 ]; then
+  groups=(core)
+fi
+wanted=()
+for g in "${groups[@]}"; do
+  case $g in
+    -h|--help|--list) usage; exit 0 ;;
+  esac
+  if [ -z "${PKG_GROUPS[$g]+set}" ]; then
+    echo "setup: unknown group '$g'" >&2
+    usage >&2
+    exit 2
+  fi
+  # shellcheck disable=SC2206  # word splitting of the package list is intended
+  wanted+=(${PKG_GROUPS[$g]})
+done
+
+missing=()
+for p in "${wanted[@]}"; do
+  if ! is_installed "$p"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  log "all packages of [${groups[*]}] present"
+  exit 0
+fi
+log "missing: ${missing[*]}"
+
+# --- foreign architectures (multiarch) --------------------------------------
+for p in "${missing[@]}"; do
+  if [[ $p == *:* ]]; then
+    arch=${p##*:}
+    if [ "$arch" != "$NATIVE_ARCH" ] && ! dpkg --print-foreign-architectures | grep -qx "$arch"; then
+      log "dpkg --add-architecture $arch"
+      "${SUDO[@]}" dpkg --add-architecture "$arch"
+    fi
+  fi
+done
+
+# --- install ------------------------------------------------------------------
+export DEBIAN_FRONTEND=noninteractive
+retry() {
+  local n
+  for n in 1 2 3; do
+    if "$@"; then return 0; fi
+    log "attempt $n failed: $*"
+    sleep $((n * 5))
+  done
+  return 1
+}
+log "apt-get update"
+retry "${SUDO[@]}" apt-get update -q
+log "apt-get install ${missing[*]}"
+retry "${SUDO[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"
+
+# Check the result, so a silently skipped package fails here, not in the build.
+still=()
+for p in "${missing[@]}"; do
+  is_installed "$p" || still+=("$p")
+done
+if [ ${#still[@]} -ne 0 ]; then
+  echo "setup: still not installed: ${still[*]}" >&2
+  exit 1
+fi
+log "installed: ${missing[*]}"
