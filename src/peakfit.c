@@ -1,6 +1,7 @@
 /* peakfit.c - eq. 6 fit and failure probability (see trn/peakfit.h). */
 #include "trn/peakfit.h"
 
+#include <float.h>
 #include <math.h>
 #include <stddef.h>
 
@@ -21,6 +22,7 @@ trn_status_t trn_peak_fit(const double ll[9], trn_peak_t *out)
     double f[9];
     double s0 = 0.0, sx = 0.0, sy = 0.0, sxx = 0.0, syy = 0.0, sxy = 0.0;
     double c1, c2, c3, c4, c5, hxx, hyy, hxy, det, ivxx, ivyy, ivxy;
+    double mag = 0.0, mean_c, half_d, lam_min, noise;
     int i, x, y;
 
     if (ll == NULL || out == NULL) {
@@ -32,6 +34,9 @@ trn_status_t trn_peak_fit(const double ll[9], trn_peak_t *out)
             return TRN_E_ARG;
         }
         f[i] = ll[i] - ll[4]; /* relative to the centre: no cancellation */
+        if (fabs(ll[i]) > mag) {
+            mag = fabs(ll[i]);
+        }
     }
     for (y = -1; y <= 1; ++y) {
         for (x = -1; x <= 1; ++x) {
@@ -55,7 +60,14 @@ trn_status_t trn_peak_fit(const double ll[9], trn_peak_t *out)
     hyy = 2.0 * c5;
     hxy = c4;
     det = hxx * hyy - hxy * hxy;
-    if (!(hxx < 0.0) || !(det > 0.0)) {
+    /* Smaller eigenvalue of -H: a curvature below the rounding noise of the
+     * inputs (64 ulp of the largest |ln L|) is no curvature at all, so an
+     * exact ridge whose fit is off by rounding is still a ridge. */
+    mean_c = -(hxx + hyy) / 2.0;
+    half_d = sqrt((hxx - hyy) * (hxx - hyy) / 4.0 + hxy * hxy);
+    lam_min = mean_c - half_d;
+    noise = 64.0 * DBL_EPSILON * (mag > 1.0 ? mag : 1.0);
+    if (!(hxx < 0.0) || !(det > 0.0) || !(lam_min > noise)) {
         set_illcond(out);
         return TRN_E_ILLCOND;
     }

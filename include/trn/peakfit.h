@@ -9,7 +9,8 @@
  * neighbours (x, y in {-1, 0, 1}). The fit gives the subpixel peak
  * -H^-1 (c1, c2) and the covariance Sigma = -H^-1 of the pose, H being the
  * Hessian [[2 c3, c4], [c4, 2 c5]]. If H is not negative definite (a flat or
- * ridge-shaped peak) no finite covariance exists: TRN_E_ILLCOND, never a
+ * ridge-shaped peak, including a curvature below the rounding noise of the
+ * inputs: 64 ulp of the largest |ln L|) no finite covariance exists: TRN_E_ILLCOND, never a
  * small uncertainty.
  */
 #ifndef TRN_PEAKFIT_H
