@@ -91,7 +91,13 @@ trn_status_t trn_highpass(const trn_grid_f32_t *dem, const trn_terrain_cfg_t *cf
             cnt[o + (size_t)x + 1u] = cnt[o - sw + (size_t)x + 1u] + row_c;
         }
     }
-    r = (int32_t)lroundf(cfg->highpass_half_m / cfg->cell_m);
+    {
+        /* A box wider than the grid is the whole grid: clamp before converting
+         * so any accepted configuration gives a representable radius. */
+        double ratio = (double)cfg->highpass_half_m / (double)cfg->cell_m;
+        double rmax = (double)(w > h ? w : h);
+        r = ratio >= rmax ? (int32_t)rmax : (int32_t)lround(ratio);
+    }
     for (y = 0; y < h; ++y) {
         int32_t y0 = y - r < 0 ? 0 : y - r;
         int32_t y1 = y + r >= h ? h - 1 : y + r;
@@ -210,8 +216,8 @@ trn_status_t trn_occupancy_points(const trn_grid_f32_t *hp, const trn_terrain_cf
     if ((st = trn_grid_f32_check(hp)) != TRN_OK || (st = trn_terrain_cfg_check(cfg)) != TRN_OK) {
         return st;
     }
-    if (rover_x < -TRN_MAX_DIM || rover_x > 2 * TRN_MAX_DIM || rover_y < -TRN_MAX_DIM ||
-        rover_y > 2 * TRN_MAX_DIM) {
+    if (rover_x < -TRN_MAX_DIM || rover_x > hp->width - 1 + TRN_MAX_DIM ||
+        rover_y < -TRN_MAX_DIM || rover_y > hp->height - 1 + TRN_MAX_DIM) {
         return TRN_E_ARG;
     }
     /* z outermost so the list comes sorted (z, y, x), the distance volume's order. */

@@ -43,8 +43,8 @@
 #define TRN_LNP_SCALE 65536
 #endif
 
-#if TRN_MAX_DIM < 8 || TRN_MAX_DIM > 32767
-#error "TRN_MAX_DIM must be in [8, 32767] (coordinates are int16_t/int32_t)"
+#if TRN_MAX_DIM < 8 || TRN_MAX_DIM > 16383
+#error "TRN_MAX_DIM must be in [8, 16383] (local point offsets up to 2*TRN_MAX_DIM are int16_t)"
 #endif
 #if TRN_MAX_ZBINS < 1 || TRN_MAX_ZBINS > 255
 #error "TRN_MAX_ZBINS must be in [1, 255]"
