@@ -329,23 +329,6 @@ size_t trn_pyramid_bytes(int32_t nx, int32_t ny, int32_t nz, int32_t nlevels)
     return (size_t)nlevels * TRN_ALIGN_UP(per);
 }
 
-/* Value of level `lv` (0 = base) at map coordinates (x, y, z), x, y >= -pad;
- * outside the stored range -> cap. */
-static uint8_t pyr_get(const trn_pyramid_t *p, int32_t lv, int32_t x, int32_t y, int32_t z)
-{
-    if (lv == 0) {
-        if (x < 0 || y < 0 || x >= p->base.nx || y >= p->base.ny) {
-            return p->cap;
-        }
-        return p->base.data[TRN_VOL_IDX(&p->base, x, y, z)];
-    }
-    if (x >= p->base.nx || y >= p->base.ny || x < -p->pad || y < -p->pad) {
-        return p->cap;
-    }
-    return p->level[lv - 1][((size_t)z * (size_t)p->pny + (size_t)(y + p->pad)) * (size_t)p->pnx +
-                            (size_t)(x + p->pad)];
-}
-
 static uint8_t min_u8(uint8_t a, uint8_t b) { return a < b ? a : b; }
 
 trn_status_t trn_pyramid_build(trn_pyramid_t *p, const trn_vol_u8_t *dist, uint8_t cap,
@@ -378,8 +361,11 @@ trn_status_t trn_pyramid_build(trn_pyramid_t *p, const trn_vol_u8_t *dist, uint8
     for (lv = 0; lv < TRN_MAX_LEVELS; ++lv) {
         p->level[lv] = lv < nlevels ? (uint8_t *)buf + (size_t)lv * per : NULL;
     }
-    /* Level l at (x, y) = min of level l-1 at (x, y), (x+h, y), (x, y+h),
-     * (x+h, y+h) with h = 2^(l-1): the minimum over a 2^l x 2^l block. */
+    /* Level 1 = min of the base over 2x2 blocks; level l = min of level l-1
+     * at (x, y), (x+h, y), (x, y+h), (x+h, y+h), h = 2^(l-1): the minimum over
+     * a 2^l x 2^l block. Stored with `pad` cells on the low side in x and y;
+     * anything off the map is cap. Built a row at a time: each output row is
+     * the element-wise min of two source rows, each shifted by 0 and h. */
     for (lv = 1; lv <= nlevels; ++lv) {
         int32_t h = (int32_t)(1u << (unsigned)(lv - 1));
         uint8_t *out = p->level[lv - 1];
@@ -387,11 +373,45 @@ trn_status_t trn_pyramid_build(trn_pyramid_t *p, const trn_vol_u8_t *dist, uint8
             for (y = -p->pad; y < dist->ny; ++y) {
                 uint8_t *row = out + ((size_t)z * (size_t)p->pny + (size_t)(y + p->pad)) *
                                          (size_t)p->pnx;
-                for (x = -p->pad; x < dist->nx; ++x) {
-                    uint8_t a = min_u8(pyr_get(p, lv - 1, x, y, z), pyr_get(p, lv - 1, x + h, y, z));
-                    uint8_t b = min_u8(pyr_get(p, lv - 1, x, y + h, z),
-                                       pyr_get(p, lv - 1, x + h, y + h, z));
-                    row[x + p->pad] = min_u8(a, b);
+                int32_t k;
+                for (x = 0; x < p->pnx; ++x) {
+                    row[x] = cap;
+                }
+                for (k = 0; k < 2; ++k) {
+                    int32_t sy = y + k * h; /* source row, map coordinates */
+                    const uint8_t *src;
+                    int32_t lo, n;
+                    if (lv == 1) {
+                        /* base: rows 0..ny-1, columns 0..nx-1, no padding */
+                        if (sy < 0 || sy >= dist->ny) {
+                            continue;
+                        }
+                        src = dist->data + ((size_t)z * (size_t)dist->ny + (size_t)sy) *
+                                               (size_t)dist->nx;
+                        lo = 0;
+                    } else {
+                        if (sy >= dist->ny) { /* sy >= -pad always */
+                            continue;
+                        }
+                        src = p->level[lv - 2] +
+                              ((size_t)z * (size_t)p->pny + (size_t)(sy + p->pad)) * (size_t)p->pnx;
+                        lo = -p->pad;
+                    }
+                    /* out(x) = min(out(x), src(x), src(x+h)) over x in [-pad, nx-1];
+                     * src is defined on [lo, nx-1]. */
+                    for (x = lo; x < dist->nx; ++x) {
+                        uint8_t v = src[x - lo];
+                        uint8_t *o = &row[x + p->pad];
+                        *o = min_u8(*o, v);
+                    }
+                    /* source element j sits at x = lo + j and feeds x - h */
+                    n = dist->nx - lo;
+                    for (x = 0; x < n; ++x) {
+                        int32_t ox = lo + x - h + p->pad;
+                        if (ox >= 0) {
+                            row[ox] = min_u8(row[ox], src[x]);
+                        }
+                    }
                 }
             }
         }

@@ -220,19 +220,45 @@ trn_status_t trn_occupancy_points(const trn_grid_f32_t *hp, const trn_terrain_cf
         rover_y < -TRN_MAX_DIM || rover_y > hp->height - 1 + TRN_MAX_DIM) {
         return TRN_E_ARG;
     }
-    /* z outermost so the list comes sorted (z, y, x), the distance volume's order. */
-    for (z = 0; z < cfg->nz; ++z) {
+    /* Two passes so each column is computed twice, not nz times: count the
+     * voxels per bin, then place each at its bin's next slot, which leaves
+     * the list sorted (z, y, x), the distance volume's order. */
+    {
+        size_t start[TRN_MAX_ZBINS];
+        int32_t lo, hi;
+        for (z = 0; z < cfg->nz; ++z) {
+            start[z] = 0u;
+        }
         for (y = 0; y < hp->height; ++y) {
             for (x = 0; x < hp->width; ++x) {
-                int32_t lo, hi;
-                if (column_of(hp, cfg, x, y, &lo, &hi) && z >= lo && z <= hi) {
-                    if (n >= capacity) {
-                        return TRN_E_CAPACITY;
+                if (column_of(hp, cfg, x, y, &lo, &hi)) {
+                    for (z = lo; z <= hi; ++z) {
+                        start[z] += 1u;
                     }
-                    pts[n].x = (int16_t)(x - rover_x);
-                    pts[n].y = (int16_t)(y - rover_y);
-                    pts[n].z = (int16_t)z;
-                    ++n;
+                    n += (size_t)(hi - lo + 1);
+                }
+            }
+        }
+        if (n > capacity) {
+            return TRN_E_CAPACITY;
+        }
+        {
+            size_t acc = 0u;
+            for (z = 0; z < cfg->nz; ++z) {
+                size_t c = start[z];
+                start[z] = acc;
+                acc += c;
+            }
+        }
+        for (y = 0; y < hp->height; ++y) {
+            for (x = 0; x < hp->width; ++x) {
+                if (column_of(hp, cfg, x, y, &lo, &hi)) {
+                    for (z = lo; z <= hi; ++z) {
+                        trn_point_t *q = &pts[start[z]++];
+                        q->x = (int16_t)(x - rover_x);
+                        q->y = (int16_t)(y - rover_y);
+                        q->z = (int16_t)z;
+                    }
                 }
             }
         }
