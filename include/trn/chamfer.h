@@ -26,15 +26,23 @@ extern "C" {
 
 /**
  * @brief Chamfer distance transform, in place allowed.
+ *
+ * Occupied voxels get 0, every other voxel min(D, cap) where D is the
+ * length of the shortest 3-4-5 path (within the volume) to an occupied
+ * voxel; D / 3 is within -5.8 % .. +10.6 % of the Euclidean distance in
+ * voxel sides. Time O(nx ny nz); no allocation, a few hundred bytes of stack.
+ *
  * @param[in]  occ  occupancy: nonzero = occupied, 0 = free.
  * @param[out] dist distances in chamfer units, min(true chamfer distance, cap);
- *                  same dimensions as occ; may be the same memory as occ.
+ *                  same dimensions as occ; may be the same memory as occ,
+ *                  otherwise must not overlap it.
  * @param[in]  cap  largest stored distance, 3..TRN_CHAMFER_CAP_MAX.
  * @retval TRN_OK
  * @retval TRN_E_NULL   occ, dist or their data NULL
  * @retval TRN_E_SIZE   bad dimensions or occ and dist differ in size
- * @retval TRN_E_ARG    cap out of range
+ * @retval TRN_E_ARG    cap out of range, or occ and dist partly overlap
  * @retval TRN_E_NODATA no voxel is occupied (dist is then all cap)
+ * On TRN_E_NULL, TRN_E_SIZE and TRN_E_ARG dist is left untouched.
  */
 trn_status_t trn_chamfer3d(const trn_vol_u8_t *occ, trn_vol_u8_t *dist, uint8_t cap);
 
