@@ -763,7 +763,7 @@ static int bench_chamfer(world_t *w, const opts_t *o, size_result_t *r)
     chamfer_ctx_t cc;
     stream_ctx_t sc;
     dijkstra_ctx_t dc;
-    timing_t t_scan, t_rows, t_dij;
+    timing_t t_scan = {0}, t_rows = {0}, t_dij = {0};
     char note[160];
     int same;
 
