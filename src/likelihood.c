@@ -269,6 +269,17 @@ static int better(int found, const trn_best_t *b, int64_t s, int32_t x, int32_t 
     return y < b->y || (y == b->y && x < b->x);
 }
 
+/* Keep (x, y, s) if it beats the current best. */
+static void consider(trn_best_t *best, int *found, int64_t s, int32_t x, int32_t y)
+{
+    if (better(*found, best, s, x, y)) {
+        best->x = x;
+        best->y = y;
+        best->score = s;
+        *found = 1;
+    }
+}
+
 trn_status_t trn_search_exhaustive(const trn_vol_u8_t *dist, const trn_lnp_table_t *t,
                                    const trn_point_t *pts, size_t n, const trn_window_t *win,
                                    const trn_exclusion_t *ex, trn_best_t *best,
@@ -300,12 +311,7 @@ trn_status_t trn_search_exhaustive(const trn_vol_u8_t *dist, const trn_lnp_table
             }
             s = score_level(&L, t->lnp, pts, n, &bb, x, y);
             ++scored;
-            if (better(found, best, s, x, y)) {
-                best->x = x;
-                best->y = y;
-                best->score = s;
-                found = 1;
-            }
+            consider(best, &found, s, x, y);
         }
     }
     if (stats != NULL) {
@@ -529,6 +535,7 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
     trn_status_t st;
     block_t *tops;
     block_t stack[TRN_BB_STACK];
+    level_view_t L0;
     size_t ntop = 0, i;
     int32_t top_lv, bs, x, y;
     bbox_t bb;
@@ -552,6 +559,7 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
     }
     tops = (block_t *)ws;
     bb = points_bbox(pts, n);
+    L0 = pyr_view(p, 0);
     top_lv = p->nlevels;
     bs = (int32_t)(1u << (unsigned)top_lv);
     {
@@ -593,20 +601,11 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
                     continue;
                 }
                 if (cl == 0) {
-                    level_view_t L0;
-                    int64_t s;
                     if (excluded(ex, cx, cy)) {
                         continue;
                     }
-                    L0 = pyr_view(p, 0);
-                    s = score_level(&L0, t->lnp, pts, n, &bb, cx, cy);
+                    consider(best, &found, score_level(&L0, t->lnp, pts, n, &bb, cx, cy), cx, cy);
                     ++scored;
-                    if (better(found, best, s, cx, cy)) {
-                        best->x = cx;
-                        best->y = cy;
-                        best->score = s;
-                        found = 1;
-                    }
                 } else {
                     level_view_t Lc;
                     if (block_excluded(ex, win, cx, cy, h)) {
