@@ -411,11 +411,13 @@ trn_status_t trn_pyramid_build(trn_pyramid_t *p, const trn_vol_u8_t *dist, uint8
                         *o = min_u8(*o, v);
                     }
                     /* source element j sits at x = lo + j and feeds x - h */
+                    /* output index lo + j - h + pad >= 0 from j = h - lo - pad on */
                     n = dist->nx - lo;
-                    for (x = 0; x < n; ++x) {
-                        int32_t ox = lo + x - h + p->pad;
-                        if (ox >= 0) {
-                            row[ox] = min_u8(row[ox], src[x]);
+                    {
+                        int32_t j0 = h - lo - p->pad > 0 ? h - lo - p->pad : 0;
+                        uint8_t *o = row + (lo - h + p->pad);
+                        for (x = j0; x < n; ++x) {
+                            o[x] = min_u8(o[x], src[x]);
                         }
                     }
                 }
