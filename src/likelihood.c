@@ -527,6 +527,19 @@ static void sort_blocks(block_t *a, size_t n)
     }
 }
 
+/* The block of level `level` with corner (x, y), with its bound on level L. */
+static block_t bounded_block(const level_view_t *L, const trn_lnp_table_t *t,
+                             const trn_point_t *pts, size_t n, const bbox_t *bb, int32_t x,
+                             int32_t y, int32_t level)
+{
+    block_t b;
+    b.x = x;
+    b.y = y;
+    b.level = level;
+    b.bound = score_level(L, t->lnp, pts, n, bb, x, y);
+    return b;
+}
+
 #define TRN_BB_STACK (4 * TRN_MAX_LEVELS + 4)
 
 trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
@@ -571,12 +584,8 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
                 if (block_excluded(ex, win, x, y, bs)) {
                     continue;
                 }
-                tops[ntop].x = x;
-                tops[ntop].y = y;
-                tops[ntop].level = top_lv;
-                tops[ntop].bound = score_level(&L, t->lnp, pts, n, &bb, x, y);
+                tops[ntop++] = bounded_block(&L, t, pts, n, &bb, x, y, top_lv);
                 ++bounded;
-                ++ntop;
             }
         }
     }
@@ -590,6 +599,7 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
         while (sp > 0u) {
             block_t e = stack[--sp];
             block_t kids[4];
+            level_view_t Lc;
             size_t nk = 0, a, b;
             int32_t h, cl, k;
             if (found && e.bound < best->score) {
@@ -597,6 +607,7 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
             }
             h = (int32_t)(1u << (unsigned)(e.level - 1));
             cl = e.level - 1;
+            Lc = pyr_view(p, cl);
             for (k = 0; k < 4; ++k) {
                 int32_t cx = e.x + ((k & 1) ? h : 0), cy = e.y + ((k & 2) ? h : 0);
                 if (cx > win->x1 || cy > win->y1) {
@@ -609,17 +620,11 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
                     consider(best, &found, score_level(&L0, t->lnp, pts, n, &bb, cx, cy), cx, cy);
                     ++scored;
                 } else {
-                    level_view_t Lc;
                     if (block_excluded(ex, win, cx, cy, h)) {
                         continue;
                     }
-                    Lc = pyr_view(p, cl);
-                    kids[nk].x = cx;
-                    kids[nk].y = cy;
-                    kids[nk].level = cl;
-                    kids[nk].bound = score_level(&Lc, t->lnp, pts, n, &bb, cx, cy);
+                    kids[nk++] = bounded_block(&Lc, t, pts, n, &bb, cx, cy, cl);
                     ++bounded;
-                    ++nk;
                 }
             }
             /* insertion sort, then push worst first so the best pops next */
