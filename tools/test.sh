@@ -6,6 +6,8 @@
 #   3. aarch64:       configure, build, ctest (cross, tests under qemu-aarch64)
 #   4. arm-none-eabi: configure, build (bare-metal Cortex-R5F; prints libtrn.a size)
 #   5. host-release:  configure, build (Release -O2; the tools)
+#   6. tools/test.d/*.sh, in name order: further checks, one script each
+#      (each exits non-zero on failure; run with the repository as cwd)
 #
 # Stops at the first failure. Works from any directory.
 set -euo pipefail
@@ -78,3 +80,8 @@ step "arm-none-eabi build (size)" cmake --build --preset arm-none-eabi
 
 step "host-release configure" cmake --preset host-release
 step "host-release build (tools)" cmake --build --preset host-release
+
+shopt -s nullglob
+for stage in tools/test.d/*.sh; do
+  step "$(basename "$stage" .sh)" bash "$stage"
+done

@@ -1,0 +1,60 @@
+/* tools/trn/main.c - the `trn` host command line: `trn <subcommand> ...`.
+ *
+ * Subcommands are listed in commands.def (one line each) and live in
+ * cmd_<name>.c. This file only dispatches. */
+#include <stdio.h>
+#include <string.h>
+
+#include "commands.h"
+#include "trn/trn.h"
+
+typedef struct {
+  const char *name;
+  int (*run)(int argc, char **argv);
+  const char *summary;
+} command_t;
+
+static int cmd_version(int argc, char **argv);
+
+static const command_t k_commands[] = {
+#define TRN_COMMAND(sym, name, summary) {name, trn_cmd_##sym, summary},
+#include "commands.def"
+#undef TRN_COMMAND
+    {"version", cmd_version, "print the trn version"},
+};
+
+#define N_COMMANDS (sizeof k_commands / sizeof k_commands[0])
+
+static void usage(FILE *out) {
+  size_t i;
+  fprintf(out, "usage: trn <command> [options]   (trn <command> --help for its options)\n\ncommands:\n");
+  for (i = 0; i < N_COMMANDS; ++i) {
+    fprintf(out, "  %-12s %s\n", k_commands[i].name, k_commands[i].summary);
+  }
+}
+
+static int cmd_version(int argc, char **argv) {
+  (void)argc;
+  (void)argv;
+  printf("trn %s\n", TRN_VERSION_STRING);
+  return 0;
+}
+
+int main(int argc, char **argv) {
+  size_t i;
+  if (argc < 2) {
+    usage(stderr);
+    return 2;
+  }
+  if (strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0 || strcmp(argv[1], "help") == 0) {
+    usage(stdout);
+    return 0;
+  }
+  for (i = 0; i < N_COMMANDS; ++i) {
+    if (strcmp(argv[1], k_commands[i].name) == 0) {
+      return k_commands[i].run(argc - 1, argv + 1);
+    }
+  }
+  fprintf(stderr, "trn: unknown command '%s' (trn --help lists them)\n", argv[1]);
+  return 2;
+}
