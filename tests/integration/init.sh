@@ -36,7 +36,7 @@ echo "KT-SETUP vcan0 $TRN_GPIO_CHIP $TRN_GPIO_SIM"
 
 if grep -q 'trn.shell=1' /proc/cmdline; then
   echo "KT-SHELL (exit the shell to end the VM)"
-  setsid cttyhack sh
+  sh
   /bin/kt_exit 1
 fi
 
