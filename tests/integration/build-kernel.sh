@@ -18,7 +18,7 @@ set -euo pipefail
 HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 FRAG="$HERE/kernel.config"
 TARBALL=/usr/src/linux-source-6.1.tar.xz
-CACHE=${TRN_CACHE_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/trn}
+CACHE=${TRN_CACHE_DIR:-${XDG_CACHE_HOME:-${HOME:-/tmp}/.cache}/trn}
 JOBS=${TRN_KERNEL_JOBS:-2}
 
 die() { echo "build-kernel: $*" >&2; exit 1; }
