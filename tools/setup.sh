@@ -19,6 +19,7 @@ declare -A PKG_GROUPS=(
   [core]="cmake ninja-build make gcc libc6-dev pkg-config libcmocka-dev
           gcc-aarch64-linux-gnu binutils-aarch64-linux-gnu libc6-dev-arm64-cross
           libcmocka-dev:arm64 qemu-user
+          libgpiod-dev libgpiod-dev:arm64
           gcc-arm-none-eabi binutils-arm-none-eabi libnewlib-arm-none-eabi"
   # Benchmarks: the optional OpenCV reference in trn_bench (C++).
   [bench]="g++ libopencv-dev"
@@ -26,8 +27,12 @@ declare -A PKG_GROUPS=(
   [gdal]="libgdal-dev"
   # Plots of results.
   [plot]="python3 python3-matplotlib"
+  # Kernel integration tests (tests/integration/): build a small Linux from
+  # Debian's source, an initramfs of static programs, boot it under QEMU.
+  [vm]="linux-source-6.1 xz-utils make gcc bc bison flex libelf-dev cpio gzip
+        busybox-static qemu-system-x86 iproute2 can-utils libgpiod-dev gpiod"
 )
-GROUP_ORDER=(core bench gdal plot)
+GROUP_ORDER=(core bench gdal plot vm)
 
 usage() {
   echo "usage: $0 [group...]   (default: core)"
