@@ -172,6 +172,45 @@ static int64_t score_level(const level_view_t *L, const int32_t *lnp, const trn_
     return s;
 }
 
+/*
+ * Early exit for branch-and-bound. Every table entry is <= lmax (the
+ * table's largest), so after the first i points of a sum s, the full sum is
+ * at most s + (n - i) lmax. When that is below `cut` (the score to beat) the
+ * block or pose can be discarded without reading the other points: the
+ * decision is exactly the one the full sum would give (full < cut), so the
+ * search result does not change. Checked every CUT_CHUNK points.
+ * Returns 1 with the exact sum in *s_out, or 0 when proven < cut.
+ */
+#define CUT_CHUNK 128u
+
+static int score_cut(const level_view_t *L, const int32_t *lnp, const trn_point_t *pts, size_t n,
+                     const bbox_t *bb, int32_t px, int32_t py, int64_t cut, int32_t lmax,
+                     int64_t *s_out)
+{
+    int64_t s = 0;
+    size_t i = 0;
+    while (i < n) {
+        const size_t m = (n - i > CUT_CHUNK) ? CUT_CHUNK : n - i;
+        s += score_level(L, lnp, pts + i, m, bb, px, py);
+        i += m;
+        if (i < n && s + (int64_t)(n - i) * (int64_t)lmax < cut) {
+            return 0;
+        }
+    }
+    *s_out = s;
+    return 1;
+}
+
+static int32_t lnp_max(const trn_lnp_table_t *t)
+{
+    int32_t m = t->lnp[0];
+    unsigned d;
+    for (d = 1u; d <= (unsigned)t->cap; ++d) {
+        m = t->lnp[d] > m ? t->lnp[d] : m;
+    }
+    return m;
+}
+
 static level_view_t base_view(const trn_vol_u8_t *dist, uint8_t cap)
 {
     level_view_t L;
@@ -527,17 +566,21 @@ static void sort_blocks(block_t *a, size_t n)
     }
 }
 
-/* The block of level `level` with corner (x, y), with its bound on level L. */
-static block_t bounded_block(const level_view_t *L, const trn_lnp_table_t *t,
-                             const trn_point_t *pts, size_t n, const bbox_t *bb, int32_t x,
-                             int32_t y, int32_t level)
+/* The block of level `level` with corner (x, y), with its bound on level L.
+ * With found set, returns 0 (no block) when the bound is proven below
+ * `cut`, the best score so far: such a block would be pruned anyway. */
+static int bounded_block(const level_view_t *L, const trn_lnp_table_t *t, const trn_point_t *pts,
+                         size_t n, const bbox_t *bb, int32_t x, int32_t y, int32_t level,
+                         int found, int64_t cut, int32_t lmax, block_t *b)
 {
-    block_t b;
-    b.x = x;
-    b.y = y;
-    b.level = level;
-    b.bound = score_level(L, t->lnp, pts, n, bb, x, y);
-    return b;
+    b->x = x;
+    b->y = y;
+    b->level = level;
+    if (!found) {
+        b->bound = score_level(L, t->lnp, pts, n, bb, x, y);
+        return 1;
+    }
+    return score_cut(L, t->lnp, pts, n, bb, x, y, cut, lmax, &b->bound);
 }
 
 #define TRN_BB_STACK (4 * TRN_MAX_LEVELS + 4)
@@ -556,6 +599,7 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
     bbox_t bb;
     int found = 0;
     uint64_t scored = 0, bounded = 0;
+    int32_t lmax;
 
     if (p == NULL || t == NULL || best == NULL || ws == NULL) {
         return TRN_E_NULL;
@@ -573,6 +617,7 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
         return TRN_E_WORKSPACE;
     }
     tops = (block_t *)ws;
+    lmax = lnp_max(t);
     bb = points_bbox(pts, n);
     L0 = pyr_view(p, 0);
     top_lv = p->nlevels;
@@ -584,7 +629,10 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
                 if (block_excluded(ex, win, x, y, bs)) {
                     continue;
                 }
-                tops[ntop++] = bounded_block(&L, t, pts, n, &bb, x, y, top_lv);
+                if (bounded_block(&L, t, pts, n, &bb, x, y, top_lv, found, best->score, lmax,
+                                  &tops[ntop])) {
+                    ++ntop;
+                }
                 ++bounded;
             }
         }
@@ -617,13 +665,23 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
                     if (excluded(ex, cx, cy)) {
                         continue;
                     }
-                    consider(best, &found, score_level(&L0, t->lnp, pts, n, &bb, cx, cy), cx, cy);
+                    int64_t s;
+                    if (!found) {
+                        consider(best, &found, score_level(&L0, t->lnp, pts, n, &bb, cx, cy), cx,
+                                 cy);
+                    } else if (score_cut(&L0, t->lnp, pts, n, &bb, cx, cy, best->score, lmax,
+                                         &s)) {
+                        consider(best, &found, s, cx, cy);
+                    }
                     ++scored;
                 } else {
                     if (block_excluded(ex, win, cx, cy, h)) {
                         continue;
                     }
-                    kids[nk++] = bounded_block(&Lc, t, pts, n, &bb, cx, cy, cl);
+                    if (bounded_block(&Lc, t, pts, n, &bb, cx, cy, cl, found, best->score, lmax,
+                                      &kids[nk])) {
+                        ++nk;
+                    }
                     ++bounded;
                 }
             }
