@@ -376,12 +376,73 @@ size_t trn_pyramid_bytes(int32_t nx, int32_t ny, int32_t nz, int32_t nlevels)
 
 static uint8_t min_u8(uint8_t a, uint8_t b) { return a < b ? a : b; }
 
+#define PYR_LANES 16
+
+/* out[k] = min(a[k], a[k+h], b[k], b[k+h]) for k < PYR_LANES (a fixed-count
+ * loop over non-overlapping arrays: compilers vectorize it at -O2). */
+static void pyr_block(uint8_t *restrict out, const uint8_t *restrict a, const uint8_t *restrict b,
+                      size_t h)
+{
+    size_t k;
+    for (k = 0; k < PYR_LANES; ++k) {
+        out[k] = min_u8(min_u8(a[k], a[k + h]), min_u8(b[k], b[k + h]));
+    }
+}
+
+/* Source value at map column x of a row covering columns [lo, nx), cap elsewhere. */
+static uint8_t pyr_src(const uint8_t *r, int32_t lo, int32_t nx, int32_t x, uint8_t cap)
+{
+    return (r != NULL && x >= lo && x < nx) ? r[x - lo] : cap;
+}
+
+/*
+ * One output row of a pyramid level: for map column x in [-pad, nx), stored
+ * at row[x + pad], the minimum of S0 and S1 at x and x + h, where S0, S1 are
+ * the source rows r0, r1 (map columns [lo, nx), NULL = off the map) and
+ * anything off the map is cap. The interior, where every read is in range,
+ * goes by PYR_LANES-wide blocks (the last one may overlap the one before:
+ * the output never aliases a source); the few columns at each end one by one.
+ */
+static void pyr_row(uint8_t *row, const uint8_t *r0, const uint8_t *r1, int32_t lo, int32_t nx,
+                    int32_t pad, int32_t h, uint8_t cap)
+{
+    const int32_t pnx = nx + pad;
+    int32_t x, a, b;
+    if (r0 == NULL && r1 == NULL) {
+        for (x = 0; x < pnx; ++x) {
+            row[x] = cap;
+        }
+        return;
+    }
+    if (r0 == NULL) {
+        r0 = r1;
+    } else if (r1 == NULL) {
+        r1 = r0;
+    }
+    /* interior: lo <= x and x + h < nx */
+    a = lo > -pad ? lo : -pad;
+    b = nx - h; /* exclusive */
+    for (x = -pad; x < pnx - pad; ++x) {
+        if (x == a && b - a >= PYR_LANES) {
+            int32_t i;
+            for (i = a; i < b; i += PYR_LANES) {
+                const int32_t i0 = i + PYR_LANES <= b ? i : b - PYR_LANES;
+                pyr_block(row + (i0 + pad), r0 + (i0 - lo), r1 + (i0 - lo), (size_t)h);
+            }
+            x = b - 1;
+            continue;
+        }
+        row[x + pad] = min_u8(min_u8(pyr_src(r0, lo, nx, x, cap), pyr_src(r0, lo, nx, x + h, cap)),
+                              min_u8(pyr_src(r1, lo, nx, x, cap), pyr_src(r1, lo, nx, x + h, cap)));
+    }
+}
+
 trn_status_t trn_pyramid_build(trn_pyramid_t *p, const trn_vol_u8_t *dist, uint8_t cap,
                                int32_t nlevels, void *buf, size_t len)
 {
     trn_status_t st;
     size_t need, per;
-    int32_t lv, x, y, z;
+    int32_t lv, y, z;
 
     if (p == NULL || buf == NULL) {
         return TRN_E_NULL;
@@ -409,8 +470,7 @@ trn_status_t trn_pyramid_build(trn_pyramid_t *p, const trn_vol_u8_t *dist, uint8
     /* Level 1 = min of the base over 2x2 blocks; level l = min of level l-1
      * at (x, y), (x+h, y), (x, y+h), (x+h, y+h), h = 2^(l-1): the minimum over
      * a 2^l x 2^l block. Stored with `pad` cells on the low side in x and y;
-     * anything off the map is cap. Built a row at a time: each output row is
-     * the element-wise min of two source rows, each shifted by 0 and h. */
+     * anything off the map is cap. Built a row at a time (pyr_row). */
     for (lv = 1; lv <= nlevels; ++lv) {
         int32_t h = (int32_t)(1u << (unsigned)(lv - 1));
         uint8_t *out = p->level[lv - 1];
@@ -418,48 +478,24 @@ trn_status_t trn_pyramid_build(trn_pyramid_t *p, const trn_vol_u8_t *dist, uint8
             for (y = -p->pad; y < dist->ny; ++y) {
                 uint8_t *row = out + ((size_t)z * (size_t)p->pny + (size_t)(y + p->pad)) *
                                          (size_t)p->pnx;
-                int32_t k;
-                for (x = 0; x < p->pnx; ++x) {
-                    row[x] = cap;
-                }
+                const uint8_t *src[2];
+                int32_t k, lo;
                 for (k = 0; k < 2; ++k) {
                     int32_t sy = y + k * h; /* source row, map coordinates */
-                    const uint8_t *src;
-                    int32_t lo, n;
+                    src[k] = NULL;
                     if (lv == 1) {
                         /* base: rows 0..ny-1, columns 0..nx-1, no padding */
-                        if (sy < 0 || sy >= dist->ny) {
-                            continue;
+                        if (sy >= 0 && sy < dist->ny) {
+                            src[k] = dist->data + ((size_t)z * (size_t)dist->ny + (size_t)sy) *
+                                                      (size_t)dist->nx;
                         }
-                        src = dist->data + ((size_t)z * (size_t)dist->ny + (size_t)sy) *
-                                               (size_t)dist->nx;
-                        lo = 0;
-                    } else {
-                        if (sy >= dist->ny) { /* sy >= -pad always */
-                            continue;
-                        }
-                        src = p->level[lv - 2] +
-                              ((size_t)z * (size_t)p->pny + (size_t)(sy + p->pad)) * (size_t)p->pnx;
-                        lo = -p->pad;
-                    }
-                    /* out(x) = min(out(x), src(x), src(x+h)) over x in [-pad, nx-1];
-                     * src is defined on [lo, nx-1]. */
-                    for (x = lo; x < dist->nx; ++x) {
-                        uint8_t v = src[x - lo];
-                        uint8_t *o = &row[x + p->pad];
-                        *o = min_u8(*o, v);
-                    }
-                    /* source element j sits at x = lo + j and feeds x - h */
-                    /* output index lo + j - h + pad >= 0 from j = h - lo - pad on */
-                    n = dist->nx - lo;
-                    {
-                        int32_t j0 = h - lo - p->pad > 0 ? h - lo - p->pad : 0;
-                        uint8_t *o = row + (lo - h + p->pad);
-                        for (x = j0; x < n; ++x) {
-                            o[x] = min_u8(o[x], src[x]);
-                        }
+                    } else if (sy < dist->ny) { /* sy >= -pad always */
+                        src[k] = p->level[lv - 2] + ((size_t)z * (size_t)p->pny +
+                                                     (size_t)(sy + p->pad)) * (size_t)p->pnx;
                     }
                 }
+                lo = lv == 1 ? 0 : -p->pad;
+                pyr_row(row, src[0], src[1], lo, dist->nx, p->pad, h, cap);
             }
         }
     }

@@ -201,18 +201,16 @@ static void test_score_pose_vs_naive(void **state)
 
 /* ---- pyramid: every level equals a brute-force block minimum ---------- */
 
-static void test_pyramid_vs_bruteforce(void **state)
+/* Every level of one random volume against a brute-force block minimum. */
+static void pyramid_case(int NX, int NY, int NZ, int max_levels, trn_rng_t *r)
 {
-    enum { NX = 19, NY = 13, NZ = 3 };
-    static uint8_t buf[NX * NY * NZ];
+    uint8_t *buf = malloc((size_t)NX * NY * NZ);
     trn_vol_u8_t v;
     trn_pyramid_t p;
-    trn_rng_t r;
     int lv, nl;
-    (void)state;
-    trn_rng_seed(&r, 8);
-    random_dist(&v, buf, sizeof buf, NX, NY, NZ, 40, &r);
-    for (nl = 1; nl <= 4; ++nl) {
+    assert_non_null(buf);
+    random_dist(&v, buf, (size_t)NX * NY * NZ, NX, NY, NZ, 40, r);
+    for (nl = 1; nl <= max_levels; ++nl) {
         size_t bytes = trn_pyramid_bytes(NX, NY, NZ, nl);
         uint8_t *pb = malloc(bytes);
         assert_non_null(pb);
@@ -242,6 +240,23 @@ static void test_pyramid_vs_bruteforce(void **state)
             }
         }
         free(pb);
+    }
+    free(buf);
+}
+
+/* Shapes cover rows narrower than one 16-byte block, exactly one block,
+ * one block plus a tail, several blocks, and levels whose shift h or
+ * padding is wider than the row. */
+static void test_pyramid_vs_bruteforce(void **state)
+{
+    static const int shapes[][3] = {{19, 13, 3}, {1, 1, 1},  {5, 40, 2},  {16, 3, 2},
+                                    {17, 9, 1},  {33, 7, 2}, {47, 21, 2}, {70, 5, 1}};
+    trn_rng_t r;
+    size_t i;
+    (void)state;
+    trn_rng_seed(&r, 8);
+    for (i = 0; i < sizeof shapes / sizeof shapes[0]; ++i) {
+        pyramid_case(shapes[i][0], shapes[i][1], shapes[i][2], 5, &r);
     }
 }
 
