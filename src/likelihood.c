@@ -43,11 +43,18 @@ static double ln_p1(uint32_t dc, const trn_lik_cfg_t *cfg)
 trn_status_t trn_outlier_density(const trn_vol_u8_t *dist, const trn_lik_cfg_t *cfg,
                                  double *k_per_m)
 {
-    uint32_t hist[TRN_CHAMFER_CAP_MAX + 1];
+    /* Four partial histograms, voxel i counted in hist[i % 4]: a run of equal
+     * distances (long runs of cap are the norm) then increments four
+     * counters in turn instead of waiting on one. Each fits in uint32_t:
+     * at most TRN_MAX_DIM^2 * TRN_MAX_ZBINS / 4 voxels. */
+    uint32_t hist[4][TRN_CHAMFER_CAP_MAX + 1];
     trn_status_t st;
     size_t i, total;
     double k = 0.0;
     uint32_t d;
+    unsigned j;
+    uint8_t vmax = 0u;
+    const uint8_t *v;
 
     if (dist == NULL || cfg == NULL || k_per_m == NULL) {
         return TRN_E_NULL;
@@ -55,20 +62,41 @@ trn_status_t trn_outlier_density(const trn_vol_u8_t *dist, const trn_lik_cfg_t *
     if ((st = trn_vol_u8_check(dist)) != TRN_OK || (st = trn_lik_cfg_check(cfg)) != TRN_OK) {
         return st;
     }
-    for (d = 0; d <= TRN_CHAMFER_CAP_MAX; ++d) {
-        hist[d] = 0u;
+    for (j = 0u; j < 4u; ++j) {
+        for (d = 0; d <= TRN_CHAMFER_CAP_MAX; ++d) {
+            hist[j][d] = 0u;
+        }
     }
     total = (size_t)dist->nx * (size_t)dist->ny * (size_t)dist->nz;
-    for (i = 0; i < total; ++i) {
-        uint8_t v = dist->data[i];
-        if (v > cfg->cap) {
+    v = dist->data;
+    for (i = 0; i + 4u <= total; i += 4u) {
+        const uint8_t a = v[i], b = v[i + 1u], c = v[i + 2u], e = v[i + 3u];
+        const uint8_t m = (uint8_t)((a > b ? a : b) > (c > e ? c : e) ? (a > b ? a : b)
+                                                                       : (c > e ? c : e));
+        vmax = m > vmax ? m : vmax;
+        if (vmax > TRN_CHAMFER_CAP_MAX) {
+            return TRN_E_ARG; /* keeps every index below in range */
+        }
+        hist[0][a] += 1u;
+        hist[1][b] += 1u;
+        hist[2][c] += 1u;
+        hist[3][e] += 1u;
+    }
+    for (; i < total; ++i) {
+        vmax = v[i] > vmax ? v[i] : vmax;
+        if (vmax > TRN_CHAMFER_CAP_MAX) {
             return TRN_E_ARG;
         }
-        hist[v] += 1u;
+        hist[0][v[i]] += 1u;
+    }
+    if (vmax > cfg->cap) {
+        return TRN_E_ARG;
     }
     for (d = 0; d <= cfg->cap; ++d) {
-        if (hist[d] != 0u) {
-            k += (double)hist[d] * exp(ln_p1(d, cfg));
+        const double n = (double)hist[0][d] + (double)hist[1][d] + (double)hist[2][d] +
+                         (double)hist[3][d];
+        if (n != 0.0) {
+            k += n * exp(ln_p1(d, cfg));
         }
     }
     *k_per_m = k / (double)total;

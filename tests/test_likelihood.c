@@ -247,6 +247,40 @@ static void pyramid_case(int NX, int NY, int NZ, int max_levels, trn_rng_t *r)
 /* Shapes cover rows narrower than one 16-byte block, exactly one block,
  * one block plus a tail, several blocks, and levels whose shift h or
  * padding is wider than the row. */
+/* K against a plain per-voxel double sum, on volumes whose voxel counts
+ * are not multiples of 4 (the histogram's tail) and on all-cap ones. */
+static void test_k_vs_naive_sum(void **state)
+{
+    static const int shapes[][3] = {{1, 1, 1}, {3, 1, 1}, {5, 7, 3}, {16, 9, 2}, {31, 17, 5}};
+    trn_lik_cfg_t c = cfg_of(0.1f, 0.1f, 0.95f, 40);
+    trn_rng_t r;
+    size_t i, j;
+    (void)state;
+    trn_rng_seed(&r, 31);
+    for (i = 0; i < sizeof shapes / sizeof shapes[0]; ++i) {
+        size_t nv = (size_t)shapes[i][0] * shapes[i][1] * shapes[i][2];
+        uint8_t *buf = malloc(nv);
+        trn_vol_u8_t v;
+        int rep;
+        assert_non_null(buf);
+        assert_int_equal(trn_vol_u8_init(&v, buf, nv, shapes[i][0], shapes[i][1], shapes[i][2]),
+                         TRN_OK);
+        for (rep = 0; rep < 2; ++rep) {
+            double k = 0.0, want = 0.0;
+            for (j = 0; j < nv; ++j) {
+                double d, sg = (double)c.sigma_m;
+                buf[j] = rep == 0 ? (uint8_t)trn_rng_int(&r, 0, 40) : (uint8_t)40;
+                d = buf[j] / 3.0 * (double)c.cell_m;
+                want += exp(-d * d / (2 * sg * sg)) / (sg * sqrt(2 * M_PI));
+            }
+            want /= (double)nv;
+            assert_int_equal(trn_outlier_density(&v, &c, &k), TRN_OK);
+            assert_true(fabs(k - want) <= 1e-9 * want);
+        }
+        free(buf);
+    }
+}
+
 static void test_pyramid_vs_bruteforce(void **state)
 {
     static const int shapes[][3] = {{19, 13, 3}, {1, 1, 1},  {5, 40, 2},  {16, 3, 2},
@@ -480,6 +514,21 @@ static void test_bad_inputs(void **state)
     assert_int_equal(trn_outlier_density(&v, &c, NULL), TRN_E_NULL);
     bad = v; bad.nz = 0; assert_int_equal(trn_outlier_density(&bad, &c, &k), TRN_E_SIZE);
     bc = c; bc.cap = 4; assert_int_equal(trn_outlier_density(&v, &bc, &k), TRN_E_ARG);
+    {
+        /* one voxel above cap (or above any table index) anywhere: each lane
+         * of the first 4-voxel group, the middle, the last two voxels */
+        static const size_t at[] = {0u, 1u, 2u, 3u, 181u, 358u, 359u};
+        static const uint8_t val[] = {21u, 255u};
+        size_t ia, iv;
+        for (ia = 0; ia < sizeof at / sizeof at[0]; ++ia) {
+            for (iv = 0; iv < 2u; ++iv) {
+                buf[at[ia]] = val[iv];
+                assert_int_equal(trn_outlier_density(&v, &c, &k), TRN_E_ARG);
+                buf[at[ia]] = 5u;
+            }
+        }
+        assert_int_equal(trn_outlier_density(&v, &c, &k), TRN_OK);
+    }
 
     /* table */
     assert_int_equal(trn_lnp_table_build(NULL, &c, 1.0), TRN_E_NULL);
@@ -554,6 +603,7 @@ int main(void)
         cmocka_unit_test(test_k_plane_analytic),
         cmocka_unit_test(test_k_against_integration),
         cmocka_unit_test(test_score_pose_vs_naive),
+        cmocka_unit_test(test_k_vs_naive_sum),
         cmocka_unit_test(test_pyramid_vs_bruteforce),
         cmocka_unit_test(test_bb_equals_exhaustive),
         cmocka_unit_test(test_ties_resolved_identically),
