@@ -770,3 +770,66 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
     }
     return found ? TRN_OK : TRN_E_NODATA;
 }
+
+/* ------------------------------------------------------------ point order */
+
+trn_status_t trn_points_order(trn_point_t *pts, size_t n, int32_t nz)
+{
+    size_t count[TRN_MAX_ZBINS], next[TRN_MAX_ZBINS], end[TRN_MAX_ZBINS];
+    int32_t rank[TRN_MAX_ZBINS];
+    size_t i, pos, moves;
+    int32_t a, b, z;
+
+    if (pts == NULL) {
+        return TRN_E_NULL;
+    }
+    if (nz < 1 || nz > TRN_MAX_ZBINS) {
+        return TRN_E_ARG;
+    }
+    if (!points_z_ok(pts, n, nz)) {
+        return TRN_E_ARG;
+    }
+    for (z = 0; z < nz; ++z) {
+        count[z] = 0u;
+        rank[z] = z;
+    }
+    for (i = 0; i < n; ++i) {
+        ++count[pts[i].z];
+    }
+    /* bins by increasing population, ties by bin (insertion sort, nz <= 255) */
+    for (a = 1; a < nz; ++a) {
+        int32_t v = rank[a];
+        b = a;
+        while (b > 0 && (count[rank[b - 1]] > count[v] ||
+                         (count[rank[b - 1]] == count[v] && rank[b - 1] > v))) {
+            rank[b] = rank[b - 1];
+            --b;
+        }
+        rank[b] = v;
+    }
+    pos = 0u;
+    for (a = 0; a < nz; ++a) {
+        next[rank[a]] = pos;
+        pos += count[rank[a]];
+        end[rank[a]] = pos;
+    }
+    /* In-place bucket permutation: every inner step puts one point into its
+     * bin's next free slot for good, so there are at most n of them. */
+    moves = 0u;
+    for (a = 0; a < nz; ++a) {
+        const int32_t bin = rank[a];
+        while (next[bin] < end[bin] && moves <= n) {
+            trn_point_t p = pts[next[bin]];
+            while (p.z != bin && moves <= n) {
+                const size_t slot = next[p.z]++;
+                trn_point_t q = pts[slot];
+                pts[slot] = p;
+                p = q;
+                ++moves;
+            }
+            pts[next[bin]++] = p;
+            ++moves;
+        }
+    }
+    return TRN_OK;
+}

@@ -281,6 +281,80 @@ static void test_k_vs_naive_sum(void **state)
     }
 }
 
+static int point_cmp(const void *a, const void *b)
+{
+    const trn_point_t *p = a, *q = b;
+    if (p->z != q->z) {
+        return p->z < q->z ? -1 : 1;
+    }
+    if (p->y != q->y) {
+        return p->y < q->y ? -1 : 1;
+    }
+    return p->x < q->x ? -1 : (p->x > q->x ? 1 : 0);
+}
+
+/* trn_points_order: a permutation, bins contiguous by increasing population
+ * (ties: lower bin first), and the same best pose and score from both
+ * searches before and after. */
+static void test_points_order(void **state)
+{
+    enum { N = 3000 };
+    static trn_point_t pts[N], orig[N], sa[N], sb[N];
+    trn_rng_t r;
+    int trial;
+    (void)state;
+    trn_rng_seed(&r, 77);
+    for (trial = 0; trial < 40; ++trial) {
+        int nz = trn_rng_int(&r, 1, trial < 30 ? 16 : TRN_MAX_ZBINS);
+        size_t n = (size_t)trn_rng_int(&r, 0, N), i, cnt[TRN_MAX_ZBINS] = {0};
+        int skew = trn_rng_int(&r, 0, 2);
+        for (i = 0; i < n; ++i) {
+            int z = trn_rng_int(&r, 0, nz - 1);
+            if (skew == 1 && trn_rng_unit(&r) < 0.7) {
+                z = nz / 2; /* one crowded bin, as the ground is */
+            }
+            pts[i].x = (int16_t)trn_rng_int(&r, -20, 20);
+            pts[i].y = (int16_t)trn_rng_int(&r, -20, 20);
+            pts[i].z = (int16_t)z;
+            ++cnt[z];
+        }
+        memcpy(orig, pts, n * sizeof pts[0]);
+        assert_int_equal(trn_points_order(pts, n, nz), TRN_OK);
+        /* a permutation */
+        memcpy(sa, orig, n * sizeof pts[0]);
+        memcpy(sb, pts, n * sizeof pts[0]);
+        qsort(sa, n, sizeof sa[0], point_cmp);
+        qsort(sb, n, sizeof sb[0], point_cmp);
+        if (n > 0u) {
+            assert_memory_equal(sa, sb, n * sizeof sa[0]);
+        }
+        /* bins contiguous, in order of population */
+        for (i = 1; i < n; ++i) {
+            int zp = pts[i - 1].z, zc = pts[i].z;
+            if (zp != zc) {
+                size_t j;
+                assert_true(cnt[zp] < cnt[zc] || (cnt[zp] == cnt[zc] && zp < zc));
+                for (j = i + 1; j < n; ++j) {
+                    assert_true(pts[j].z != zp); /* zp's run has ended */
+                }
+            }
+        }
+    }
+    /* bad inputs leave the points unchanged */
+    pts[0].x = 1; pts[0].y = 2; pts[0].z = 3;
+    pts[1].x = 4; pts[1].y = 5; pts[1].z = 0;
+    memcpy(orig, pts, 2 * sizeof pts[0]);
+    assert_int_equal(trn_points_order(NULL, 2, 4), TRN_E_NULL);
+    assert_int_equal(trn_points_order(pts, 2, 0), TRN_E_ARG);
+    assert_int_equal(trn_points_order(pts, 2, TRN_MAX_ZBINS + 1), TRN_E_ARG);
+    assert_int_equal(trn_points_order(pts, 2, 3), TRN_E_ARG); /* z = 3 outside 0..2 */
+    pts[1].z = -1;
+    assert_int_equal(trn_points_order(pts, 2, 8), TRN_E_ARG);
+    pts[1].z = 0;
+    assert_memory_equal(pts, orig, 2 * sizeof pts[0]);
+    assert_int_equal(trn_points_order(pts, 0, 8), TRN_OK);
+}
+
 static void test_pyramid_vs_bruteforce(void **state)
 {
     static const int shapes[][3] = {{19, 13, 3}, {1, 1, 1},  {5, 40, 2},  {16, 3, 2},
@@ -416,6 +490,16 @@ static void test_bb_equals_exhaustive(void **state)
                 trn_status_t a = trn_search_exhaustive(&s.vd, &s.t, pts, n, &w, exp_, &be, &se);
                 trn_status_t b = trn_search_bb(&p, &s.t, pts, n, &w, exp_, ws, wsb, &bf, &sf);
                 assert_int_equal(a, b);
+                if (q % 2 == 1) {
+                    /* rare bins first: the early exits change, the answer must not */
+                    trn_best_t bo;
+                    assert_int_equal(trn_points_order(pts, n, s.nz), TRN_OK);
+                    assert_int_equal(trn_search_bb(&p, &s.t, pts, n, &w, exp_, ws, wsb, &bo, NULL),
+                                     b);
+                    if (b == TRN_OK) {
+                        assert_true(bo.x == bf.x && bo.y == bf.y && bo.score == bf.score);
+                    }
+                }
                 if (a == TRN_OK) {
                     assert_int_equal(be.x, bf.x);
                     assert_int_equal(be.y, bf.y);
@@ -604,6 +688,7 @@ int main(void)
         cmocka_unit_test(test_k_against_integration),
         cmocka_unit_test(test_score_pose_vs_naive),
         cmocka_unit_test(test_k_vs_naive_sum),
+        cmocka_unit_test(test_points_order),
         cmocka_unit_test(test_pyramid_vs_bruteforce),
         cmocka_unit_test(test_bb_equals_exhaustive),
         cmocka_unit_test(test_ties_resolved_identically),
