@@ -201,31 +201,55 @@ static int64_t score_level(const level_view_t *L, const int32_t *lnp, const trn_
 }
 
 /*
- * Early exit for branch-and-bound. Every table entry is <= lmax (the
- * table's largest), so after the first i points of a sum s, the full sum is
- * at most s + (n - i) lmax. When that is below `cut` (the score to beat) the
- * block or pose can be discarded without reading the other points: the
- * decision is exactly the one the full sum would give (full < cut), so the
- * search result does not change. Checked every CUT_CHUNK points.
- * Returns 1 with the exact sum in *s_out, or 0 when proven < cut.
+ * Early exit for branch-and-bound. The points are split into BB_NCH chunks
+ * (chunk c = [chunk_lo(c), chunk_lo(c + 1))). A block or pose is scored
+ * chunk by chunk against `up`, upper bounds of the sums of chunks c.. on:
+ * after chunk c, if the sum so far plus up[c + 1] is below `cut` (the best
+ * score so far), the full sum is too, and the block or pose is discarded
+ * unread: the decision the full sum would give, so results do not change.
+ * The bounds: for a top-level block, (points left) x the table's largest
+ * entry; for a child, its parent's own chunk sums, which bound the child's
+ * term by term (the child's block lies inside the parent's, so its minimum
+ * distance per point is no smaller, and ln p does not increase).
  */
-#define CUT_CHUNK 128u
+#define BB_NCH 32u
 
-static int score_cut(const level_view_t *L, const int32_t *lnp, const trn_point_t *pts, size_t n,
-                     const bbox_t *bb, int32_t px, int32_t py, int64_t cut, int32_t lmax,
-                     int64_t *s_out)
+/** Sums of chunks c..BB_NCH-1 for c = 0..BB_NCH (s[BB_NCH] = 0). */
+typedef struct {
+    int64_t s[BB_NCH + 1u];
+} suffix_t;
+
+static size_t chunk_lo(size_t n, size_t c)
 {
+    const size_t q = n / BB_NCH, r = n % BB_NCH;
+    return c * q + (c < r ? c : r);
+}
+
+/* Score (px, py) on L by chunks. up: upper bounds as above, or NULL for no
+ * exit. Returns 0 when proven below cut; else 1 with the sum in *total and,
+ * if suf is not NULL, the chunk suffix sums in *suf. */
+static int score_chunks(const level_view_t *L, const int32_t *lnp, const trn_point_t *pts,
+                        size_t n, const bbox_t *bb, int32_t px, int32_t py, const suffix_t *up,
+                        int64_t cut, int64_t *total, suffix_t *suf)
+{
+    int64_t cs[BB_NCH];
     int64_t s = 0;
-    size_t i = 0;
-    while (i < n) {
-        const size_t m = (n - i > CUT_CHUNK) ? CUT_CHUNK : n - i;
-        s += score_level(L, lnp, pts + i, m, bb, px, py);
-        i += m;
-        if (i < n && s + (int64_t)(n - i) * (int64_t)lmax < cut) {
+    size_t c;
+    for (c = 0; c < BB_NCH; ++c) {
+        const size_t lo = chunk_lo(n, c), hi = chunk_lo(n, c + 1u);
+        cs[c] = hi > lo ? score_level(L, lnp, pts + lo, hi - lo, bb, px, py) : 0;
+        s += cs[c];
+        if (up != NULL && c + 1u < BB_NCH && s + up->s[c + 1u] < cut) {
             return 0;
         }
     }
-    *s_out = s;
+    *total = s;
+    if (suf != NULL) {
+        suf->s[BB_NCH] = 0;
+        for (c = BB_NCH; c-- > 0u;) {
+            suf->s[c] = suf->s[c + 1u] + cs[c];
+        }
+    }
     return 1;
 }
 
@@ -535,6 +559,7 @@ trn_status_t trn_pyramid_build(trn_pyramid_t *p, const trn_vol_u8_t *dist, uint8
 typedef struct {
     int32_t x, y;
     int32_t level;
+    int32_t slot; /* where its chunk sums are (tops: tops_suf; kids: kid_suf) */
     int64_t bound;
 } block_t;
 
@@ -555,17 +580,21 @@ static level_view_t pyr_view(const trn_pyramid_t *p, int32_t lv)
 
 static int32_t ceil_div(int32_t a, int32_t b) { return (a + b - 1) / b; }
 
+#define TRN_BB_STACK (4u * TRN_MAX_LEVELS + 4u)
+
 size_t trn_search_bb_workspace_bytes(const trn_pyramid_t *p, const trn_window_t *win)
 {
     int32_t bs;
+    size_t ntop;
     if (p == NULL || win == NULL || p->nlevels < 1 || p->nlevels > TRN_MAX_LEVELS ||
         win->x1 < win->x0 || win->y1 < win->y0 || win->x1 - win->x0 >= TRN_MAX_DIM ||
         win->y1 - win->y0 >= TRN_MAX_DIM) {
         return 0u;
     }
     bs = (int32_t)(1u << (unsigned)p->nlevels);
-    return TRN_ALIGN_UP((size_t)ceil_div(win->x1 - win->x0 + 1, bs) *
-                        (size_t)ceil_div(win->y1 - win->y0 + 1, bs) * sizeof(block_t));
+    ntop = (size_t)ceil_div(win->x1 - win->x0 + 1, bs) * (size_t)ceil_div(win->y1 - win->y0 + 1, bs);
+    return TRN_ALIGN_UP(ntop * sizeof(block_t)) + TRN_ALIGN_UP(ntop * sizeof(suffix_t)) +
+           TRN_ALIGN_UP((TRN_BB_STACK + 4u) * sizeof(suffix_t));
 }
 
 /* Is every pose of block (x, y, size s) that lies in the window excluded? */
@@ -630,25 +659,6 @@ static void sort_blocks(block_t *a, size_t n)
     }
 }
 
-/* The block of level `level` with corner (x, y), with its bound on level L.
- * With found set, returns 0 (no block) when the bound is proven below
- * `cut`, the best score so far: such a block would be pruned anyway. */
-static int bounded_block(const level_view_t *L, const trn_lnp_table_t *t, const trn_point_t *pts,
-                         size_t n, const bbox_t *bb, int32_t x, int32_t y, int32_t level,
-                         int found, int64_t cut, int32_t lmax, block_t *b)
-{
-    b->x = x;
-    b->y = y;
-    b->level = level;
-    if (!found) {
-        b->bound = score_level(L, t->lnp, pts, n, bb, x, y);
-        return 1;
-    }
-    return score_cut(L, t->lnp, pts, n, bb, x, y, cut, lmax, &b->bound);
-}
-
-#define TRN_BB_STACK (4 * TRN_MAX_LEVELS + 4)
-
 trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
                            const trn_point_t *pts, size_t n, const trn_window_t *win,
                            const trn_exclusion_t *ex, void *ws, size_t ws_bytes,
@@ -656,14 +666,15 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
 {
     trn_status_t st;
     block_t *tops;
+    suffix_t *tops_suf, *stack_suf, *kid_suf;
+    suffix_t lim; /* (points from chunk c on) x largest table entry */
     block_t stack[TRN_BB_STACK];
     level_view_t L0;
-    size_t ntop = 0, i;
-    int32_t top_lv, bs, x, y;
+    size_t ntop = 0, ntop_max, i, c;
+    int32_t top_lv, bs, x, y, lmax;
     bbox_t bb;
     int found = 0;
     uint64_t scored = 0, bounded = 0;
-    int32_t lmax;
 
     if (p == NULL || t == NULL || best == NULL || ws == NULL) {
         return TRN_E_NULL;
@@ -680,24 +691,36 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
     if (ws_bytes < trn_search_bb_workspace_bytes(p, win)) {
         return TRN_E_WORKSPACE;
     }
-    tops = (block_t *)ws;
-    lmax = lnp_max(t);
-    bb = points_bbox(pts, n);
-    L0 = pyr_view(p, 0);
     top_lv = p->nlevels;
     bs = (int32_t)(1u << (unsigned)top_lv);
+    ntop_max = (size_t)ceil_div(win->x1 - win->x0 + 1, bs) * (size_t)ceil_div(win->y1 - win->y0 + 1, bs);
+    tops = (block_t *)ws;
+    tops_suf = (suffix_t *)(void *)((uint8_t *)ws + TRN_ALIGN_UP(ntop_max * sizeof(block_t)));
+    stack_suf = tops_suf + ntop_max;
+    kid_suf = stack_suf + TRN_BB_STACK;
+    lmax = lnp_max(t);
+    for (c = 0; c <= BB_NCH; ++c) {
+        lim.s[c] = (int64_t)(n - chunk_lo(n, c)) * (int64_t)lmax;
+    }
+    bb = points_bbox(pts, n);
+    L0 = pyr_view(p, 0);
     {
         level_view_t L = pyr_view(p, top_lv);
         for (y = win->y0; y <= win->y1; y += bs) {
             for (x = win->x0; x <= win->x1; x += bs) {
+                block_t *tb = &tops[ntop];
                 if (block_excluded(ex, win, x, y, bs)) {
                     continue;
                 }
-                if (bounded_block(&L, t, pts, n, &bb, x, y, top_lv, found, best->score, lmax,
-                                  &tops[ntop])) {
+                ++bounded;
+                tb->x = x;
+                tb->y = y;
+                tb->level = top_lv;
+                tb->slot = (int32_t)ntop;
+                if (score_chunks(&L, t->lnp, pts, n, &bb, x, y, found ? &lim : NULL,
+                                 best->score, &tb->bound, &tops_suf[ntop])) {
                     ++ntop;
                 }
-                ++bounded;
             }
         }
     }
@@ -707,9 +730,11 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
         if (found && tops[i].bound < best->score) {
             break; /* sorted: no later block can hold a better pose */
         }
+        stack_suf[0] = tops_suf[tops[i].slot];
         stack[sp++] = tops[i];
         while (sp > 0u) {
             block_t e = stack[--sp];
+            const suffix_t *eup = &stack_suf[sp]; /* e's chunk sums, until kids are pushed */
             block_t kids[4];
             level_view_t Lc;
             size_t nk = 0, a, b;
@@ -722,6 +747,7 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
             Lc = pyr_view(p, cl);
             for (k = 0; k < 4; ++k) {
                 int32_t cx = e.x + ((k & 1) ? h : 0), cy = e.y + ((k & 2) ? h : 0);
+                int64_t s;
                 if (cx > win->x1 || cy > win->y1) {
                     continue;
                 }
@@ -729,24 +755,24 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
                     if (excluded(ex, cx, cy)) {
                         continue;
                     }
-                    int64_t s;
-                    if (!found) {
-                        consider(best, &found, score_level(&L0, t->lnp, pts, n, &bb, cx, cy), cx,
-                                 cy);
-                    } else if (score_cut(&L0, t->lnp, pts, n, &bb, cx, cy, best->score, lmax,
-                                         &s)) {
+                    ++scored;
+                    if (score_chunks(&L0, t->lnp, pts, n, &bb, cx, cy, found ? eup : NULL,
+                                     best->score, &s, NULL)) {
                         consider(best, &found, s, cx, cy);
                     }
-                    ++scored;
                 } else {
                     if (block_excluded(ex, win, cx, cy, h)) {
                         continue;
                     }
-                    if (bounded_block(&Lc, t, pts, n, &bb, cx, cy, cl, found, best->score, lmax,
-                                      &kids[nk])) {
+                    ++bounded;
+                    kids[nk].x = cx;
+                    kids[nk].y = cy;
+                    kids[nk].level = cl;
+                    kids[nk].slot = k;
+                    if (score_chunks(&Lc, t->lnp, pts, n, &bb, cx, cy, found ? eup : NULL,
+                                     best->score, &kids[nk].bound, &kid_suf[k])) {
                         ++nk;
                     }
-                    ++bounded;
                 }
             }
             /* insertion sort, then push worst first so the best pops next */
@@ -760,6 +786,7 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
                 kids[b] = v;
             }
             for (a = nk; a-- > 0u;) {
+                stack_suf[sp] = kid_suf[kids[a].slot];
                 stack[sp++] = kids[a];
             }
         }

@@ -573,7 +573,7 @@ static void test_bad_inputs(void **state)
     trn_window_t w = {1, 1, 8, 7}, off = {5, 5, NX, 6}, inv = {5, 5, 4, 6};
     trn_exclusion_t negr = {3, 3, -1}, all = {4, 4, 100};
     trn_best_t b;
-    static uint8_t ws[4096];
+    static uint8_t ws[16384];
     double k;
     int64_t s;
     trn_lik_cfg_t bc;
@@ -656,6 +656,7 @@ static void test_bad_inputs(void **state)
     assert_int_equal(trn_pyramid_build(&p, &v, 20, 2, pbuf, sizeof pbuf), TRN_OK);
 
     /* branch and bound */
+    assert_true(trn_search_bb_workspace_bytes(&p, &w) <= sizeof ws);
     assert_int_equal(trn_search_bb_workspace_bytes(NULL, &w), 0u);
     assert_int_equal(trn_search_bb_workspace_bytes(&p, &inv), 0u);
     assert_int_equal(trn_search_bb(NULL, &t, pts, 2, &w, NULL, ws, sizeof ws, &b, NULL), TRN_E_NULL);
