@@ -43,11 +43,18 @@ static double ln_p1(uint32_t dc, const trn_lik_cfg_t *cfg)
 trn_status_t trn_outlier_density(const trn_vol_u8_t *dist, const trn_lik_cfg_t *cfg,
                                  double *k_per_m)
 {
-    uint32_t hist[TRN_CHAMFER_CAP_MAX + 1];
+    /* Four partial histograms, voxel i counted in hist[i % 4]: a run of equal
+     * distances (long runs of cap are the norm) then increments four
+     * counters in turn instead of waiting on one. Each fits in uint32_t:
+     * at most TRN_MAX_DIM^2 * TRN_MAX_ZBINS / 4 voxels. */
+    uint32_t hist[4][TRN_CHAMFER_CAP_MAX + 1];
     trn_status_t st;
     size_t i, total;
     double k = 0.0;
     uint32_t d;
+    unsigned j;
+    uint8_t vmax = 0u;
+    const uint8_t *v;
 
     if (dist == NULL || cfg == NULL || k_per_m == NULL) {
         return TRN_E_NULL;
@@ -55,20 +62,41 @@ trn_status_t trn_outlier_density(const trn_vol_u8_t *dist, const trn_lik_cfg_t *
     if ((st = trn_vol_u8_check(dist)) != TRN_OK || (st = trn_lik_cfg_check(cfg)) != TRN_OK) {
         return st;
     }
-    for (d = 0; d <= TRN_CHAMFER_CAP_MAX; ++d) {
-        hist[d] = 0u;
+    for (j = 0u; j < 4u; ++j) {
+        for (d = 0; d <= TRN_CHAMFER_CAP_MAX; ++d) {
+            hist[j][d] = 0u;
+        }
     }
     total = (size_t)dist->nx * (size_t)dist->ny * (size_t)dist->nz;
-    for (i = 0; i < total; ++i) {
-        uint8_t v = dist->data[i];
-        if (v > cfg->cap) {
+    v = dist->data;
+    for (i = 0; i + 4u <= total; i += 4u) {
+        const uint8_t a = v[i], b = v[i + 1u], c = v[i + 2u], e = v[i + 3u];
+        const uint8_t m = (uint8_t)((a > b ? a : b) > (c > e ? c : e) ? (a > b ? a : b)
+                                                                       : (c > e ? c : e));
+        vmax = m > vmax ? m : vmax;
+        if (vmax > TRN_CHAMFER_CAP_MAX) {
+            return TRN_E_ARG; /* keeps every index below in range */
+        }
+        hist[0][a] += 1u;
+        hist[1][b] += 1u;
+        hist[2][c] += 1u;
+        hist[3][e] += 1u;
+    }
+    for (; i < total; ++i) {
+        vmax = v[i] > vmax ? v[i] : vmax;
+        if (vmax > TRN_CHAMFER_CAP_MAX) {
             return TRN_E_ARG;
         }
-        hist[v] += 1u;
+        hist[0][v[i]] += 1u;
+    }
+    if (vmax > cfg->cap) {
+        return TRN_E_ARG;
     }
     for (d = 0; d <= cfg->cap; ++d) {
-        if (hist[d] != 0u) {
-            k += (double)hist[d] * exp(ln_p1(d, cfg));
+        const double n = (double)hist[0][d] + (double)hist[1][d] + (double)hist[2][d] +
+                         (double)hist[3][d];
+        if (n != 0.0) {
+            k += n * exp(ln_p1(d, cfg));
         }
     }
     *k_per_m = k / (double)total;
@@ -170,6 +198,69 @@ static int64_t score_level(const level_view_t *L, const int32_t *lnp, const trn_
         }
     }
     return s;
+}
+
+/*
+ * Early exit for branch-and-bound. The points are split into BB_NCH chunks
+ * (chunk c = [chunk_lo(c), chunk_lo(c + 1))). A block or pose is scored
+ * chunk by chunk against `up`, upper bounds of the sums of chunks c.. on:
+ * after chunk c, if the sum so far plus up[c + 1] is below `cut` (the best
+ * score so far), the full sum is too, and the block or pose is discarded
+ * unread: the decision the full sum would give, so results do not change.
+ * The bounds: for a top-level block, (points left) x the table's largest
+ * entry; for a child, its parent's own chunk sums, which bound the child's
+ * term by term (the child's block lies inside the parent's, so its minimum
+ * distance per point is no smaller, and ln p does not increase).
+ */
+#define BB_NCH 32u
+
+/** Sums of chunks c..BB_NCH-1 for c = 0..BB_NCH (s[BB_NCH] = 0). */
+typedef struct {
+    int64_t s[BB_NCH + 1u];
+} suffix_t;
+
+static size_t chunk_lo(size_t n, size_t c)
+{
+    const size_t q = n / BB_NCH, r = n % BB_NCH;
+    return c * q + (c < r ? c : r);
+}
+
+/* Score (px, py) on L by chunks. up: upper bounds as above, or NULL for no
+ * exit. Returns 0 when proven below cut; else 1 with the sum in *total and,
+ * if suf is not NULL, the chunk suffix sums in *suf. */
+static int score_chunks(const level_view_t *L, const int32_t *lnp, const trn_point_t *pts,
+                        size_t n, const bbox_t *bb, int32_t px, int32_t py, const suffix_t *up,
+                        int64_t cut, int64_t *total, suffix_t *suf)
+{
+    int64_t cs[BB_NCH];
+    int64_t s = 0;
+    size_t c;
+    for (c = 0; c < BB_NCH; ++c) {
+        const size_t lo = chunk_lo(n, c), hi = chunk_lo(n, c + 1u);
+        cs[c] = hi > lo ? score_level(L, lnp, pts + lo, hi - lo, bb, px, py) : 0;
+        s += cs[c];
+        if (up != NULL && c + 1u < BB_NCH && s + up->s[c + 1u] < cut) {
+            return 0;
+        }
+    }
+    *total = s;
+    if (suf != NULL) {
+        suf->s[BB_NCH] = 0;
+        for (c = BB_NCH; c-- > 0u;) {
+            suf->s[c] = suf->s[c + 1u] + cs[c];
+        }
+    }
+    return 1;
+}
+
+static int32_t lnp_max(const trn_lnp_table_t *t)
+{
+    int32_t m = t->lnp[0];
+    unsigned d;
+    for (d = 1u; d <= (unsigned)t->cap; ++d) {
+        m = t->lnp[d] > m ? t->lnp[d] : m;
+    }
+    return m;
 }
 
 static level_view_t base_view(const trn_vol_u8_t *dist, uint8_t cap)
@@ -337,12 +428,73 @@ size_t trn_pyramid_bytes(int32_t nx, int32_t ny, int32_t nz, int32_t nlevels)
 
 static uint8_t min_u8(uint8_t a, uint8_t b) { return a < b ? a : b; }
 
+#define PYR_LANES 16
+
+/* out[k] = min(a[k], a[k+h], b[k], b[k+h]) for k < PYR_LANES (a fixed-count
+ * loop over non-overlapping arrays: compilers vectorize it at -O2). */
+static void pyr_block(uint8_t *restrict out, const uint8_t *restrict a, const uint8_t *restrict b,
+                      size_t h)
+{
+    size_t k;
+    for (k = 0; k < PYR_LANES; ++k) {
+        out[k] = min_u8(min_u8(a[k], a[k + h]), min_u8(b[k], b[k + h]));
+    }
+}
+
+/* Source value at map column x of a row covering columns [lo, nx), cap elsewhere. */
+static uint8_t pyr_src(const uint8_t *r, int32_t lo, int32_t nx, int32_t x, uint8_t cap)
+{
+    return (r != NULL && x >= lo && x < nx) ? r[x - lo] : cap;
+}
+
+/*
+ * One output row of a pyramid level: for map column x in [-pad, nx), stored
+ * at row[x + pad], the minimum of S0 and S1 at x and x + h, where S0, S1 are
+ * the source rows r0, r1 (map columns [lo, nx), NULL = off the map) and
+ * anything off the map is cap. The interior, where every read is in range,
+ * goes by PYR_LANES-wide blocks (the last one may overlap the one before:
+ * the output never aliases a source); the few columns at each end one by one.
+ */
+static void pyr_row(uint8_t *row, const uint8_t *r0, const uint8_t *r1, int32_t lo, int32_t nx,
+                    int32_t pad, int32_t h, uint8_t cap)
+{
+    const int32_t pnx = nx + pad;
+    int32_t x, a, b;
+    if (r0 == NULL && r1 == NULL) {
+        for (x = 0; x < pnx; ++x) {
+            row[x] = cap;
+        }
+        return;
+    }
+    if (r0 == NULL) {
+        r0 = r1;
+    } else if (r1 == NULL) {
+        r1 = r0;
+    }
+    /* interior: lo <= x and x + h < nx */
+    a = lo > -pad ? lo : -pad;
+    b = nx - h; /* exclusive */
+    for (x = -pad; x < pnx - pad; ++x) {
+        if (x == a && b - a >= PYR_LANES) {
+            int32_t i;
+            for (i = a; i < b; i += PYR_LANES) {
+                const int32_t i0 = i + PYR_LANES <= b ? i : b - PYR_LANES;
+                pyr_block(row + (i0 + pad), r0 + (i0 - lo), r1 + (i0 - lo), (size_t)h);
+            }
+            x = b - 1;
+            continue;
+        }
+        row[x + pad] = min_u8(min_u8(pyr_src(r0, lo, nx, x, cap), pyr_src(r0, lo, nx, x + h, cap)),
+                              min_u8(pyr_src(r1, lo, nx, x, cap), pyr_src(r1, lo, nx, x + h, cap)));
+    }
+}
+
 trn_status_t trn_pyramid_build(trn_pyramid_t *p, const trn_vol_u8_t *dist, uint8_t cap,
                                int32_t nlevels, void *buf, size_t len)
 {
     trn_status_t st;
     size_t need, per;
-    int32_t lv, x, y, z;
+    int32_t lv, y, z;
 
     if (p == NULL || buf == NULL) {
         return TRN_E_NULL;
@@ -370,8 +522,7 @@ trn_status_t trn_pyramid_build(trn_pyramid_t *p, const trn_vol_u8_t *dist, uint8
     /* Level 1 = min of the base over 2x2 blocks; level l = min of level l-1
      * at (x, y), (x+h, y), (x, y+h), (x+h, y+h), h = 2^(l-1): the minimum over
      * a 2^l x 2^l block. Stored with `pad` cells on the low side in x and y;
-     * anything off the map is cap. Built a row at a time: each output row is
-     * the element-wise min of two source rows, each shifted by 0 and h. */
+     * anything off the map is cap. Built a row at a time (pyr_row). */
     for (lv = 1; lv <= nlevels; ++lv) {
         int32_t h = (int32_t)(1u << (unsigned)(lv - 1));
         uint8_t *out = p->level[lv - 1];
@@ -379,48 +530,24 @@ trn_status_t trn_pyramid_build(trn_pyramid_t *p, const trn_vol_u8_t *dist, uint8
             for (y = -p->pad; y < dist->ny; ++y) {
                 uint8_t *row = out + ((size_t)z * (size_t)p->pny + (size_t)(y + p->pad)) *
                                          (size_t)p->pnx;
-                int32_t k;
-                for (x = 0; x < p->pnx; ++x) {
-                    row[x] = cap;
-                }
+                const uint8_t *src[2];
+                int32_t k, lo;
                 for (k = 0; k < 2; ++k) {
                     int32_t sy = y + k * h; /* source row, map coordinates */
-                    const uint8_t *src;
-                    int32_t lo, n;
+                    src[k] = NULL;
                     if (lv == 1) {
                         /* base: rows 0..ny-1, columns 0..nx-1, no padding */
-                        if (sy < 0 || sy >= dist->ny) {
-                            continue;
+                        if (sy >= 0 && sy < dist->ny) {
+                            src[k] = dist->data + ((size_t)z * (size_t)dist->ny + (size_t)sy) *
+                                                      (size_t)dist->nx;
                         }
-                        src = dist->data + ((size_t)z * (size_t)dist->ny + (size_t)sy) *
-                                               (size_t)dist->nx;
-                        lo = 0;
-                    } else {
-                        if (sy >= dist->ny) { /* sy >= -pad always */
-                            continue;
-                        }
-                        src = p->level[lv - 2] +
-                              ((size_t)z * (size_t)p->pny + (size_t)(sy + p->pad)) * (size_t)p->pnx;
-                        lo = -p->pad;
-                    }
-                    /* out(x) = min(out(x), src(x), src(x+h)) over x in [-pad, nx-1];
-                     * src is defined on [lo, nx-1]. */
-                    for (x = lo; x < dist->nx; ++x) {
-                        uint8_t v = src[x - lo];
-                        uint8_t *o = &row[x + p->pad];
-                        *o = min_u8(*o, v);
-                    }
-                    /* source element j sits at x = lo + j and feeds x - h */
-                    /* output index lo + j - h + pad >= 0 from j = h - lo - pad on */
-                    n = dist->nx - lo;
-                    {
-                        int32_t j0 = h - lo - p->pad > 0 ? h - lo - p->pad : 0;
-                        uint8_t *o = row + (lo - h + p->pad);
-                        for (x = j0; x < n; ++x) {
-                            o[x] = min_u8(o[x], src[x]);
-                        }
+                    } else if (sy < dist->ny) { /* sy >= -pad always */
+                        src[k] = p->level[lv - 2] + ((size_t)z * (size_t)p->pny +
+                                                     (size_t)(sy + p->pad)) * (size_t)p->pnx;
                     }
                 }
+                lo = lv == 1 ? 0 : -p->pad;
+                pyr_row(row, src[0], src[1], lo, dist->nx, p->pad, h, cap);
             }
         }
     }
@@ -432,6 +559,7 @@ trn_status_t trn_pyramid_build(trn_pyramid_t *p, const trn_vol_u8_t *dist, uint8
 typedef struct {
     int32_t x, y;
     int32_t level;
+    int32_t slot; /* where its chunk sums are (tops: tops_suf; kids: kid_suf) */
     int64_t bound;
 } block_t;
 
@@ -452,17 +580,21 @@ static level_view_t pyr_view(const trn_pyramid_t *p, int32_t lv)
 
 static int32_t ceil_div(int32_t a, int32_t b) { return (a + b - 1) / b; }
 
+#define TRN_BB_STACK (4u * TRN_MAX_LEVELS + 4u)
+
 size_t trn_search_bb_workspace_bytes(const trn_pyramid_t *p, const trn_window_t *win)
 {
     int32_t bs;
+    size_t ntop;
     if (p == NULL || win == NULL || p->nlevels < 1 || p->nlevels > TRN_MAX_LEVELS ||
         win->x1 < win->x0 || win->y1 < win->y0 || win->x1 - win->x0 >= TRN_MAX_DIM ||
         win->y1 - win->y0 >= TRN_MAX_DIM) {
         return 0u;
     }
     bs = (int32_t)(1u << (unsigned)p->nlevels);
-    return TRN_ALIGN_UP((size_t)ceil_div(win->x1 - win->x0 + 1, bs) *
-                        (size_t)ceil_div(win->y1 - win->y0 + 1, bs) * sizeof(block_t));
+    ntop = (size_t)ceil_div(win->x1 - win->x0 + 1, bs) * (size_t)ceil_div(win->y1 - win->y0 + 1, bs);
+    return TRN_ALIGN_UP(ntop * sizeof(block_t)) + TRN_ALIGN_UP(ntop * sizeof(suffix_t)) +
+           TRN_ALIGN_UP((TRN_BB_STACK + 4u) * sizeof(suffix_t));
 }
 
 /* Is every pose of block (x, y, size s) that lies in the window excluded? */
@@ -527,21 +659,6 @@ static void sort_blocks(block_t *a, size_t n)
     }
 }
 
-/* The block of level `level` with corner (x, y), with its bound on level L. */
-static block_t bounded_block(const level_view_t *L, const trn_lnp_table_t *t,
-                             const trn_point_t *pts, size_t n, const bbox_t *bb, int32_t x,
-                             int32_t y, int32_t level)
-{
-    block_t b;
-    b.x = x;
-    b.y = y;
-    b.level = level;
-    b.bound = score_level(L, t->lnp, pts, n, bb, x, y);
-    return b;
-}
-
-#define TRN_BB_STACK (4 * TRN_MAX_LEVELS + 4)
-
 trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
                            const trn_point_t *pts, size_t n, const trn_window_t *win,
                            const trn_exclusion_t *ex, void *ws, size_t ws_bytes,
@@ -549,10 +666,12 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
 {
     trn_status_t st;
     block_t *tops;
+    suffix_t *tops_suf, *stack_suf, *kid_suf;
+    suffix_t lim; /* (points from chunk c on) x largest table entry */
     block_t stack[TRN_BB_STACK];
     level_view_t L0;
-    size_t ntop = 0, i;
-    int32_t top_lv, bs, x, y;
+    size_t ntop = 0, ntop_max, i, c;
+    int32_t top_lv, bs, x, y, lmax;
     bbox_t bb;
     int found = 0;
     uint64_t scored = 0, bounded = 0;
@@ -572,20 +691,36 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
     if (ws_bytes < trn_search_bb_workspace_bytes(p, win)) {
         return TRN_E_WORKSPACE;
     }
-    tops = (block_t *)ws;
-    bb = points_bbox(pts, n);
-    L0 = pyr_view(p, 0);
     top_lv = p->nlevels;
     bs = (int32_t)(1u << (unsigned)top_lv);
+    ntop_max = (size_t)ceil_div(win->x1 - win->x0 + 1, bs) * (size_t)ceil_div(win->y1 - win->y0 + 1, bs);
+    tops = (block_t *)ws;
+    tops_suf = (suffix_t *)(void *)((uint8_t *)ws + TRN_ALIGN_UP(ntop_max * sizeof(block_t)));
+    stack_suf = tops_suf + ntop_max;
+    kid_suf = stack_suf + TRN_BB_STACK;
+    lmax = lnp_max(t);
+    for (c = 0; c <= BB_NCH; ++c) {
+        lim.s[c] = (int64_t)(n - chunk_lo(n, c)) * (int64_t)lmax;
+    }
+    bb = points_bbox(pts, n);
+    L0 = pyr_view(p, 0);
     {
         level_view_t L = pyr_view(p, top_lv);
         for (y = win->y0; y <= win->y1; y += bs) {
             for (x = win->x0; x <= win->x1; x += bs) {
+                block_t *tb = &tops[ntop];
                 if (block_excluded(ex, win, x, y, bs)) {
                     continue;
                 }
-                tops[ntop++] = bounded_block(&L, t, pts, n, &bb, x, y, top_lv);
                 ++bounded;
+                tb->x = x;
+                tb->y = y;
+                tb->level = top_lv;
+                tb->slot = (int32_t)ntop;
+                if (score_chunks(&L, t->lnp, pts, n, &bb, x, y, found ? &lim : NULL,
+                                 best->score, &tb->bound, &tops_suf[ntop])) {
+                    ++ntop;
+                }
             }
         }
     }
@@ -595,9 +730,11 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
         if (found && tops[i].bound < best->score) {
             break; /* sorted: no later block can hold a better pose */
         }
+        stack_suf[0] = tops_suf[tops[i].slot];
         stack[sp++] = tops[i];
         while (sp > 0u) {
             block_t e = stack[--sp];
+            const suffix_t *eup = &stack_suf[sp]; /* e's chunk sums, until kids are pushed */
             block_t kids[4];
             level_view_t Lc;
             size_t nk = 0, a, b;
@@ -610,6 +747,7 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
             Lc = pyr_view(p, cl);
             for (k = 0; k < 4; ++k) {
                 int32_t cx = e.x + ((k & 1) ? h : 0), cy = e.y + ((k & 2) ? h : 0);
+                int64_t s;
                 if (cx > win->x1 || cy > win->y1) {
                     continue;
                 }
@@ -617,14 +755,24 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
                     if (excluded(ex, cx, cy)) {
                         continue;
                     }
-                    consider(best, &found, score_level(&L0, t->lnp, pts, n, &bb, cx, cy), cx, cy);
                     ++scored;
+                    if (score_chunks(&L0, t->lnp, pts, n, &bb, cx, cy, found ? eup : NULL,
+                                     best->score, &s, NULL)) {
+                        consider(best, &found, s, cx, cy);
+                    }
                 } else {
                     if (block_excluded(ex, win, cx, cy, h)) {
                         continue;
                     }
-                    kids[nk++] = bounded_block(&Lc, t, pts, n, &bb, cx, cy, cl);
                     ++bounded;
+                    kids[nk].x = cx;
+                    kids[nk].y = cy;
+                    kids[nk].level = cl;
+                    kids[nk].slot = k;
+                    if (score_chunks(&Lc, t->lnp, pts, n, &bb, cx, cy, found ? eup : NULL,
+                                     best->score, &kids[nk].bound, &kid_suf[k])) {
+                        ++nk;
+                    }
                 }
             }
             /* insertion sort, then push worst first so the best pops next */
@@ -638,6 +786,7 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
                 kids[b] = v;
             }
             for (a = nk; a-- > 0u;) {
+                stack_suf[sp] = kid_suf[kids[a].slot];
                 stack[sp++] = kids[a];
             }
         }
@@ -647,4 +796,67 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
         stats->blocks_bounded = bounded;
     }
     return found ? TRN_OK : TRN_E_NODATA;
+}
+
+/* ------------------------------------------------------------ point order */
+
+trn_status_t trn_points_order(trn_point_t *pts, size_t n, int32_t nz)
+{
+    size_t count[TRN_MAX_ZBINS], next[TRN_MAX_ZBINS], end[TRN_MAX_ZBINS];
+    int32_t rank[TRN_MAX_ZBINS];
+    size_t i, pos, moves;
+    int32_t a, b, z;
+
+    if (pts == NULL) {
+        return TRN_E_NULL;
+    }
+    if (nz < 1 || nz > TRN_MAX_ZBINS) {
+        return TRN_E_ARG;
+    }
+    if (!points_z_ok(pts, n, nz)) {
+        return TRN_E_ARG;
+    }
+    for (z = 0; z < nz; ++z) {
+        count[z] = 0u;
+        rank[z] = z;
+    }
+    for (i = 0; i < n; ++i) {
+        ++count[pts[i].z];
+    }
+    /* bins by increasing population, ties by bin (insertion sort, nz <= 255) */
+    for (a = 1; a < nz; ++a) {
+        int32_t v = rank[a];
+        b = a;
+        while (b > 0 && (count[rank[b - 1]] > count[v] ||
+                         (count[rank[b - 1]] == count[v] && rank[b - 1] > v))) {
+            rank[b] = rank[b - 1];
+            --b;
+        }
+        rank[b] = v;
+    }
+    pos = 0u;
+    for (a = 0; a < nz; ++a) {
+        next[rank[a]] = pos;
+        pos += count[rank[a]];
+        end[rank[a]] = pos;
+    }
+    /* In-place bucket permutation: every inner step puts one point into its
+     * bin's next free slot for good, so there are at most n of them. */
+    moves = 0u;
+    for (a = 0; a < nz; ++a) {
+        const int32_t bin = rank[a];
+        while (next[bin] < end[bin] && moves <= n) {
+            trn_point_t p = pts[next[bin]];
+            while (p.z != bin && moves <= n) {
+                const size_t slot = next[p.z]++;
+                trn_point_t q = pts[slot];
+                pts[slot] = p;
+                p = q;
+                ++moves;
+            }
+            pts[next[bin]++] = p;
+            ++moves;
+        }
+    }
+    return TRN_OK;
 }

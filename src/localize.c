@@ -301,5 +301,9 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
             TRN_OK) {
         return st;
     }
+    /* rare height bins first: same result, earlier branch-and-bound exits */
+    if ((st = trn_points_order(pts, n, map->cfg.terrain.nz)) != TRN_OK) {
+        return st;
+    }
     return trn_localize_points(map, pts, n, win, b + lay.search, ws_bytes - lay.search, out);
 }

@@ -201,18 +201,16 @@ static void test_score_pose_vs_naive(void **state)
 
 /* ---- pyramid: every level equals a brute-force block minimum ---------- */
 
-static void test_pyramid_vs_bruteforce(void **state)
+/* Every level of one random volume against a brute-force block minimum. */
+static void pyramid_case(int NX, int NY, int NZ, int max_levels, trn_rng_t *r)
 {
-    enum { NX = 19, NY = 13, NZ = 3 };
-    static uint8_t buf[NX * NY * NZ];
+    uint8_t *buf = malloc((size_t)NX * NY * NZ);
     trn_vol_u8_t v;
     trn_pyramid_t p;
-    trn_rng_t r;
     int lv, nl;
-    (void)state;
-    trn_rng_seed(&r, 8);
-    random_dist(&v, buf, sizeof buf, NX, NY, NZ, 40, &r);
-    for (nl = 1; nl <= 4; ++nl) {
+    assert_non_null(buf);
+    random_dist(&v, buf, (size_t)NX * NY * NZ, NX, NY, NZ, 40, r);
+    for (nl = 1; nl <= max_levels; ++nl) {
         size_t bytes = trn_pyramid_bytes(NX, NY, NZ, nl);
         uint8_t *pb = malloc(bytes);
         assert_non_null(pb);
@@ -242,6 +240,131 @@ static void test_pyramid_vs_bruteforce(void **state)
             }
         }
         free(pb);
+    }
+    free(buf);
+}
+
+/* Shapes cover rows narrower than one 16-byte block, exactly one block,
+ * one block plus a tail, several blocks, and levels whose shift h or
+ * padding is wider than the row. */
+/* K against a plain per-voxel double sum, on volumes whose voxel counts
+ * are not multiples of 4 (the histogram's tail) and on all-cap ones. */
+static void test_k_vs_naive_sum(void **state)
+{
+    static const int shapes[][3] = {{1, 1, 1}, {3, 1, 1}, {5, 7, 3}, {16, 9, 2}, {31, 17, 5}};
+    trn_lik_cfg_t c = cfg_of(0.1f, 0.1f, 0.95f, 40);
+    trn_rng_t r;
+    size_t i, j;
+    (void)state;
+    trn_rng_seed(&r, 31);
+    for (i = 0; i < sizeof shapes / sizeof shapes[0]; ++i) {
+        size_t nv = (size_t)shapes[i][0] * shapes[i][1] * shapes[i][2];
+        uint8_t *buf = malloc(nv);
+        trn_vol_u8_t v;
+        int rep;
+        assert_non_null(buf);
+        assert_int_equal(trn_vol_u8_init(&v, buf, nv, shapes[i][0], shapes[i][1], shapes[i][2]),
+                         TRN_OK);
+        for (rep = 0; rep < 2; ++rep) {
+            double k = 0.0, want = 0.0;
+            for (j = 0; j < nv; ++j) {
+                double d, sg = (double)c.sigma_m;
+                buf[j] = rep == 0 ? (uint8_t)trn_rng_int(&r, 0, 40) : (uint8_t)40;
+                d = buf[j] / 3.0 * (double)c.cell_m;
+                want += exp(-d * d / (2 * sg * sg)) / (sg * sqrt(2 * M_PI));
+            }
+            want /= (double)nv;
+            assert_int_equal(trn_outlier_density(&v, &c, &k), TRN_OK);
+            assert_true(fabs(k - want) <= 1e-9 * want);
+        }
+        free(buf);
+    }
+}
+
+static int point_cmp(const void *a, const void *b)
+{
+    const trn_point_t *p = a, *q = b;
+    if (p->z != q->z) {
+        return p->z < q->z ? -1 : 1;
+    }
+    if (p->y != q->y) {
+        return p->y < q->y ? -1 : 1;
+    }
+    return p->x < q->x ? -1 : (p->x > q->x ? 1 : 0);
+}
+
+/* trn_points_order: a permutation, bins contiguous by increasing population
+ * (ties: lower bin first), and the same best pose and score from both
+ * searches before and after. */
+static void test_points_order(void **state)
+{
+    enum { N = 3000 };
+    static trn_point_t pts[N], orig[N], sa[N], sb[N];
+    trn_rng_t r;
+    int trial;
+    (void)state;
+    trn_rng_seed(&r, 77);
+    for (trial = 0; trial < 40; ++trial) {
+        int nz = trn_rng_int(&r, 1, trial < 30 ? 16 : TRN_MAX_ZBINS);
+        size_t n = (size_t)trn_rng_int(&r, 0, N), i, cnt[TRN_MAX_ZBINS] = {0};
+        int skew = trn_rng_int(&r, 0, 2);
+        for (i = 0; i < n; ++i) {
+            int z = trn_rng_int(&r, 0, nz - 1);
+            if (skew == 1 && trn_rng_unit(&r) < 0.7) {
+                z = nz / 2; /* one crowded bin, as the ground is */
+            }
+            pts[i].x = (int16_t)trn_rng_int(&r, -20, 20);
+            pts[i].y = (int16_t)trn_rng_int(&r, -20, 20);
+            pts[i].z = (int16_t)z;
+            ++cnt[z];
+        }
+        memcpy(orig, pts, n * sizeof pts[0]);
+        assert_int_equal(trn_points_order(pts, n, nz), TRN_OK);
+        /* a permutation */
+        memcpy(sa, orig, n * sizeof pts[0]);
+        memcpy(sb, pts, n * sizeof pts[0]);
+        qsort(sa, n, sizeof sa[0], point_cmp);
+        qsort(sb, n, sizeof sb[0], point_cmp);
+        if (n > 0u) {
+            assert_memory_equal(sa, sb, n * sizeof sa[0]);
+        }
+        /* bins contiguous, in order of population */
+        for (i = 1; i < n; ++i) {
+            int zp = pts[i - 1].z, zc = pts[i].z;
+            if (zp != zc) {
+                size_t j;
+                assert_true(cnt[zp] < cnt[zc] || (cnt[zp] == cnt[zc] && zp < zc));
+                for (j = i + 1; j < n; ++j) {
+                    assert_true(pts[j].z != zp); /* zp's run has ended */
+                }
+            }
+        }
+    }
+    /* bad inputs leave the points unchanged */
+    pts[0].x = 1; pts[0].y = 2; pts[0].z = 3;
+    pts[1].x = 4; pts[1].y = 5; pts[1].z = 0;
+    memcpy(orig, pts, 2 * sizeof pts[0]);
+    assert_int_equal(trn_points_order(NULL, 2, 4), TRN_E_NULL);
+    assert_int_equal(trn_points_order(pts, 2, 0), TRN_E_ARG);
+    assert_int_equal(trn_points_order(pts, 2, TRN_MAX_ZBINS + 1), TRN_E_ARG);
+    assert_int_equal(trn_points_order(pts, 2, 3), TRN_E_ARG); /* z = 3 outside 0..2 */
+    pts[1].z = -1;
+    assert_int_equal(trn_points_order(pts, 2, 8), TRN_E_ARG);
+    pts[1].z = 0;
+    assert_memory_equal(pts, orig, 2 * sizeof pts[0]);
+    assert_int_equal(trn_points_order(pts, 0, 8), TRN_OK);
+}
+
+static void test_pyramid_vs_bruteforce(void **state)
+{
+    static const int shapes[][3] = {{19, 13, 3}, {1, 1, 1},  {5, 40, 2},  {16, 3, 2},
+                                    {17, 9, 1},  {33, 7, 2}, {47, 21, 2}, {70, 5, 1}};
+    trn_rng_t r;
+    size_t i;
+    (void)state;
+    trn_rng_seed(&r, 8);
+    for (i = 0; i < sizeof shapes / sizeof shapes[0]; ++i) {
+        pyramid_case(shapes[i][0], shapes[i][1], shapes[i][2], 5, &r);
     }
 }
 
@@ -367,6 +490,16 @@ static void test_bb_equals_exhaustive(void **state)
                 trn_status_t a = trn_search_exhaustive(&s.vd, &s.t, pts, n, &w, exp_, &be, &se);
                 trn_status_t b = trn_search_bb(&p, &s.t, pts, n, &w, exp_, ws, wsb, &bf, &sf);
                 assert_int_equal(a, b);
+                if (q % 2 == 1) {
+                    /* rare bins first: the early exits change, the answer must not */
+                    trn_best_t bo;
+                    assert_int_equal(trn_points_order(pts, n, s.nz), TRN_OK);
+                    assert_int_equal(trn_search_bb(&p, &s.t, pts, n, &w, exp_, ws, wsb, &bo, NULL),
+                                     b);
+                    if (b == TRN_OK) {
+                        assert_true(bo.x == bf.x && bo.y == bf.y && bo.score == bf.score);
+                    }
+                }
                 if (a == TRN_OK) {
                     assert_int_equal(be.x, bf.x);
                     assert_int_equal(be.y, bf.y);
@@ -440,7 +573,7 @@ static void test_bad_inputs(void **state)
     trn_window_t w = {1, 1, 8, 7}, off = {5, 5, NX, 6}, inv = {5, 5, 4, 6};
     trn_exclusion_t negr = {3, 3, -1}, all = {4, 4, 100};
     trn_best_t b;
-    static uint8_t ws[4096];
+    static uint8_t ws[16384];
     double k;
     int64_t s;
     trn_lik_cfg_t bc;
@@ -465,6 +598,21 @@ static void test_bad_inputs(void **state)
     assert_int_equal(trn_outlier_density(&v, &c, NULL), TRN_E_NULL);
     bad = v; bad.nz = 0; assert_int_equal(trn_outlier_density(&bad, &c, &k), TRN_E_SIZE);
     bc = c; bc.cap = 4; assert_int_equal(trn_outlier_density(&v, &bc, &k), TRN_E_ARG);
+    {
+        /* one voxel above cap (or above any table index) anywhere: each lane
+         * of the first 4-voxel group, the middle, the last two voxels */
+        static const size_t at[] = {0u, 1u, 2u, 3u, 181u, 358u, 359u};
+        static const uint8_t val[] = {21u, 255u};
+        size_t ia, iv;
+        for (ia = 0; ia < sizeof at / sizeof at[0]; ++ia) {
+            for (iv = 0; iv < 2u; ++iv) {
+                buf[at[ia]] = val[iv];
+                assert_int_equal(trn_outlier_density(&v, &c, &k), TRN_E_ARG);
+                buf[at[ia]] = 5u;
+            }
+        }
+        assert_int_equal(trn_outlier_density(&v, &c, &k), TRN_OK);
+    }
 
     /* table */
     assert_int_equal(trn_lnp_table_build(NULL, &c, 1.0), TRN_E_NULL);
@@ -508,6 +656,7 @@ static void test_bad_inputs(void **state)
     assert_int_equal(trn_pyramid_build(&p, &v, 20, 2, pbuf, sizeof pbuf), TRN_OK);
 
     /* branch and bound */
+    assert_true(trn_search_bb_workspace_bytes(&p, &w) <= sizeof ws);
     assert_int_equal(trn_search_bb_workspace_bytes(NULL, &w), 0u);
     assert_int_equal(trn_search_bb_workspace_bytes(&p, &inv), 0u);
     assert_int_equal(trn_search_bb(NULL, &t, pts, 2, &w, NULL, ws, sizeof ws, &b, NULL), TRN_E_NULL);
@@ -539,6 +688,8 @@ int main(void)
         cmocka_unit_test(test_k_plane_analytic),
         cmocka_unit_test(test_k_against_integration),
         cmocka_unit_test(test_score_pose_vs_naive),
+        cmocka_unit_test(test_k_vs_naive_sum),
+        cmocka_unit_test(test_points_order),
         cmocka_unit_test(test_pyramid_vs_bruteforce),
         cmocka_unit_test(test_bb_equals_exhaustive),
         cmocka_unit_test(test_ties_resolved_identically),

@@ -146,6 +146,25 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
                            const trn_exclusion_t *ex, void *ws, size_t ws_bytes,
                            trn_best_t *best, trn_search_stats_t *stats);
 
+/**
+ * @brief Reorder local points so that those in the least populated height
+ * bins (of these points) come first. Scores are exact sums, so every score
+ * and search result is unchanged; the order only makes trn_search_bb's
+ * early exit (a bound or score abandoned once its partial sum cannot reach
+ * the best score) happen sooner, because points in rare bins (rock tops,
+ * deep hollows) are the ones that miss at wrong poses. trn_localize_dem
+ * does this to its own points; callers of trn_localize_points may do it
+ * first. O(n + nz^2) time, in place, about 3 KiB of stack.
+ * @param[in,out] pts points, reordered (a permutation; not stable).
+ * @param[in] n       number of points (0 allowed).
+ * @param[in] nz      height bins of the volume, 1..TRN_MAX_ZBINS.
+ * @retval TRN_OK
+ * @retval TRN_E_NULL pts NULL
+ * @retval TRN_E_ARG  nz out of range, or a point's z outside 0..nz-1
+ *                    (pts is then unchanged)
+ */
+trn_status_t trn_points_order(trn_point_t *pts, size_t n, int32_t nz);
+
 #ifdef __cplusplus
 }
 #endif

@@ -104,7 +104,8 @@ size_t trn_localize_dem_workspace_bytes(const trn_map_t *map, int32_t width, int
 
 /**
  * @brief Localize a local DEM: high-pass and occupancy with the map's
- * terrain configuration, then trn_localize_points.
+ * terrain configuration, trn_points_order on the points (the result does not
+ * depend on it; the searches get cheaper), then trn_localize_points.
  * @param[in] rover_x, rover_y the rover's cell in local_dem's grid.
  * @param[in] max_points       largest local occupancy accepted.
  * @retval as trn_localize_points, plus TRN_E_CAPACITY (more than max_points
