@@ -269,5 +269,31 @@ expect_error(1, "--prior: '1014' is not a pair", "localize", "--dem", g_tif, "--
 expect_error(2, "missing required option '--local'", "localize", "--dem", g_tif, "--prior", prior)
 expect_error(2, "unknown option '--rover'", "localize", "--dem", g_tif, *common, "--rover", "1,2")
 
+# ---- figures (tools/plot/trn_plot.py), when matplotlib is there -----------------
+try:
+    import matplotlib  # noqa: F401
+    have_mpl = True
+except ImportError:
+    have_mpl = False
+    print("note: matplotlib missing, figures not checked")
+if have_mpl:
+    plot = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools", "plot", "trn_plot.py")
+    loc_json = p("loc.json")
+    with open(loc_json, "w") as f:
+        f.write(run("localize", "--dem", g_tif, "--local", local_tif, "--prior", prior, "--json")[1])
+    for fig, extra in (("dem", ["--rover", f"{truth[0]},{truth[1]}", "--localize-json", loc_json]),
+                       ("surface", []), ("raster", ["--label", "height (m)", "--target", "1010,2020"])):
+        png = p(f"fig_{fig}.png")
+        r = subprocess.run([sys.executable, plot, fig, g_asc if fig == "raster" else g_tif, "--out", png] + extra,
+                           capture_output=True, text=True, timeout=300)
+        ok = r.returncode == 0 and os.path.exists(png) and os.path.getsize(png) > 20000
+        with open(png, "rb") if os.path.exists(png) else open(os.devnull, "rb") as f:
+            ok = ok and f.read(8) == b"\x89PNG\r\n\x1a\n"
+        check(ok, f"trn_plot.py {fig}: {r.returncode} {r.stderr.strip()[-300:]}")
+    r = subprocess.run([sys.executable, plot, "dem", p("missing.tif"), "--out", p("no.png")],
+                       capture_output=True, text=True, timeout=60)
+    check(r.returncode != 0 and "cannot read" in r.stderr and not os.path.exists(p("no.png")),
+          "trn_plot.py dem on a missing file fails with a reason")
+
 print(f"{checks} checks, {len(failures)} failed")
 sys.exit(1 if failures else 0)
