@@ -137,6 +137,25 @@ check(np.array_equal(read(p("same.tif"))[1], G), "terrain: same seed, same heigh
 run("terrain", "--out", p("other.tif"), "--origin", "1000,2000", "--coverage", "0.15", "--seed", "4")
 check(not np.array_equal(read(p("other.tif"))[1], G), "terrain: another seed, other heights")
 rc, out, err = run("terrain", "--out", p("crs.tif"), "--size-cells", "32", "--crs", "EPSG:32611")
+# Progress bar: drawn on stderr when it is a terminal (a pseudo-terminal here).
+import pty  # noqa: E402
+master, slave = pty.openpty()
+pr = subprocess.Popen([TRN, "terrain", "--out", p("tty.tif"), "--size-cells", "512"], stdout=subprocess.DEVNULL,
+                      stderr=slave)
+os.close(slave)
+tty_err = b""
+while True:  # read while it runs: a full pty buffer would block the writer
+    try:
+        chunk = os.read(master, 65536)
+    except OSError:  # EIO: the child closed its end
+        break
+    if not chunk:
+        break
+    tty_err += chunk
+pr.wait(timeout=300)
+os.close(master)
+check(pr.returncode == 0 and b"terrain [" in tty_err and b"100.0%" in tty_err,
+      f"terrain draws a progress bar on a terminal: {tty_err[-120:]!r}")
 ds = gdal.Open(p("crs.tif"))
 check(rc == 0 and "UTM zone 11N" in ds.GetProjection(), "terrain --crs tags the GeoTIFF")
 ds = None

@@ -11,7 +11,7 @@
 #include "trn/trn_config.h"
 
 static void on_progress(void *ctx, long done, long total) {
-  (void)total;
+  ((progress_t *)ctx)->total = total;
   progress_update((progress_t *)ctx, done);
 }
 
@@ -92,7 +92,7 @@ int trn_cmd_terrain(int argc, char **argv) {
     free(wkt);
     return cli_fail(cmd.name, "internal error: rock draw not repeatable (%zu vs %zu)", n, n2);
   }
-  progress_begin(&prog, "terrain", (long)n);
+  progress_begin(&prog, "terrain", (long)n + size);
   tg_render(&p, rocks, n, dem, on_progress, &prog);
   progress_end(&prog);
 

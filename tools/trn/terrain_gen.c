@@ -181,7 +181,7 @@ void tg_render(const tg_params_t *p, const tg_rock_t *rocks, size_t n, float *de
       render_rock(p, &rocks[j], dem);
     }
     if (progress != NULL) {
-      progress(ctx, (long)end, (long)n);
+      progress(ctx, (long)end, (long)n + p->height);
     }
   }
 
@@ -206,6 +206,9 @@ void tg_render(const tg_params_t *p, const tg_rock_t *rocks, size_t n, float *de
         z += amp[w] * sin(kx[w] * x + ky[w] * y + ph[w]);
       }
       *cell = (float)((double)*cell + z);
+    }
+    if (progress != NULL) {
+      progress(ctx, (long)n + row + 1, (long)n + p->height);
     }
   }
 }

@@ -78,7 +78,8 @@ double tg_cum_area(double k, double d_m); /* F_k(D) */
 size_t tg_draw_rocks(const tg_params_t *p, tg_rock_t *rocks, size_t cap);
 
 /* Heights of the map: background plus rocks, width*height floats row-major.
- * progress (may be NULL) is called with (done, total) while rocks render. */
+ * progress (may be NULL) is called with (done, total), total = n + height:
+ * one step per rock, then one per row of background. */
 void tg_render(const tg_params_t *p, const tg_rock_t *rocks, size_t n, float *dem,
                void (*progress)(void *ctx, long done, long total), void *ctx);
 
