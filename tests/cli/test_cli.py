@@ -257,6 +257,8 @@ expect_error(1, "is off the map", "localize", "--dem", g_tif, "--local", local_t
              "--prior", f"{ORIGIN[0] + 25.65},{ORIGIN[1] + 10}")
 expect_error(1, "larger than --max-local-cells 32", "localize", "--dem", g_tif, *common,
              "--max-local-cells", "32")
+write_raster(p("huge.tif"), np.zeros((8, 4097), np.float32), want_gt)
+expect_error(1, "is 4097 x 8 cells; the maximum side is", "localize", "--dem", p("huge.tif"), *common)
 write_raster(p("small_global.tif"), G[:48, :48].astype(np.float32), want_gt)
 expect_error(1, "is larger than --dem", "localize", "--dem", p("small_global.tif"), *common)
 write_raster(p("local_coarse.tif"), crop[::2, ::2].copy(),
