@@ -244,6 +244,15 @@ write_raster(p("local_east.tif"), crop2, gt2)
 expect_fix("rover outside its local map", truth, "--dem", g_tif, "--local", p("local_east.tif"),
            "--prior", prior)
 
+# A featureless plain: the peak is flat, so the answer is "ill_conditioned"
+# with null sigmas (JSON has no infinity), exit 0.
+run("terrain", "--out", p("flat.tif"), "--relief-m", "0", "--min-diameter-m", "20", "--max-diameter-m", "20")
+write_raster(p("flat_local.tif"), read(p("flat.tif"))[1][100:164, 100:164].astype(np.float32),
+             (-3.2, CELL, 0.0, 3.2, 0.0, -CELL))
+r = run_json("localize", "--dem", p("flat.tif"), "--local", p("flat_local.tif"), "--prior", "13,13", "--json")
+check(r.get("status") == "ill_conditioned" and r.get("sigma_x_m", 0) is None and r.get("sigma_y_m", 0) is None,
+      f"localize on a plain: ill_conditioned with null sigmas: {r}")
+
 # ---- localize: bad input ------------------------------------------------------
 common = ["--local", local_tif, "--prior", prior]
 expect_error(1, "--dem: cannot read", "localize", "--dem", p("missing.tif"), *common)

@@ -59,7 +59,7 @@ int trn_cmd_localize(int argc, char **argv) {
                    opts, sizeof opts / sizeof opts[0]};
   dem_t g, l;
   char err[768];
-  double cell, rcol, rrow, dx_m, dy_m, pc, pr, ex, ey, est_x, est_y;
+  double cell, rcol, rrow, dx_m, dy_m, pc, pr, ex, ey, est_x, est_y, rho_en;
   long radius;
   int rx, ry, pcol, prow, rc;
   trn_map_cfg_t cfg;
@@ -184,6 +184,8 @@ int trn_cmd_localize(int argc, char **argv) {
   dem_cell_to_map(g.gt, res.x, res.y, &ex, &ey);
   est_x = ex - dx_m;
   est_y = ey - dy_m;
+  /* The core's row axis points south: flip the correlation's sign (no -0). */
+  rho_en = isfinite(res.rho) && res.rho != 0.0 ? -res.rho : res.rho == 0.0 ? 0.0 : res.rho;
   if (json) {
     json_t j;
     json_begin(&j, stdout);
@@ -191,7 +193,7 @@ int trn_cmd_localize(int argc, char **argv) {
     json_num(&j, "y_m", est_y);
     json_num(&j, "sigma_x_m", res.sigma_x_m);
     json_num(&j, "sigma_y_m", res.sigma_y_m);
-    json_num(&j, "rho", isfinite(res.rho) ? -res.rho : res.rho); /* row axis points south */
+    json_num(&j, "rho", rho_en);
     json_num(&j, "failure_probability", res.failure_probability);
     json_str(&j, "status", status_word(st));
     json_obj(&j, "prior");
@@ -210,7 +212,7 @@ int trn_cmd_localize(int argc, char **argv) {
     printf("prior        x = %.3f m   y = %.3f m   (window +-%g m = %ld cells)\n", prior[0], prior[1], window_m,
            radius);
     printf("covariance   sigma_x = %.4f m  sigma_y = %.4f m  rho = %.3f\n", res.sigma_x_m, res.sigma_y_m,
-           isfinite(res.rho) ? -res.rho : res.rho);
+           rho_en);
     printf("failure      probability %.3g%s\n", res.failure_probability,
            res.on_window_edge ? "   (best pose on the window edge: widen --window-m)" : "");
     printf("matched      %zu local voxels, %llu poses scored exactly\n", res.n_points,
