@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # tools/run.sh [args...] - build the Release tools and run the demo:
 #
-#   tools/setup.sh core, then configure + build the host-release preset, then
+#   tools/setup.sh core gdal plot, then configure + build the host-release preset, then
 #   exec build/host-release/trn_demo "$@".
 #
 # Setup and build messages go to stderr, so trn_demo's stdout stays clean for
@@ -12,7 +12,7 @@ set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 
 {
-  bash "$ROOT/tools/setup.sh" core
+  bash "$ROOT/tools/setup.sh" core gdal plot
   (cd "$ROOT" && cmake --preset host-release && cmake --build --preset host-release)
 } >&2
 

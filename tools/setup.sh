@@ -23,10 +23,11 @@ declare -A PKG_GROUPS=(
           gcc-arm-none-eabi binutils-arm-none-eabi libnewlib-arm-none-eabi"
   # Benchmarks: the optional OpenCV reference in trn_bench (C++).
   [bench]="g++ libopencv-dev"
-  # Real terrain maps (GeoTIFF DEMs) for the tools.
-  [gdal]="libgdal-dev"
-  # Plots of results.
-  [plot]="python3 python3-matplotlib"
+  # The `trn` command line: GDAL's C API (any raster DEM in, GeoTIFF out),
+  # gdal_translate / gdalinfo and the Python bindings (its tests, the plots).
+  [gdal]="libgdal-dev gdal-bin python3-gdal"
+  # Figures (tools/plot/trn_plot.py).
+  [plot]="python3 python3-matplotlib python3-numpy python3-gdal"
   # Kernel integration tests (tests/integration/): build a small Linux from
   # Debian's source, an initramfs of static programs, boot it under QEMU.
   [vm]="linux-source-6.1 xz-utils make gcc bc bison flex libelf-dev cpio gzip

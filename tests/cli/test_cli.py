@@ -1,0 +1,329 @@
+#!/usr/bin/env python3
+"""tests/cli/test_cli.py - the `trn` command line end to end (CTest `cli`).
+
+    python3 tests/cli/test_cli.py PATH/TO/trn WORKDIR
+
+Runs the built `trn` for each subcommand's happy path and each bad-input class,
+checking exit codes, the one-line `trn <cmd>: <reason>` messages, the JSON, and
+the GeoTIFFs (read back with GDAL's Python bindings). DEMs come from
+`trn terrain` itself; other formats (ESRI ASCII grid), rover-frame local maps,
+rotated / non-square / south-up / no-data variants are made with GDAL here.
+Exit status 0 when every check passes; each failure is printed.
+"""
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+from osgeo import gdal
+
+gdal.UseExceptions()
+
+TRN = os.path.abspath(sys.argv[1])
+WORK = os.path.abspath(sys.argv[2])
+failures = []
+checks = 0
+
+
+def check(cond, what):
+    global checks
+    checks += 1
+    if not cond:
+        failures.append(what)
+        print("FAIL:", what)
+
+
+def run(*args):
+    p = subprocess.run([TRN] + [str(a) for a in args], capture_output=True, text=True, timeout=300)
+    return p.returncode, p.stdout, p.stderr
+
+
+def expect_error(rc_want, needle, *args):
+    """A bad input: exit code, exactly one stderr line `trn <cmd>: ...` holding needle, no stdout."""
+    rc, out, err = run(*args)
+    cmd = args[0]
+    lines = err.splitlines()
+    label = "trn " + " ".join(str(a) for a in args)
+    check(rc == rc_want, f"{label}: exit {rc}, want {rc_want} (stderr: {err.strip()!r})")
+    check(len(lines) == 1, f"{label}: {len(lines)} stderr lines, want 1: {err!r}")
+    check(err.startswith(f"trn {cmd}: "), f"{label}: message does not start with 'trn {cmd}: ': {err!r}")
+    check(needle in err, f"{label}: message lacks {needle!r}: {err!r}")
+    check(out == "", f"{label}: stdout not empty: {out!r}")
+
+
+def run_json(*args):
+    rc, out, err = run(*args)
+    label = "trn " + " ".join(str(a) for a in args)
+    check(rc == 0, f"{label}: exit {rc}: {err.strip()}")
+    try:
+        obj = json.loads(out)
+    except ValueError:
+        check(False, f"{label}: stdout is not one JSON object: {out!r}")
+        return {}
+    check(out.count("\n") == 1, f"{label}: JSON is not one line")
+    return obj
+
+
+def write_raster(path, arr, gt, fmt="GTiff", nodata=None, srs=None):
+    """Write a float32 one-band raster through a MEM dataset (any driver with CreateCopy)."""
+    mem = gdal.GetDriverByName("MEM").Create("", arr.shape[1], arr.shape[0], 1, gdal.GDT_Float32)
+    if gt is not None:
+        mem.SetGeoTransform(gt)
+    if srs:
+        mem.SetProjection(srs)
+    band = mem.GetRasterBand(1)
+    if nodata is not None:
+        band.SetNoDataValue(nodata)
+    band.WriteArray(arr)
+    gdal.GetDriverByName(fmt).CreateCopy(path, mem)
+    mem = None
+
+
+def read(path):
+    ds = gdal.Open(path)
+    arr = ds.GetRasterBand(1).ReadAsArray().astype(np.float64)
+    return ds, arr
+
+
+def p(name):
+    return os.path.join(WORK, name)
+
+
+# --------------------------------------------------------------------------
+shutil.rmtree(WORK, ignore_errors=True)
+os.makedirs(WORK)
+
+# ---- dispatcher -------------------------------------------------------------
+rc, out, err = run("--help")
+check(rc == 0 and "terrain" in out and "localize" in out, "trn --help lists terrain and localize")
+rc, out, err = run("nosuch")
+check(rc == 2 and "unknown command" in err, "trn nosuch: exit 2, unknown command")
+for cmd in ("terrain", "localize"):
+    rc, out, err = run(cmd, "--help")
+    check(rc == 0 and out.startswith(f"usage: trn {cmd}") and err == "", f"trn {cmd} --help")
+
+# ---- terrain: happy path ----------------------------------------------------
+ORIGIN = (1000.0, 2000.0)
+CELL = 0.1
+N = 256
+g_tif = p("global.tif")
+t = run_json("terrain", "--out", g_tif, "--origin", "1000,2000", "--coverage", "0.15", "--seed", "3", "--json")
+for key in ("file", "width", "height", "cell_m", "coverage_k", "rocks", "rock_area_fraction",
+            "model_area_fraction", "seed"):
+    check(key in t, f"terrain --json has {key}")
+check(t.get("width") == N and t.get("height") == N and t.get("cell_m") == CELL, "terrain JSON size and cell")
+check(t.get("rocks", 0) > 100, f"terrain draws rocks ({t.get('rocks')})")
+# Realised rock area on one small map: within 30 % of the model (the sharp
+# statistical test is test_terrain_gen over large maps).
+check(abs(t.get("rock_area_fraction", 0) / t.get("model_area_fraction", 1) - 1) < 0.3,
+      "terrain rock area fraction near the model")
+ds, G = read(g_tif)
+gt = ds.GetGeoTransform()
+want_gt = (ORIGIN[0], CELL, 0.0, ORIGIN[1] + N * CELL, 0.0, -CELL)
+check(all(abs(a - b) < 1e-9 for a, b in zip(gt, want_gt)), f"terrain geotransform {gt} == {want_gt}")
+check(ds.RasterXSize == N and ds.RasterYSize == N, "terrain raster size")
+check(ds.GetRasterBand(1).DataType == gdal.GDT_Float32, "terrain is float32")
+check(math.isnan(ds.GetRasterBand(1).GetNoDataValue() or 0.0), "terrain no-data is NaN")
+check(np.isfinite(G).all(), "terrain heights all finite")
+check(G.max() - np.median(G) > 0.2, "terrain has rocks standing above the ground")
+check(ds.GetProjection() == "", "terrain without --crs has no CRS")
+ds = None
+rc, out, err = run("terrain", "--out", p("same.tif"), "--origin", "1000,2000", "--coverage", "0.15", "--seed", "3")
+check(rc == 0 and out.startswith("wrote ") and err == "", "terrain human summary, quiet stderr off a terminal")
+check(np.array_equal(read(p("same.tif"))[1], G), "terrain: same seed, same heights")
+run("terrain", "--out", p("other.tif"), "--origin", "1000,2000", "--coverage", "0.15", "--seed", "4")
+check(not np.array_equal(read(p("other.tif"))[1], G), "terrain: another seed, other heights")
+rc, out, err = run("terrain", "--out", p("crs.tif"), "--size-cells", "32", "--crs", "EPSG:32611")
+# Progress bar: drawn on stderr when it is a terminal (a pseudo-terminal here).
+import pty  # noqa: E402
+master, slave = pty.openpty()
+pr = subprocess.Popen([TRN, "terrain", "--out", p("tty.tif"), "--size-cells", "512"], stdout=subprocess.DEVNULL,
+                      stderr=slave)
+os.close(slave)
+tty_err = b""
+while True:  # read while it runs: a full pty buffer would block the writer
+    try:
+        chunk = os.read(master, 65536)
+    except OSError:  # EIO: the child closed its end
+        break
+    if not chunk:
+        break
+    tty_err += chunk
+pr.wait(timeout=300)
+os.close(master)
+check(pr.returncode == 0 and b"terrain [" in tty_err and b"100.0%" in tty_err,
+      f"terrain draws a progress bar on a terminal: {tty_err[-120:]!r}")
+ds = gdal.Open(p("crs.tif"))
+check(rc == 0 and "UTM zone 11N" in ds.GetProjection(), "terrain --crs tags the GeoTIFF")
+ds = None
+
+# ---- terrain: bad input -------------------------------------------------------
+x = p("x.tif")
+expect_error(1, "--size-cells: 3 is out of range", "terrain", "--out", x, "--size-cells", "3")
+expect_error(1, "--size-cells: '12abc' is not an integer", "terrain", "--out", x, "--size-cells", "12abc")
+expect_error(1, "--cell-m: 'abc' is not a finite number", "terrain", "--out", x, "--cell-m", "abc")
+expect_error(1, "--cell-m: 'nan' is not a finite number", "terrain", "--out", x, "--cell-m", "nan")
+expect_error(1, "--coverage: 0 is out of range", "terrain", "--out", x, "--coverage", "0")
+expect_error(1, "--seed: '-1' is not an unsigned", "terrain", "--out", x, "--seed", "-1")
+expect_error(1, "--origin: '5' is not a pair", "terrain", "--out", x, "--origin", "5")
+expect_error(1, "below the smallest", "terrain", "--out", x, "--min-diameter-m", "0.5", "--max-diameter-m", "0.3")
+expect_error(1, "cannot create", "terrain", "--out", p("no/such/dir/x.tif"))
+expect_error(1, "--crs 'NOT_A_CRS'", "terrain", "--out", x, "--crs", "NOT_A_CRS")
+expect_error(2, "unknown option '--bogus'", "terrain", "--out", x, "--bogus", "1")
+expect_error(2, "missing required option '--out'", "terrain")
+expect_error(2, "missing value for '--out'", "terrain", "--out")
+expect_error(2, "unexpected argument 'extra'", "terrain", "--out", x, "extra")
+expect_error(2, "takes no value", "terrain", "--out", x, "--json=1")
+expect_error(2, "given twice", "terrain", "--out", x, "--seed", "1", "--seed", "2")
+
+# ---- localize: happy paths ---------------------------------------------------
+# Truth: the rover stands on the centre of global cell (col 140, row 120).
+# The local map is the 64 x 64 crop starting at (108, 88), so the rover is
+# at local cell (32.5 - 0.5 ...) = centre of local (32, 32); in the rover
+# frame the crop's top-left corner is ((108 - 140.5) c, -(88 - 120.5) c).
+C0, R0, L = 108, 88, 64
+RC, RR = 140, 120
+truth = (ORIGIN[0] + (RC + 0.5) * CELL, ORIGIN[1] + N * CELL - (RR + 0.5) * CELL)
+prior = f"{truth[0] + 0.7:.3f},{truth[1] - 0.5:.3f}"
+crop = G[R0:R0 + L, C0:C0 + L].astype(np.float32)
+rover_gt = ((C0 - (RC + 0.5)) * CELL, CELL, 0.0, -(R0 - (RR + 0.5)) * CELL, 0.0, -CELL)
+local_tif = p("local.tif")
+write_raster(local_tif, crop, rover_gt)
+
+
+def expect_fix(label, want, *args, tol=0.03):
+    r = run_json("localize", *args, "--json")
+    for key in ("x_m", "y_m", "sigma_x_m", "sigma_y_m", "rho", "failure_probability", "status"):
+        check(key in r, f"localize {label}: JSON has {key}")
+    if "x_m" in r:
+        err_m = math.hypot(r["x_m"] - want[0], r["y_m"] - want[1])
+        print(f"localize {label}: ({r['x_m']:.4f}, {r['y_m']:.4f}) vs truth ({want[0]:.4f}, {want[1]:.4f}): "
+              f"error {err_m:.4f} m, sigma ({r['sigma_x_m']}, {r['sigma_y_m']}), status {r['status']}")
+        check(err_m < tol, f"localize {label}: error {err_m:.4f} m >= {tol} m")
+        check(r["status"] == "ok", f"localize {label}: status {r['status']}")
+        check(r["failure_probability"] < 0.01, f"localize {label}: failure probability {r['failure_probability']}")
+        check(0 < r["sigma_x_m"] < 0.05 and 0 < r["sigma_y_m"] < 0.05, f"localize {label}: sigmas")
+    return r
+
+
+expect_fix("GeoTIFF", truth, "--dem", g_tif, "--local", local_tif, "--prior", prior)
+rc, out, err = run("localize", "--dem", g_tif, "--local", local_tif, "--prior", prior)
+check(rc == 0 and out.startswith("estimate") and "status: ok" in out, "localize human summary")
+
+# Second GDAL format: both maps as ESRI ASCII grids.
+g_asc, l_asc = p("global.asc"), p("local.asc")
+gdal.Translate(g_asc, g_tif, format="AAIGrid")
+gdal.Translate(l_asc, local_tif, format="AAIGrid")
+expect_fix("AAIGrid", truth, "--dem", g_asc, "--local", l_asc, "--prior", prior)
+
+# The rover between cells: the same crop, rover-frame origin moved by half a
+# cell east and a quarter north, so the rover stands there in map terms.
+sub_gt = (rover_gt[0] - 0.05, CELL, 0.0, rover_gt[3] + 0.025, 0.0, -CELL)
+write_raster(p("local_sub.tif"), crop, sub_gt)
+expect_fix("sub-cell rover", (truth[0] + 0.05, truth[1] - 0.025),
+           "--dem", g_tif, "--local", p("local_sub.tif"), "--prior", prior, tol=0.02)
+
+# South-up storage (rows flipped, positive pixel height): same heights, same answer.
+south_gt = (rover_gt[0], CELL, 0.0, rover_gt[3] - L * CELL, 0.0, CELL)
+write_raster(p("local_south.tif"), crop[::-1, :].copy(), south_gt)
+expect_fix("south-up local", truth, "--dem", g_tif, "--local", p("local_south.tif"), "--prior", prior)
+
+# No-data holes (value -9999) in the local map: still localizes.
+holed = crop.copy()
+holed[10:30, 5:25] = -9999.0
+write_raster(p("local_holes.tif"), holed, rover_gt, nodata=-9999.0)
+expect_fix("no-data holes", truth, "--dem", g_tif, "--local", p("local_holes.tif"), "--prior", prior)
+
+# A local map smaller than the window and off-centre rover: crop 40 x 40 to the east of the rover.
+crop2 = G[RR - 20:RR + 20, RC + 5:RC + 45].astype(np.float32)
+gt2 = ((RC + 5 - (RC + 0.5)) * CELL, CELL, 0.0, -(RR - 20 - (RR + 0.5)) * CELL, 0.0, -CELL)
+write_raster(p("local_east.tif"), crop2, gt2)
+expect_fix("rover outside its local map", truth, "--dem", g_tif, "--local", p("local_east.tif"),
+           "--prior", prior)
+
+# A featureless plain: the peak is flat, so the answer is "ill_conditioned"
+# with null sigmas (JSON has no infinity), exit 0.
+run("terrain", "--out", p("flat.tif"), "--relief-m", "0", "--min-diameter-m", "20", "--max-diameter-m", "20")
+write_raster(p("flat_local.tif"), read(p("flat.tif"))[1][100:164, 100:164].astype(np.float32),
+             (-3.2, CELL, 0.0, 3.2, 0.0, -CELL))
+r = run_json("localize", "--dem", p("flat.tif"), "--local", p("flat_local.tif"), "--prior", "13,13", "--json")
+check(r.get("status") == "ill_conditioned" and r.get("sigma_x_m", 0) is None and r.get("sigma_y_m", 0) is None,
+      f"localize on a plain: ill_conditioned with null sigmas: {r}")
+
+# ---- localize: bad input ------------------------------------------------------
+common = ["--local", local_tif, "--prior", prior]
+expect_error(1, "--dem: cannot read", "localize", "--dem", p("missing.tif"), *common)
+with open(p("notes.txt"), "w") as f:
+    f.write("this is not a raster\n")
+expect_error(1, "--dem: cannot read", "localize", "--dem", p("notes.txt"), *common)
+expect_error(1, "has 1 band, no band 2", "localize", "--dem", g_tif, "--band", "2", *common)
+expect_error(1, "--band: 0 is out of range", "localize", "--dem", g_tif, "--band", "0", *common)
+expect_error(1, "is off the map", "localize", "--dem", g_tif, "--local", local_tif, "--prior", "0,0")
+expect_error(1, "is off the map", "localize", "--dem", g_tif, "--local", local_tif,
+             "--prior", f"{ORIGIN[0] + 25.65},{ORIGIN[1] + 10}")
+expect_error(1, "larger than --max-local-cells 32", "localize", "--dem", g_tif, *common,
+             "--max-local-cells", "32")
+write_raster(p("huge.tif"), np.zeros((8, 4097), np.float32), want_gt)
+expect_error(1, "is 4097 x 8 cells; the maximum side is", "localize", "--dem", p("huge.tif"), *common)
+write_raster(p("small_global.tif"), G[:48, :48].astype(np.float32), want_gt)
+expect_error(1, "is larger than --dem", "localize", "--dem", p("small_global.tif"), *common)
+write_raster(p("local_coarse.tif"), crop[::2, ::2].copy(),
+             (rover_gt[0], 2 * CELL, 0.0, rover_gt[3], 0.0, -2 * CELL))
+expect_error(1, "cell sizes differ", "localize", "--dem", g_tif, "--local", p("local_coarse.tif"),
+             "--prior", prior)
+write_raster(p("rotated.tif"), crop, (rover_gt[0], CELL, 0.01, rover_gt[3], 0.01, -CELL))
+expect_error(1, "rotated geotransform", "localize", "--dem", g_tif, "--local", p("rotated.tif"),
+             "--prior", prior)
+write_raster(p("nonsquare.tif"), crop, (rover_gt[0], CELL, 0.0, rover_gt[3], 0.0, -2 * CELL))
+expect_error(1, "non-square cells", "localize", "--dem", g_tif, "--local", p("nonsquare.tif"),
+             "--prior", prior)
+write_raster(p("nogt.tif"), crop, None)
+expect_error(1, "has no geotransform", "localize", "--dem", g_tif, "--local", p("nogt.tif"), "--prior", prior)
+write_raster(p("allnan.tif"), np.full((L, L), np.nan, np.float32), rover_gt)
+expect_error(1, "no usable data", "localize", "--dem", g_tif, "--local", p("allnan.tif"), "--prior", prior)
+far_gt = (1e6, CELL, 0.0, 1e6, 0.0, -CELL)
+write_raster(p("far.tif"), crop, far_gt)
+expect_error(1, "is it in the rover frame", "localize", "--dem", g_tif, "--local", p("far.tif"),
+             "--prior", prior)
+expect_error(1, "--window-m: -1 is out of range", "localize", "--dem", g_tif, *common, "--window-m", "-1")
+expect_error(1, "--window-m: 'wide' is not a finite number", "localize", "--dem", g_tif, *common,
+             "--window-m", "wide")
+expect_error(1, "--window-m 1000 is 10000 cells", "localize", "--dem", g_tif, *common, "--window-m", "1000")
+expect_error(1, "--prior: '1,2,3' is not a pair", "localize", "--dem", g_tif, "--local", local_tif,
+             "--prior", "1,2,3")
+expect_error(1, "--prior: '1014' is not a pair", "localize", "--dem", g_tif, "--local", local_tif,
+             "--prior", "1014")
+expect_error(2, "missing required option '--local'", "localize", "--dem", g_tif, "--prior", prior)
+expect_error(2, "unknown option '--rover'", "localize", "--dem", g_tif, *common, "--rover", "1,2")
+
+# ---- figures (tools/plot/trn_plot.py), when matplotlib is there -----------------
+try:
+    import matplotlib  # noqa: F401
+    have_mpl = True
+except ImportError:
+    have_mpl = False
+    print("note: matplotlib missing, figures not checked")
+if have_mpl:
+    plot = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools", "plot", "trn_plot.py")
+    loc_json = p("loc.json")
+    with open(loc_json, "w") as f:
+        f.write(run("localize", "--dem", g_tif, "--local", local_tif, "--prior", prior, "--json")[1])
+    for fig, extra in (("dem", ["--rover", f"{truth[0]},{truth[1]}", "--localize-json", loc_json]),
+                       ("surface", []), ("raster", ["--label", "height (m)", "--target", "1010,2020"])):
+        png = p(f"fig_{fig}.png")
+        r = subprocess.run([sys.executable, plot, fig, g_asc if fig == "raster" else g_tif, "--out", png] + extra,
+                           capture_output=True, text=True, timeout=300)
+        ok = r.returncode == 0 and os.path.exists(png) and os.path.getsize(png) > 20000
+        with open(png, "rb") if os.path.exists(png) else open(os.devnull, "rb") as f:
+            ok = ok and f.read(8) == b"\x89PNG\r\n\x1a\n"
+        check(ok, f"trn_plot.py {fig}: {r.returncode} {r.stderr.strip()[-300:]}")
+    r = subprocess.run([sys.executable, plot, "dem", p("missing.tif"), "--out", p("no.png")],
+                       capture_output=True, text=True, timeout=60)
+    check(r.returncode != 0 and "cannot read" in r.stderr and not os.path.exists(p("no.png")),
+          "trn_plot.py dem on a missing file fails with a reason")
+
+print(f"{checks} checks, {len(failures)} failed")
+sys.exit(1 if failures else 0)

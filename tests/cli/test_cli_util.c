@@ -1,0 +1,122 @@
+/* tests/cli/test_cli_util.c - the `trn` option parsers, JSON writer and
+ * option table (tools/trn/cli.[ch]). */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "cli.h"
+
+static void test_parse_double(void **state) {
+  double v = 0.0;
+  (void)state;
+  assert_true(cli_parse_double("0.25", &v) && v == 0.25);
+  assert_true(cli_parse_double("-1e3", &v) && v == -1000.0);
+  assert_false(cli_parse_double("", &v));
+  assert_false(cli_parse_double("1.5m", &v));
+  assert_false(cli_parse_double(" 1", &v));
+  assert_false(cli_parse_double("nan", &v));
+  assert_false(cli_parse_double("inf", &v));
+  assert_false(cli_parse_double("1e999", &v));
+  assert_false(cli_parse_double(NULL, &v));
+}
+
+static void test_parse_integers(void **state) {
+  long l = 0;
+  uint64_t u = 0;
+  (void)state;
+  assert_true(cli_parse_long("-42", &l) && l == -42);
+  assert_false(cli_parse_long("4.0", &l));
+  assert_false(cli_parse_long("99999999999999999999999", &l));
+  assert_true(cli_parse_u64("18446744073709551615", &u) && u == UINT64_MAX);
+  assert_false(cli_parse_u64("18446744073709551616", &u));
+  assert_false(cli_parse_u64("-1", &u));
+  assert_false(cli_parse_u64("+1", &u));
+  assert_false(cli_parse_u64("", &u));
+}
+
+static void test_parse_xy(void **state) {
+  double x = 0.0, y = 0.0;
+  (void)state;
+  assert_true(cli_parse_xy("1014.5,-2.25", &x, &y) && x == 1014.5 && y == -2.25);
+  assert_false(cli_parse_xy("1,2,3", &x, &y));
+  assert_false(cli_parse_xy("1", &x, &y));
+  assert_false(cli_parse_xy(",2", &x, &y));
+  assert_false(cli_parse_xy("1,", &x, &y));
+  assert_false(cli_parse_xy("1;2", &x, &y));
+  assert_false(cli_parse_xy("1,nan", &x, &y));
+}
+
+/* Everything the writer printed, from a temporary file. */
+static void slurp(FILE *f, char *buf, size_t n) {
+  size_t got;
+  rewind(f);
+  got = fread(buf, 1, n - 1, f);
+  buf[got] = '\0';
+}
+
+static void test_json(void **state) {
+  char buf[512];
+  json_t j;
+  FILE *f = tmpfile();
+  (void)state;
+  assert_non_null(f);
+  json_begin(&j, f);
+  json_str(&j, "s", "a\"b\\c\nd\te\001f");
+  json_num(&j, "x", 0.1);
+  json_num(&j, "nan", NAN);
+  json_num(&j, "inf", -INFINITY);
+  json_int(&j, "n", -7);
+  json_bool(&j, "t", 1);
+  json_obj(&j, "o");
+  json_num(&j, "y", 1e-300);
+  json_obj_end(&j);
+  json_end(&j);
+  slurp(f, buf, sizeof buf);
+  fclose(f);
+  assert_string_equal(buf, "{\"s\": \"a\\\"b\\\\c\\nd\\te\\u0001f\", \"x\": 0.1, \"nan\": null, \"inf\": null, "
+                           "\"n\": -7, \"t\": true, \"o\": {\"y\": 1e-300}}\n");
+}
+
+static void test_option_table(void **state) {
+  const char *out = NULL;
+  long n = 5;
+  double c = 1.0, xy[2] = {0, 0};
+  int flag = 0;
+  cli_opt_t opts[] = {
+      {"--out", CLI_STRING, &out, 0, 0, 1, "F", "out", 0},
+      {"--n", CLI_LONG, &n, 1, 10, 0, "N", "n", 0},
+      {"--c", CLI_DOUBLE, &c, 0.5, 2.0, 0, "C", "c", 0},
+      {"--xy", CLI_XY, xy, 0, 0, 0, "X,Y", "xy", 0},
+      {"--flag", CLI_FLAG, &flag, 0, 0, 0, NULL, "flag", 0},
+  };
+  cli_cmd_t cmd = {"t", "test", NULL, opts, 5};
+  char *ok[] = {"t", "--out", "f.tif", "--n=7", "--c", "2", "--xy", "3,4", "--flag"};
+  char *range[] = {"t", "--out", "f", "--n", "11"};
+  char *unknown[] = {"t", "--out", "f", "--m", "1"};
+  char *missing[] = {"t", "--n", "3"};
+  char *novalue[] = {"t", "--out"};
+  (void)state;
+  assert_int_equal(cli_parse(&cmd, 9, ok), CLI_OK);
+  assert_string_equal(out, "f.tif");
+  assert_true(n == 7 && c == 2.0 && xy[0] == 3.0 && xy[1] == 4.0 && flag == 1);
+  assert_int_equal(cli_parse(&cmd, 5, range), CLI_BAD_INPUT);
+  assert_int_equal(n, 7); /* unchanged on error */
+  assert_int_equal(cli_parse(&cmd, 5, unknown), CLI_USAGE);
+  assert_int_equal(cli_parse(&cmd, 3, missing), CLI_USAGE);
+  assert_int_equal(cli_parse(&cmd, 2, novalue), CLI_USAGE);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_parse_double), cmocka_unit_test(test_parse_integers),
+      cmocka_unit_test(test_parse_xy),     cmocka_unit_test(test_json),
+      cmocka_unit_test(test_option_table),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}

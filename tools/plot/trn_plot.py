@@ -1,0 +1,265 @@
+#!/usr/bin/python3
+"""tools/plot/trn_plot.py - figures from the `trn` command line's outputs.
+
+    trn_plot.py dem     DEM.tif --out dem.png [--rover X,Y] [--target X,Y] [--prior X,Y]
+                        [--estimate X,Y | --localize-json FILE] [--title T]
+    trn_plot.py surface DEM.tif --out surface.png [--zscale Z] [--elev E] [--azim A]
+    trn_plot.py raster  MAP.tif --out map.png [--label TEXT] [--cmap NAME] [markers as dem]
+
+Every input is anything GDAL reads (band 1, no-data and NaN shown as missing);
+axes are map metres from the raster's geotransform (x east, y north). Needs
+Debian's python3-matplotlib, python3-numpy and python3-gdal
+(`bash tools/setup.sh plot`); run with /usr/bin/python3.
+
+Adding a figure: write `def fig_NAME(args)` that returns a matplotlib Figure,
+and `def add_NAME(sub)` that adds its subparser; list it in FIGURES. The
+shared pieces are read_raster (heights + extent), add_markers (rover, target,
+prior, estimate), and save.
+"""
+import argparse
+import json
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.ticker  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.colors import LightSource  # noqa: E402
+from osgeo import gdal  # noqa: E402
+
+gdal.UseExceptions()
+
+
+# ---------------------------------------------------------------------------
+# shared pieces
+# ---------------------------------------------------------------------------
+class Raster:
+    """Band 1 of a raster, north-up (row 0 = north edge), NaN = missing."""
+
+    def __init__(self, z, gt, path):
+        self.z = z
+        self.gt = gt
+        self.path = path
+        self.cell = gt[1]
+
+    @property
+    def extent(self):
+        """(left, right, bottom, top) in map metres, for imshow."""
+        h, w = self.z.shape
+        return (self.gt[0], self.gt[0] + w * self.gt[1], self.gt[3] + h * self.gt[5], self.gt[3])
+
+    def centres(self):
+        """Map coordinates of the cell centres, as 1-D x (east) and y (north) arrays."""
+        h, w = self.z.shape
+        x = self.gt[0] + (np.arange(w) + 0.5) * self.gt[1]
+        y = self.gt[3] + (np.arange(h) + 0.5) * self.gt[5]
+        return x, y
+
+
+def read_raster(path, band=1):
+    try:
+        ds = gdal.Open(path)
+    except RuntimeError as e:
+        sys.exit(f"trn_plot: cannot read '{path}': {e}")
+    if band > ds.RasterCount:
+        sys.exit(f"trn_plot: '{path}' has {ds.RasterCount} band(s), no band {band}")
+    b = ds.GetRasterBand(band)
+    z = b.ReadAsArray().astype(np.float64)
+    nd = b.GetNoDataValue()
+    if nd is not None and np.isfinite(nd):
+        z[z == np.float32(nd)] = np.nan
+    z[~np.isfinite(z)] = np.nan
+    gt = list(ds.GetGeoTransform())
+    if gt[2] != 0 or gt[4] != 0:
+        sys.exit(f"trn_plot: '{path}' has a rotated geotransform")
+    if gt[5] > 0:  # south-up: flip to north-up
+        z = z[::-1, :]
+        gt[3] += z.shape[0] * gt[5]
+        gt[5] = -gt[5]
+    if gt[1] < 0:
+        z = z[:, ::-1]
+        gt[0] += z.shape[1] * gt[1]
+        gt[1] = -gt[1]
+    return Raster(z, tuple(gt), path)
+
+
+def xy(text):
+    """argparse type for X,Y."""
+    try:
+        x, y = text.split(",")
+        v = (float(x), float(y))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a pair X,Y")
+    if not all(np.isfinite(v)):
+        raise argparse.ArgumentTypeError(f"'{text}' is not finite")
+    return v
+
+
+MARKERS = {
+    # name: (matplotlib marker, colour, size, label)
+    "prior": ("+", "#ffd000", 140, "prior"),
+    "rover": ("o", "#ff2d2d", 70, "rover"),
+    "target": ("*", "#00e5ff", 220, "selected target"),
+    "estimate": ("x", "#ffffff", 90, "estimate"),
+}
+
+
+def add_marker_options(p):
+    p.add_argument("--rover", type=xy, metavar="X,Y", help="rover position, map metres")
+    p.add_argument("--target", type=xy, metavar="X,Y", help="selected target, map metres")
+    p.add_argument("--prior", type=xy, metavar="X,Y", help="prior position, map metres")
+    p.add_argument("--estimate", type=xy, metavar="X,Y", help="localization estimate, map metres")
+    p.add_argument("--localize-json", metavar="FILE",
+                   help="output of `trn localize --json`: marks its estimate (x_m, y_m) and prior")
+
+
+def add_markers(ax, args):
+    pts = {k: getattr(args, k, None) for k in MARKERS}
+    if getattr(args, "localize_json", None):
+        with open(args.localize_json) as f:
+            r = json.load(f)
+        pts["estimate"] = pts["estimate"] or (r["x_m"], r["y_m"])
+        if "prior" in r:
+            pts["prior"] = pts["prior"] or (r["prior"]["x_m"], r["prior"]["y_m"])
+    shown = False
+    for k, (m, c, s, label) in MARKERS.items():
+        if pts[k] is not None:
+            ax.scatter([pts[k][0]], [pts[k][1]], marker=m, c=c, s=s, label=label, zorder=5,
+                       edgecolors="black" if m not in "+x" else None, linewidths=1.0 if m not in "+x" else 2.0)
+            shown = True
+    if shown:
+        ax.legend(loc="upper right", fontsize=8, framealpha=0.8)
+
+
+def map_axes(ax, r):
+    ax.set_xlabel("x east (m)")
+    ax.set_ylabel("y north (m)")
+    ax.set_aspect("equal")
+    ax.ticklabel_format(useOffset=False, style="plain")
+
+
+def save(fig, path, dpi):
+    fig.savefig(path, dpi=dpi, bbox_inches="tight")
+    plt.close(fig)
+    print(f"wrote {path}")
+
+
+# ---------------------------------------------------------------------------
+# figures
+# ---------------------------------------------------------------------------
+def fig_dem(args):
+    """Shaded relief coloured by height (the paper's Fig. 2a), with markers."""
+    r = read_raster(args.dem)
+    z = r.z
+    valid = np.isfinite(z)
+    if not valid.any():
+        sys.exit(f"trn_plot: '{args.dem}' has no valid height")
+    lo, hi = np.nanpercentile(z, [1, 99.5])
+    filled = np.where(valid, z, np.nanmin(z))
+    ls = LightSource(azdeg=315, altdeg=40)
+    rgb = ls.shade(filled, cmap=plt.get_cmap("gist_earth"), vmin=lo, vmax=hi, vert_exag=args.vert_exag,
+                   dx=r.cell, dy=r.cell, blend_mode="overlay")
+    rgb[~valid] = (0.6, 0.6, 0.6, 1.0)  # not seen: grey
+    fig, ax = plt.subplots(figsize=(7.5, 6.5))
+    ax.imshow(rgb, extent=r.extent, origin="upper", interpolation="nearest")
+    sm = plt.cm.ScalarMappable(cmap="gist_earth", norm=plt.Normalize(lo, hi))
+    fig.colorbar(sm, ax=ax, shrink=0.8, label="height (m)")
+    map_axes(ax, r)
+    add_markers(ax, args)
+    h, w = z.shape
+    ax.set_title(args.title or f"{args.dem.split('/')[-1]}: {w} x {h} cells of {r.cell:g} m")
+    return fig
+
+
+def add_dem(sub):
+    p = sub.add_parser("dem", help="shaded DEM with rover / target / estimate markers")
+    p.add_argument("dem", help="DEM (any GDAL raster)")
+    p.add_argument("--vert-exag", type=float, default=2.0, help="hillshade vertical exaggeration (default 2)")
+    add_marker_options(p)
+    return p
+
+
+def fig_surface(args):
+    """3-D view of the terrain (the paper's Fig. 2c)."""
+    r = read_raster(args.dem)
+    z = r.z
+    x, y = r.centres()
+    step = max(1, int(np.ceil(max(z.shape) / args.max_cells)))
+    zs = z[::step, ::step]
+    X, Y = np.meshgrid(x[::step], y[::step])
+    fig = plt.figure(figsize=(9, 7))
+    ax = fig.add_subplot(projection="3d")
+    lo, hi = np.nanpercentile(z, [1, 99.5])
+    ax.plot_surface(X, Y, zs, cmap="gist_earth", vmin=lo, vmax=hi, rstride=1, cstride=1,
+                    linewidth=0, antialiased=False, shade=True)
+    ax.set_xlabel("x east (m)")
+    ax.set_ylabel("y north (m)")
+    ax.set_zlabel("height (m)", labelpad=12)
+    ax.tick_params(axis="z", pad=6)
+    ax.zaxis.set_major_locator(matplotlib.ticker.MaxNLocator(3))
+    xr, yr = x[-1] - x[0], y[0] - y[-1]
+    zr = max(np.nanmax(zs) - np.nanmin(zs), 1e-6)
+    ax.set_box_aspect((xr, yr, zr * args.zscale))
+    ax.view_init(elev=args.elev, azim=args.azim)
+    ax.ticklabel_format(useOffset=False, style="plain")
+    ax.set_title(args.title or f"{args.dem.split('/')[-1]} (heights x{args.zscale:g})")
+    return fig
+
+
+def add_surface(sub):
+    p = sub.add_parser("surface", help="3-D view of a DEM (Fig. 2c)")
+    p.add_argument("dem", help="DEM (any GDAL raster)")
+    p.add_argument("--zscale", type=float, default=2.0, help="vertical exaggeration (default 2)")
+    p.add_argument("--elev", type=float, default=35.0, help="view elevation, degrees (default 35)")
+    p.add_argument("--azim", type=float, default=-60.0, help="view azimuth, degrees (default -60)")
+    p.add_argument("--max-cells", type=int, default=256, help="largest side drawn; coarser grids are subsampled")
+    return p
+
+
+def fig_raster(args):
+    """Any one-band map (uncertainty per candidate, uncertainty field ...) with a colour bar."""
+    r = read_raster(args.raster)
+    fig, ax = plt.subplots(figsize=(7.5, 6.5))
+    z = np.ma.masked_invalid(r.z)
+    cmap = plt.get_cmap(args.cmap).copy()
+    cmap.set_bad("#999999")
+    im = ax.imshow(z, extent=r.extent, origin="upper", cmap=cmap, interpolation="nearest",
+                   norm=matplotlib.colors.LogNorm() if args.log else None)
+    fig.colorbar(im, ax=ax, shrink=0.8, label=args.label)
+    map_axes(ax, r)
+    add_markers(ax, args)
+    ax.set_title(args.title or args.raster.split("/")[-1])
+    return fig
+
+
+def add_raster(sub):
+    p = sub.add_parser("raster", help="any one-band map with a colour bar (grey = no data)")
+    p.add_argument("raster", help="map (any GDAL raster)")
+    p.add_argument("--label", default="value", help="colour bar label")
+    p.add_argument("--cmap", default="viridis", help="matplotlib colour map (default viridis)")
+    p.add_argument("--log", action="store_true", help="logarithmic colour scale")
+    add_marker_options(p)
+    return p
+
+
+FIGURES = {"dem": (add_dem, fig_dem), "surface": (add_surface, fig_surface), "raster": (add_raster, fig_raster)}
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="trn_plot.py", description="Figures from the trn command line's outputs.")
+    sub = ap.add_subparsers(dest="figure", required=True, metavar="FIGURE")
+    for name, (add, _) in FIGURES.items():
+        p = add(sub)
+        p.add_argument("--out", required=True, metavar="PNG", help="image to write")
+        p.add_argument("--title", help="figure title")
+        p.add_argument("--dpi", type=int, default=120, help="resolution (default 120)")
+    args = ap.parse_args(argv)
+    fig = FIGURES[args.figure][1](args)
+    save(fig, args.out, args.dpi)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

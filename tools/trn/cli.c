@@ -1,0 +1,394 @@
+/* tools/trn/cli.c - option parsing, errors, JSON and progress for `trn`. */
+#define _POSIX_C_SOURCE 200809L /* isatty */
+#include "cli.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+/* ------------------------------------------------------------------------ */
+/* strict value parsers                                                       */
+/* ------------------------------------------------------------------------ */
+
+int cli_parse_double(const char *s, double *out) {
+  char *end = NULL;
+  double v;
+  if (s == NULL || *s == '\0' || *s == ' ' || *s == '\t') {
+    return 0;
+  }
+  errno = 0;
+  v = strtod(s, &end);
+  if (end == s || *end != '\0' || errno == ERANGE || !isfinite(v)) {
+    return 0;
+  }
+  *out = v;
+  return 1;
+}
+
+int cli_parse_long(const char *s, long *out) {
+  char *end = NULL;
+  long v;
+  if (s == NULL || *s == '\0' || *s == ' ' || *s == '\t') {
+    return 0;
+  }
+  errno = 0;
+  v = strtol(s, &end, 10);
+  if (end == s || *end != '\0' || errno == ERANGE) {
+    return 0;
+  }
+  *out = v;
+  return 1;
+}
+
+int cli_parse_u64(const char *s, uint64_t *out) {
+  uint64_t v = 0;
+  size_t i;
+  if (s == NULL || *s == '\0') {
+    return 0;
+  }
+  for (i = 0; s[i] != '\0'; ++i) {
+    unsigned d;
+    if (s[i] < '0' || s[i] > '9' || i >= 20) {
+      return 0;
+    }
+    d = (unsigned)(s[i] - '0');
+    if (v > (UINT64_MAX - d) / 10u) {
+      return 0; /* overflow */
+    }
+    v = v * 10u + d;
+  }
+  *out = v;
+  return 1;
+}
+
+int cli_parse_xy(const char *s, double *x, double *y) {
+  char buf[128];
+  const char *comma;
+  size_t n;
+  if (s == NULL) {
+    return 0;
+  }
+  comma = strchr(s, ',');
+  if (comma == NULL || strchr(comma + 1, ',') != NULL) {
+    return 0;
+  }
+  n = (size_t)(comma - s);
+  if (n == 0 || n >= sizeof buf) {
+    return 0;
+  }
+  memcpy(buf, s, n);
+  buf[n] = '\0';
+  return cli_parse_double(buf, x) && cli_parse_double(comma + 1, y);
+}
+
+/* ------------------------------------------------------------------------ */
+/* errors and usage                                                           */
+/* ------------------------------------------------------------------------ */
+
+int cli_fail(const char *cmd, const char *fmt, ...) {
+  va_list ap;
+  fprintf(stderr, "trn %s: ", cmd);
+  va_start(ap, fmt);
+  vfprintf(stderr, fmt, ap);
+  va_end(ap);
+  fputc('\n', stderr);
+  return CLI_BAD_INPUT;
+}
+
+static int usage_error(const cli_cmd_t *cmd, const char *what, const char *arg) {
+  fprintf(stderr, "trn %s: %s '%s' (trn %s --help)\n", cmd->name, what, arg, cmd->name);
+  return CLI_USAGE;
+}
+
+static void range_text(const cli_opt_t *o, char *buf, size_t n) {
+  buf[0] = '\0';
+  if (o->kind == CLI_LONG) {
+    snprintf(buf, n, " [%.0f..%.0f]", o->lo, o->hi);
+  } else if (o->kind == CLI_DOUBLE) {
+    snprintf(buf, n, " [%g..%g]", o->lo, o->hi);
+  }
+}
+
+void cli_usage(const cli_cmd_t *cmd, FILE *out) {
+  size_t i;
+  fprintf(out, "usage: trn %s", cmd->name);
+  for (i = 0; i < cmd->n_opts; ++i) {
+    const cli_opt_t *o = &cmd->opts[i];
+    fprintf(out, " %s%s%s%s%s", o->required ? "" : "[", o->name, o->metavar ? " " : "",
+            o->metavar ? o->metavar : "", o->required ? "" : "]");
+  }
+  fprintf(out, "\n\n%s\n\noptions:\n", cmd->summary);
+  for (i = 0; i < cmd->n_opts; ++i) {
+    const cli_opt_t *o = &cmd->opts[i];
+    char head[64], range[64];
+    snprintf(head, sizeof head, "%s%s%s", o->name, o->metavar ? " " : "", o->metavar ? o->metavar : "");
+    range_text(o, range, sizeof range);
+    fprintf(out, "  %-22s %s%s\n", head, o->help, range);
+  }
+  fprintf(out, "  %-22s %s\n", "--help", "this text");
+  if (cmd->details != NULL) {
+    fprintf(out, "\n%s\n", cmd->details);
+  }
+  fprintf(out, "\nexit status: 0 ok, 1 bad input (one line on stderr), 2 usage error\n");
+}
+
+static int set_value(const cli_cmd_t *cmd, cli_opt_t *o, const char *v) {
+  switch (o->kind) {
+  case CLI_FLAG:
+    *(int *)o->dst = 1;
+    return CLI_OK;
+  case CLI_STRING:
+    if (*v == '\0') {
+      return cli_fail(cmd->name, "%s: empty value", o->name);
+    }
+    *(const char **)o->dst = v;
+    return CLI_OK;
+  case CLI_LONG: {
+    long x;
+    if (!cli_parse_long(v, &x)) {
+      return cli_fail(cmd->name, "%s: '%s' is not an integer", o->name, v);
+    }
+    if ((double)x < o->lo || (double)x > o->hi) {
+      return cli_fail(cmd->name, "%s: %ld is out of range [%.0f..%.0f]", o->name, x, o->lo, o->hi);
+    }
+    *(long *)o->dst = x;
+    return CLI_OK;
+  }
+  case CLI_U64: {
+    uint64_t x;
+    if (!cli_parse_u64(v, &x)) {
+      return cli_fail(cmd->name, "%s: '%s' is not an unsigned 64-bit integer", o->name, v);
+    }
+    *(uint64_t *)o->dst = x;
+    return CLI_OK;
+  }
+  case CLI_DOUBLE: {
+    double x;
+    if (!cli_parse_double(v, &x)) {
+      return cli_fail(cmd->name, "%s: '%s' is not a finite number", o->name, v);
+    }
+    if (x < o->lo || x > o->hi) {
+      return cli_fail(cmd->name, "%s: %g is out of range [%g..%g]", o->name, x, o->lo, o->hi);
+    }
+    *(double *)o->dst = x;
+    return CLI_OK;
+  }
+  case CLI_XY: {
+    double *xy = (double *)o->dst;
+    if (!cli_parse_xy(v, &xy[0], &xy[1])) {
+      return cli_fail(cmd->name, "%s: '%s' is not a pair X,Y of finite numbers", o->name, v);
+    }
+    return CLI_OK;
+  }
+  }
+  return cli_fail(cmd->name, "%s: internal error (option kind)", o->name);
+}
+
+int cli_parse(cli_cmd_t *cmd, int argc, char **argv) {
+  int i;
+  size_t k;
+  for (k = 0; k < cmd->n_opts; ++k) {
+    cmd->opts[k].seen = 0;
+  }
+  for (i = 1; i < argc; ++i) {
+    const char *a = argv[i];
+    const char *eq;
+    const char *val = NULL;
+    size_t name_len;
+    cli_opt_t *o = NULL;
+    int rc;
+    if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
+      cli_usage(cmd, stdout);
+      return CLI_HELP;
+    }
+    if (strncmp(a, "--", 2) != 0) {
+      return usage_error(cmd, "unexpected argument", a);
+    }
+    eq = strchr(a, '=');
+    name_len = eq != NULL ? (size_t)(eq - a) : strlen(a);
+    for (k = 0; k < cmd->n_opts; ++k) {
+      if (strlen(cmd->opts[k].name) == name_len && strncmp(cmd->opts[k].name, a, name_len) == 0) {
+        o = &cmd->opts[k];
+        break;
+      }
+    }
+    if (o == NULL) {
+      return usage_error(cmd, "unknown option", a);
+    }
+    if (o->seen) {
+      return usage_error(cmd, "option given twice:", o->name);
+    }
+    if (o->kind == CLI_FLAG) {
+      if (eq != NULL) {
+        return usage_error(cmd, "option takes no value:", o->name);
+      }
+    } else if (eq != NULL) {
+      val = eq + 1;
+    } else if (i + 1 < argc) {
+      val = argv[++i];
+    } else {
+      return usage_error(cmd, "missing value for", o->name);
+    }
+    rc = set_value(cmd, o, val);
+    if (rc != CLI_OK) {
+      return rc;
+    }
+    o->seen = 1;
+  }
+  for (k = 0; k < cmd->n_opts; ++k) {
+    if (cmd->opts[k].required && !cmd->opts[k].seen) {
+      return usage_error(cmd, "missing required option", cmd->opts[k].name);
+    }
+  }
+  return CLI_OK;
+}
+
+/* ------------------------------------------------------------------------ */
+/* JSON                                                                        */
+/* ------------------------------------------------------------------------ */
+
+void json_write_string(FILE *out, const char *s) {
+  const unsigned char *p = (const unsigned char *)(s != NULL ? s : "");
+  fputc('"', out);
+  for (; *p != '\0'; ++p) {
+    switch (*p) {
+    case '"': fputs("\\\"", out); break;
+    case '\\': fputs("\\\\", out); break;
+    case '\n': fputs("\\n", out); break;
+    case '\r': fputs("\\r", out); break;
+    case '\t': fputs("\\t", out); break;
+    case '\b': fputs("\\b", out); break;
+    case '\f': fputs("\\f", out); break;
+    default:
+      if (*p < 0x20 || *p == 0x7f) {
+        fprintf(out, "\\u%04x", (unsigned)*p);
+      } else {
+        fputc((int)*p, out); /* UTF-8 bytes pass through */
+      }
+    }
+  }
+  fputc('"', out);
+}
+
+static void json_key(json_t *j, const char *key) {
+  if (!j->first[j->depth]) {
+    fputs(", ", j->out);
+  }
+  j->first[j->depth] = 0;
+  if (key != NULL) {
+    json_write_string(j->out, key);
+    fputs(": ", j->out);
+  }
+}
+
+void json_begin(json_t *j, FILE *out) {
+  j->out = out;
+  j->depth = 0;
+  j->first[0] = 1;
+  fputc('{', out);
+}
+
+void json_end(json_t *j) {
+  fputs("}\n", j->out);
+  fflush(j->out);
+}
+
+void json_obj(json_t *j, const char *key) {
+  json_key(j, key);
+  fputc('{', j->out);
+  if (j->depth + 1 < (int)(sizeof j->first / sizeof j->first[0])) {
+    j->depth++;
+  }
+  j->first[j->depth] = 1;
+}
+
+void json_obj_end(json_t *j) {
+  fputc('}', j->out);
+  if (j->depth > 0) {
+    j->depth--;
+  }
+}
+
+void json_str(json_t *j, const char *key, const char *v) {
+  json_key(j, key);
+  json_write_string(j->out, v);
+}
+
+void json_num(json_t *j, const char *key, double v) {
+  json_key(j, key);
+  if (isfinite(v)) {
+    /* Shortest of %.15g..%.17g that reads back as the same double. */
+    char buf[40];
+    int prec;
+    for (prec = 15; prec <= 17; ++prec) {
+      snprintf(buf, sizeof buf, "%.*g", prec, v);
+      if (strtod(buf, NULL) == v) {
+        break;
+      }
+    }
+    fputs(buf, j->out);
+  } else {
+    fputs("null", j->out);
+  }
+}
+
+void json_int(json_t *j, const char *key, long long v) {
+  json_key(j, key);
+  fprintf(j->out, "%lld", v);
+}
+
+void json_bool(json_t *j, const char *key, int v) {
+  json_key(j, key);
+  fputs(v ? "true" : "false", j->out);
+}
+
+/* ------------------------------------------------------------------------ */
+/* progress bar                                                                */
+/* ------------------------------------------------------------------------ */
+
+#define BAR_WIDTH 40
+
+void progress_begin(progress_t *p, const char *label, long total) {
+  p->active = isatty(2) ? 1 : 0;
+  p->label = label;
+  p->total = total > 0 ? total : 1;
+  p->last_permille = -1;
+  progress_update(p, 0);
+}
+
+void progress_update(progress_t *p, long done) {
+  int permille, filled, i;
+  if (!p->active) {
+    return;
+  }
+  if (done < 0) {
+    done = 0;
+  }
+  if (done > p->total) {
+    done = p->total;
+  }
+  permille = (int)((double)done * 1000.0 / (double)p->total);
+  if (permille == p->last_permille) {
+    return;
+  }
+  p->last_permille = permille;
+  filled = permille * BAR_WIDTH / 1000;
+  fprintf(stderr, "\r%s [", p->label);
+  for (i = 0; i < BAR_WIDTH; ++i) {
+    fputc(i < filled ? '#' : '.', stderr);
+  }
+  fprintf(stderr, "] %5.1f%%", (double)permille / 10.0);
+  fflush(stderr);
+}
+
+void progress_end(progress_t *p) {
+  if (!p->active) {
+    return;
+  }
+  progress_update(p, p->total);
+  fputc('\n', stderr);
+  fflush(stderr);
+}

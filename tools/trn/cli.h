@@ -1,0 +1,104 @@
+/* tools/trn/cli.h - what every `trn` subcommand shares: strict option
+ * parsing from a table, the one-line error convention, a JSON writer and a
+ * progress bar.
+ *
+ * Exit statuses (every subcommand):
+ *   0  success
+ *   1  bad input: a value that is not a number or is out of range, an
+ *      unreadable or unsuitable file, a position off the map ...; one line
+ *      `trn <cmd>: <reason>` on stderr
+ *   2  usage: unknown option, option without its value, a required option
+ *      missing, a stray positional argument; one line plus a pointer to --help
+ * `--help` / `-h` prints the subcommand's usage on stdout and exits 0. */
+#ifndef TRN_CLI_H
+#define TRN_CLI_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#define CLI_OK 0
+#define CLI_BAD_INPUT 1
+#define CLI_USAGE 2
+#define CLI_HELP (-1) /* cli_parse: --help was printed; exit 0 */
+
+typedef enum {
+  CLI_FLAG,   /* no value; dst is int, set to 1 */
+  CLI_STRING, /* dst is const char *, points into argv */
+  CLI_LONG,   /* dst is long, integer in [lo, hi] */
+  CLI_U64,    /* dst is uint64_t, decimal, any value 0..2^64-1 */
+  CLI_DOUBLE, /* dst is double, finite, in [lo, hi] */
+  CLI_XY      /* dst is double[2], "X,Y" both finite (range not checked) */
+} cli_kind_t;
+
+typedef struct {
+  const char *name;    /* "--out" */
+  cli_kind_t kind;
+  void *dst;
+  double lo, hi;       /* range of CLI_LONG / CLI_DOUBLE (inclusive) */
+  int required;
+  const char *metavar; /* "FILE.tif", "N", "X,Y" */
+  const char *help;    /* one line; the default is part of the text */
+  int seen;            /* set by cli_parse */
+} cli_opt_t;
+
+typedef struct {
+  const char *name;     /* "terrain" */
+  const char *summary;  /* one line */
+  const char *details;  /* extra paragraph after the options, or NULL */
+  cli_opt_t *opts;
+  size_t n_opts;
+} cli_cmd_t;
+
+/* Parse argv (argv[0] is the subcommand name). Returns CLI_OK, CLI_HELP
+ * (usage printed on stdout), CLI_BAD_INPUT or CLI_USAGE (message printed). */
+int cli_parse(cli_cmd_t *cmd, int argc, char **argv);
+
+/* Print the usage of cmd (synopsis, options with ranges). */
+void cli_usage(const cli_cmd_t *cmd, FILE *out);
+
+/* Print `trn <cmd>: <reason>` (one line) on stderr; returns CLI_BAD_INPUT. */
+int cli_fail(const char *cmd, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+/* Strict parsers (exposed for tests and for commands with custom values).
+ * Each returns 1 on success, 0 when the text is not entirely one value. */
+int cli_parse_double(const char *s, double *out);
+int cli_parse_long(const char *s, long *out);
+int cli_parse_u64(const char *s, uint64_t *out);
+int cli_parse_xy(const char *s, double *x, double *y);
+
+/* ---- JSON writer: one object on one line, keys in call order. ---------- */
+typedef struct {
+  FILE *out;
+  int depth;
+  int first[8]; /* nothing written yet at this depth */
+} json_t;
+
+void json_begin(json_t *j, FILE *out);          /* "{" */
+void json_end(json_t *j);                       /* "}\n" */
+void json_obj(json_t *j, const char *key);      /* "key": { */
+void json_obj_end(json_t *j);                   /* } */
+void json_str(json_t *j, const char *key, const char *v);
+void json_num(json_t *j, const char *key, double v); /* non-finite -> null */
+void json_int(json_t *j, const char *key, long long v);
+void json_bool(json_t *j, const char *key, int v);
+/* Write s as a JSON string literal (quotes, escapes, control characters). */
+void json_write_string(FILE *out, const char *s);
+
+/* ---- progress bar on stderr, drawn only when stderr is a terminal ------- */
+typedef struct {
+  int active;       /* isatty(2) */
+  const char *label;
+  long total;
+  int last_permille;
+} progress_t;
+
+void progress_begin(progress_t *p, const char *label, long total);
+void progress_update(progress_t *p, long done);
+void progress_end(progress_t *p);
+
+#endif /* TRN_CLI_H */

@@ -1,0 +1,324 @@
+/* tools/trn/dem_io.c - GDAL C API DEM reading and GeoTIFF writing. */
+#include "dem_io.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cpl_conv.h>
+#include <cpl_error.h>
+#include <cpl_string.h>
+#include <gdal.h>
+#include <ogr_srs_api.h>
+
+static void set_err(char *err, size_t n, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+static void set_err(char *err, size_t n, const char *fmt, ...) {
+  va_list ap;
+  size_t i;
+  if (err == NULL || n == 0) {
+    return;
+  }
+  va_start(ap, fmt);
+  vsnprintf(err, n, fmt, ap);
+  va_end(ap);
+  /* One line: GDAL messages may hold newlines. */
+  for (i = 0; err[i] != '\0'; ++i) {
+    if (err[i] == '\n' || err[i] == '\r') {
+      err[i] = ' ';
+    }
+  }
+}
+
+/* GDAL once per process, quiet: its messages reach the user through our
+ * one-line reasons (CPLGetLastErrorMsg), not on their own. */
+static void gdal_init(void) {
+  static int done = 0;
+  if (!done) {
+    GDALAllRegister();
+    CPLSetErrorHandler(CPLQuietErrorHandler);
+    done = 1;
+  }
+}
+
+static const char *last_gdal_msg(void) {
+  const char *m = CPLGetLastErrorMsg();
+  return (m != NULL && *m != '\0') ? m : "GDAL gave no reason";
+}
+
+void dem_free(dem_t *dem) {
+  if (dem == NULL) {
+    return;
+  }
+  free(dem->data);
+  free(dem->srs_wkt);
+  memset(dem, 0, sizeof *dem);
+}
+
+static char *dup_string(const char *s) {
+  size_t n = strlen(s) + 1;
+  char *d = malloc(n);
+  if (d != NULL) {
+    memcpy(d, s, n);
+  }
+  return d;
+}
+
+int dem_read(const char *path, int band, int max_dim, dem_t *dem, char *err, size_t err_len) {
+  GDALDatasetH ds;
+  GDALRasterBandH b;
+  double gt[6];
+  int w, h, nbands, has_nodata = 0, mask_flags, r, c;
+  double nodata;
+  const char *wkt;
+  size_t n;
+  float *data;
+  double cell, rel;
+
+  memset(dem, 0, sizeof *dem);
+  gdal_init();
+  CPLErrorReset();
+  ds = GDALOpenEx(path, GDAL_OF_RASTER | GDAL_OF_READONLY, NULL, NULL, NULL);
+  if (ds == NULL) {
+    set_err(err, err_len, "cannot read '%s' as a raster: %s", path, last_gdal_msg());
+    return -1;
+  }
+  nbands = GDALGetRasterCount(ds);
+  if (band < 1 || band > nbands) {
+    set_err(err, err_len, "'%s' has %d band%s, no band %d", path, nbands, nbands == 1 ? "" : "s", band);
+    GDALClose(ds);
+    return -1;
+  }
+  w = GDALGetRasterXSize(ds);
+  h = GDALGetRasterYSize(ds);
+  if (w < 1 || h < 1 || w > max_dim || h > max_dim) {
+    set_err(err, err_len, "'%s' is %d x %d cells; the maximum side is %d cells", path, w, h, max_dim);
+    GDALClose(ds);
+    return -1;
+  }
+  if (GDALGetGeoTransform(ds, gt) != CE_None) {
+    set_err(err, err_len, "'%s' has no geotransform (cell size and position unknown)", path);
+    GDALClose(ds);
+    return -1;
+  }
+  if (gt[2] != 0.0 || gt[4] != 0.0) {
+    set_err(err, err_len, "'%s' has a rotated geotransform (terms %g, %g); resample it north-up first",
+            path, gt[2], gt[4]);
+    GDALClose(ds);
+    return -1;
+  }
+  if (!(isfinite(gt[1]) && isfinite(gt[5]) && gt[1] != 0.0 && gt[5] != 0.0)) {
+    set_err(err, err_len, "'%s' has a degenerate geotransform (pixel size %g x %g)", path, gt[1], gt[5]);
+    GDALClose(ds);
+    return -1;
+  }
+  cell = fabs(gt[1]);
+  rel = fabs(fabs(gt[5]) - cell) / cell;
+  if (rel > 1e-6) {
+    set_err(err, err_len, "'%s' has non-square cells (%g x %g m); resample it to square cells first",
+            path, cell, fabs(gt[5]));
+    GDALClose(ds);
+    return -1;
+  }
+
+  n = (size_t)w * (size_t)h;
+  data = malloc(n * sizeof *data);
+  if (data == NULL) {
+    set_err(err, err_len, "out of memory for a %d x %d DEM", w, h);
+    GDALClose(ds);
+    return -1;
+  }
+  b = GDALGetRasterBand(ds, band);
+  if (GDALRasterIO(b, GF_Read, 0, 0, w, h, data, w, h, GDT_Float32, 0, 0) != CE_None) {
+    set_err(err, err_len, "cannot read band %d of '%s': %s", band, path, last_gdal_msg());
+    free(data);
+    GDALClose(ds);
+    return -1;
+  }
+
+  /* Not seen: no-data value, mask, non-finite. */
+  nodata = GDALGetRasterNoDataValue(b, &has_nodata);
+  mask_flags = GDALGetMaskFlags(b);
+  if (!(mask_flags & GMF_ALL_VALID) && !(mask_flags & GMF_NODATA)) {
+    unsigned char *m = malloc(n);
+    if (m == NULL) {
+      set_err(err, err_len, "out of memory for a %d x %d mask", w, h);
+      free(data);
+      GDALClose(ds);
+      return -1;
+    }
+    if (GDALRasterIO(GDALGetMaskBand(b), GF_Read, 0, 0, w, h, m, w, h, GDT_Byte, 0, 0) != CE_None) {
+      set_err(err, err_len, "cannot read the mask of band %d of '%s': %s", band, path, last_gdal_msg());
+      free(m);
+      free(data);
+      GDALClose(ds);
+      return -1;
+    }
+    for (size_t i = 0; i < n; ++i) {
+      if (m[i] == 0) {
+        data[i] = NAN;
+      }
+    }
+    free(m);
+  }
+  {
+    /* The band is read as float32, so compare with the no-data value as
+     * float32 (a double no-data value is rounded the same way the heights
+     * are). A NaN no-data value needs no comparison. */
+    int use_nd = has_nodata && isfinite(nodata) && fabs(nodata) <= 3.4e38;
+    float nd = use_nd ? (float)nodata : 0.0f;
+    for (size_t i = 0; i < n; ++i) {
+      if (!isfinite(data[i]) || (use_nd && data[i] == nd)) {
+        data[i] = NAN;
+      }
+    }
+  }
+
+  /* Normalise to north-up, west-to-east. */
+  if (gt[5] > 0.0) {
+    for (r = 0; r < h / 2; ++r) {
+      float *a = data + (size_t)r * (size_t)w;
+      float *z = data + (size_t)(h - 1 - r) * (size_t)w;
+      for (c = 0; c < w; ++c) {
+        float t = a[c];
+        a[c] = z[c];
+        z[c] = t;
+      }
+    }
+    gt[3] = gt[3] + (double)h * gt[5];
+    gt[5] = -gt[5];
+  }
+  if (gt[1] < 0.0) {
+    for (r = 0; r < h; ++r) {
+      float *row = data + (size_t)r * (size_t)w;
+      for (c = 0; c < w / 2; ++c) {
+        float t = row[c];
+        row[c] = row[w - 1 - c];
+        row[w - 1 - c] = t;
+      }
+    }
+    gt[0] = gt[0] + (double)w * gt[1];
+    gt[1] = -gt[1];
+  }
+
+  wkt = GDALGetProjectionRef(ds);
+  if (wkt != NULL && *wkt != '\0') {
+    dem->srs_wkt = dup_string(wkt);
+  }
+  GDALClose(ds);
+
+  dem->data = data;
+  dem->width = w;
+  dem->height = h;
+  memcpy(dem->gt, gt, sizeof gt);
+  dem->cell_m = gt[1];
+  return 0;
+}
+
+int dem_write_gtiff(const char *path, const float *data, int width, int height, const double gt[6],
+                    const char *srs_wkt, char *err, size_t err_len) {
+  GDALDriverH drv;
+  GDALDatasetH ds;
+  GDALRasterBandH b;
+  char **opts = NULL;
+  double gtc[6];
+  CPLErr e;
+
+  gdal_init();
+  CPLErrorReset();
+  drv = GDALGetDriverByName("GTiff");
+  if (drv == NULL) {
+    set_err(err, err_len, "GDAL has no GTiff driver");
+    return -1;
+  }
+  opts = CSLSetNameValue(opts, "COMPRESS", "DEFLATE");
+  opts = CSLSetNameValue(opts, "PREDICTOR", "3"); /* floating-point predictor */
+  ds = GDALCreate(drv, path, width, height, 1, GDT_Float32, opts);
+  CSLDestroy(opts);
+  if (ds == NULL) {
+    set_err(err, err_len, "cannot create '%s': %s", path, last_gdal_msg());
+    return -1;
+  }
+  memcpy(gtc, gt, sizeof gtc);
+  e = GDALSetGeoTransform(ds, gtc);
+  if (e == CE_None && srs_wkt != NULL && *srs_wkt != '\0') {
+    e = GDALSetProjection(ds, srs_wkt);
+  }
+  b = GDALGetRasterBand(ds, 1);
+  if (e == CE_None) {
+    e = GDALSetRasterNoDataValue(b, (double)NAN);
+  }
+  if (e == CE_None) {
+    e = GDALRasterIO(b, GF_Write, 0, 0, width, height, (void *)(size_t)data, width, height, GDT_Float32,
+                     0, 0);
+  }
+  if (e != CE_None) {
+    set_err(err, err_len, "cannot write '%s': %s", path, last_gdal_msg());
+    GDALClose(ds);
+    return -1;
+  }
+  GDALClose(ds);
+  if (CPLGetLastErrorType() >= CE_Failure) {
+    set_err(err, err_len, "cannot finish '%s': %s", path, last_gdal_msg());
+    return -1;
+  }
+  return 0;
+}
+
+void dem_map_to_cell(const double gt[6], double x_m, double y_m, double *col, double *row) {
+  *col = (x_m - gt[0]) / gt[1] - 0.5;
+  *row = (y_m - gt[3]) / gt[5] - 0.5;
+}
+
+void dem_cell_to_map(const double gt[6], double col, double row, double *x_m, double *y_m) {
+  *x_m = gt[0] + (col + 0.5) * gt[1];
+  *y_m = gt[3] + (row + 0.5) * gt[5];
+}
+
+int dem_cell_of(const dem_t *dem, double x_m, double y_m, int *col, int *row) {
+  double c, r;
+  dem_map_to_cell(dem->gt, x_m, y_m, &c, &r);
+  c = floor(c + 0.5);
+  r = floor(r + 0.5);
+  if (!(c >= 0.0 && c <= (double)(dem->width - 1) && r >= 0.0 && r <= (double)(dem->height - 1))) {
+    return 0;
+  }
+  *col = (int)c;
+  *row = (int)r;
+  return 1;
+}
+
+char *dem_srs_to_wkt(const char *user, char *err, size_t err_len) {
+  OGRSpatialReferenceH srs;
+  char *wkt = NULL;
+  char *out;
+  gdal_init();
+  CPLErrorReset();
+  srs = OSRNewSpatialReference(NULL);
+  if (srs == NULL || OSRSetFromUserInput(srs, user) != OGRERR_NONE) {
+    set_err(err, err_len, "--crs '%s' is not a coordinate reference system GDAL knows: %s", user,
+            last_gdal_msg());
+    if (srs != NULL) {
+      OSRDestroySpatialReference(srs);
+    }
+    return NULL;
+  }
+  if (OSRExportToWkt(srs, &wkt) != OGRERR_NONE || wkt == NULL) {
+    set_err(err, err_len, "--crs '%s' cannot be written as WKT", user);
+    OSRDestroySpatialReference(srs);
+    return NULL;
+  }
+  out = dup_string(wkt);
+  CPLFree(wkt);
+  OSRDestroySpatialReference(srs);
+  if (out == NULL) {
+    set_err(err, err_len, "out of memory");
+  }
+  return out;
+}

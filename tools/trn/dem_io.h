@@ -1,0 +1,59 @@
+/* tools/trn/dem_io.h - DEMs in and out of GDAL, and map <-> cell coordinates.
+ *
+ * A DEM in memory (dem_t) is always north-up: row 0 is the northern edge,
+ * column 0 the western edge, rows run south, columns run east. The cell is
+ * square, cell_m metres. The core's grids take it as is (x = column,
+ * y = row), so the core's +y points SOUTH in map terms; every conversion
+ * between map coordinates (x east, y north, metres) and cells goes through
+ * dem_map_to_cell / dem_cell_to_map.
+ *
+ * Cell (c, r) is centred at map coordinates
+ *     X = gt[0] + (c + 0.5) * gt[1],   Y = gt[3] + (r + 0.5) * gt[5]
+ * with gt[1] = cell_m > 0 and gt[5] = -cell_m (GDAL's geotransform, kept
+ * after normalisation). A file stored south-up (gt[5] > 0) or east-to-west
+ * (gt[1] < 0) is flipped on reading and its geotransform adjusted, so the
+ * same map coordinates still name the same heights. Rotated geotransforms
+ * and non-square cells are rejected. */
+#ifndef TRN_DEM_IO_H
+#define TRN_DEM_IO_H
+
+#include <stddef.h>
+
+typedef struct {
+  float *data;    /* width*height heights, row-major, NaN = not seen */
+  int width;      /* columns */
+  int height;     /* rows */
+  double gt[6];   /* GDAL geotransform, north-up after normalisation */
+  double cell_m;  /* gt[1] = -gt[5] */
+  char *srs_wkt;  /* the file's CRS as WKT, or NULL when it had none */
+} dem_t;
+
+/* Read band `band` (1-based) of anything GDAL opens. The band's no-data
+ * value, its mask (when not all-valid) and non-finite heights become NaN.
+ * max_dim bounds width and height. Returns 0 on success; on failure returns
+ * -1 and writes a one-line reason (no trailing newline) into err. */
+int dem_read(const char *path, int band, int max_dim, dem_t *dem, char *err, size_t err_len);
+
+/* Write data (width x height, north-up as dem_t) as a one-band float32
+ * GeoTIFF with geotransform gt, no-data NaN, and srs_wkt when not NULL/empty.
+ * Returns 0 or -1 with a reason in err. */
+int dem_write_gtiff(const char *path, const float *data, int width, int height, const double gt[6],
+                    const char *srs_wkt, char *err, size_t err_len);
+
+/* Free what dem_read allocated; dem is zeroed. */
+void dem_free(dem_t *dem);
+
+/* Map coordinates -> fractional cell coordinates (cell centres at integers). */
+void dem_map_to_cell(const double gt[6], double x_m, double y_m, double *col, double *row);
+
+/* Fractional cell coordinates -> map coordinates. */
+void dem_cell_to_map(const double gt[6], double col, double row, double *x_m, double *y_m);
+
+/* Nearest cell of a map position; 1 if it lies on the map, 0 if off it. */
+int dem_cell_of(const dem_t *dem, double x_m, double y_m, int *col, int *row);
+
+/* Convert a user CRS text (EPSG:xxxx, WKT, PROJ string, IAU_2015:xxxx ...)
+ * to WKT. Returns a malloc'd string or NULL with a reason in err. */
+char *dem_srs_to_wkt(const char *user, char *err, size_t err_len);
+
+#endif /* TRN_DEM_IO_H */
