@@ -124,10 +124,11 @@ trn_status_t trn_highpass(const trn_grid_f32_t *dem, const trn_terrain_cfg_t *cf
 static int32_t bin_of(float hp, const trn_terrain_cfg_t *cfg)
 {
     double k;
+    const int32_t mid_bin = cfg->nz / 2; /* bin of h' = 0 (integer division intended) */
     if (!valid_h(hp)) {
         return -1;
     }
-    k = floor((double)hp / (double)cfg->zbin_m) + (double)(cfg->nz / 2);
+    k = floor((double)hp / (double)cfg->zbin_m) + (double)mid_bin;
     if (k < 0.0) {
         return 0;
     }
