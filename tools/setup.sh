@@ -26,8 +26,12 @@ declare -A PKG_GROUPS=(
   [gdal]="libgdal-dev"
   # Plots of results.
   [plot]="python3 python3-matplotlib"
+  # Assurance stages (docs/assurance.md): static analysis (cppcheck + its
+  # MISRA addon, clang-tidy), libFuzzer (clang + compiler-rt), coverage (gcovr),
+  # the stack tool (python3).
+  [assure]="python3 cppcheck clang-tidy clang libclang-rt-14-dev gcovr"
 )
-GROUP_ORDER=(core bench gdal plot)
+GROUP_ORDER=(core bench gdal plot assure)
 
 usage() {
   echo "usage: $0 [group...]   (default: core)"

@@ -40,7 +40,9 @@ typedef struct {
  * @retval TRN_E_NULL    ll or out NULL
  * @retval TRN_E_ARG     a value is NaN or infinite
  * @retval TRN_E_ILLCOND Hessian not negative definite, or the fitted peak
- *                       lies outside the 3x3 patch (|dx| or |dy| > 1)
+ *                       lies outside the 3x3 patch (|dx| or |dy| > 1), or
+ *                       differences of the inputs overflow a double (values
+ *                       near +-1e308): no finite fit exists
  */
 trn_status_t trn_peak_fit(const double ll[9], trn_peak_t *out);
 

@@ -7,6 +7,7 @@
 # (the default with GCC).
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/../.."
+bash tools/setup.sh assure
 
 python3 -m unittest discover -s tools/stack -p 'test_*.py' 2>&1 | tail -n 3
 
