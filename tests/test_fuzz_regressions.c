@@ -61,11 +61,29 @@ static void test_peakfit_gradient_overflow(void **state)
     }
 }
 
+/* The limit both findings led to: a difference of exactly 1e300 nats is
+ * fitted, one beyond it is TRN_E_ILLCOND (peakfit.h). */
+static void test_peakfit_difference_limit(void **state)
+{
+    double ll[9] = { -1.0, -1.0, -1.0, -1.0, 0.0, -1.0, -1.0, -1.0, -1.0 };
+    trn_peak_t p;
+    (void)state;
+    ll[0] = -1.0e300;
+    assert_int_not_equal(trn_peak_fit(ll, &p), TRN_E_ARG);
+    ll[0] = -1.0001e300;
+    assert_int_equal(trn_peak_fit(ll, &p), TRN_E_ILLCOND);
+    assert_true(isinf(p.sigma_x) && p.dx == 0.0);
+    ll[0] = -1.0;
+    ll[4] = 1.0001e300; /* the centre itself far from the rest */
+    assert_int_equal(trn_peak_fit(ll, &p), TRN_E_ILLCOND);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_peakfit_huge_curvature),
         cmocka_unit_test(test_peakfit_gradient_overflow),
+        cmocka_unit_test(test_peakfit_difference_limit),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

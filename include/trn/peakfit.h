@@ -41,8 +41,8 @@ typedef struct {
  * @retval TRN_E_ARG     a value is NaN or infinite
  * @retval TRN_E_ILLCOND Hessian not negative definite, or the fitted peak
  *                       lies outside the 3x3 patch (|dx| or |dy| > 1), or
- *                       differences of the inputs overflow a double (values
- *                       near +-1e308): no finite fit exists
+ *                       an input differs from the centre by more than
+ *                       1e300 nats (the fit would overflow)
  */
 trn_status_t trn_peak_fit(const double ll[9], trn_peak_t *out);
 
