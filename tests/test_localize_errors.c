@@ -164,6 +164,76 @@ static void test_single_pose_window_has_no_second(void **state)
     assert_int_equal(res.on_window_edge, 1);
 }
 
+/* The local map is the global one cut at (4, 4), rover at local (6, 6): the
+ * true pose is (10, 10). Windows that put the truth on each of the four
+ * edges in turn, and one with the truth inside: on_window_edge must say
+ * which. */
+static void test_window_edge_flag_each_side(void **state)
+{
+    trn_map_t map;
+    trn_map_cfg_t cfg;
+    trn_grid_f32_t g, local;
+    const trn_window_t wins[5] = {
+        { 10, 8, 14, 12 }, /* truth on x0 */
+        { 6, 8, 10, 12 },  /* on x1 */
+        { 8, 10, 12, 14 }, /* on y0 */
+        { 8, 6, 12, 10 },  /* on y1 */
+        { 8, 8, 12, 12 },  /* inside */
+    };
+    trn_loc_result_t res;
+    trn_status_t st;
+    int i;
+    (void)state;
+    build(&map, &cfg, &g);
+    assert_int_equal(trn_grid_f32_sub(&g, 4, 4, 12, 12, &local), TRN_OK);
+    for (i = 0; i < 5; ++i) {
+        st = trn_localize_dem(&map, &local, 6, 6, 4000, &wins[i], ws, sizeof ws, &res);
+        assert_true(st == TRN_OK || st == TRN_E_ILLCOND);
+        assert_int_equal(res.ix, 10);
+        assert_int_equal(res.iy, 10);
+        assert_int_equal(res.on_window_edge, i < 4 ? 1 : 0);
+    }
+}
+
+/* A smooth global map (one Gaussian hill, 2 cells wide) and s = 4 cells:
+ * the peak is wide (sigma about 0.6 cells), so the exclusion zone grows from min_exclusion_cells to
+ * ceil(4 max(sigma)) cells, as localize.h documents. */
+static void test_broad_peak_widens_exclusion(void **state)
+{
+    trn_map_t map;
+    trn_map_cfg_t cfg;
+    trn_grid_f32_t g, local;
+    trn_window_t win = { 6, 6, 18, 18 };
+    trn_loc_result_t res;
+    trn_status_t st;
+    double smax_cells;
+    size_t mb;
+    int x, y;
+    (void)state;
+    for (y = 0; y < N; ++y) {
+        for (x = 0; x < N; ++x) {
+            const double dx = x - 12.0, dy = y - 12.0;
+            dem[y * N + x] = (float)(1.5 * exp(-(dx * dx + dy * dy) / (2.0 * 2.0 * 2.0)));
+        }
+    }
+    assert_int_equal(trn_grid_f32_init(&g, dem, N * N, N, N), TRN_OK);
+    trn_map_cfg_default(&cfg);
+    cfg.levels = 2;
+    cfg.terrain.highpass_half_m = 2.0f;
+    cfg.sigma_m = 0.4f; /* s = 4 cells: ln p changes slowly with distance */
+    mb = trn_map_bytes(&cfg, N, N);
+    assert_int_equal(trn_map_build(&map, &cfg, &g, map_buf, mb), TRN_OK);
+    assert_int_equal(trn_grid_f32_sub(&g, 6, 6, 12, 12, &local), TRN_OK);
+    st = trn_localize_dem(&map, &local, 6, 6, 4000, &win, ws, sizeof ws, &res);
+    assert_int_equal(st, TRN_OK);
+    assert_int_equal(res.ix, 12); /* the truth: cut at (6, 6), rover at local (6, 6) */
+    assert_int_equal(res.iy, 12);
+    smax_cells = (res.sigma_x_m > res.sigma_y_m ? res.sigma_x_m : res.sigma_y_m) / 0.1;
+    print_message("broad peak: sigma %.3f cells, exclusion %d cells\n", smax_cells, (int)res.exclusion_cells);
+    assert_true(4.0 * smax_cells > (double)cfg.min_exclusion_cells);
+    assert_int_equal(res.exclusion_cells, (int32_t)ceil(4.0 * smax_cells - 1e-9));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -174,6 +244,8 @@ int main(void)
         cmocka_unit_test(test_dem_workspace_bytes_each_arg),
         cmocka_unit_test(test_localize_dem_too_many_points),
         cmocka_unit_test(test_single_pose_window_has_no_second),
+        cmocka_unit_test(test_window_edge_flag_each_side),
+        cmocka_unit_test(test_broad_peak_widens_exclusion),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
