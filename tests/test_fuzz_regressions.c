@@ -12,6 +12,7 @@
 #include <math.h>
 
 #include "trn/peakfit.h"
+#include "trn/terrain.h"
 
 /* fuzz_peakfit, crash-5289317781f4840a61fb1087d1469cded5b6e886: a peak of
  * curvature ~1e231 nats/cell^2. det(H) overflowed to +inf, so the variances
@@ -78,12 +79,46 @@ static void test_peakfit_difference_limit(void **state)
     assert_int_equal(trn_peak_fit(ll, &p), TRN_E_ILLCOND);
 }
 
+/* fuzz_terrain (10^6-execution run), crash-970f0f5a0a099c7eccf041f7d34ce0ea315954e6:
+ * finite heights near +-3.4e38 m. The filtered height h - mean is computed
+ * in double and exceeded FLT_MAX, so its conversion to float gave inf (C99
+ * 6.3.1.5 leaves that undefined; IEC 60559 gives inf): a seen height became
+ * "not seen".
+ * Contract (terrain.h): only NaN/inf inputs are missing, so every finite
+ * height gives a finite filtered height, and missing stays NaN. */
+static void test_highpass_extreme_heights_stay_finite(void **state)
+{
+    enum { W = 5, H = 5 };
+    static float dem_buf[W * H], out_buf[W * H];
+    static double ws[1024];
+    const trn_terrain_cfg_t cfg = { 0.1f, 0.1f, 0.3f, 9 };
+    trn_grid_f32_t dem, out;
+    int i;
+    (void)state;
+    for (i = 0; i < W * H; ++i) {
+        dem_buf[i] = (i % 3 == 0) ? 3.3e38f : ((i % 3 == 1) ? -3.3e38f : NAN);
+    }
+    dem_buf[12] = 2.0f;
+    assert_int_equal(trn_grid_f32_init(&dem, dem_buf, W * H, W, H), TRN_OK);
+    assert_int_equal(trn_grid_f32_init(&out, out_buf, W * H, W, H), TRN_OK);
+    assert_true(trn_highpass_workspace_bytes(W, H) <= sizeof ws);
+    assert_int_equal(trn_highpass(&dem, &cfg, &out, ws, sizeof ws), TRN_OK);
+    for (i = 0; i < W * H; ++i) {
+        if (isfinite(dem_buf[i])) {
+            assert_true(isfinite(out_buf[i]));
+        } else {
+            assert_true(isnan(out_buf[i]));
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_peakfit_huge_curvature),
         cmocka_unit_test(test_peakfit_gradient_overflow),
         cmocka_unit_test(test_peakfit_difference_limit),
+        cmocka_unit_test(test_highpass_extreme_heights_stay_finite),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
