@@ -228,6 +228,22 @@ static void test_search_bb_pyramid_table_mismatch(void **state)
                      TRN_E_ARG);
 }
 
+/* A distance volume with a zero dimension: TRN_E_SIZE from both searches. */
+static void test_searches_bad_volume_size(void **state)
+{
+    fix_t f;
+    trn_vol_u8_t d;
+    trn_pyramid_t p;
+    trn_best_t b;
+    (void)state;
+    fixture(&f);
+    d = f.dist; d.nx = 0;
+    assert_int_equal(trn_search_exhaustive(&d, &f.t, f.pts, 2, &f.win, NULL, &b, NULL), TRN_E_SIZE);
+    p = f.p; p.base.ny = 0;
+    assert_int_equal(trn_search_bb(&p, &f.t, f.pts, 2, &f.win, NULL, ws_buf, sizeof ws_buf, &b, NULL),
+                     TRN_E_SIZE);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -241,6 +257,7 @@ int main(void)
         cmocka_unit_test(test_pyramid_build_each_arg),
         cmocka_unit_test(test_bb_workspace_bytes_each_arg),
         cmocka_unit_test(test_search_bb_pyramid_table_mismatch),
+        cmocka_unit_test(test_searches_bad_volume_size),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

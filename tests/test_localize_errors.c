@@ -234,6 +234,39 @@ static void test_broad_peak_widens_exclusion(void **state)
     assert_int_equal(res.exclusion_cells, (int32_t)ceil(4.0 * smax_cells - 1e-9));
 }
 
+/* localize_points' remaining documented statuses: TRN_E_SIZE from a map
+ * whose search pyramid has lost its base volume, and TRN_E_ILLCOND from a
+ * flat map matched with a flat patch (every pose scores the same). */
+static void test_localize_points_size_and_illcond(void **state)
+{
+    trn_map_t map, bad;
+    trn_map_cfg_t cfg;
+    trn_grid_f32_t g;
+    trn_window_t win = { 6, 6, 16, 16 };
+    trn_point_t plane[25];
+    trn_loc_result_t res;
+    size_t mb;
+    int i;
+    (void)state;
+    build(&map, &cfg, &g);
+    for (i = 0; i < 25; ++i) {
+        plane[i].x = (int16_t)(i % 5 - 2);
+        plane[i].y = (int16_t)(i / 5 - 2);
+        plane[i].z = (int16_t)(cfg.terrain.nz / 2);
+    }
+    bad = map;
+    bad.pyr.base.nx = 0;
+    assert_int_equal(trn_localize_points(&bad, plane, 25, &win, ws, sizeof ws, &res), TRN_E_SIZE);
+
+    for (i = 0; i < N * N; ++i) {
+        dem[i] = 0.0f;
+    }
+    mb = trn_map_bytes(&cfg, N, N);
+    assert_int_equal(trn_map_build(&map, &cfg, &g, map_buf, mb), TRN_OK);
+    assert_int_equal(trn_localize_points(&map, plane, 25, &win, ws, sizeof ws, &res), TRN_E_ILLCOND);
+    assert_true(isinf(res.sigma_x_m) && isinf(res.sigma_y_m));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -246,6 +279,7 @@ int main(void)
         cmocka_unit_test(test_single_pose_window_has_no_second),
         cmocka_unit_test(test_window_edge_flag_each_side),
         cmocka_unit_test(test_broad_peak_widens_exclusion),
+        cmocka_unit_test(test_localize_points_size_and_illcond),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

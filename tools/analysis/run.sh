@@ -7,6 +7,8 @@
 #   2. cppcheck without MISRA over the rest of port/ (OS code).
 #   3. clang-tidy (Debian, LLVM 14) over src/ and port/ with the checks in
 #      CHECKS below.
+#   4. tools/analysis/retval_audit.py: every status a public header documents
+#      for a function is asserted by some test.
 # Files are found with globs, so new modules are checked without edits here.
 # Every suppression comes from tools/analysis/deviations.txt (one reason per
 # line); nothing is suppressed inline.
@@ -78,6 +80,9 @@ if ! clang-tidy --quiet --checks="$CHECKS" --warnings-as-errors='*' "${all[@]}" 
   grep -E 'warning:|error:' "$log" || cat "$log"
   fail=1
 fi
+
+echo "--- documented statuses vs tests"
+python3 tools/analysis/retval_audit.py || fail=1
 
 if [ $fail -ne 0 ]; then
   echo "analysis: FINDINGS (fix, or add a reasoned line to $DEV)" >&2
