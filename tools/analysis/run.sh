@@ -7,7 +7,9 @@
 #   2. cppcheck without MISRA over the rest of port/ (OS code).
 #   3. clang-tidy (Debian, LLVM 14) over src/ and port/ with the checks in
 #      CHECKS below.
-#   4. tools/analysis/retval_audit.py: every status a public header documents
+#   4. no assert()/NDEBUG in the core: argument checks are plain code,
+#      compiled in every build type.
+#   5. tools/analysis/retval_audit.py: every status a public header documents
 #      for a function is asserted by some test.
 # Files are found with globs, so new modules are checked without edits here.
 # Every suppression comes from tools/analysis/deviations.txt (one reason per
@@ -81,6 +83,11 @@ if ! clang-tidy --quiet --checks="$CHECKS" --warnings-as-errors='*' "${all[@]}" 
   fail=1
 fi
 
+echo "--- argument checks always compiled in (no assert, no NDEBUG in the core)"
+if [ ${#core[@]} -gt 0 ] && grep -nE '\bassert[[:space:]]*\(|NDEBUG|<assert\.h>' "${core[@]}" include/trn/*.h; then
+  echo "analysis: the core must check arguments with if + status, not assert()" >&2
+  fail=1
+fi
 echo "--- documented statuses vs tests"
 python3 tools/analysis/retval_audit.py || fail=1
 
