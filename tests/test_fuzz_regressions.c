@@ -9,6 +9,7 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include <float.h>
 #include <math.h>
 
 #include "trn/peakfit.h"
@@ -88,17 +89,24 @@ static void test_peakfit_difference_limit(void **state)
  * height gives a finite filtered height, and missing stays NaN. */
 static void test_highpass_extreme_heights_stay_finite(void **state)
 {
-    enum { W = 5, H = 5 };
+    /* Two 3x3 blocks side by side, box half-width 1 cell: the left block is
+     * +3.3e38 around a -3.3e38 centre (h' about -5.9e38), the right one the
+     * mirror image (h' about +5.9e38); one corner is missing. */
+    enum { W = 6, H = 3 };
     static float dem_buf[W * H], out_buf[W * H];
     static double ws[1024];
-    const trn_terrain_cfg_t cfg = { 0.1f, 0.1f, 0.3f, 9 };
+    const trn_terrain_cfg_t cfg = { 0.1f, 0.1f, 0.1f, 9 };
     trn_grid_f32_t dem, out;
-    int i;
+    int x, y, i;
     (void)state;
-    for (i = 0; i < W * H; ++i) {
-        dem_buf[i] = (i % 3 == 0) ? 3.3e38f : ((i % 3 == 1) ? -3.3e38f : NAN);
+    for (y = 0; y < H; ++y) {
+        for (x = 0; x < W; ++x) {
+            dem_buf[y * W + x] = (x < 3) ? 3.3e38f : -3.3e38f;
+        }
     }
-    dem_buf[12] = 2.0f;
+    dem_buf[1 * W + 1] = -3.3e38f;
+    dem_buf[1 * W + 4] = 3.3e38f;
+    dem_buf[0] = NAN;
     assert_int_equal(trn_grid_f32_init(&dem, dem_buf, W * H, W, H), TRN_OK);
     assert_int_equal(trn_grid_f32_init(&out, out_buf, W * H, W, H), TRN_OK);
     assert_true(trn_highpass_workspace_bytes(W, H) <= sizeof ws);
@@ -110,6 +118,8 @@ static void test_highpass_extreme_heights_stay_finite(void **state)
             assert_true(isnan(out_buf[i]));
         }
     }
+    assert_true(out_buf[1 * W + 1] == -FLT_MAX); /* clamped, not -inf */
+    assert_true(out_buf[1 * W + 4] == FLT_MAX);  /* clamped, not +inf */
 }
 
 int main(void)
