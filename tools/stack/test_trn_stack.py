@@ -9,6 +9,7 @@
    worst(hc_mid) = 48 + 24 = 72; worst(hc_top) = 16 + max(72, 24) = 88.
    If GCC changes its code generation, this test fails and the hand count
    has to be redone from `arm-none-eabi-objdump -d`.
+   The same for one core function, trn_grid_f32_sub (16 bytes, see the test).
 2. Recursion (direct and mutual), a call through a pointer, an unknown
    external callee and a public function over the limit each make the tool
    fail with a message naming the problem.
@@ -56,6 +57,21 @@ class HandCount(unittest.TestCase):
             rc, out, err = run_tool(self.tmp, "--function", fn)
             self.assertEqual(rc, 0, err)
             self.assertEqual(int(out.strip()), want, fn)
+
+    @unittest.skipUnless(os.path.isdir(os.path.join(HERE, "..", "..", "build", "arm-none-eabi")),
+                         "arm-none-eabi preset not built")
+    def test_core_function_hand_count(self):
+        # trn_grid_f32_sub on the Cortex-R5 (arm-none-eabi preset, -O2 -marm),
+        # from `arm-none-eabi-objdump -d .../grid.c.obj`:
+        #   push {r4, r5, r6, lr}          16 bytes, no sub sp
+        #   bl trn_grid_f32_check          a leaf without push or sub sp: 0
+        # worst = 16 + 0 = 16. Recount if grid.c or the compiler changes.
+        root = os.path.realpath(os.path.join(HERE, "..", ".."))
+        p = subprocess.run([sys.executable, TOOL, "--build", os.path.join(root, "build", "arm-none-eabi"),
+                            "--root", root, "--function", "trn_grid_f32_sub"],
+                           capture_output=True, text=True)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        self.assertEqual(int(p.stdout.strip()), 16)
 
     def expect_fail(self, text, needle, *args):
         compile_c("gcc", [], text, "t", self.tmp)
