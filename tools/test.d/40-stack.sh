@@ -17,8 +17,9 @@ for b in build/arm-none-eabi build/host-release; do
 done
 
 echo "--- arm-none-eabi-size per module (bytes)"
-for lib in build/arm-none-eabi/libtrn.a build/arm-none-eabi/port/proto/libtrn_proto.a; do
-  if [ -f "$lib" ]; then
-    arm-none-eabi-size -t "$lib" | sed "s#(ex .*/#(ex #"
-  fi
-done
+# Every static library of the bare-metal build (libtrn.a, and libtrn_proto.a
+# once port/proto exists), found rather than named.
+while IFS= read -r lib; do
+  echo "$lib:"
+  arm-none-eabi-size -t "$lib" | sed "s#(ex .*/#(ex #"
+done < <(find build/arm-none-eabi -name '*.a' -not -path '*/CMakeFiles/*' | sort)
