@@ -5,6 +5,11 @@
 #include <math.h>
 #include <stddef.h>
 
+/* Largest |ln L(i) - ln L(centre)| fitted, nats: with it every sum and
+ * coefficient below stays under 1e302, far from overflow. Real scores are
+ * below 1e12 nats (TRN_LNP_SCALE-unit int64 sums). */
+#define FIT_MAX_DIFF 1.0e300
+
 static void set_illcond(trn_peak_t *out)
 {
     out->dx = 0.0;
@@ -22,7 +27,7 @@ trn_status_t trn_peak_fit(const double ll[9], trn_peak_t *out)
     double f[9];
     double s0 = 0.0, sx = 0.0, sy = 0.0, sxx = 0.0, syy = 0.0, sxy = 0.0;
     double c1, c2, c3, c4, c5, hxx, hyy, hxy, det, ivxx, ivyy, ivxy;
-    double mag = 0.0, mean_c, half_d, lam_min, noise;
+    double mag = 0.0, mean_c, half_d, lam_min, noise, scale;
     int i, x, y;
 
     if (ll == NULL || out == NULL) {
@@ -33,9 +38,16 @@ trn_status_t trn_peak_fit(const double ll[9], trn_peak_t *out)
             set_illcond(out);
             return TRN_E_ARG;
         }
-        f[i] = ll[i] - ll[4]; /* relative to the centre: no cancellation */
         if (fabs(ll[i]) > mag) {
             mag = fabs(ll[i]);
+        }
+    }
+    for (i = 0; i < 9; ++i) {
+        f[i] = ll[i] - ll[4]; /* relative to the centre: no cancellation */
+        /* Differences beyond FIT_MAX_DIFF would overflow the sums below. */
+        if (!(fabs(f[i]) <= FIT_MAX_DIFF)) {
+            set_illcond(out);
+            return TRN_E_ILLCOND;
         }
     }
     for (y = -1; y <= 1; ++y) {
@@ -59,6 +71,22 @@ trn_status_t trn_peak_fit(const double ll[9], trn_peak_t *out)
     hxx = 2.0 * c3;
     hyy = 2.0 * c5;
     hxy = c4;
+    if (!(hxx < 0.0)) {
+        set_illcond(out);
+        return TRN_E_ILLCOND;
+    }
+    /* Work on H / scale (entries in [-1, 1]), so the determinant and the
+     * eigenvalue cannot overflow or underflow for any finite curvature. */
+    scale = fabs(hxx);
+    if (fabs(hyy) > scale) {
+        scale = fabs(hyy);
+    }
+    if (fabs(hxy) > scale) {
+        scale = fabs(hxy);
+    }
+    hxx /= scale;
+    hyy /= scale;
+    hxy /= scale;
     det = hxx * hyy - hxy * hxy;
     /* Smaller eigenvalue of -H: a curvature below the rounding noise of the
      * inputs (64 ulp of the largest |ln L|) is no curvature at all, so an
@@ -67,14 +95,14 @@ trn_status_t trn_peak_fit(const double ll[9], trn_peak_t *out)
     half_d = sqrt((hxx - hyy) * (hxx - hyy) / 4.0 + hxy * hxy);
     lam_min = mean_c - half_d;
     noise = 64.0 * DBL_EPSILON * (mag > 1.0 ? mag : 1.0);
-    if (!(hxx < 0.0) || !(det > 0.0) || !(lam_min > noise)) {
+    if (!(det > 0.0) || !(lam_min > noise / scale)) {
         set_illcond(out);
         return TRN_E_ILLCOND;
     }
     /* Sigma = -H^-1 */
-    ivxx = -hyy / det;
-    ivyy = -hxx / det;
-    ivxy = hxy / det;
+    ivxx = -hyy / det / scale;
+    ivyy = -hxx / det / scale;
+    ivxy = hxy / det / scale;
     out->var_x = ivxx;
     out->var_y = ivyy;
     out->cov_xy = ivxy;
@@ -83,9 +111,13 @@ trn_status_t trn_peak_fit(const double ll[9], trn_peak_t *out)
     out->dy = ivxy * c1 + ivyy * c2;
     out->sigma_x = sqrt(ivxx);
     out->sigma_y = sqrt(ivyy);
-    out->rho = ivxy / (out->sigma_x * out->sigma_y);
-    if (fabs(out->dx) > 1.0 || fabs(out->dy) > 1.0 || !isfinite(out->sigma_x) ||
-        !isfinite(out->sigma_y)) {
+    /* cov / (sigma_x sigma_y) = hxy / sqrt(hxx hyy): free of the scale, so
+     * it stays finite when the variances are tiny. The checks below cannot
+     * fail after det > 0 (docs/assurance.md lists them): they guard the
+     * contract against rounding. */
+    out->rho = hxy / sqrt(hxx * hyy);
+    if (!(fabs(out->dx) <= 1.0) || !(fabs(out->dy) <= 1.0) || !(ivxx > 0.0) || !(ivyy > 0.0) ||
+        !isfinite(out->sigma_x) || !isfinite(out->sigma_y) || !(fabs(out->rho) < 1.0)) {
         set_illcond(out);
         return TRN_E_ILLCOND;
     }

@@ -1,6 +1,7 @@
 /* terrain.c - high-pass filter and occupancy (see trn/terrain.h). */
 #include "trn/terrain.h"
 
+#include <float.h>
 #include <math.h>
 
 static int pos_finite_le(float v, float max) { return v > 0.0f && v <= max; }
@@ -111,8 +112,14 @@ trn_status_t trn_highpass(const trn_grid_f32_t *dem, const trn_terrain_cfg_t *cf
                 size_t a = (size_t)x0, b = (size_t)x1 + 1u;
                 double s = sum[rb + b] - sum[rb + a] - sum[ra + b] + sum[ra + a];
                 int32_t c = cnt[rb + b] - cnt[rb + a] - cnt[ra + b] + cnt[ra + a];
-                /* c >= 1: the cell itself is valid and inside its own box. */
-                res = (float)(((double)v - ref) - s / (double)c);
+                /* c >= 1: the cell itself is valid and inside its own box.
+                 * Heights near +-FLT_MAX can give |h'| > FLT_MAX: clamp, so
+                 * a seen height stays seen (and the float conversion is
+                 * defined); occupancy puts it in the end bin either way. */
+                double hp = ((double)v - ref) - s / (double)c;
+                hp = hp > (double)FLT_MAX ? (double)FLT_MAX : hp;
+                hp = hp < -(double)FLT_MAX ? -(double)FLT_MAX : hp;
+                res = (float)hp;
             }
             TRN_GRID_AT(out, x, y) = res;
         }
@@ -124,10 +131,11 @@ trn_status_t trn_highpass(const trn_grid_f32_t *dem, const trn_terrain_cfg_t *cf
 static int32_t bin_of(float hp, const trn_terrain_cfg_t *cfg)
 {
     double k;
+    const int32_t mid_bin = cfg->nz / 2; /* bin of h' = 0 (integer division intended) */
     if (!valid_h(hp)) {
         return -1;
     }
-    k = floor((double)hp / (double)cfg->zbin_m) + (double)(cfg->nz / 2);
+    k = floor((double)hp / (double)cfg->zbin_m) + (double)mid_bin;
     if (k < 0.0) {
         return 0;
     }

@@ -32,8 +32,12 @@ declare -A PKG_GROUPS=(
   # Debian's source, an initramfs of static programs, boot it under QEMU.
   [vm]="linux-source-6.1 xz-utils make gcc bc bison flex libelf-dev cpio gzip
         busybox-static qemu-system-x86 iproute2 can-utils libgpiod-dev gpiod"
+  # Assurance stages (docs/assurance.md): static analysis (cppcheck + its
+  # MISRA addon, clang-tidy), libFuzzer (clang + compiler-rt), coverage (gcovr),
+  # the stack tool (python3).
+  [assure]="python3 cppcheck clang-tidy clang libclang-rt-14-dev gcovr"
 )
-GROUP_ORDER=(core bench gdal plot vm)
+GROUP_ORDER=(core bench gdal plot vm assure)
 
 usage() {
   echo "usage: $0 [group...]   (default: core)"

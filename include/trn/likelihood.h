@@ -101,7 +101,8 @@ trn_status_t trn_lnp_table_build(trn_lnp_table_t *t, const trn_lik_cfg_t *cfg, d
 /**
  * @brief ln L of one pose (eq. 1), any pose (points off the map count as cap).
  * @retval TRN_OK, TRN_E_NULL, TRN_E_SIZE, TRN_E_NODATA (n == 0), TRN_E_ARG
- *         (a point's z outside the volume).
+ *         (a point's z outside the volume, or table cap out of range).
+ * @retval TRN_E_RANGE px or py outside [-2 TRN_MAX_DIM, 2 TRN_MAX_DIM].
  */
 trn_status_t trn_score_pose(const trn_vol_u8_t *dist, const trn_lnp_table_t *t,
                             const trn_point_t *pts, size_t n, int32_t px, int32_t py,

@@ -40,7 +40,9 @@ typedef struct {
  * @retval TRN_E_NULL    ll or out NULL
  * @retval TRN_E_ARG     a value is NaN or infinite
  * @retval TRN_E_ILLCOND Hessian not negative definite, or the fitted peak
- *                       lies outside the 3x3 patch (|dx| or |dy| > 1)
+ *                       lies outside the 3x3 patch (|dx| or |dy| > 1), or
+ *                       an input differs from the centre by more than
+ *                       1e300 nats (the fit would overflow)
  */
 trn_status_t trn_peak_fit(const double ll[9], trn_peak_t *out);
 

@@ -14,6 +14,8 @@
  *
  * Missing data: a height that is NaN or infinite is "not seen". It stays NaN
  * through the filter, is never occupied and never matched.
+ * A finite height stays seen: a filtered value beyond +-FLT_MAX (heights
+ * near the float limits) is clamped to +-FLT_MAX, i.e. to the end bin.
  */
 #ifndef TRN_TERRAIN_H
 #define TRN_TERRAIN_H

@@ -43,6 +43,21 @@
 #define TRN_LNP_SCALE 65536
 #endif
 
+/**
+ * Largest worst-case stack, in bytes, of any public function (its own frame
+ * plus its deepest chain of callees, libm budgets included), as computed from
+ * the build by tools/stack/trn_stack.py; the test command fails above it.
+ * 2 KiB: a flight task on a Cortex-R5 RTOS typically gets 4-8 KiB of stack,
+ * and the navigation call must leave at least half of the smallest of those
+ * to the task's own frames, the RTOS context save (with the VFP registers)
+ * and nested interrupts. The core keeps large data in caller workspaces, so
+ * only fixed small tables (histograms, heaps of <= 1 KiB) live on the stack.
+ * This is a check of the build, not a compile-time limit of the code.
+ */
+#ifndef TRN_STACK_LIMIT_BYTES
+#define TRN_STACK_LIMIT_BYTES 2048
+#endif
+
 #if TRN_MAX_DIM < 8 || TRN_MAX_DIM > 16383
 #error "TRN_MAX_DIM must be in [8, 16383] (local point offsets up to 2*TRN_MAX_DIM are int16_t)"
 #endif
@@ -57,6 +72,10 @@
 #endif
 #if TRN_LNP_SCALE < 1024 || TRN_LNP_SCALE > 1048576
 #error "TRN_LNP_SCALE must be in [1024, 1048576]"
+#endif
+
+#if TRN_STACK_LIMIT_BYTES < 256
+#error "TRN_STACK_LIMIT_BYTES must be at least 256"
 #endif
 
 #endif /* TRN_CONFIG_H */

@@ -1,0 +1,79 @@
+#!/usr/bin/env python3
+"""retval_audit.py - every documented status of every public function is asserted by a test.
+
+For each function declared in the public headers (include/trn/*.h,
+port/include/**/*.h) the statuses named in its doc comment (@retval and
+@return lines: TRN_OK, TRN_E_*) are collected; "as <function>" inherits that
+function's list. Then the tests (tests/test_*.c) are split into statements; a
+status counts as tested for F when a statement calls F( and names the status,
+or assigns F's result (st = F(...)) and one of the next four statements names
+the status. Prints the missing (function, status) pairs and exits 1 if any.
+A heuristic on the text, not a proof: it catches a status nobody asserts.
+"""
+import glob
+import os
+import re
+import sys
+
+ROOT = os.path.realpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+STATUS = re.compile(r'\bTRN_(?:OK|E_[A-Z]+)\b')
+
+
+def documented():
+    docs = {}
+    inherit = {}
+    for h in sorted(glob.glob(os.path.join(ROOT, "include/trn/*.h")) +
+                    glob.glob(os.path.join(ROOT, "port/include/**/*.h"), recursive=True)):
+        text = open(h, encoding="utf-8").read()
+        for m in re.finditer(r'/\*\*((?:[^*]|\*(?!/))*)\*/\s*([^;{}]*?)\b(trn_\w+)\s*\(', text):
+            comment, name = m.group(1), m.group(3)
+            if "#define" in m.group(2) or "typedef" in m.group(2):
+                continue
+            lines = [l for l in comment.splitlines() if "@retval" in l or "@return" in l or
+                     l.strip().startswith("*") and STATUS.search(l)]
+            block = "\n".join(lines)
+            sts = set(STATUS.findall(block))
+            am = re.search(r'@retval\s+as\s+(trn_\w+)', comment)
+            if am:
+                inherit[name] = am.group(1)
+            if sts or am:
+                docs[name] = sts
+    for name, base in inherit.items():
+        docs[name] |= docs.get(base, set())
+    return docs
+
+
+def tested():
+    seen = {}
+    for t in sorted(glob.glob(os.path.join(ROOT, "tests/test_*.c"))):
+        text = open(t, encoding="utf-8").read()
+        text = re.sub(r'/\*.*?\*/', ' ', text, flags=re.S)
+        stmts = text.split(";")
+        for i, s in enumerate(stmts):
+            for m in re.finditer(r'\b(trn_\w+)\s*\(', s):
+                f = m.group(1)
+                found = set(STATUS.findall(s))
+                if re.search(r'\b\w+\s*=\s*' + re.escape(f) + r'\s*\(', s):
+                    for nxt in stmts[i + 1:i + 5]:
+                        found |= set(STATUS.findall(nxt))
+                seen.setdefault(f, set()).update(found)
+    return seen
+
+
+def main():
+    docs, seen = documented(), tested()
+    missing = []
+    for f in sorted(docs):
+        for st in sorted(docs[f]):
+            if st not in seen.get(f, set()):
+                missing.append((f, st))
+    total = sum(len(v) for v in docs.values())
+    for f, st in missing:
+        print("retval_audit: %s documents %s, no test asserts it" % (f, st))
+    print("retval_audit: %d functions, %d documented statuses, %d without a test"
+          % (len(docs), total, len(missing)))
+    return 1 if missing else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

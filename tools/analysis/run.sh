@@ -1,0 +1,98 @@
+#!/usr/bin/env bash
+# tools/analysis/run.sh - static analysis of the C code (docs/assurance.md,
+# "Static analysis"); exits non-zero on any finding.
+#
+#   1. cppcheck (Debian) with the MISRA C:2012 addon over the core: src/,
+#      include/trn/ and port/proto/ (pure C99 flight code).
+#   2. cppcheck without MISRA over the rest of port/ (OS code).
+#   3. clang-tidy (Debian, LLVM 14) over src/ and port/ with the checks in
+#      CHECKS below.
+#   4. no assert()/NDEBUG in the core: argument checks are plain code,
+#      compiled in every build type.
+#   5. tools/analysis/retval_audit.py: every status a public header documents
+#      for a function is asserted by some test.
+# Files are found with globs, so new modules are checked without edits here.
+# Every suppression comes from tools/analysis/deviations.txt (one reason per
+# line); nothing is suppressed inline.
+#
+# The MISRA addon reports rule numbers only ("misra violation (use
+# --rule-texts=<file> ...)"): the rule texts are MISRA's copyrighted document,
+# which we do not have; the rule number is enough to look the rule up.
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/../.."
+ROOT=$(pwd)
+OUT=build/analysis
+mkdir -p "$OUT/cppcheck-core" "$OUT/cppcheck-port"
+
+DEV=tools/analysis/deviations.txt
+# clang-tidy: bug finders and CERT C in full; from readability only the checks
+# that catch mistakes rather than taste.
+CHECKS='-*,bugprone-*,cert-*,clang-analyzer-*'
+CHECKS+=',readability-misleading-indentation,readability-braces-around-statements'
+CHECKS+=',readability-non-const-parameter,readability-redundant-declaration'
+CHECKS+=',readability-duplicate-include,readability-inconsistent-declaration-parameter-name'
+CHECKS+=',readability-named-parameter,readability-implicit-bool-conversion'
+
+# --- suppressions from the one deviations file ------------------------------
+supp="$OUT/cppcheck-suppressions.txt"
+: >"$supp"
+while read -r tool id scope _reason; do
+  case $tool in
+    cppcheck)
+      if [ "$scope" = "*" ]; then echo "$id" >>"$supp"; else echo "$id:$ROOT/$scope" >>"$supp"; fi ;;
+    clang-tidy)
+      [ "$scope" = "*" ] || { echo "analysis: clang-tidy deviations must have scope *: $id" >&2; exit 2; }
+      CHECKS+=",-$id" ;;
+    ''|'#'*) ;;
+    *) echo "analysis: $DEV: unknown tool '$tool'" >&2; exit 2 ;;
+  esac
+done < <(grep -v '^[[:space:]]*#' "$DEV" | grep -v '^[[:space:]]*$')
+
+shopt -s nullglob globstar
+core=(src/**/*.c port/proto/**/*.c)
+port_os=()
+for f in port/**/*.c; do
+  case $f in port/proto/*) ;; *) port_os+=("$f") ;; esac
+done
+incs=(-I include -I src)
+[ -d port/include ] && incs+=(-I port/include)
+
+fail=0
+TEMPLATE='{file}:{line}: {severity}: {id}: {message}'
+common=(--std=c99 --enable=warning,style,performance,portability --inline-suppr
+        --suppressions-list="$supp" --error-exitcode=1 -q --template="$TEMPLATE"
+        -D__STDC_VERSION__=199901L "${incs[@]}")
+
+echo "--- cppcheck $(cppcheck --version | awk '{print $2}') + MISRA C:2012 addon: ${#core[@]} core files"
+if ! cppcheck "${common[@]}" --addon=misra --cppcheck-build-dir="$OUT/cppcheck-core" "${core[@]}"; then
+  fail=1
+fi
+if [ ${#port_os[@]} -gt 0 ]; then
+  echo "--- cppcheck (no MISRA): ${#port_os[@]} port files"
+  cppcheck "${common[@]}" --cppcheck-build-dir="$OUT/cppcheck-port" "${port_os[@]}" || fail=1
+fi
+
+all=("${core[@]}" "${port_os[@]}")
+echo "--- clang-tidy $(clang-tidy --version | sed -n 's/.*version \([0-9.]*\).*/\1/p' | head -1): ${#all[@]} files"
+echo "    checks: $CHECKS"
+log="$OUT/clang-tidy.log"
+# -D_DEFAULT_SOURCE for the OS code of port/linux (POSIX + Linux headers).
+if ! clang-tidy --quiet --checks="$CHECKS" --warnings-as-errors='*' "${all[@]}" \
+     -- -std=c99 "${incs[@]}" -D_DEFAULT_SOURCE >"$log" 2>&1; then
+  grep -E 'warning:|error:' "$log" || cat "$log"
+  fail=1
+fi
+
+echo "--- argument checks always compiled in (no assert, no NDEBUG in the core)"
+if [ ${#core[@]} -gt 0 ] && grep -nE '\bassert[[:space:]]*\(|NDEBUG|<assert\.h>' "${core[@]}" include/trn/*.h; then
+  echo "analysis: the core must check arguments with if + status, not assert()" >&2
+  fail=1
+fi
+echo "--- documented statuses vs tests"
+python3 tools/analysis/retval_audit.py || fail=1
+
+if [ $fail -ne 0 ]; then
+  echo "analysis: FINDINGS (fix, or add a reasoned line to $DEV)" >&2
+  exit 1
+fi
+echo "analysis: no findings (cppcheck + MISRA, clang-tidy); $(grep -c '^cppcheck\|^clang-tidy' "$DEV") deviations in $DEV"
