@@ -43,16 +43,15 @@ static double ln_p1(uint32_t dc, const trn_lik_cfg_t *cfg)
 trn_status_t trn_outlier_density(const trn_vol_u8_t *dist, const trn_lik_cfg_t *cfg,
                                  double *k_per_m)
 {
-    /* Four partial histograms, voxel i counted in hist[i % 4]: a run of equal
-     * distances (long runs of cap are the norm) then increments four
-     * counters in turn instead of waiting on one. Each fits in uint32_t:
-     * at most TRN_MAX_DIM^2 * TRN_MAX_ZBINS / 4 voxels. */
-    uint32_t hist[4][TRN_CHAMFER_CAP_MAX + 1];
+    /* One histogram, filled run by run: a run of equal distances (long runs
+     * of cap are the norm) costs one increment instead of one per voxel.
+     * Counts fit in uint32_t: at most TRN_MAX_DIM^2 * TRN_MAX_ZBINS voxels
+     * (2^31). One histogram keeps the stack near 1 KiB (TRN_STACK_LIMIT_BYTES). */
+    uint32_t hist[TRN_CHAMFER_CAP_MAX + 1];
     trn_status_t st;
-    size_t i, total;
+    size_t i, run_end, total;
     double k = 0.0;
     uint32_t d;
-    unsigned j;
     uint8_t vmax = 0u;
     const uint8_t *v;
 
@@ -62,39 +61,30 @@ trn_status_t trn_outlier_density(const trn_vol_u8_t *dist, const trn_lik_cfg_t *
     if ((st = trn_vol_u8_check(dist)) != TRN_OK || (st = trn_lik_cfg_check(cfg)) != TRN_OK) {
         return st;
     }
-    for (j = 0u; j < 4u; ++j) {
-        for (d = 0; d <= TRN_CHAMFER_CAP_MAX; ++d) {
-            hist[j][d] = 0u;
-        }
+    for (d = 0; d <= TRN_CHAMFER_CAP_MAX; ++d) {
+        hist[d] = 0u;
     }
     total = (size_t)dist->nx * (size_t)dist->ny * (size_t)dist->nz;
     v = dist->data;
-    for (i = 0; i + 4u <= total; i += 4u) {
-        const uint8_t a = v[i], b = v[i + 1u], c = v[i + 2u], e = v[i + 3u];
-        const uint8_t m = (uint8_t)((a > b ? a : b) > (c > e ? c : e) ? (a > b ? a : b)
-                                                                       : (c > e ? c : e));
-        vmax = m > vmax ? m : vmax;
+    i = 0u;
+    while (i < total) {
+        const uint8_t c = v[i];
+        run_end = i + 1u;
+        while (run_end < total && v[run_end] == c) {
+            ++run_end;
+        }
+        vmax = c > vmax ? c : vmax;
         if (vmax > TRN_CHAMFER_CAP_MAX) {
             return TRN_E_ARG; /* keeps every index below in range */
         }
-        hist[0][a] += 1u;
-        hist[1][b] += 1u;
-        hist[2][c] += 1u;
-        hist[3][e] += 1u;
-    }
-    for (; i < total; ++i) {
-        vmax = v[i] > vmax ? v[i] : vmax;
-        if (vmax > TRN_CHAMFER_CAP_MAX) {
-            return TRN_E_ARG;
-        }
-        hist[0][v[i]] += 1u;
+        hist[c] += (uint32_t)(run_end - i);
+        i = run_end;
     }
     if (vmax > cfg->cap) {
         return TRN_E_ARG;
     }
     for (d = 0; d <= cfg->cap; ++d) {
-        const double n = (double)hist[0][d] + (double)hist[1][d] + (double)hist[2][d] +
-                         (double)hist[3][d];
+        const double n = (double)hist[d];
         if (n != 0.0) {
             k += n * exp(ln_p1(d, cfg));
         }
@@ -802,9 +792,12 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
 
 trn_status_t trn_points_order(trn_point_t *pts, size_t n, int32_t nz)
 {
-    size_t count[TRN_MAX_ZBINS], next[TRN_MAX_ZBINS], end[TRN_MAX_ZBINS];
-    int32_t rank[TRN_MAX_ZBINS];
-    size_t i, pos, moves;
+    /* uint32_t bookkeeping (n <= UINT32_MAX is checked) keeps the frame near
+     * 1.6 KiB on every target (TRN_STACK_LIMIT_BYTES). */
+    uint32_t count[TRN_MAX_ZBINS], next[TRN_MAX_ZBINS], end[TRN_MAX_ZBINS];
+    uint8_t rank[TRN_MAX_ZBINS];
+    uint32_t pos;
+    size_t i, moves;
     int32_t a, b, z;
 
     if (pts == NULL) {
@@ -813,19 +806,24 @@ trn_status_t trn_points_order(trn_point_t *pts, size_t n, int32_t nz)
     if (nz < 1 || nz > TRN_MAX_ZBINS) {
         return TRN_E_ARG;
     }
+#if SIZE_MAX > UINT32_MAX
+    if (n > (size_t)UINT32_MAX) {
+        return TRN_E_SIZE;
+    }
+#endif
     if (!points_z_ok(pts, n, nz)) {
         return TRN_E_ARG;
     }
     for (z = 0; z < nz; ++z) {
         count[z] = 0u;
-        rank[z] = z;
+        rank[z] = (uint8_t)z;
     }
     for (i = 0; i < n; ++i) {
         ++count[pts[i].z];
     }
     /* bins by increasing population, ties by bin (insertion sort, nz <= 255) */
     for (a = 1; a < nz; ++a) {
-        int32_t v = rank[a];
+        const uint8_t v = rank[a];
         b = a;
         while (b > 0 && (count[rank[b - 1]] > count[v] ||
                          (count[rank[b - 1]] == count[v] && rank[b - 1] > v))) {
@@ -848,7 +846,7 @@ trn_status_t trn_points_order(trn_point_t *pts, size_t n, int32_t nz)
         while (next[bin] < end[bin] && moves <= n) {
             trn_point_t p = pts[next[bin]];
             while (p.z != bin && moves <= n) {
-                const size_t slot = next[p.z]++;
+                const uint32_t slot = next[p.z]++;
                 trn_point_t q = pts[slot];
                 pts[slot] = p;
                 p = q;

@@ -353,6 +353,11 @@ static void test_points_order(void **state)
     pts[1].z = 0;
     assert_memory_equal(pts, orig, 2 * sizeof pts[0]);
     assert_int_equal(trn_points_order(pts, 0, 8), TRN_OK);
+#if SIZE_MAX > UINT32_MAX
+    /* more points than the uint32 bookkeeping can index: refused before
+     * any point is read */
+    assert_int_equal(trn_points_order(pts, (size_t)UINT32_MAX + 1u, 8), TRN_E_SIZE);
+#endif
 }
 
 static void test_pyramid_vs_bruteforce(void **state)

@@ -162,6 +162,7 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
  * @retval TRN_OK
  * @retval TRN_E_NULL pts NULL
  * @retval TRN_E_ARG  nz out of range, or a point's z outside 0..nz-1
+ * @retval TRN_E_SIZE n above UINT32_MAX (possible only where size_t is wider)
  *                    (pts is then unchanged)
  */
 trn_status_t trn_points_order(trn_point_t *pts, size_t n, int32_t nz);
