@@ -118,7 +118,10 @@ static int candidate_ok(const trn_select_cfg_t *cfg, const geom_t *g, int32_t cx
     const double r = sqrt(dx * dx + dy * dy) * g->cell;
     const double hx = (double)g->half + 0.5;
     double b, ex, ey;
-    if (cx < 0 || cy < 0 || cx >= g->nx || cy >= g->ny) {
+    /* the patch and its one-cell pose margin inside the map: a patch cut by
+     * the map's edge would look informative because of the edge alone */
+    if (cx - g->half - 1 < 0 || cy - g->half - 1 < 0 || cx + g->half + 1 > g->nx - 1 ||
+        cy + g->half + 1 > g->ny - 1) {
         return 0;
     }
     if (r < (double)cfg->min_range_m || r > (double)cfg->max_range_m) {

@@ -5,10 +5,12 @@
  * position, the best target and the next best distinct ones.
  *
  * Candidates: patch centres on a lattice of stride_cells around the rover's
- * cell, on the map, at range [min_range_m, max_range_m] from the rover, at a
+ * cell whose patch, grown by one cell for the pose offsets, lies inside the
+ * map (a patch cut by the map's edge would look informative because of the
+ * edge alone: off the map every voxel scores the cap), at range [min_range_m, max_range_m] from the rover, at a
  * bearing (grid frame: atan2(dy, dx), x = column, y = row) minus the rover's
  * heading within [pan_min_rad, pan_max_rad], and whose square patch (side
- * patch_cells = 2 floor(patch_m / cell_m / 2) + 1, clipped to the map) keeps
+ * patch_cells = 2 floor(patch_m / cell_m / 2) + 1) keeps
  * out of the rover's footprint disc (radius footprint_radius_m).
  *
  * Prediction: P = eq. 9 applied to P_G over the union of the candidate
