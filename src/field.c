@@ -8,8 +8,8 @@ void trn_field_cfg_default(trn_field_cfg_t *cfg)
 {
     if (cfg != NULL) {
         cfg->coarse_step_cells = 16;
-        cfg->margin_rel = 0.25f;
-        cfg->change_rel = 0.5f;
+        cfg->margin_rel = 0.5f;
+        cfg->change_rel = 1.5f;
     }
 }
 
@@ -116,6 +116,7 @@ trn_status_t trn_field(const trn_map_t *map, const trn_kernels_t *k, const trn_v
     trn_status_t s;
     size_t need;
     int32_t step, i, j, x, y, w, h;
+    double spread;
 
     if (map == NULL || k == NULL || pg == NULL || scfg == NULL || fcfg == NULL ||
         area == NULL || out == NULL || evaluated == NULL || stats == NULL || ws == NULL) {
@@ -180,10 +181,29 @@ trn_status_t trn_field(const trn_map_t *map, const trn_kernels_t *k, const trn_v
             }
         }
     }
+    /* the coarse field's spread: its mean finite value minus its minimum */
+    {
+        double sum = 0.0;
+        uint32_t nf = 0u;
+        for (j = 0; j <= nint(step, h); ++j) {
+            for (i = 0; i <= nint(step, w); ++i) {
+                const double v = (double)TRN_GRID_AT(out, lat(i, step, w), lat(j, step, h));
+                if (isfinite(v)) {
+                    sum += v;
+                    ++nf;
+                }
+            }
+        }
+        spread = nf > 0u ? sum / (double)nf - stats->best_m : 0.0;
+    }
     /* refinement levels */
     for (; step > 1; step /= 2) {
         const double best = stats->best_m;
         const int32_t half = step / 2;
+        /* the low band narrows with the step: margin_rel * S at the coarse
+         * level, half of it at the next, ... */
+        const double band = (double)fcfg->margin_rel * spread * (double)step /
+                            (double)fcfg->coarse_step_cells;
         for (j = 0; j < nint(step, h); ++j) {
             for (i = 0; i < nint(step, w); ++i) {
                 const int32_t xa = lat(i, step, w), xb = lat(i + 1, step, w);
@@ -209,8 +229,8 @@ trn_status_t trn_field(const trn_map_t *map, const trn_kernels_t *k, const trn_v
                 if (!known || nfin == 0) {
                     continue;
                 }
-                refine = nfin < 4 || vmin <= best * (1.0 + (double)fcfg->margin_rel) ||
-                         vmax - vmin > (double)fcfg->change_rel * vmin;
+                refine = nfin < 4 || vmin <= best + band ||
+                         vmax - vmin > (double)fcfg->change_rel * spread;
                 if (!refine) {
                     continue;
                 }

@@ -8,11 +8,13 @@
  * Rule: evaluate the lattice of step coarse_step_cells (the last row and
  * column clamped to the area's edge). Then, level by level, halve the step:
  * a square of the current level whose four corners are known is refined
- * (its four edge midpoints and centre evaluated) when
- *  - its smallest finite corner is within margin_rel of the smallest value
- *    found so far (low: v_min <= best * (1 + margin_rel)), or
- *  - its corners change fast: v_max - v_min > change_rel * v_min, or some
- *    corners are finite and some infinite.
+ * (its four edge midpoints and centre evaluated) when, with S the coarse
+ * lattice's spread (mean of its finite values minus its minimum),
+ *  - it is low: its smallest finite corner v_min <= best + band, best being
+ *    the smallest value found before this level and the band
+ *    margin_rel * S * step / coarse_step_cells narrowing as the step halves, or
+ *  - it changes fast: v_max - v_min > change_rel * S, or some corners are
+ *    finite and some infinite.
  * Squares whose corners are all infinite are not refined. The loop stops at
  * step 1; no recursion, every loop bounded by the area. Cells never
  * evaluated get the bilinear interpolation of the finest known square that
@@ -43,7 +45,7 @@ typedef struct {
     double best_m;             /**< that value, m (+inf if none finite) */
 } trn_field_stats_t;
 
-/** @brief Defaults: coarse step 16 cells (1.6 m), margin 0.25, change 0.5. */
+/** @brief Defaults: coarse step 16 cells (1.6 m), margin 0.5, change 1.5. */
 void trn_field_cfg_default(trn_field_cfg_t *cfg);
 
 /** @brief Check. @retval TRN_OK, TRN_E_NULL, TRN_E_ARG. */
