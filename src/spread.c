@@ -296,11 +296,22 @@ trn_status_t trn_prob_global_map(const trn_kernels_t *k, const trn_sigma_model_t
                        ws_bytes);
 }
 
-/* Source window of roi: roi grown by the largest radius, clipped to nx x ny. */
-static void source_window(const trn_kernels_t *k, const trn_window_t *roi, int32_t nx,
-                          int32_t ny, trn_window_t *sw)
+/* Source window of roi: roi grown by the largest radius any source that
+ * could reach roi uses, clipped to nx x ny. Sources farther than R_9 never
+ * reach roi; within that box sigma grows with the distance to the rover, so
+ * its farthest corner bounds every kernel used there. */
+static void source_window(const trn_kernels_t *k, const trn_sigma_model_t *m, float cell_m,
+                          trn_xy_t rover, const trn_window_t *roi, int32_t nx, int32_t ny,
+                          trn_window_t *sw)
 {
-    const int32_t r = k->radius[TRN_KERNEL_COUNT - 1];
+    const int32_t r9 = k->radius[TRN_KERNEL_COUNT - 1];
+    const double ex = fmax(fabs((double)(roi->x0 - r9) - (double)rover.x_cells),
+                           fabs((double)(roi->x1 + r9) - (double)rover.x_cells));
+    const double ey = fmax(fabs((double)(roi->y0 - r9) - (double)rover.y_cells),
+                           fabs((double)(roi->y1 + r9) - (double)rover.y_cells));
+    const double c = (double)cell_m;
+    const double sig = ((double)m->sigma_min_m + (double)m->k_per_m * (ex * ex + ey * ey) * c * c) / c;
+    const int32_t r = k->radius[trn_kernel_pick(k, sig < 1e30 ? (float)sig : 1e30f)];
     sw->x0 = roi->x0 - r > 0 ? roi->x0 - r : 0;
     sw->y0 = roi->y0 - r > 0 ? roi->y0 - r : 0;
     sw->x1 = roi->x1 + r < nx - 1 ? roi->x1 + r : nx - 1;
@@ -356,7 +367,7 @@ trn_status_t trn_prob_local(const trn_kernels_t *k, const trn_sigma_model_t *m, 
         return TRN_E_WORKSPACE;
     }
     ps.k = k;
-    source_window(k, roi, pg->nx, pg->ny, &ps.sw);
+    source_window(k, m, cell_m, rover, roi, pg->nx, pg->ny, &ps.sw);
     ps.dw = *roi;
     ps.sww = ps.sw.x1 - ps.sw.x0 + 1;
     ps.swh = ps.sw.y1 - ps.sw.y0 + 1;

@@ -42,6 +42,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "bench_select.h"
 #include "ref_chamfer.h"
 #include "rng.h"
 #include "synth.h"
@@ -605,6 +606,7 @@ typedef struct {
     double chamfer_vs_scan;   /* median trn_chamfer3d / median scalar scan passes */
     int32_t win[N_WINDOWS];   /* half-widths used (clamped on small maps) */
     double search_speedup[N_WINDOWS]; /* median exhaustive / median branch-and-bound */
+    bench_select_result_t sel;/* landmark selection rows */
     int wrong;                /* a wrong answer was seen */
 } size_result_t;
 
@@ -1096,6 +1098,10 @@ static int bench_size(const opts_t *o, int32_t n, size_result_t *r)
     }
     for (k = 0; rc == 0 && k < N_WINDOWS; ++k) {
         rc = bench_window(&w, o, k, r);
+    }
+    if (rc == 0) {
+        rc = bench_select_run(&w.mc.map, n, o->repeats, &r->sel);
+        r->wrong |= r->sel.wrong;
     }
     world_free(&w);
     return rc;
