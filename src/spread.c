@@ -127,6 +127,15 @@ typedef struct {
     float *tmp;
 } pass_t;
 
+/* y[i] += a * x[i], i < n (distinct arrays: restrict lets it vectorise). */
+static void axpy(float *restrict y, const float *restrict x, float a, int32_t n)
+{
+    int32_t i;
+    for (i = 0; i < n; ++i) {
+        y[i] += a * x[i];
+    }
+}
+
 /* Scatter v * kernel j centred at global column sx into trow (dw columns). */
 static void scatter_x(const pass_t *p, float *trow, int32_t sx, int32_t j, float v)
 {
@@ -134,9 +143,8 @@ static void scatter_x(const pass_t *p, float *trow, int32_t sx, int32_t j, float
     const float *t = p->k->taps[j] + (TRN_KERNEL_MAX_RADIUS - r); /* t[i]: offset i - r */
     const int32_t lo = sx - r > p->dw.x0 ? sx - r : p->dw.x0;
     const int32_t hi = sx + r < p->dw.x1 ? sx + r : p->dw.x1;
-    int32_t g;
-    for (g = lo; g <= hi; ++g) {
-        trow[g - p->dw.x0] += v * t[g - sx + r];
+    if (lo <= hi) {
+        axpy(trow + (lo - p->dw.x0), t + (lo - sx + r), v, hi - lo + 1);
     }
 }
 
@@ -205,12 +213,8 @@ static void ypass(const pass_t *p, float *out)
             lo = ty - r > p->dw.y0 ? ty - r : p->dw.y0;
             hi = ty + r < p->dw.y1 ? ty + r : p->dw.y1;
             for (g = lo; g <= hi; ++g) {
-                const float w = t[g - ty + r];
-                float *orow = out + (size_t)(g - p->dw.y0) * (size_t)p->dww;
-                int32_t i;
-                for (i = x; i < xe; ++i) {
-                    orow[i] += w * trow[i];
-                }
+                axpy(out + (size_t)(g - p->dw.y0) * (size_t)p->dww + (size_t)x, trow + x,
+                     t[g - ty + r], xe - x);
             }
             x = xe;
         }
