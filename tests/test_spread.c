@@ -258,6 +258,54 @@ static void test_local_region_equals_whole(void **state)
     free(full);
 }
 
+/* trn_prob_global_map reads the occupancy from the distance volume (D = 0):
+ * it must equal trn_prob_global on the occupancy trn_map_build made. */
+static void test_map_variant_equals_occupancy(void **state)
+{
+    const int n = 64;
+    float *dem = malloc(sizeof(float) * n * n), *hp = malloc(sizeof(float) * n * n);
+    float *pg = malloc(sizeof(float) * n * n * 16);
+    uint8_t *occ;
+    selworld_t w;
+    trn_sigma_model_t gm;
+    trn_xy_t s = {20.0f, 40.0f};
+    trn_grid_f32_t gd, gh;
+    size_t hb, i, nvox;
+    void *hws;
+    int x, y;
+    (void)state;
+    for (y = 0; y < n; ++y) {
+        for (x = 0; x < n; ++x) { /* bumps and a ramp */
+            dem[y * n + x] = (float)(0.3 * sin(0.4 * x) * cos(0.3 * y) + 0.01 * x);
+        }
+    }
+    trn_sigma_global_default(&gm);
+    assert_int_equal(selworld_init(&w, n, dem, &gm, &s, 1), TRN_OK);
+    nvox = (size_t)n * n * w.map.dist.nz;
+    occ = malloc(nvox);
+    assert_int_equal(trn_grid_f32_init(&gd, dem, (size_t)n * n, n, n), TRN_OK);
+    assert_int_equal(trn_grid_f32_init(&gh, hp, (size_t)n * n, n, n), TRN_OK);
+    hb = trn_highpass_workspace_bytes(n, n);
+    hws = selworld_alloc(hb);
+    assert_int_equal(trn_highpass(&gd, &w.cfg.terrain, &gh, hws, hb), TRN_OK);
+    {
+        trn_vol_u8_t v;
+        assert_int_equal(trn_vol_u8_init(&v, occ, nvox, n, n, w.map.dist.nz), TRN_OK);
+        assert_int_equal(trn_occupancy(&gh, &w.cfg.terrain, &v, NULL), TRN_OK);
+    }
+    run_global(occ, n, n, w.map.dist.nz, &gm, &s, 1, pg);
+    for (i = 0; i < nvox; ++i) {
+        assert_true((occ[i] != 0) == (w.map.dist.data[i] == 0));
+        assert_true(pg[i] == w.pg.data[i]);
+    }
+    free(hws);
+    free(occ);
+    free(dem);
+    free(hp);
+    free(pg);
+    selworld_free(&w);
+}
+
 static void test_bad_inputs(void **state)
 {
     const int nx = 16, ny = 12, nz = 2;
@@ -322,6 +370,7 @@ int main(void)
         cmocka_unit_test(test_constant_sigma_equals_2d),
         cmocka_unit_test(test_varying_sigma_and_mass),
         cmocka_unit_test(test_local_region_equals_whole),
+        cmocka_unit_test(test_map_variant_equals_occupancy),
         cmocka_unit_test(test_bad_inputs),
     };
     return cmocka_run_group_tests(tests, setup, NULL);

@@ -45,14 +45,18 @@ typedef struct {
     double best_m;             /**< that value, m (+inf if none finite) */
 } trn_field_stats_t;
 
-/** @brief Defaults: coarse step 16 cells (1.6 m), margin 0.5, change 1.5. */
+/** @brief Defaults: coarse step 16 cells (1.6 m), margin 0.5, change 1.5.
+ * @param[out] cfg the defaults; NULL is ignored. */
 void trn_field_cfg_default(trn_field_cfg_t *cfg);
 
-/** @brief Check. @retval TRN_OK, TRN_E_NULL, TRN_E_ARG. */
+/** @brief Check. @param[in] cfg the parameters.
+ * @retval TRN_OK, TRN_E_NULL, TRN_E_ARG (step not a power of two in 1..256,
+ *         margin or change NaN or out of [0, 100]). */
 trn_status_t trn_field_cfg_check(const trn_field_cfg_t *cfg);
 
 /** @brief Workspace bytes of trn_field (0 if invalid): candidates of one
- * position plus trn_select's workspace. */
+ * position plus trn_select's workspace.
+ * @param[in] scfg, map, k as trn_select_workspace_bytes. */
 size_t trn_field_workspace_bytes(const trn_select_cfg_t *scfg, const trn_map_t *map,
                                  const trn_kernels_t *k);
 

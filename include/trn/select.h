@@ -85,16 +85,21 @@ typedef struct {
 
 /** @brief Defaults (method.md 4): range 1-10 m, full pan (+-pi), footprint
  * 0.5 m, 2 m patch (21 cells at 0.1 m), stride 2 cells, separation 1 m (half
- * a patch), local error trn_sigma_local_default. */
+ * a patch), local error trn_sigma_local_default.
+ * @param[out] cfg the defaults; NULL is ignored. */
 void trn_select_cfg_default(trn_select_cfg_t *cfg);
 
-/** @brief Check a configuration for cells of cell_m. @retval TRN_OK, TRN_E_NULL, TRN_E_ARG. */
+/** @brief Check a configuration for cells of cell_m (patch >= 3 cells, reach
+ * <= TRN_MAX_DIM cells). @param[in] cfg, cell_m the rules and the map's cell (m).
+ * @retval TRN_OK, TRN_E_NULL, TRN_E_ARG (a value NaN or out of range). */
 trn_status_t trn_select_cfg_check(const trn_select_cfg_t *cfg, float cell_m);
 
-/** @brief Largest number of candidates of one rover position (array size); 0 if invalid. */
+/** @brief Largest number of candidates of one rover position (array size); 0 if invalid.
+ * @param[in] cfg, cell_m the rules and the map's cell (m). */
 size_t trn_select_max_candidates(const trn_select_cfg_t *cfg, float cell_m);
 
-/** @brief Workspace bytes of trn_select for this map and kernels (0 if invalid). */
+/** @brief Workspace bytes of trn_select for this map and kernels (0 if invalid).
+ * @param[in] cfg, map, k the rules, the prepared map, the built kernels. */
 size_t trn_select_workspace_bytes(const trn_select_cfg_t *cfg, const trn_map_t *map,
                                   const trn_kernels_t *k);
 

@@ -63,20 +63,24 @@ typedef struct {
 } trn_sigma_model_t;
 
 /** @brief Default error of the global map (eq. 8): 0.02 m + 0.001/m r^2
- * (0.12 m at 10 m, 0.65 m at 25 m). */
+ * (0.12 m at 10 m, 0.65 m at 25 m).
+ * @param[out] m the model; NULL is ignored. */
 void trn_sigma_global_default(trn_sigma_model_t *m);
 
 /** @brief Default expected error of the new local map (eq. 9), rover mast
- * stereo: 0.02 m + 0.002/m r^2 (0.07 m at 5 m, 0.22 m at 10 m). */
+ * stereo: 0.02 m + 0.002/m r^2 (0.07 m at 5 m, 0.22 m at 10 m).
+ * @param[out] m the model; NULL is ignored. */
 void trn_sigma_local_default(trn_sigma_model_t *m);
 
-/** @brief Check a sigma model. @retval TRN_OK, TRN_E_NULL, TRN_E_ARG (NaN or out of range). */
+/** @brief Check a sigma model.
+ * @param[in] m the model.
+ * @retval TRN_OK, TRN_E_NULL, TRN_E_ARG (NaN or out of range). */
 trn_status_t trn_sigma_model_check(const trn_sigma_model_t *m);
 
 /**
  * @brief Kernel index of every cell of a window: sigma from the distance of
  * the cell centre to the nearest sensing position, nearest kernel in log-sigma.
- * @param[in]  k, m, cell_m  kernels, model, cell side (m, (0, 1000]).
+ * @param[in]  k, m, cell_m  kernels (built), model, cell side (m, (0, 1000]).
  * @param[in]  sensors       n_sensors positions (1..TRN_SPREAD_MAX_SENSORS), global cells, finite.
  * @param[in]  win           inclusive window of global cells (any, may lie off a map).
  * @param[out] idx           row-major kernel indices, window width per row.
@@ -89,12 +93,15 @@ trn_status_t trn_spread_kernel_map(const trn_kernels_t *k, const trn_sigma_model
                                    float cell_m, const trn_xy_t *sensors, size_t n_sensors,
                                    const trn_window_t *win, uint8_t *idx, size_t idx_len);
 
-/** @brief Workspace bytes of trn_prob_global for an nx x ny map (0 if out of range). */
+/** @brief Workspace bytes of trn_prob_global for an nx x ny map (0 if out of range).
+ * @param[in] nx, ny map size, cells. */
 size_t trn_prob_global_workspace_bytes(int32_t nx, int32_t ny);
 
 /**
  * @brief Eq. 8: P_G = occupancy M spread by the global map's error, sigma
  * from the distance to the nearest of the global map's sensing positions.
+ * @param[in]  k, m, cell_m        kernels (built), global error model, cell side (m).
+ * @param[in]  sensors, n_sensors  sensing positions of the global map, global cells.
  * @param[in]  occ     occupancy (nonzero = occupied), nx x ny x nz.
  * @param[out] pg      same dimensions as occ, overwritten.
  * @param[in]  ws      trn_prob_global_workspace_bytes bytes, 16-byte aligned.
@@ -108,7 +115,11 @@ trn_status_t trn_prob_global(const trn_kernels_t *k, const trn_sigma_model_t *m,
 
 /**
  * @brief Eq. 8 for a prepared global map: as trn_prob_global with the map's
- * occupancy, read from its distance volume (occupied <=> chamfer distance 0).
+ * occupancy, read from its distance volume (occupied <=> chamfer distance 0),
+ * and the map's cell size.
+ * @param[in]  k, m, sensors, n_sensors, ws, ws_bytes  as trn_prob_global.
+ * @param[in]  map  prepared global map.
+ * @param[out] pg   map->dist sized.
  * @retval as trn_prob_global (pg must be map->dist sized).
  */
 trn_status_t trn_prob_global_map(const trn_kernels_t *k, const trn_sigma_model_t *m,
@@ -116,13 +127,15 @@ trn_status_t trn_prob_global_map(const trn_kernels_t *k, const trn_sigma_model_t
                                  trn_vol_f32_t *pg, void *ws, size_t ws_bytes);
 
 /** @brief Workspace bytes of trn_prob_local for roi (0 if invalid): kernel
- * map and one intermediate slice over roi plus the largest kernel radius. */
+ * map and one intermediate slice over roi plus the largest kernel radius.
+ * @param[in] k built kernels; @param[in] roi the region (any position). */
 size_t trn_prob_local_workspace_bytes(const trn_kernels_t *k, const trn_window_t *roi);
 
 /**
  * @brief Eq. 9 on demand for a region: P = P_G spread by the expected error
  * of a local map sensed from the rover's position, for the cells of roi only
  * (sources within the largest kernel radius of roi contribute).
+ * @param[in]  k, m, cell_m  kernels (built), local error model, cell side (m).
  * @param[in]  rover   the rover's position, global cells (finite; may be anywhere).
  * @param[in]  pg      eq. 8 result (nx x ny x nz).
  * @param[in]  roi     inclusive window of global cells, inside pg.
