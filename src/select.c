@@ -24,9 +24,12 @@ void trn_select_cfg_default(trn_select_cfg_t *cfg)
     trn_sigma_local_default(&cfg->local_sigma);
 }
 
+/* patch_m in whole cells (nearest, so 2.0 m / 0.1f m is 20, not 19), then
+ * up to the next odd number so the patch has a centre cell. */
 static int32_t patch_cells(const trn_select_cfg_t *cfg, float cell_m)
 {
-    return 2 * (int32_t)floor((double)cfg->patch_m / (double)cell_m / 2.0) + 1;
+    const int32_t n = (int32_t)floor((double)cfg->patch_m / (double)cell_m + 0.5);
+    return (n % 2 == 0) ? n + 1 : n;
 }
 
 /* Candidate centres lie within reach cells of the rover cell on each axis. */
@@ -55,8 +58,8 @@ trn_status_t trn_select_cfg_check(const trn_select_cfg_t *cfg, float cell_m)
         cfg->stride_cells < 1 || cfg->stride_cells > 64) {
         return TRN_E_ARG;
     }
-    if ((double)cfg->patch_m / (double)cell_m < 3.0 ||
-        (double)cfg->patch_m / (double)cell_m > (double)TRN_MAX_DIM ||
+    if ((double)cfg->patch_m / (double)cell_m > (double)TRN_MAX_DIM ||
+        patch_cells(cfg, cell_m) < 3 ||
         (double)cfg->max_range_m / (double)cell_m > (double)TRN_MAX_DIM) {
         return TRN_E_ARG;
     }

@@ -25,7 +25,7 @@
 #define CELL 0.1
 #define PI 3.14159265358979323846
 
-static synth_rock_t g_rocks[400];
+static synth_rock_t g_rocks[1000];
 
 /* Small reach so the brute force stays quick under ASan and qemu. */
 static void small_cfg(trn_select_cfg_t *c)
@@ -208,6 +208,55 @@ static void test_dp_equals_brute_force(void **state)
     selworld_free(&w);
 }
 
+/* The paper-like defaults (1-10 m, 2 m patches) on a 240 x 240 map, stride 4
+ * to keep the brute force short: every 5th candidate re-summed, the best
+ * must be the brute-force argmin over all of them. */
+static void test_defaults_one_position(void **state)
+{
+    selworld_t w;
+    trn_select_cfg_t cfg;
+    trn_rover_t rv = {{118.6f, 121.2f}, 0.7f};
+    sel_t s;
+    trn_vol_f32_t p;
+    size_t i, bf_best = (size_t)-1;
+    double bf_min = HUGE_VAL;
+    (void)state;
+    trn_select_cfg_default(&cfg);
+    cfg.stride_cells = 4;
+    make_world(&w, 240, 900, 0.15, 17, NULL);
+    assert_int_equal(run_select(&w, &cfg, &rv, &s, 5), TRN_OK);
+    assert_int_equal(s.res.patch_cells, 21);
+    region_p(&w, &cfg, &rv, &s.res.roi, &p);
+    for (i = 0; i < s.res.n_candidates; ++i) {
+        double ll[9], la[9], bound, u;
+        int d;
+        if (i % 5 != 0 && s.c[i].uncertainty_m > 1.5 * s.c[s.res.best].uncertainty_m) {
+            continue; /* sampled, plus every candidate that could compete */
+        }
+        brute_ll(&w, &p, &s.res.roi, s.c[i].x, s.c[i].y, 10, ll, la, &bound);
+        for (d = 0; d < 9; ++d) {
+            assert_true(fabs(ll[d] - s.c[i].ll[d]) <= bound);
+        }
+        u = fit_unc(ll);
+        if (u < bf_min) {
+            bf_min = u;
+            bf_best = i;
+        }
+    }
+    printf("defaults: %zu candidates, %zu informative, region %dx%d, best (%d, %d) %.4f m\n",
+           s.res.n_candidates, s.res.n_informative, (int)(s.res.roi.x1 - s.res.roi.x0 + 1),
+           (int)(s.res.roi.y1 - s.res.roi.y0 + 1), (int)s.c[s.res.best].x,
+           (int)s.c[s.res.best].y, s.c[s.res.best].uncertainty_m);
+    assert_true(s.res.best == bf_best ||
+                fabs(s.c[s.res.best].uncertainty_m - bf_min) <= 1e-6 * bf_min);
+    for (i = 0; i < s.res.n_candidates; ++i) {
+        assert_true(s.c[i].range_m >= 1.0f && s.c[i].range_m <= 10.0f);
+    }
+    free(p.data);
+    sel_free(&s);
+    selworld_free(&w);
+}
+
 static void test_candidate_rules_and_ranking(void **state)
 {
     selworld_t w;
@@ -359,7 +408,7 @@ static void test_bad_inputs(void **state)
     bad.stride_cells = 0;
     assert_int_equal(trn_select_cfg_check(&bad, 0.1f), TRN_E_ARG);
     bad = cfg;
-    bad.patch_m = 0.2f; /* < 3 cells */
+    bad.patch_m = 0.14f; /* 1 cell < 3 */
     assert_int_equal(trn_select_cfg_check(&bad, 0.1f), TRN_E_ARG);
     bad = cfg;
     bad.local_sigma.k_per_m = -1.0f;
@@ -399,6 +448,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_dp_equals_brute_force),
+        cmocka_unit_test(test_defaults_one_position),
         cmocka_unit_test(test_candidate_rules_and_ranking),
         cmocka_unit_test(test_one_rock),
         cmocka_unit_test(test_featureless),

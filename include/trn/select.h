@@ -10,7 +10,8 @@
  * edge alone: off the map every voxel scores the cap), at range [min_range_m, max_range_m] from the rover, at a
  * bearing (grid frame: atan2(dy, dx), x = column, y = row) minus the rover's
  * heading within [pan_min_rad, pan_max_rad], and whose square patch (side
- * patch_cells = 2 floor(patch_m / cell_m / 2) + 1) keeps
+ * patch_cells = patch_m / cell_m rounded to the nearest integer, plus one if
+ * even, so 2 m at 0.1 m cells is 21 cells) keeps
  * out of the rover's footprint disc (radius footprint_radius_m).
  *
  * Prediction: P = eq. 9 applied to P_G over the union of the candidate
@@ -49,7 +50,7 @@ typedef struct {
     float pan_min_rad;        /**< bearing limits relative to the heading, */
     float pan_max_rad;        /**< [-pi, pi], min <= max */
     float footprint_radius_m; /**< rover disc no patch may touch, m, [0, 100] */
-    float patch_m;            /**< patch side, m; >= 3 cells after rounding to odd */
+    float patch_m;            /**< patch side, m; >= 3 cells after rounding (file comment) */
     int32_t stride_cells;     /**< candidate lattice step, 1..64 */
     float min_separation_m;   /**< least distance between ranked targets, m, [0, 1000] */
     trn_sigma_model_t local_sigma; /**< eq. 9 error model of the new local map */
