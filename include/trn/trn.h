@@ -15,5 +15,9 @@
 #include "trn/likelihood.h"
 #include "trn/peakfit.h"
 #include "trn/localize.h"
+#include "trn/kernels.h"
+#include "trn/spread.h"
+#include "trn/select.h"
+#include "trn/field.h"
 
 #endif /* TRN_TRN_H */

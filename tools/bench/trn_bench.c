@@ -23,6 +23,7 @@
  *             off by up to 10 cells, windows +-25 and +-50 cells: exhaustive
  *             search against branch-and-bound (answers must be identical).
  *   localize  one whole trn_localize_dem call per window, and its parts.
+ *   pmap, select, field  the landmark-selection rows (bench_select.c).
  *
  * Timing: CLOCK_MONOTONIC, one warm-up call, then `repeats` timed calls;
  * median and minimum reported. Ratios compare medians measured in the same
@@ -42,6 +43,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "bench_select.h"
 #include "ref_chamfer.h"
 #include "rng.h"
 #include "synth.h"
@@ -605,6 +607,7 @@ typedef struct {
     double chamfer_vs_scan;   /* median trn_chamfer3d / median scalar scan passes */
     int32_t win[N_WINDOWS];   /* half-widths used (clamped on small maps) */
     double search_speedup[N_WINDOWS]; /* median exhaustive / median branch-and-bound */
+    bench_select_result_t sel;/* landmark selection rows */
     int wrong;                /* a wrong answer was seen */
 } size_result_t;
 
@@ -1102,6 +1105,10 @@ static int bench_size(const opts_t *o, int32_t n, size_result_t *r)
     for (k = 0; rc == 0 && k < N_WINDOWS; ++k) {
         rc = bench_window(&w, o, k, r);
     }
+    if (rc == 0) {
+        rc = bench_select_run(&w.mc.map, n, o->repeats, &r->sel);
+        r->wrong |= r->sel.wrong;
+    }
     world_free(&w);
     return rc;
 }
@@ -1185,7 +1192,21 @@ int main(int argc, char **argv)
     }
     printf("target fast search >= 10x exhaustive: %s (%.1fx worst; %s)\n",
            worst_bb >= 10.0 ? "PASS" : "MISS", worst_bb, buf);
-    printf("same answer (branch-and-bound = exhaustive = localize, chamfer = Dijkstra): %s\n",
+    for (i = 0; i < o.nsizes; ++i) {
+        const bench_select_result_t *b = &res[i].sel;
+        if (b->pmap_cv_ms > 0.0) {
+            printf("target probability map (eq. 8) no slower than cv::sepFilter2D%s: %s "
+                   "(%d: %.2fx = sepFilter2D / trn_prob_global_map)\n",
+                   res[i].n >= 512 ? "" : " (info below 512)",
+                   b->pmap_cv_ms >= b->pmap_ms ? "PASS" : "MISS", (int)res[i].n,
+                   b->pmap_cv_ms / b->pmap_ms);
+        }
+        printf("target all candidates of one rover position < 20 ms%s: %s (%d: %.2f ms)\n",
+               res[i].n >= 512 ? "" : " (info below 512)",
+               b->select_ms < 20.0 ? "PASS" : "MISS", (int)res[i].n, b->select_ms);
+    }
+    printf("same answer (branch-and-bound = exhaustive = localize, chamfer = Dijkstra, "
+           "selection = naive): %s\n",
            wrong ? "NO" : "yes");
     printf("total run time %.1f s\n", now_s() - t0);
     (void)g_sink;

@@ -51,6 +51,30 @@ double bench_cv_dt_checksum(const bench_cv_dt_t *c);
 /** Free everything bench_cv_dt_create allocated; NULL is a no-op. */
 void bench_cv_dt_destroy(bench_cv_dt_t *c);
 
+/** Opaque: nz float slices (0/1 occupancy), their outputs and one kernel. */
+typedef struct bench_cv_sep bench_cv_sep_t;
+
+/**
+ * Prepare cv::sepFilter2D on every z slice of an occupancy volume: slice z is
+ * an ny x nx CV_32FC1 image, 1 where voxel (x, y, z) is occupied (occ_zero
+ * = 0: occ != 0; occ_zero = 1: occ == 0, for a chamfer distance volume), 0
+ * elsewhere; outputs CV_32FC1 allocated here once; the same ksize-tap kernel
+ * in x and y.
+ * @return NULL on bad sizes or out of memory.
+ */
+bench_cv_sep_t *bench_cv_sep_create(const uint8_t *occ, int occ_zero, int nx, int ny, int nz,
+                                    const float *kernel, int ksize);
+
+/** cv::sepFilter2D(slice, out, CV_32F, k, k, anchor centre, 0, BORDER_CONSTANT)
+ * for every slice. @return 0, or -1 on an OpenCV exception. */
+int bench_cv_sep_run(bench_cv_sep_t *c);
+
+/** Sum of every output pixel of the last run. */
+double bench_cv_sep_checksum(const bench_cv_sep_t *c);
+
+/** Free; NULL is a no-op. */
+void bench_cv_sep_destroy(bench_cv_sep_t *c);
+
 #ifdef __cplusplus
 }
 #endif

@@ -1,0 +1,87 @@
+/**
+ * @file field.h
+ * @brief Sensor uncertainty field (paper section 6; method.md 5): for rover
+ * positions over an area, the predicted uncertainty of the best landmark
+ * (trn_select's best uncertainty_m; +inf where no target is informative),
+ * computed coarse to fine.
+ *
+ * Rule: evaluate the lattice of step coarse_step_cells (the last row and
+ * column clamped to the area's edge). Then, level by level, halve the step:
+ * a square of the current level whose four corners are known is refined
+ * (its four edge midpoints and centre evaluated) when, with S the coarse
+ * lattice's spread (mean of its finite values minus its minimum),
+ *  - it is low: its smallest finite corner v_min <= best + band, best being
+ *    the smallest value found before this level and the band
+ *    margin_rel * S * step / coarse_step_cells narrowing as the step halves, or
+ *  - it changes fast: v_max - v_min > change_rel * S, or some corners are
+ *    finite and some infinite.
+ * Squares whose corners are all infinite are not refined. The loop stops at
+ * step 1; no recursion, every loop bounded by the area. Cells never
+ * evaluated get the bilinear interpolation of the finest known square that
+ * encloses them (+inf if a corner is infinite); evaluated[] tells which
+ * cells are exact. Cost: one trn_select per evaluated cell (reported).
+ */
+#ifndef TRN_FIELD_H
+#define TRN_FIELD_H
+
+#include "trn/select.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Refinement parameters. */
+typedef struct {
+    int32_t coarse_step_cells; /**< power of two, 1..256 */
+    float margin_rel;          /**< "low" margin, [0, 100] */
+    float change_rel;          /**< "changes fast" threshold, [0, 100] */
+} trn_field_cfg_t;
+
+/** Work and answer of one field computation. */
+typedef struct {
+    uint32_t evaluations;      /**< trn_select calls */
+    uint32_t cells;            /**< cells of the area */
+    int32_t best_x, best_y;    /**< global cell of the lowest evaluated value (-1 if none finite) */
+    double best_m;             /**< that value, m (+inf if none finite) */
+} trn_field_stats_t;
+
+/** @brief Defaults: coarse step 16 cells (1.6 m), margin 0.5, change 1.5.
+ * @param[out] cfg the defaults; NULL is ignored. */
+void trn_field_cfg_default(trn_field_cfg_t *cfg);
+
+/** @brief Check. @param[in] cfg the parameters.
+ * @retval TRN_OK, TRN_E_NULL, TRN_E_ARG (step not a power of two in 1..256,
+ *         margin or change NaN or out of [0, 100]). */
+trn_status_t trn_field_cfg_check(const trn_field_cfg_t *cfg);
+
+/** @brief Workspace bytes of trn_field (0 if invalid): candidates of one
+ * position plus trn_select's workspace.
+ * @param[in] scfg, map, k as trn_select_workspace_bytes. */
+size_t trn_field_workspace_bytes(const trn_select_cfg_t *scfg, const trn_map_t *map,
+                                 const trn_kernels_t *k);
+
+/**
+ * @brief Coarse-to-fine sensor uncertainty field over area.
+ * @param[in]  map, k, pg, scfg  as trn_select.
+ * @param[in]  heading_rad       rover heading for every position (finite).
+ * @param[in]  area              inclusive window of rover cells, inside the map.
+ * @param[out] out               area-sized grid (width = x1-x0+1, height = y1-y0+1), m.
+ * @param[out] evaluated         area cells, row-major: 1 where out is exact.
+ * @param[in]  evaluated_len     bytes at evaluated.
+ * @param[out] stats             work and minimum.
+ * @param[in]  ws                trn_field_workspace_bytes bytes, 16-byte aligned.
+ * @retval TRN_OK (also when no position has an informative target: stats->best_m = +inf)
+ * @retval TRN_E_NULL, TRN_E_ARG (cfgs, heading), TRN_E_SIZE (out or evaluated
+ *         not area-sized, pg mismatch), TRN_E_RANGE (area empty or off the
+ *         map), TRN_E_WORKSPACE, or another trn_select error
+ */
+trn_status_t trn_field(const trn_map_t *map, const trn_kernels_t *k, const trn_vol_f32_t *pg,
+                       const trn_select_cfg_t *scfg, const trn_field_cfg_t *fcfg,
+                       float heading_rad, const trn_window_t *area, trn_grid_f32_t *out,
+                       uint8_t *evaluated, size_t evaluated_len, trn_field_stats_t *stats,
+                       void *ws, size_t ws_bytes);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* TRN_FIELD_H */

@@ -1,0 +1,136 @@
+/**
+ * @file select.h
+ * @brief Landmark selection (paper section 4; method.md 4): predicted
+ * localization uncertainty of every candidate target seen from one rover
+ * position, the best target and the next best distinct ones.
+ *
+ * Candidates: patch centres on a lattice of stride_cells around the rover's
+ * cell whose patch, grown by one cell for the pose offsets, lies inside the
+ * map (a patch cut by the map's edge would look informative because of the
+ * edge alone: off the map every voxel scores the cap), at range [min_range_m, max_range_m] from the rover, at a
+ * bearing (grid frame: atan2(dy, dx), x = column, y = row) minus the rover's
+ * heading within [pan_min_rad, pan_max_rad], and whose square patch (side
+ * patch_cells = patch_m / cell_m rounded to the nearest integer, plus one if
+ * even, so 2 m at 0.1 m cells is 21 cells) keeps
+ * out of the rover's footprint disc (radius footprint_radius_m).
+ *
+ * Prediction: P = eq. 9 applied to P_G over the union of the candidate
+ * patches (trn_prob_local). The patch is a probabilistic local map, so the
+ * expected log-likelihood at pose offset d (dx, dy in -1..1) is
+ *   E[ln L(d)] = sum_{v in patch} P(v) ln p(D(v + d)),
+ * D the global map's chamfer distances (off the map: the cap) and ln p the
+ * map's table. Dynamic programming: for each d, C_d(x, y) = sum_z q(P) lnp(D)
+ * over the region, with q(P) = round(P * TRN_SELECT_PROB_SCALE) (P clamped
+ * to [0, 4]), is accumulated into an exact int64 summed-area table, so every
+ * candidate's window sum costs four reads and is exact (a flat map gives
+ * exactly equal sums: no rounding can fake a curvature). Eq. 6 on the nine
+ * values (trn_peak_fit) gives sigma_x, sigma_y, rho; the scalar to minimise is
+ * sqrt(sigma_x^2 + sigma_y^2) in metres. A candidate whose fit is
+ * ill-conditioned is uninformative: infinite uncertainty, informative = 0.
+ */
+#ifndef TRN_SELECT_H
+#define TRN_SELECT_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include "trn/localize.h"
+#include "trn/spread.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Fixed-point scale of P in the expected log-likelihood sums. */
+#define TRN_SELECT_PROB_SCALE 65536
+
+/** Candidate rules (see the file comment). */
+typedef struct {
+    float min_range_m;        /**< nearest target, m, [0, max_range_m] */
+    float max_range_m;        /**< farthest target, m, (0, 1000] */
+    float pan_min_rad;        /**< bearing limits relative to the heading, */
+    float pan_max_rad;        /**< [-pi, pi], min <= max */
+    float footprint_radius_m; /**< rover disc no patch may touch, m, [0, 100] */
+    float patch_m;            /**< patch side, m; >= 3 cells after rounding (file comment) */
+    int32_t stride_cells;     /**< candidate lattice step, 1..64 */
+    float min_separation_m;   /**< least distance between ranked targets, m, [0, 1000] */
+    trn_sigma_model_t local_sigma; /**< eq. 9 error model of the new local map */
+} trn_select_cfg_t;
+
+/** The rover: position (global cells) and heading (rad, grid frame). */
+typedef struct {
+    trn_xy_t pos;
+    float heading_rad;
+} trn_rover_t;
+
+/** One candidate target and its prediction (Fig. 2b is the set of these). */
+typedef struct {
+    int32_t x, y;          /**< patch centre, global cells */
+    float range_m;         /**< distance from the rover, m */
+    float bearing_rad;     /**< relative to the heading, (-pi, pi] */
+    double ll[9];          /**< E[ln L(d)], nats, ll[(dy + 1) * 3 + (dx + 1)] */
+    double sigma_x_m, sigma_y_m, rho; /**< eq. 6 fit; +inf sigmas when uninformative */
+    double cov_m2[3];      /**< var_x, var_y, cov_xy, m^2 */
+    double uncertainty_m;  /**< sqrt(sigma_x^2 + sigma_y^2), m; +inf when uninformative */
+    int32_t informative;   /**< 1 finite fit, 0 ill-conditioned */
+} trn_candidate_t;
+
+/** Summary of one selection. */
+typedef struct {
+    trn_window_t roi;      /**< region where P (eq. 9) was computed */
+    size_t n_candidates;   /**< entries written to the candidate array */
+    size_t n_informative;  /**< of them with a finite fit */
+    size_t n_ranked;       /**< entries written to the ranked array */
+    size_t best;           /**< index of the best candidate (= ranked[0]) */
+    int32_t patch_cells;   /**< patch side used */
+} trn_select_result_t;
+
+/** @brief Defaults (method.md 4): range 1-10 m, full pan (+-pi), footprint
+ * 0.5 m, 2 m patch (21 cells at 0.1 m), stride 2 cells, separation 1 m (half
+ * a patch), local error trn_sigma_local_default.
+ * @param[out] cfg the defaults; NULL is ignored. */
+void trn_select_cfg_default(trn_select_cfg_t *cfg);
+
+/** @brief Check a configuration for cells of cell_m (patch >= 3 cells, reach
+ * <= TRN_MAX_DIM cells). @param[in] cfg, cell_m the rules and the map's cell (m).
+ * @retval TRN_OK, TRN_E_NULL, TRN_E_ARG (a value NaN or out of range). */
+trn_status_t trn_select_cfg_check(const trn_select_cfg_t *cfg, float cell_m);
+
+/** @brief Largest number of candidates of one rover position (array size); 0 if invalid.
+ * @param[in] cfg, cell_m the rules and the map's cell (m). */
+size_t trn_select_max_candidates(const trn_select_cfg_t *cfg, float cell_m);
+
+/** @brief Workspace bytes of trn_select for this map and kernels (0 if invalid).
+ * @param[in] cfg, map, k the rules, the prepared map, the built kernels. */
+size_t trn_select_workspace_bytes(const trn_select_cfg_t *cfg, const trn_map_t *map,
+                                  const trn_kernels_t *k);
+
+/**
+ * @brief Score every candidate target of one rover position and rank them.
+ * @param[in]  map      prepared global map (distances, ln p table, cell size).
+ * @param[in]  k        kernel table.
+ * @param[in]  pg       eq. 8 probability map of this map (same nx, ny, nz).
+ * @param[in]  cfg      candidate rules.
+ * @param[in]  rover    rover position (on the map) and heading (finite).
+ * @param[out] cands    capacity entries; n_candidates written (row-major lattice order).
+ * @param[out] ranked   ranked_cap indices into cands: best first, then the
+ *                      next best informative targets, each at least
+ *                      min_separation_m from every earlier one.
+ * @param[out] res      summary.
+ * @param[in]  ws       trn_select_workspace_bytes bytes, 16-byte aligned.
+ * @retval TRN_OK
+ * @retval TRN_E_NOTARGET candidates exist but none is informative (cands,
+ *         res filled; n_ranked = 0) or no candidate lies within reach
+ * @retval TRN_E_NULL, TRN_E_ARG (cfg, rover not finite), TRN_E_SIZE (pg does
+ *         not match the map, or the region is too large for exact int64 sums),
+ *         TRN_E_RANGE (rover off the map), TRN_E_CAPACITY (more candidates
+ *         than capacity, ranked_cap 0), TRN_E_WORKSPACE
+ */
+trn_status_t trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_vol_f32_t *pg,
+                        const trn_select_cfg_t *cfg, const trn_rover_t *rover,
+                        trn_candidate_t *cands, size_t capacity, size_t *ranked,
+                        size_t ranked_cap, trn_select_result_t *res, void *ws, size_t ws_bytes);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* TRN_SELECT_H */

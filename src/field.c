@@ -1,0 +1,275 @@
+/* field.c - coarse-to-fine sensor uncertainty field (see trn/field.h). */
+#include "trn/field.h"
+
+#include <math.h>
+#include <string.h>
+
+void trn_field_cfg_default(trn_field_cfg_t *cfg)
+{
+    if (cfg != NULL) {
+        cfg->coarse_step_cells = 16;
+        cfg->margin_rel = 0.5f;
+        cfg->change_rel = 1.5f;
+    }
+}
+
+trn_status_t trn_field_cfg_check(const trn_field_cfg_t *cfg)
+{
+    if (cfg == NULL) {
+        return TRN_E_NULL;
+    }
+    if (cfg->coarse_step_cells < 1 || cfg->coarse_step_cells > 256 ||
+        (cfg->coarse_step_cells & (cfg->coarse_step_cells - 1)) != 0 ||
+        !(cfg->margin_rel >= 0.0f && cfg->margin_rel <= 100.0f) ||
+        !(cfg->change_rel >= 0.0f && cfg->change_rel <= 100.0f)) {
+        return TRN_E_ARG;
+    }
+    return TRN_OK;
+}
+
+size_t trn_field_workspace_bytes(const trn_select_cfg_t *scfg, const trn_map_t *map,
+                                 const trn_kernels_t *k)
+{
+    size_t sw, nc;
+    if (map == NULL) {
+        return 0u;
+    }
+    sw = trn_select_workspace_bytes(scfg, map, k);
+    nc = trn_select_max_candidates(scfg, map->cfg.terrain.cell_m);
+    if (sw == 0u || nc == 0u) {
+        return 0u;
+    }
+    return TRN_ALIGN_UP(nc * sizeof(trn_candidate_t)) + sw;
+}
+
+typedef struct {
+    const trn_map_t *map;
+    const trn_kernels_t *k;
+    const trn_vol_f32_t *pg;
+    const trn_select_cfg_t *scfg;
+    float heading;
+    trn_window_t area;
+    int32_t w, h;
+    trn_grid_f32_t *out;
+    uint8_t *ev;
+    trn_candidate_t *cands;
+    size_t ncap;
+    void *sws;
+    size_t swsb;
+    trn_field_stats_t *st;
+} field_t;
+
+/* Evaluate area cell (x, y) unless known. */
+static trn_status_t eval_cell(field_t *f, int32_t x, int32_t y)
+{
+    trn_rover_t rv;
+    trn_select_result_t r;
+    size_t ranked;
+    trn_status_t s;
+    double v;
+    const size_t i = (size_t)y * (size_t)f->w + (size_t)x;
+    if (f->ev[i] != 0u) {
+        return TRN_OK;
+    }
+    rv.pos.x_cells = (float)(f->area.x0 + x);
+    rv.pos.y_cells = (float)(f->area.y0 + y);
+    rv.heading_rad = f->heading;
+    s = trn_select(f->map, f->k, f->pg, f->scfg, &rv, f->cands, f->ncap, &ranked, 1u, &r,
+                   f->sws, f->swsb);
+    if (s == TRN_OK) {
+        v = f->cands[r.best].uncertainty_m;
+    } else if (s == TRN_E_NOTARGET) {
+        v = HUGE_VAL;
+    } else {
+        return s;
+    }
+    f->ev[i] = 1u;
+    TRN_GRID_AT(f->out, x, y) = (float)v;
+    f->st->evaluations++;
+    if (v < f->st->best_m) {
+        f->st->best_m = v;
+        f->st->best_x = f->area.x0 + x;
+        f->st->best_y = f->area.y0 + y;
+    }
+    return TRN_OK;
+}
+
+static int32_t lat(int32_t i, int32_t s, int32_t n)
+{
+    const int32_t v = i * s;
+    return v < n - 1 ? v : n - 1;
+}
+
+/* Number of lattice intervals of step s over n cells. */
+static int32_t nint(int32_t s, int32_t n)
+{
+    return (n - 1 + s - 1) / s;
+}
+
+trn_status_t trn_field(const trn_map_t *map, const trn_kernels_t *k, const trn_vol_f32_t *pg,
+                       const trn_select_cfg_t *scfg, const trn_field_cfg_t *fcfg,
+                       float heading_rad, const trn_window_t *area, trn_grid_f32_t *out,
+                       uint8_t *evaluated, size_t evaluated_len, trn_field_stats_t *stats,
+                       void *ws, size_t ws_bytes)
+{
+    field_t f;
+    trn_status_t s;
+    size_t need;
+    int32_t step, i, j, x, y, w, h;
+    double spread;
+
+    if (map == NULL || k == NULL || pg == NULL || scfg == NULL || fcfg == NULL ||
+        area == NULL || out == NULL || evaluated == NULL || stats == NULL || ws == NULL) {
+        return TRN_E_NULL;
+    }
+    if ((s = trn_field_cfg_check(fcfg)) != TRN_OK) {
+        return s;
+    }
+    if ((s = trn_select_cfg_check(scfg, map->cfg.terrain.cell_m)) != TRN_OK) {
+        return s;
+    }
+    if (!isfinite(heading_rad)) {
+        return TRN_E_ARG;
+    }
+    if ((s = trn_grid_f32_check(out)) != TRN_OK) {
+        return s;
+    }
+    if ((s = trn_vol_u8_check(&map->dist)) != TRN_OK) {
+        return s;
+    }
+    if (area->x1 < area->x0 || area->y1 < area->y0 || area->x0 < 0 || area->y0 < 0 ||
+        area->x1 >= map->dist.nx || area->y1 >= map->dist.ny) {
+        return TRN_E_RANGE;
+    }
+    w = area->x1 - area->x0 + 1;
+    h = area->y1 - area->y0 + 1;
+    if (out->width != w || out->height != h || evaluated_len < (size_t)w * (size_t)h) {
+        return TRN_E_SIZE;
+    }
+    need = trn_field_workspace_bytes(scfg, map, k);
+    if (need == 0u || ws_bytes < need || ((uintptr_t)ws & 15u) != 0u) {
+        return TRN_E_WORKSPACE;
+    }
+    f.map = map;
+    f.k = k;
+    f.pg = pg;
+    f.scfg = scfg;
+    f.heading = heading_rad;
+    f.area = *area;
+    f.w = w;
+    f.h = h;
+    f.out = out;
+    f.ev = evaluated;
+    f.cands = (trn_candidate_t *)ws;
+    f.ncap = trn_select_max_candidates(scfg, map->cfg.terrain.cell_m);
+    f.sws = (uint8_t *)ws + TRN_ALIGN_UP(f.ncap * sizeof(trn_candidate_t));
+    f.swsb = ws_bytes - TRN_ALIGN_UP(f.ncap * sizeof(trn_candidate_t));
+    f.st = stats;
+    memset(evaluated, 0, (size_t)w * (size_t)h);
+    stats->evaluations = 0u;
+    stats->cells = (uint32_t)w * (uint32_t)h;
+    stats->best_x = -1;
+    stats->best_y = -1;
+    stats->best_m = HUGE_VAL;
+
+    /* coarse lattice */
+    step = fcfg->coarse_step_cells;
+    for (j = 0; j <= nint(step, h); ++j) {
+        for (i = 0; i <= nint(step, w); ++i) {
+            if ((s = eval_cell(&f, lat(i, step, w), lat(j, step, h))) != TRN_OK) {
+                return s;
+            }
+        }
+    }
+    /* the coarse field's spread: its mean finite value minus its minimum */
+    {
+        double sum = 0.0;
+        uint32_t nf = 0u;
+        for (j = 0; j <= nint(step, h); ++j) {
+            for (i = 0; i <= nint(step, w); ++i) {
+                const double v = (double)TRN_GRID_AT(out, lat(i, step, w), lat(j, step, h));
+                if (isfinite(v)) {
+                    sum += v;
+                    ++nf;
+                }
+            }
+        }
+        spread = nf > 0u ? sum / (double)nf - stats->best_m : 0.0;
+    }
+    /* refinement levels */
+    for (; step > 1; step /= 2) {
+        const double best = stats->best_m;
+        const int32_t half = step / 2;
+        /* the low band narrows with the step: margin_rel * S at the coarse
+         * level, half of it at the next, ... */
+        const double band = (double)fcfg->margin_rel * spread * (double)step /
+                            (double)fcfg->coarse_step_cells;
+        for (j = 0; j < nint(step, h); ++j) {
+            for (i = 0; i < nint(step, w); ++i) {
+                const int32_t xa = lat(i, step, w), xb = lat(i + 1, step, w);
+                const int32_t ya = lat(j, step, h), yb = lat(j + 1, step, h);
+                const int32_t xm = lat(2 * i + 1, half, w), ym = lat(2 * j + 1, half, h);
+                const int32_t cx[4] = {xa, xb, xa, xb}, cy[4] = {ya, ya, yb, yb};
+                double vmin = HUGE_VAL, vmax = -HUGE_VAL;
+                int c, nfin = 0, known = 1, refine;
+                for (c = 0; c < 4; ++c) {
+                    const size_t id = (size_t)cy[c] * (size_t)w + (size_t)cx[c];
+                    double v;
+                    if (evaluated[id] == 0u) {
+                        known = 0;
+                        break;
+                    }
+                    v = (double)TRN_GRID_AT(out, cx[c], cy[c]);
+                    if (isfinite(v)) {
+                        ++nfin;
+                        vmin = v < vmin ? v : vmin;
+                        vmax = v > vmax ? v : vmax;
+                    }
+                }
+                if (!known || nfin == 0) {
+                    continue;
+                }
+                refine = nfin < 4 || vmin <= best + band ||
+                         vmax - vmin > (double)fcfg->change_rel * spread;
+                if (!refine) {
+                    continue;
+                }
+                if ((s = eval_cell(&f, xm, ya)) != TRN_OK || (s = eval_cell(&f, xa, ym)) != TRN_OK ||
+                    (s = eval_cell(&f, xm, ym)) != TRN_OK || (s = eval_cell(&f, xb, ym)) != TRN_OK ||
+                    (s = eval_cell(&f, xm, yb)) != TRN_OK) {
+                    return s;
+                }
+            }
+        }
+    }
+    /* fill: bilinear in the finest enclosing square with known corners */
+    for (y = 0; y < h; ++y) {
+        for (x = 0; x < w; ++x) {
+            int32_t st;
+            if (evaluated[(size_t)y * (size_t)w + (size_t)x] != 0u) {
+                continue;
+            }
+            TRN_GRID_AT(out, x, y) = HUGE_VALF;
+            for (st = 2; st <= fcfg->coarse_step_cells; st *= 2) {
+                const int32_t xa = lat(x / st, st, w), xb = lat(x / st + 1, st, w);
+                const int32_t ya = lat(y / st, st, h), yb = lat(y / st + 1, st, h);
+                if (evaluated[(size_t)ya * (size_t)w + (size_t)xa] &&
+                    evaluated[(size_t)ya * (size_t)w + (size_t)xb] &&
+                    evaluated[(size_t)yb * (size_t)w + (size_t)xa] &&
+                    evaluated[(size_t)yb * (size_t)w + (size_t)xb]) {
+                    const double tx = xb > xa ? (double)(x - xa) / (double)(xb - xa) : 0.0;
+                    const double ty = yb > ya ? (double)(y - ya) / (double)(yb - ya) : 0.0;
+                    const double v00 = (double)TRN_GRID_AT(out, xa, ya);
+                    const double v10 = (double)TRN_GRID_AT(out, xb, ya);
+                    const double v01 = (double)TRN_GRID_AT(out, xa, yb);
+                    const double v11 = (double)TRN_GRID_AT(out, xb, yb);
+                    const double v = (1.0 - ty) * ((1.0 - tx) * v00 + tx * v10) +
+                                     ty * ((1.0 - tx) * v01 + tx * v11);
+                    TRN_GRID_AT(out, x, y) = isfinite(v) ? (float)v : HUGE_VALF;
+                    break;
+                }
+            }
+        }
+    }
+    return TRN_OK;
+}
