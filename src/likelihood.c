@@ -584,7 +584,8 @@ size_t trn_search_bb_workspace_bytes(const trn_pyramid_t *p, const trn_window_t 
     bs = (int32_t)(1u << (unsigned)p->nlevels);
     ntop = (size_t)ceil_div(win->x1 - win->x0 + 1, bs) * (size_t)ceil_div(win->y1 - win->y0 + 1, bs);
     return TRN_ALIGN_UP(ntop * sizeof(block_t)) + TRN_ALIGN_UP(ntop * sizeof(suffix_t)) +
-           TRN_ALIGN_UP((TRN_BB_STACK + 4u) * sizeof(suffix_t));
+           TRN_ALIGN_UP((TRN_BB_STACK + 4u) * sizeof(suffix_t)) +
+           TRN_ALIGN_UP(TRN_BB_STACK * sizeof(block_t));
 }
 
 /* Is every pose of block (x, y, size s) that lies in the window excluded? */
@@ -658,7 +659,7 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
     block_t *tops;
     suffix_t *tops_suf, *stack_suf, *kid_suf;
     suffix_t lim; /* (points from chunk c on) x largest table entry */
-    block_t stack[TRN_BB_STACK];
+    block_t *stack; /* in the workspace: keeps the frame under TRN_STACK_LIMIT_BYTES */
     level_view_t L0;
     size_t ntop = 0, ntop_max, i, c;
     int32_t top_lv, bs, x, y, lmax;
@@ -688,6 +689,9 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
     tops_suf = (suffix_t *)(void *)((uint8_t *)ws + TRN_ALIGN_UP(ntop_max * sizeof(block_t)));
     stack_suf = tops_suf + ntop_max;
     kid_suf = stack_suf + TRN_BB_STACK;
+    stack = (block_t *)(void *)((uint8_t *)ws + TRN_ALIGN_UP(ntop_max * sizeof(block_t)) +
+                                TRN_ALIGN_UP(ntop_max * sizeof(suffix_t)) +
+                                TRN_ALIGN_UP((TRN_BB_STACK + 4u) * sizeof(suffix_t)));
     lmax = lnp_max(t);
     for (c = 0; c <= BB_NCH; ++c) {
         lim.s[c] = (int64_t)(n - chunk_lo(n, c)) * (int64_t)lmax;
