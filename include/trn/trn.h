@@ -15,5 +15,6 @@
 #include "trn/likelihood.h"
 #include "trn/peakfit.h"
 #include "trn/localize.h"
+#include "trn/mast.h"
 
 #endif /* TRN_TRN_H */
