@@ -24,10 +24,13 @@ declare -A PKG_GROUPS=(
   [bench]="g++ libopencv-dev"
   # Real terrain maps (GeoTIFF DEMs) for the tools.
   [gdal]="libgdal-dev"
+  # CAN bus tools: the cantools cross-check of the DBC runs in the project
+  # venv (.venv, cantools from PyPI); can-utils to record and replay logs.
+  [can]="python3 python3-venv can-utils"
   # Plots of results.
   [plot]="python3 python3-matplotlib"
 )
-GROUP_ORDER=(core bench gdal plot)
+GROUP_ORDER=(core bench gdal can plot)
 
 usage() {
   echo "usage: $0 [group...]   (default: core)"
