@@ -13,11 +13,15 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include <math.h>
 #include <string.h>
 
+#include "trn/mast.h"
+#include "trn_port/can_msg.h"
 #include "trn_port/capture.h"
 #include "trn_port/crc.h"
 #include "rng.h"
+#include "synth.h"
 
 static trn_capture_t g_cap, g_out, g_sentinel;
 static trn_capture_rx_t g_rx;
@@ -440,6 +444,173 @@ static void test_length_rejects(void **state)
     assert_int_equal(err, TRN_CAP_ERR_NONE);
 }
 
+
+static void test_points_m(void **state)
+{
+    static trn_vec3f_t pts[TRN_PORT_MAX_CAPTURE_POINTS];
+    size_t n = 99;
+    (void)state;
+    memset(&g_cap, 0, sizeof g_cap);
+    g_cap.n_points = 3;
+    g_cap.points[0] = (trn_cap_point_t){1, -2, 1000};
+    g_cap.points[1] = (trn_cap_point_t){-32768, 32767, 0};
+    g_cap.points[2] = (trn_cap_point_t){123, 4567, -89};
+    assert_int_equal(trn_capture_points_m(&g_cap, pts, 3, &n), TRN_OK);
+    assert_int_equal(n, 3);
+    assert_true(pts[0].x == 0.001f && pts[0].y == -0.002f && pts[0].z == 1.0f);
+    assert_true(pts[1].x == -32.768f && pts[1].y == 32.767f && pts[1].z == 0.0f);
+    assert_true(pts[2].x == 0.123f && pts[2].y == 4.567f && pts[2].z == -0.089f);
+    assert_int_equal(trn_capture_points_m(&g_cap, pts, 2, &n), TRN_E_CAPACITY);
+    assert_int_equal(trn_capture_points_m(NULL, pts, 3, &n), TRN_E_NULL);
+    assert_int_equal(trn_capture_points_m(&g_cap, NULL, 3, &n), TRN_E_NULL);
+    assert_int_equal(trn_capture_points_m(&g_cap, pts, 3, NULL), TRN_E_NULL);
+#if TRN_PORT_MAX_CAPTURE_POINTS < 65535
+    g_cap.n_points = TRN_PORT_MAX_CAPTURE_POINTS + 1;
+    assert_int_equal(trn_capture_points_m(&g_cap, pts, 65535, &n), TRN_E_SIZE);
+#endif
+}
+
+/* Property: whatever a faulty bus does to the segments (drop, duplicate,
+ * swap, truncate, flip a bit, inject a stranger), a capture is delivered
+ * only if it is exactly the one sent. 3000 seeded damaged transfers. */
+static void test_damaged_streams_never_deliver_wrong_data(void **state)
+{
+    trn_rng_t r;
+    int trial, delivered_ok = 0, rejected = 0;
+    (void)state;
+    trn_rng_seed(&r, 77);
+    fresh();
+    for (trial = 0; trial < 3000; ++trial) {
+        size_t len = 0;
+        uint8_t n, i;
+        int done = 0, kind = trn_rng_int(&r, 0, 6), got = 0;
+        uint8_t victim;
+        trn_cap_err_t err;
+        make_capture(&g_cap, (uint16_t)trn_rng_int(&r, 0, 400), (uint64_t)trial);
+        assert_int_equal(trn_capture_encode(&g_cap, g_wire, sizeof g_wire, &len), TRN_OK);
+        n = split(g_wire, len, (size_t)trn_rng_int(&r, 16, 900));
+        victim = (uint8_t)trn_rng_int(&r, 0, n - 1);
+        g_out = g_sentinel;
+        for (i = 0; i < n; ++i) {
+            const uint8_t *seg = g_segs[i];
+            size_t sl = g_seg_len[i];
+            static uint8_t tmp[TRN_ISOTP_MAX_MSG];
+            int feed_twice = 0;
+            if (i == victim) {
+                memcpy(tmp, seg, sl);
+                switch (kind) {
+                case 0: continue;                                     /* dropped */
+                case 1: feed_twice = 1; break;                        /* duplicated */
+                case 2: sl = (size_t)trn_rng_int(&r, 1, (int)sl - 1); break; /* truncated */
+                case 3: tmp[trn_rng_int(&r, 0, (int)sl - 1)] ^= (uint8_t)(1u << trn_rng_int(&r, 0, 7)); break;
+                case 4: if (i + 1 < n) { seg = g_segs[i + 1]; sl = g_seg_len[i + 1]; memcpy(tmp, seg, sl); } break;
+                case 5: tmp[0] ^= 0x01; break;                        /* stranger's id */
+                default: break;                                       /* clean */
+                }
+                seg = tmp;
+            }
+            (void)trn_capture_rx_segment(&g_rx, seg, sl, &g_out, &done, &err);
+            got |= done;
+            if (feed_twice) {
+                (void)trn_capture_rx_segment(&g_rx, seg, sl, &g_out, &done, &err);
+                got |= done;
+            }
+        }
+        (void)trn_capture_rx_abort(&g_rx);
+        if (got) {
+            /* delivered: must be exactly what was sent */
+            assert_int_equal(g_out.capture_id, g_cap.capture_id);
+            assert_int_equal(g_out.n_points, g_cap.n_points);
+            assert_memory_equal(g_out.points, g_cap.points, sizeof(trn_cap_point_t) * g_cap.n_points);
+            ++delivered_ok;
+        } else {
+            assert_memory_equal(&g_out, &g_sentinel, sizeof g_out);
+            ++rejected;
+        }
+    }
+    print_message("damaged transfers: %d delivered intact, %d rejected\n", delivered_ok, rejected);
+    assert_true(rejected > 1000);
+    assert_true(delivered_ok > 300);
+}
+
+/* The whole chain: terrain seen by the stereo head -> capture on the wire
+ * (segments, CRC) -> reassembled -> metres -> map with the pan/tilt the
+ * capture carries -> local DEM equal to the terrain. */
+static void test_capture_to_local_dem(void **state)
+{
+    static synth_rock_t rocks[10];
+    static trn_vec3f_t pts[TRN_PORT_MAX_CAPTURE_POINTS];
+    static float dem_mem[40 * 40], truth[40 * 40];
+    synth_terrain_t terr;
+    trn_mast_geom_t g;
+    trn_rover_pose_t p = {5.0f, 6.0f, 0.0f, -0.4f};
+    trn_local_dem_cfg_t cfg = {0.1f, 20, 20, 1};
+    trn_vec3f_t target;
+    trn_rigid_t T;
+    trn_grid_f32_t dem;
+    float pan, tilt;
+    size_t len = 0, n = 0, used = 0, i;
+    uint8_t nseg, s;
+    int x, y, done = 0;
+    trn_cap_err_t err;
+    (void)state;
+    memset(&g, 0, sizeof g);
+    g.pan_x_m = 0.2f;
+    g.pan_z_m = 1.4f;
+    g.tilt_fwd_m = 0.05f;
+    g.cam_left_m = 0.1f;
+    g.cam_up_m = 0.03f;
+    g.pan_min_rad = -3.0f;
+    g.pan_max_rad = 3.0f;
+    g.tilt_min_rad = -1.5f;
+    g.tilt_max_rad = 0.5f;
+    synth_make(&terr, rocks, 10, 12.0, 0.1, 0.3, 0.5, 0.1, 3);
+    p.z_m = (float)synth_height(&terr, p.x_m, p.y_m);
+    target = (trn_vec3f_t){p.x_m + 1.5f, p.y_m - 0.5f, 0.0f};
+    target.z = (float)synth_height(&terr, target.x, target.y);
+    assert_int_equal(trn_mast_point_at(&g, &p, &target, &pan, &tilt), TRN_OK);
+    /* the head reports the angles it measured, in counts */
+    memset(&g_cap, 0, sizeof g_cap);
+    g_cap.capture_id = 7;
+    assert_int_equal(trn_can_angle_to_raw(pan, &g_cap.pan_100urad), TRN_OK);
+    assert_int_equal(trn_can_angle_to_raw(tilt, &g_cap.tilt_100urad), TRN_OK);
+    assert_int_equal(trn_mast_camera_to_map(&g, &p, trn_can_angle_from_raw(g_cap.pan_100urad),
+                                            trn_can_angle_from_raw(g_cap.tilt_100urad), &T), TRN_OK);
+    for (y = 0; y < 40; ++y) {
+        for (x = 0; x < 40; ++x) {
+            double mx = p.x_m + (x - 20) * 0.1, my = p.y_m + (y - 20) * 0.1, h = synth_height(&terr, mx, my);
+            double d[3] = {mx - T.t.x, my - T.t.y, h - T.t.z}, c[3];
+            int k;
+            for (k = 0; k < 3; ++k) {
+                c[k] = T.r[k] * d[0] + T.r[3 + k] * d[1] + T.r[6 + k] * d[2];
+            }
+            truth[y * 40 + x] = (float)h;
+            g_cap.points[g_cap.n_points].x_mm = (int16_t)floor(c[0] * 1000.0 + 0.5);
+            g_cap.points[g_cap.n_points].y_mm = (int16_t)floor(c[1] * 1000.0 + 0.5);
+            g_cap.points[g_cap.n_points].z_mm = (int16_t)floor(c[2] * 1000.0 + 0.5);
+            ++g_cap.n_points;
+        }
+    }
+    assert_int_equal(trn_capture_encode(&g_cap, g_wire, sizeof g_wire, &len), TRN_OK);
+    fresh();
+    nseg = split(g_wire, len, TRN_CAP_SEG_PAYLOAD_MAX);
+    assert_int_equal(nseg, 3); /* 1600 points = 9620 bytes */
+    for (s = 0; s < nseg; ++s) {
+        assert_int_equal(trn_capture_rx_segment(&g_rx, g_segs[s], g_seg_len[s], &g_out, &done, &err), TRN_OK);
+    }
+    assert_int_equal(done, 1);
+    assert_int_equal(trn_capture_points_m(&g_out, pts, TRN_PORT_MAX_CAPTURE_POINTS, &n), TRN_OK);
+    assert_int_equal(trn_mast_camera_to_map(&g, &p, trn_can_angle_from_raw(g_out.pan_100urad),
+                                            trn_can_angle_from_raw(g_out.tilt_100urad), &T), TRN_OK);
+    assert_int_equal(trn_rigid_apply(&T, pts, n, pts), TRN_OK);
+    assert_int_equal(trn_grid_f32_init(&dem, dem_mem, 40 * 40, 40, 40), TRN_OK);
+    assert_int_equal(trn_mast_local_dem(pts, n, &p, &cfg, &dem, &used), TRN_OK);
+    assert_int_equal(used, 1600);
+    for (i = 0; i < 1600; ++i) {
+        assert_float_equal(dem_mem[i], truth[i], 2e-3f);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -452,6 +623,9 @@ int main(void)
         cmocka_unit_test(test_header_rejects),
         cmocka_unit_test(test_segment_rejects),
         cmocka_unit_test(test_length_rejects),
+        cmocka_unit_test(test_points_m),
+        cmocka_unit_test(test_damaged_streams_never_deliver_wrong_data),
+        cmocka_unit_test(test_capture_to_local_dem),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -325,6 +325,28 @@ trn_status_t trn_capture_rx_segment(trn_capture_rx_t *rx, const uint8_t *seg, si
     return restarted;
 }
 
+trn_status_t trn_capture_points_m(const trn_capture_t *c, trn_vec3f_t *out, size_t capacity, size_t *n)
+{
+    size_t i;
+    if (c == NULL || out == NULL || n == NULL) {
+        return TRN_E_NULL;
+    }
+    if (c->n_points > TRN_PORT_MAX_CAPTURE_POINTS) {
+        return TRN_E_SIZE;
+    }
+    if (capacity < (size_t)c->n_points) {
+        return TRN_E_CAPACITY;
+    }
+    for (i = 0u; i < (size_t)c->n_points; ++i) {
+        /* int16 and 1000 are exact in float: one correctly rounded division */
+        out[i].x = (float)c->points[i].x_mm / 1000.0f;
+        out[i].y = (float)c->points[i].y_mm / 1000.0f;
+        out[i].z = (float)c->points[i].z_mm / 1000.0f;
+    }
+    *n = (size_t)c->n_points;
+    return TRN_OK;
+}
+
 const char *trn_cap_err_name(trn_cap_err_t err)
 {
     switch (err) {

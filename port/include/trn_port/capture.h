@@ -32,6 +32,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include "trn/mast.h"
 #include "trn/status.h"
 #include "trn_port/port_config.h"
 #include "trn_port/isotp.h"
@@ -176,6 +177,19 @@ trn_status_t trn_capture_rx_segment(trn_capture_rx_t *rx, const uint8_t *seg, si
  * @retval TRN_OK, TRN_E_NULL
  */
 trn_status_t trn_capture_rx_abort(trn_capture_rx_t *rx);
+
+/**
+ * @brief The points of a validated capture in metres (camera frame), ready
+ * for trn_mast_camera_to_map / trn_rigid_apply (mast.h) with the capture's
+ * pan and tilt (trn_can_angle_from_raw): each coordinate is mm / 1000,
+ * correctly rounded to float.
+ * @param[in]  c    the capture.
+ * @param[out] out  capacity points.
+ * @param[out] n    c->n_points.
+ * @retval TRN_OK, TRN_E_NULL, TRN_E_CAPACITY (capacity < n_points, nothing
+ *         written), TRN_E_SIZE (c->n_points above TRN_PORT_MAX_CAPTURE_POINTS)
+ */
+trn_status_t trn_capture_points_m(const trn_capture_t *c, trn_vec3f_t *out, size_t capacity, size_t *n);
 
 /** @brief Short constant name of an error ("CRC", ...). Never NULL. */
 const char *trn_cap_err_name(trn_cap_err_t err);
