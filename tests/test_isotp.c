@@ -395,6 +395,211 @@ static void test_rx_short_cf_fc_bad_frame(void **state)
     assert_int_equal(g_rx.n_messages, 0);
 }
 
+
+/* ---- sender ------------------------------------------------------------------ */
+
+/* Sender -> receiver loopback on a simulated clock: the sender is stepped at
+ * its wake times, every frame reaches the receiver 50 us later, every FC the
+ * receiver asks for reaches the sender 50 us after that. Returns the number
+ * of frames; checks STmin between consecutive CFs of a block. */
+static int loopback(const uint8_t *msg, size_t len, uint8_t bs, uint8_t stmin, uint32_t *t_end)
+{
+    static uint8_t rbuf[TRN_ISOTP_MAX_MSG];
+    trn_isotp_tx_t tx;
+    trn_isotp_rx_t rx;
+    uint32_t now = 1000, last_cf = 0, stmin_us = trn_isotp_stmin_us(stmin);
+    int frames = 0, guard, after_fc = 1, done = 0;
+    assert_int_equal(trn_isotp_tx_init(&tx, 1000, 0), TRN_OK);
+    assert_int_equal(trn_isotp_rx_init(&rx, rbuf, sizeof rbuf, bs, stmin, 1000), TRN_OK);
+    assert_int_equal(trn_isotp_tx_start(&tx, msg, len), TRN_OK);
+    for (guard = 0; guard < 100000 && !done; ++guard) {
+        trn_isotp_tx_result_t tr;
+        trn_isotp_rx_result_t rr;
+        assert_int_equal(trn_isotp_tx_step(&tx, now, &tr), TRN_OK);
+        if (!(tr.events & TRN_ISOTP_TX_EV_FRAME)) {
+            assert_true(tr.wake_us > now || tx.state == TRN_ISOTP_TX_WAIT_FC);
+            now = tr.wake_us > now ? tr.wake_us : now + 1;
+            continue;
+        }
+        ++frames;
+        if ((tr.frame[0] >> 4) == TRN_ISOTP_CF) {
+            if (!after_fc) {
+                assert_true(now - last_cf >= stmin_us); /* STmin honoured */
+            }
+            last_cf = now;
+            after_fc = 0;
+        }
+        now += 50;
+        assert_int_equal(trn_isotp_rx_frame(&rx, tr.frame, tr.dlc, now / 1000, &rr), TRN_OK);
+        if (rr.events & TRN_ISOTP_EV_MESSAGE) {
+            assert_true(tr.events & TRN_ISOTP_TX_EV_DONE);
+            assert_int_equal(rr.msg_len, len);
+            assert_memory_equal(rbuf, msg, len);
+            done = 1;
+        }
+        if (rr.events & TRN_ISOTP_EV_SEND_FC) {
+            now += 50;
+            assert_int_equal(trn_isotp_tx_fc(&tx, rr.fc, rr.fc_dlc, now, &tr), TRN_OK);
+            after_fc = 1;
+        }
+    }
+    assert_true(done);
+    assert_int_equal(tx.n_messages, 1);
+    assert_int_equal(tx.state, TRN_ISOTP_TX_IDLE);
+    *t_end = now;
+    return frames;
+}
+
+static void test_tx_loopback(void **state)
+{
+    static uint8_t msg[TRN_ISOTP_MAX_MSG];
+    const size_t lens[] = {1, 7, 8, 13, 14, 100, 1000, 4095};
+    size_t i;
+    uint32_t t_end;
+    (void)state;
+    for (i = 0; i < sizeof msg; ++i) {
+        msg[i] = (uint8_t)(i * 7 + 3);
+    }
+    for (i = 0; i < sizeof lens / sizeof lens[0]; ++i) {
+        assert_int_equal(loopback(msg, lens[i], 0, 0, &t_end), trn_isotp_frame_count(lens[i]));
+        assert_int_equal(loopback(msg, lens[i], 3, 0x02, &t_end), trn_isotp_frame_count(lens[i]));
+        assert_int_equal(loopback(msg, lens[i], 1, 0xF5, &t_end), trn_isotp_frame_count(lens[i]));
+    }
+    /* 100 bytes = FF + 14 CFs; BS 0, STmin 10 ms: 13 gaps of >= 10 ms */
+    loopback(msg, 100, 0, 10, &t_end);
+    assert_true(t_end - 1000 >= 13 * 10000);
+    assert_true(t_end - 1000 < 13 * 10000 + 16 * 200);
+}
+
+static void test_tx_timeout_bs(void **state)
+{
+    static uint8_t msg[20];
+    trn_isotp_tx_t tx;
+    trn_isotp_tx_result_t r;
+    (void)state;
+    assert_int_equal(trn_isotp_tx_init(&tx, 1000, 0), TRN_OK);
+    assert_int_equal(trn_isotp_tx_start(&tx, msg, 20), TRN_OK);
+    assert_int_equal(trn_isotp_tx_step(&tx, 0xFFFFFF00u, &r), TRN_OK); /* FF, near the clock wrap */
+    assert_true(r.events & TRN_ISOTP_TX_EV_FRAME);
+    assert_int_equal(r.frame[0], 0x10);
+    assert_int_equal(tx.state, TRN_ISOTP_TX_WAIT_FC);
+    assert_int_equal(trn_isotp_tx_step(&tx, 0xFFFFFF00u + 1000000u, &r), TRN_OK); /* exactly N_Bs */
+    assert_int_equal(r.events, 0);
+    assert_int_equal(r.wake_us, 0xFFFFFF00u + 1000001u);
+    assert_int_equal(trn_isotp_tx_step(&tx, 0xFFFFFF00u + 1000001u, &r), TRN_E_TIMEOUT);
+    assert_int_equal(r.error, TRN_ISOTP_TX_ERR_TIMEOUT_BS);
+    assert_int_equal(tx.err_count[TRN_ISOTP_TX_ERR_TIMEOUT_BS], 1);
+    assert_int_equal(tx.state, TRN_ISOTP_TX_IDLE);
+    assert_int_equal(tx.n_messages, 0);
+    assert_int_equal(trn_isotp_tx_step(&tx, 5, &r), TRN_OK); /* idle: nothing */
+    assert_int_equal(r.events, 0);
+}
+
+static void test_tx_fc_errors(void **state)
+{
+    static uint8_t msg[40];
+    const uint8_t wait[3] = {0x31, 0, 0}, ovf[3] = {0x32, 0, 0}, bad[3] = {0x34, 0, 0}, cts[3] = {0x30, 0, 0};
+    const uint8_t sf[2] = {0x01, 0x55};
+    trn_isotp_tx_t tx;
+    trn_isotp_tx_result_t r;
+    (void)state;
+    assert_int_equal(trn_isotp_tx_init(&tx, 100, 2), TRN_OK);
+    /* two WAITs are fine (each restarts N_Bs), the third is one too many */
+    assert_int_equal(trn_isotp_tx_start(&tx, msg, 40), TRN_OK);
+    assert_int_equal(trn_isotp_tx_step(&tx, 0, &r), TRN_OK);
+    assert_int_equal(trn_isotp_tx_fc(&tx, wait, 3, 90000, &r), TRN_OK);
+    assert_int_equal(trn_isotp_tx_step(&tx, 180000, &r), TRN_OK); /* 90 ms after the WAIT: no timeout */
+    assert_int_equal(r.events, 0);
+    assert_int_equal(trn_isotp_tx_fc(&tx, wait, 3, 180000, &r), TRN_OK);
+    assert_int_equal(trn_isotp_tx_fc(&tx, wait, 3, 190000, &r), TRN_E_SEQ);
+    assert_int_equal(r.error, TRN_ISOTP_TX_ERR_WFT_OVERRUN);
+    assert_int_equal(tx.state, TRN_ISOTP_TX_IDLE);
+    /* a CTS resets the WAIT count */
+    assert_int_equal(trn_isotp_tx_start(&tx, msg, 40), TRN_OK);
+    assert_int_equal(trn_isotp_tx_step(&tx, 0, &r), TRN_OK);
+    assert_int_equal(trn_isotp_tx_fc(&tx, wait, 3, 1, &r), TRN_OK);
+    assert_int_equal(trn_isotp_tx_fc(&tx, wait, 3, 2, &r), TRN_OK);
+    assert_int_equal(trn_isotp_tx_fc(&tx, cts, 3, 3, &r), TRN_OK);
+    assert_int_equal(tx.wft, 0);
+    assert_int_equal(tx.state, TRN_ISOTP_TX_SENDING);
+    /* FC while sending is unexpected and ignored */
+    assert_int_equal(trn_isotp_tx_fc(&tx, cts, 3, 4, &r), TRN_E_FORMAT);
+    assert_int_equal(r.error, TRN_ISOTP_TX_ERR_UNEXPECTED_FC);
+    assert_int_equal(tx.state, TRN_ISOTP_TX_SENDING);
+    /* overflow */
+    assert_int_equal(trn_isotp_tx_start(&tx, msg, 40), TRN_OK);
+    assert_int_equal(trn_isotp_tx_step(&tx, 0, &r), TRN_OK);
+    assert_int_equal(trn_isotp_tx_fc(&tx, ovf, 3, 1, &r), TRN_E_CAPACITY);
+    assert_int_equal(r.error, TRN_ISOTP_TX_ERR_OVERFLOW);
+    assert_int_equal(tx.state, TRN_ISOTP_TX_IDLE);
+    /* invalid flow status, short FC, a non-FC frame */
+    assert_int_equal(trn_isotp_tx_start(&tx, msg, 40), TRN_OK);
+    assert_int_equal(trn_isotp_tx_step(&tx, 0, &r), TRN_OK);
+    assert_int_equal(trn_isotp_tx_fc(&tx, bad, 3, 1, &r), TRN_E_FORMAT);
+    assert_int_equal(r.error, TRN_ISOTP_TX_ERR_INVALID_FC);
+    assert_int_equal(tx.state, TRN_ISOTP_TX_IDLE);
+    assert_int_equal(trn_isotp_tx_start(&tx, msg, 40), TRN_OK);
+    assert_int_equal(trn_isotp_tx_step(&tx, 0, &r), TRN_OK);
+    assert_int_equal(trn_isotp_tx_fc(&tx, cts, 2, 1, &r), TRN_E_FORMAT);
+    assert_int_equal(trn_isotp_tx_start(&tx, msg, 40), TRN_OK);
+    assert_int_equal(trn_isotp_tx_step(&tx, 0, &r), TRN_OK);
+    assert_int_equal(trn_isotp_tx_fc(&tx, sf, 2, 1, &r), TRN_E_FORMAT);
+    assert_int_equal(tx.err_count[TRN_ISOTP_TX_ERR_INVALID_FC], 3);
+    assert_int_equal(tx.err_count[TRN_ISOTP_TX_ERR_OVERFLOW], 1);
+    assert_int_equal(tx.err_count[TRN_ISOTP_TX_ERR_WFT_OVERRUN], 1);
+    assert_int_equal(tx.err_count[TRN_ISOTP_TX_ERR_UNEXPECTED_FC], 1);
+    assert_int_equal(tx.n_messages, 0);
+    /* arguments */
+    assert_int_equal(trn_isotp_tx_init(NULL, 100, 0), TRN_E_NULL);
+    assert_int_equal(trn_isotp_tx_init(&tx, 0, 0), TRN_E_ARG);
+    assert_int_equal(trn_isotp_tx_init(&tx, 60001, 0), TRN_E_ARG);
+    assert_int_equal(trn_isotp_tx_start(NULL, msg, 4), TRN_E_NULL);
+    assert_int_equal(trn_isotp_tx_start(&tx, NULL, 4), TRN_E_NULL);
+    assert_int_equal(trn_isotp_tx_start(&tx, msg, 0), TRN_E_SIZE);
+    assert_int_equal(trn_isotp_tx_start(&tx, msg, 4096), TRN_E_SIZE);
+    assert_int_equal(trn_isotp_tx_step(NULL, 0, &r), TRN_E_NULL);
+    assert_int_equal(trn_isotp_tx_step(&tx, 0, NULL), TRN_E_NULL);
+    assert_int_equal(trn_isotp_tx_fc(NULL, cts, 3, 0, &r), TRN_E_NULL);
+    assert_int_equal(trn_isotp_tx_fc(&tx, NULL, 3, 0, &r), TRN_E_NULL);
+    assert_int_equal(trn_isotp_tx_fc(&tx, cts, 3, 0, NULL), TRN_E_NULL);
+    assert_int_equal(trn_isotp_tx_fc(&tx, cts, 9, 0, &r), TRN_E_ARG);
+    assert_string_equal(trn_isotp_tx_err_name(TRN_ISOTP_TX_ERR_WFT_OVERRUN), "WFT_OVERRUN");
+    assert_string_equal(trn_isotp_tx_err_name(TRN_ISOTP_TX_ERR_COUNT), "UNKNOWN");
+}
+
+static void test_tx_block_pacing(void **state)
+{
+    /* BS 2: FF, FC, CF1, CF2, (wait FC), CF3 ... the sender stops after each block */
+    static uint8_t msg[30]; /* FF + 4 CFs */
+    const uint8_t cts[3] = {0x30, 2, 0x05};
+    trn_isotp_tx_t tx;
+    trn_isotp_tx_result_t r;
+    (void)state;
+    assert_int_equal(trn_isotp_tx_init(&tx, 1000, 0), TRN_OK);
+    assert_int_equal(trn_isotp_tx_start(&tx, msg, 30), TRN_OK);
+    assert_int_equal(trn_isotp_tx_step(&tx, 0, &r), TRN_OK);
+    assert_int_equal(trn_isotp_tx_fc(&tx, cts, 3, 100, &r), TRN_OK);
+    assert_int_equal(trn_isotp_tx_step(&tx, 100, &r), TRN_OK); /* CF1 at once after the FC */
+    assert_int_equal(r.frame[0], 0x21);
+    assert_int_equal(trn_isotp_tx_step(&tx, 5099, &r), TRN_OK); /* STmin 5 ms not over */
+    assert_int_equal(r.events, 0);
+    assert_int_equal(r.wake_us, 5100);
+    assert_int_equal(trn_isotp_tx_step(&tx, 5100, &r), TRN_OK);
+    assert_int_equal(r.frame[0], 0x22);
+    assert_int_equal(tx.state, TRN_ISOTP_TX_WAIT_FC); /* block of 2 done */
+    assert_int_equal(trn_isotp_tx_step(&tx, 20000, &r), TRN_OK);
+    assert_int_equal(r.events, 0);
+    assert_int_equal(trn_isotp_tx_fc(&tx, cts, 3, 20000, &r), TRN_OK);
+    assert_int_equal(trn_isotp_tx_step(&tx, 20000, &r), TRN_OK);
+    assert_int_equal(r.frame[0], 0x23);
+    assert_int_equal(trn_isotp_tx_step(&tx, 25000, &r), TRN_OK);
+    assert_int_equal(r.frame[0], 0x24);
+    assert_true(r.events & TRN_ISOTP_TX_EV_DONE);
+    assert_int_equal(r.dlc, 1 + (30 - 6 - 21));
+    assert_int_equal(tx.state, TRN_ISOTP_TX_IDLE);
+    assert_int_equal(tx.n_messages, 1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -411,6 +616,10 @@ int main(void)
         cmocka_unit_test(test_rx_interrupted),
         cmocka_unit_test(test_rx_timeouts),
         cmocka_unit_test(test_rx_short_cf_fc_bad_frame),
+        cmocka_unit_test(test_tx_loopback),
+        cmocka_unit_test(test_tx_timeout_bs),
+        cmocka_unit_test(test_tx_fc_errors),
+        cmocka_unit_test(test_tx_block_pacing),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

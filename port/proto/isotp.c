@@ -370,3 +370,190 @@ const char *trn_isotp_err_name(trn_isotp_err_t err)
     default: return "UNKNOWN";
     }
 }
+
+/* ---- sender ----------------------------------------------------------------- */
+
+static void tx_res_clear(trn_isotp_tx_result_t *res)
+{
+    unsigned i;
+    res->events = 0u;
+    res->error = (uint8_t)TRN_ISOTP_TX_ERR_NONE;
+    res->dlc = 0u;
+    res->wake_us = 0u;
+    for (i = 0u; i < 8u; ++i) {
+        res->frame[i] = 0u;
+    }
+}
+
+static void tx_idle(trn_isotp_tx_t *tx)
+{
+    tx->state = (uint8_t)TRN_ISOTP_TX_IDLE;
+    tx->msg = NULL;
+    tx->len = 0u;
+    tx->n_frames = 0u;
+    tx->next = 0u;
+    tx->bs = 0u;
+    tx->block_left = 0u;
+    tx->wft = 0u;
+    tx->paced = 0u;
+    tx->stmin_us = 0u;
+    tx->t_ref_us = 0u;
+}
+
+static void tx_error(trn_isotp_tx_t *tx, trn_isotp_tx_result_t *res, trn_isotp_tx_err_t err, int abort)
+{
+    tx->err_count[err] += 1u;
+    res->events |= TRN_ISOTP_TX_EV_ERROR;
+    res->error = (uint8_t)err;
+    if (abort) {
+        tx_idle(tx);
+    }
+}
+
+trn_status_t trn_isotp_tx_init(trn_isotp_tx_t *tx, uint32_t n_bs_ms, uint8_t max_wft)
+{
+    unsigned i;
+    if (tx == NULL) {
+        return TRN_E_NULL;
+    }
+    if (n_bs_ms == 0u || n_bs_ms > 60000u) {
+        return TRN_E_ARG;
+    }
+    tx_idle(tx);
+    tx->n_bs_us = n_bs_ms * 1000u;
+    tx->max_wft = max_wft;
+    tx->n_messages = 0u;
+    for (i = 0u; i < (unsigned)TRN_ISOTP_TX_ERR_COUNT; ++i) {
+        tx->err_count[i] = 0u;
+    }
+    return TRN_OK;
+}
+
+trn_status_t trn_isotp_tx_start(trn_isotp_tx_t *tx, const uint8_t *msg, size_t len)
+{
+    if (tx == NULL || msg == NULL) {
+        return TRN_E_NULL;
+    }
+    if (len == 0u || len > TRN_ISOTP_MAX_MSG) {
+        return TRN_E_SIZE;
+    }
+    tx_idle(tx);
+    tx->msg = msg;
+    tx->len = (uint16_t)len;
+    tx->n_frames = trn_isotp_frame_count(len);
+    tx->state = (uint8_t)TRN_ISOTP_TX_FIRST;
+    return TRN_OK;
+}
+
+/* Emit frame tx->next into res (arguments valid by construction). */
+static void tx_emit(trn_isotp_tx_t *tx, trn_isotp_tx_result_t *res)
+{
+    (void)trn_isotp_encode_frame(tx->msg, tx->len, tx->next, res->frame, &res->dlc);
+    res->events |= TRN_ISOTP_TX_EV_FRAME;
+    tx->next = (uint16_t)(tx->next + 1u);
+    if (tx->next == tx->n_frames) {
+        res->events |= TRN_ISOTP_TX_EV_DONE;
+        tx->n_messages += 1u;
+        tx_idle(tx);
+    }
+}
+
+trn_status_t trn_isotp_tx_step(trn_isotp_tx_t *tx, uint32_t now_us, trn_isotp_tx_result_t *res)
+{
+    if (tx == NULL || res == NULL) {
+        return TRN_E_NULL;
+    }
+    tx_res_clear(res);
+    switch (tx->state) {
+    case TRN_ISOTP_TX_FIRST:
+        tx_emit(tx, res);
+        if (tx->state != (uint8_t)TRN_ISOTP_TX_IDLE) {
+            tx->state = (uint8_t)TRN_ISOTP_TX_WAIT_FC;
+            tx->t_ref_us = now_us;
+        }
+        return TRN_OK;
+    case TRN_ISOTP_TX_WAIT_FC:
+        if ((uint32_t)(now_us - tx->t_ref_us) > tx->n_bs_us) {
+            tx_error(tx, res, TRN_ISOTP_TX_ERR_TIMEOUT_BS, 1);
+            return TRN_E_TIMEOUT;
+        }
+        res->wake_us = tx->t_ref_us + tx->n_bs_us + 1u;
+        return TRN_OK;
+    case TRN_ISOTP_TX_SENDING:
+        if (tx->paced != 0u && (uint32_t)(now_us - tx->t_ref_us) < tx->stmin_us) {
+            res->wake_us = tx->t_ref_us + tx->stmin_us;
+            return TRN_OK;
+        }
+        tx_emit(tx, res);
+        if (tx->state == (uint8_t)TRN_ISOTP_TX_IDLE) {
+            return TRN_OK;
+        }
+        tx->t_ref_us = now_us;
+        tx->paced = 1u;
+        if (tx->bs != 0u) {
+            tx->block_left = (uint8_t)(tx->block_left - 1u);
+            if (tx->block_left == 0u) {
+                tx->state = (uint8_t)TRN_ISOTP_TX_WAIT_FC;
+            }
+        }
+        return TRN_OK;
+    default: /* idle: nothing to do */
+        return TRN_OK;
+    }
+}
+
+trn_status_t trn_isotp_tx_fc(trn_isotp_tx_t *tx, const uint8_t *data, uint8_t dlc, uint32_t now_us,
+                             trn_isotp_tx_result_t *res)
+{
+    trn_isotp_frame_t fr;
+    if (tx == NULL || data == NULL || res == NULL) {
+        return TRN_E_NULL;
+    }
+    if (dlc > 8u) {
+        return TRN_E_ARG;
+    }
+    tx_res_clear(res);
+    if (tx->state != (uint8_t)TRN_ISOTP_TX_WAIT_FC) {
+        tx_error(tx, res, TRN_ISOTP_TX_ERR_UNEXPECTED_FC, 0);
+        return TRN_E_FORMAT;
+    }
+    if (trn_isotp_decode(data, dlc, &fr) != TRN_OK || fr.type != (uint8_t)TRN_ISOTP_FC) {
+        tx_error(tx, res, TRN_ISOTP_TX_ERR_INVALID_FC, 1);
+        return TRN_E_FORMAT;
+    }
+    if (fr.fs == (uint8_t)TRN_ISOTP_FS_OVFLW) {
+        tx_error(tx, res, TRN_ISOTP_TX_ERR_OVERFLOW, 1);
+        return TRN_E_CAPACITY;
+    }
+    if (fr.fs == (uint8_t)TRN_ISOTP_FS_WAIT) {
+        tx->wft = (uint8_t)(tx->wft + 1u);
+        if (tx->wft > tx->max_wft) {
+            tx_error(tx, res, TRN_ISOTP_TX_ERR_WFT_OVERRUN, 1);
+            return TRN_E_SEQ;
+        }
+        tx->t_ref_us = now_us; /* N_Bs restarts */
+        return TRN_OK;
+    }
+    /* clear to send: the first CF of the block may go at once */
+    tx->wft = 0u;
+    tx->bs = fr.bs;
+    tx->block_left = fr.bs;
+    tx->stmin_us = trn_isotp_stmin_us(fr.stmin);
+    tx->paced = 0u;
+    tx->state = (uint8_t)TRN_ISOTP_TX_SENDING;
+    return TRN_OK;
+}
+
+const char *trn_isotp_tx_err_name(trn_isotp_tx_err_t err)
+{
+    switch (err) {
+    case TRN_ISOTP_TX_ERR_NONE: return "NONE";
+    case TRN_ISOTP_TX_ERR_TIMEOUT_BS: return "TIMEOUT_BS";
+    case TRN_ISOTP_TX_ERR_WFT_OVERRUN: return "WFT_OVERRUN";
+    case TRN_ISOTP_TX_ERR_OVERFLOW: return "OVERFLOW";
+    case TRN_ISOTP_TX_ERR_INVALID_FC: return "INVALID_FC";
+    case TRN_ISOTP_TX_ERR_UNEXPECTED_FC: return "UNEXPECTED_FC";
+    case TRN_ISOTP_TX_ERR_COUNT: return "UNKNOWN";
+    default: return "UNKNOWN";
+    }
+}

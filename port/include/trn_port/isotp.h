@@ -210,6 +210,101 @@ trn_status_t trn_isotp_rx_poll(trn_isotp_rx_t *rx, uint32_t now_ms, trn_isotp_rx
 /** @brief Short constant name of an error ("WRONG_SN", ...). Never NULL. */
 const char *trn_isotp_err_name(trn_isotp_err_t err);
 
+/* ---- sender --------------------------------------------------------------- */
+
+/** Named sender errors (index into trn_isotp_tx_t.err_count). */
+typedef enum {
+    TRN_ISOTP_TX_ERR_NONE = 0,
+    TRN_ISOTP_TX_ERR_TIMEOUT_BS,    /**< N_Bs: no flow control within n_bs_ms: message aborted */
+    TRN_ISOTP_TX_ERR_WFT_OVERRUN,   /**< more consecutive FC WAIT than max_wft: message aborted */
+    TRN_ISOTP_TX_ERR_OVERFLOW,      /**< the receiver answered FC overflow: message aborted */
+    TRN_ISOTP_TX_ERR_INVALID_FC,    /**< undecodable FC (reserved flow status, short): message aborted */
+    TRN_ISOTP_TX_ERR_UNEXPECTED_FC, /**< FC while not waiting for one (ignored) */
+    TRN_ISOTP_TX_ERR_COUNT
+} trn_isotp_tx_err_t;
+
+/** Sender states. */
+typedef enum {
+    TRN_ISOTP_TX_IDLE = 0,    /**< nothing to send */
+    TRN_ISOTP_TX_FIRST = 1,   /**< started; the SF or FF goes out at the next step */
+    TRN_ISOTP_TX_WAIT_FC = 2, /**< FF or a block sent; waiting for flow control */
+    TRN_ISOTP_TX_SENDING = 3  /**< sending consecutive frames, paced by STmin */
+} trn_isotp_tx_state_t;
+
+/** Result flags of one sender step. */
+#define TRN_ISOTP_TX_EV_FRAME 0x01u /**< transmit frame[0..dlc) on the data ID now */
+#define TRN_ISOTP_TX_EV_DONE  0x02u /**< the last frame of the message is in this result */
+#define TRN_ISOTP_TX_EV_ERROR 0x04u /**< error holds what went wrong (counted); message aborted unless UNEXPECTED_FC */
+
+/** What one sender step produced. */
+typedef struct {
+    uint8_t events;    /**< TRN_ISOTP_TX_EV_* */
+    uint8_t error;     /**< trn_isotp_tx_err_t */
+    uint8_t frame[8];  /**< when EV_FRAME */
+    uint8_t dlc;       /**< when EV_FRAME */
+    uint32_t wake_us;  /**< when nothing was sent: the earliest time the next step can act */
+} trn_isotp_tx_result_t;
+
+/**
+ * A sender: configuration, state and counters, owned by the caller. The
+ * message memory stays the caller's and must not change while sending.
+ * Time is the caller's microsecond clock (wraps handled; 71 min period).
+ */
+typedef struct {
+    uint32_t n_bs_us;       /**< N_Bs timeout waiting for an FC */
+    uint8_t max_wft;        /**< most consecutive FC WAIT accepted */
+    uint8_t state;          /**< trn_isotp_tx_state_t */
+    const uint8_t *msg;     /**< the message being sent */
+    uint16_t len;           /**< its length */
+    uint16_t n_frames;      /**< trn_isotp_frame_count(len) */
+    uint16_t next;          /**< next frame index */
+    uint8_t bs;             /**< block size of the last FC CTS */
+    uint8_t block_left;     /**< CFs left in the block (bs > 0) */
+    uint8_t wft;            /**< consecutive FC WAIT so far */
+    uint8_t paced;          /**< 1 when the next CF must respect STmin */
+    uint32_t stmin_us;      /**< separation time of the last FC CTS */
+    uint32_t t_ref_us;      /**< FF/block end time (WAIT_FC) or last CF time (SENDING) */
+    uint32_t n_messages;    /**< messages sent completely */
+    uint32_t err_count[TRN_ISOTP_TX_ERR_COUNT]; /**< per trn_isotp_tx_err_t */
+} trn_isotp_tx_t;
+
+/**
+ * @brief Set up a sender: idle, counters zero.
+ * @param[in] n_bs_ms N_Bs, 1..60000 ms.
+ * @param[in] max_wft most consecutive FC WAIT, 0..255.
+ * @retval TRN_OK, TRN_E_NULL, TRN_E_ARG (n_bs_ms)
+ */
+trn_status_t trn_isotp_tx_init(trn_isotp_tx_t *tx, uint32_t n_bs_ms, uint8_t max_wft);
+
+/**
+ * @brief Start sending msg (len 1..4095); the first frame goes out at the
+ * next trn_isotp_tx_step. A message in progress is abandoned (not counted).
+ * @retval TRN_OK, TRN_E_NULL, TRN_E_SIZE (len)
+ */
+trn_status_t trn_isotp_tx_start(trn_isotp_tx_t *tx, const uint8_t *msg, size_t len);
+
+/**
+ * @brief Advance the sender to now_us: emits at most one frame (the SF/FF,
+ * or the next CF once STmin has passed since the previous CF), or reports
+ * the N_Bs timeout. Call again after each EV_FRAME, or at res->wake_us.
+ * @retval TRN_OK, TRN_E_NULL, TRN_E_TIMEOUT (TIMEOUT_BS)
+ */
+trn_status_t trn_isotp_tx_step(trn_isotp_tx_t *tx, uint32_t now_us, trn_isotp_tx_result_t *res);
+
+/**
+ * @brief Feed a frame received on the flow-control ID.
+ * @retval TRN_OK         CTS (sending resumes) or WAIT within max_wft
+ * @retval TRN_E_NULL, TRN_E_ARG (dlc > 8)
+ * @retval TRN_E_FORMAT   INVALID_FC, UNEXPECTED_FC
+ * @retval TRN_E_CAPACITY OVERFLOW
+ * @retval TRN_E_SEQ      WFT_OVERRUN
+ */
+trn_status_t trn_isotp_tx_fc(trn_isotp_tx_t *tx, const uint8_t *data, uint8_t dlc, uint32_t now_us,
+                             trn_isotp_tx_result_t *res);
+
+/** @brief Short constant name of a sender error ("TIMEOUT_BS", ...). Never NULL. */
+const char *trn_isotp_tx_err_name(trn_isotp_tx_err_t err);
+
 #ifdef __cplusplus
 }
 #endif
