@@ -203,6 +203,7 @@ static void test_angle_conversion(void **state)
     assert_int_equal(raw, -32768);
     assert_int_equal(trn_can_angle_to_raw(3.2768f, &raw), TRN_E_ARG);
     assert_int_equal(trn_can_angle_to_raw(-3.2770f, &raw), TRN_E_ARG);
+    assert_int_equal(trn_can_angle_to_raw(-3.27685f, &raw), TRN_E_ARG); /* rounds to -32769 */
     assert_int_equal(trn_can_angle_to_raw(NAN, &raw), TRN_E_ARG);
     assert_int_equal(trn_can_angle_to_raw(INFINITY, &raw), TRN_E_ARG);
     assert_int_equal(trn_can_angle_to_raw(1.0f, NULL), TRN_E_NULL);
@@ -316,6 +317,17 @@ static void test_classify_names_counter(void **state)
     assert_int_equal(trn_can_classify(&f), TRN_CAN_MSG_NONE);
     assert_string_equal(trn_can_msg_name(TRN_CAN_MSG_MAST_STATUS), "MAST_STATUS");
     assert_string_equal(trn_can_msg_name(TRN_CAN_MSG_NONE), "NONE");
+    {
+        /* every kind has its own name */
+        int a, b;
+        for (a = TRN_CAN_MSG_MAST_CMD; a <= TRN_CAN_MSG_STEREO_HB; ++a) {
+            assert_string_not_equal(trn_can_msg_name((trn_can_msg_kind_t)a), "NONE");
+            for (b = a + 1; b <= TRN_CAN_MSG_STEREO_HB; ++b) {
+                assert_string_not_equal(trn_can_msg_name((trn_can_msg_kind_t)a),
+                                        trn_can_msg_name((trn_can_msg_kind_t)b));
+            }
+        }
+    }
     assert_string_equal(trn_can_msg_name((trn_can_msg_kind_t)99), "NONE");
     assert_int_equal(trn_can_counter_gap(4, 5), 0);
     assert_int_equal(trn_can_counter_gap(255, 0), 0);

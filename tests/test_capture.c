@@ -132,6 +132,7 @@ static void test_encode_decode_args(void **state)
         uint8_t seg[64];
         size_t sl;
         assert_int_equal(trn_capture_segment(g_wire, len, 10, 4, seg, sizeof seg, &sl), TRN_E_RANGE);
+        assert_int_equal(trn_capture_segment(g_wire, len, 0, 0, seg, sizeof seg, &sl), TRN_E_ARG);
         assert_int_equal(trn_capture_segment(g_wire, len, 10, 0, seg, 13, &sl), TRN_E_WORKSPACE);
         assert_int_equal(trn_capture_segment(g_wire, 15, 10, 0, seg, sizeof seg, &sl), TRN_E_ARG);
         assert_int_equal(trn_capture_segment(NULL, len, 10, 0, seg, sizeof seg, &sl), TRN_E_NULL);
@@ -154,6 +155,16 @@ static void test_encode_decode_args(void **state)
     }
     assert_string_equal(trn_cap_err_name(TRN_CAP_ERR_CRC), "CRC");
     assert_string_equal(trn_cap_err_name(TRN_CAP_ERR_COUNT), "UNKNOWN");
+    assert_string_equal(trn_cap_err_name((trn_cap_err_t)99), "UNKNOWN");
+    {
+        int a, b;
+        for (a = 0; a < TRN_CAP_ERR_COUNT; ++a) {
+            assert_string_not_equal(trn_cap_err_name((trn_cap_err_t)a), "UNKNOWN");
+            for (b = a + 1; b < TRN_CAP_ERR_COUNT; ++b) {
+                assert_string_not_equal(trn_cap_err_name((trn_cap_err_t)a), trn_cap_err_name((trn_cap_err_t)b));
+            }
+        }
+    }
 }
 
 /* Feed segments in the order given; returns the status of the last one. */

@@ -189,6 +189,24 @@ static void test_rx_init_args(void **state)
     assert_int_equal(trn_isotp_rx_poll(&rx, 0, NULL), TRN_E_NULL);
     assert_string_equal(trn_isotp_err_name(TRN_ISOTP_ERR_WRONG_SN), "WRONG_SN");
     assert_string_equal(trn_isotp_err_name(TRN_ISOTP_ERR_COUNT), "UNKNOWN");
+    assert_string_equal(trn_isotp_err_name((trn_isotp_err_t)99), "UNKNOWN");
+    {
+        int a, b;
+        for (a = 0; a < TRN_ISOTP_ERR_COUNT; ++a) {
+            assert_string_not_equal(trn_isotp_err_name((trn_isotp_err_t)a), "UNKNOWN");
+            for (b = a + 1; b < TRN_ISOTP_ERR_COUNT; ++b) {
+                assert_string_not_equal(trn_isotp_err_name((trn_isotp_err_t)a), trn_isotp_err_name((trn_isotp_err_t)b));
+            }
+        }
+        for (a = 0; a < TRN_ISOTP_TX_ERR_COUNT; ++a) {
+            assert_string_not_equal(trn_isotp_tx_err_name((trn_isotp_tx_err_t)a), "UNKNOWN");
+            for (b = a + 1; b < TRN_ISOTP_TX_ERR_COUNT; ++b) {
+                assert_string_not_equal(trn_isotp_tx_err_name((trn_isotp_tx_err_t)a),
+                                        trn_isotp_tx_err_name((trn_isotp_tx_err_t)b));
+            }
+        }
+        assert_string_equal(trn_isotp_tx_err_name((trn_isotp_tx_err_t)99), "UNKNOWN");
+    }
 }
 
 /* Send msg through the stateless sender into rx; returns the number of FC
