@@ -13,11 +13,15 @@ dbc=${2:-$root/port/proto/trn_mast.dbc}
 venv=$root/.venv
 
 if ! "$venv/bin/python" -c 'import cantools' 2>/dev/null; then
-  # a fresh machine: python3-venv from Debian (tools/setup.sh group `can`)
-  if ! python3 -m venv --help >/dev/null 2>&1; then
-    bash "$root/tools/setup.sh" can
+  if [ ! -x "$venv/bin/python" ]; then
+    # a fresh machine may lack python3 or its venv module (Debian's
+    # python3-venv): tools/setup.sh group `can` installs them
+    if ! python3 -m venv "$venv" >/dev/null 2>&1; then
+      rm -rf "$venv"
+      bash "$root/tools/setup.sh" can
+      python3 -m venv "$venv"
+    fi
   fi
-  [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
   "$venv/bin/python" -m pip install --quiet cantools
 fi
 
