@@ -25,9 +25,19 @@
 
 static trn_capture_t g_cap, g_out, g_sentinel;
 static trn_capture_rx_t g_rx;
-static uint8_t g_wire[TRN_CAP_WIRE_MAX + 64];
+static uint8_t g_wire[2 * TRN_CAP_WIRE_MAX + 64];
 static uint8_t g_segs[255][TRN_ISOTP_MAX_MSG];
 static size_t g_seg_len[255];
+
+/* Tests written for the default maximum skip themselves when a build sets
+ * a smaller TRN_PORT_MAX_CAPTURE_POINTS. */
+#define NEED_POINTS(n)                                                                  \
+    do {                                                                                \
+        if ((long)TRN_PORT_MAX_CAPTURE_POINTS < (long)(n)) {                            \
+            print_message("skipped: needs TRN_PORT_MAX_CAPTURE_POINTS >= %d\n", (int)(n)); \
+            skip();                                                                     \
+        }                                                                               \
+    } while (0)
 
 static void make_capture(trn_capture_t *c, uint16_t n, uint64_t seed)
 {
@@ -195,6 +205,9 @@ static void test_round_trips(void **state)
             uint8_t n, i;
             int done = 0;
             trn_cap_err_t err = TRN_CAP_ERR_COUNT;
+            if (sizes[si] > TRN_PORT_MAX_CAPTURE_POINTS) {
+                continue;
+            }
             make_capture(&g_cap, sizes[si], 100 + si);
             assert_int_equal(trn_capture_encode(&g_cap, g_wire, sizeof g_wire, &len), TRN_OK);
             assert_int_equal(len, TRN_CAP_WIRE_BYTES(sizes[si]));
@@ -221,17 +234,21 @@ static void test_round_trips(void **state)
     for (si = 0; si < TRN_CAP_ERR_COUNT; ++si) {
         assert_int_equal(g_rx.err_count[si], 0);
     }
-    assert_true(g_rx.n_complete >= 15);
+    assert_true(g_rx.n_complete >= (TRN_PORT_MAX_CAPTURE_POINTS >= 4096 ? 15u : 1u));
 }
 
-/* A 1000-point capture in 1000-byte segments (7 segments). */
+/* A capture of up to 1000 points (fewer when the build's maximum is
+ * smaller) split into exactly 7 segments of g_seven_payload bytes. */
+#define SEVEN_POINTS (TRN_PORT_MAX_CAPTURE_POINTS < 1000 ? TRN_PORT_MAX_CAPTURE_POINTS : 1000)
+static size_t g_seven_payload, g_seven_len;
+
 static uint8_t setup_seven(void)
 {
-    size_t len = 0;
-    make_capture(&g_cap, 1000, 9);
-    assert_int_equal(trn_capture_encode(&g_cap, g_wire, sizeof g_wire, &len), TRN_OK);
+    make_capture(&g_cap, SEVEN_POINTS, 9);
+    assert_int_equal(trn_capture_encode(&g_cap, g_wire, sizeof g_wire, &g_seven_len), TRN_OK);
+    g_seven_payload = (g_seven_len + 3u + 6u) / 7u; /* 7 segments also for len + 3 */
     fresh();
-    return split(g_wire, len, 1000);
+    return split(g_wire, g_seven_len, g_seven_payload);
 }
 
 static void expect_reject(trn_status_t st, trn_cap_err_t err, int done, trn_status_t want_st, trn_cap_err_t want)
@@ -293,7 +310,7 @@ static void test_missing_duplicate_out_of_order(void **state)
             assert_int_equal(st, TRN_OK);
         }
         assert_int_equal(done, 1);
-        assert_int_equal(g_out.n_points, 1000);
+        assert_int_equal(g_out.n_points, SEVEN_POINTS);
     }
 }
 
@@ -340,7 +357,7 @@ static void test_bad_crc(void **state)
     const int order[] = {0, 1, 2, 3, 4, 5, 6};
     (void)state;
     setup_seven();
-    g_segs[3][100] ^= 0x01; /* one bit of one point */
+    g_segs[3][g_seg_len[3] / 2] ^= 0x01; /* one bit of one point */
     st = feed(order, 7, &done, &err);
     expect_reject(st, err, done, TRN_E_CRC, TRN_CAP_ERR_CRC);
     setup_seven();
@@ -416,27 +433,28 @@ static void test_length_rejects(void **state)
     int done = 0;
     trn_cap_err_t err;
     trn_status_t st;
-    size_t len = 0;
+    size_t len, pay;
     uint8_t n;
     const int order[] = {0, 1, 2, 3, 4, 5, 6};
     (void)state;
     /* truncated: the sender stops 6 bytes early but marks the end */
-    make_capture(&g_cap, 1000, 9);
-    assert_int_equal(trn_capture_encode(&g_cap, g_wire, sizeof g_wire, &len), TRN_OK);
-    fresh();
-    n = split(g_wire, len - 6, 1000);
+    setup_seven();
+    len = g_seven_len;
+    pay = g_seven_payload;
+    n = split(g_wire, len - 6, pay);
     assert_int_equal(n, 7);
     st = feed(order, 7, &done, &err);
     expect_reject(st, err, done, TRN_E_FORMAT, TRN_CAP_ERR_TRUNCATED);
     /* wrong length: 3 bytes more than the header announces */
     memset(g_wire + len, 0, 3);
     fresh();
-    n = split(g_wire, len + 3, 1000);
+    n = split(g_wire, len + 3, pay);
+    assert_int_equal(n, 7);
     st = feed(order, 7, &done, &err);
     expect_reject(st, err, done, TRN_E_FORMAT, TRN_CAP_ERR_OVERFLOW);
     /* a whole extra segment beyond the capture */
     fresh();
-    n = split(g_wire, 7000 + 3, 1000); /* 8 segments, the capture is 6020 bytes */
+    n = split(g_wire, len + pay + 3, pay); /* one segment more than the capture needs */
     assert_int_equal(n, 8);
     {
         const int order8[] = {0, 1, 2, 3, 4, 5, 6};
@@ -497,7 +515,8 @@ static void test_damaged_streams_never_deliver_wrong_data(void **state)
         int done = 0, kind = trn_rng_int(&r, 0, 6), got = 0;
         uint8_t victim;
         trn_cap_err_t err;
-        make_capture(&g_cap, (uint16_t)trn_rng_int(&r, 0, 400), (uint64_t)trial);
+        make_capture(&g_cap, (uint16_t)trn_rng_int(&r, 0, TRN_PORT_MAX_CAPTURE_POINTS < 400 ? TRN_PORT_MAX_CAPTURE_POINTS : 400),
+                     (uint64_t)trial);
         assert_int_equal(trn_capture_encode(&g_cap, g_wire, sizeof g_wire, &len), TRN_OK);
         n = split(g_wire, len, (size_t)trn_rng_int(&r, 16, 900));
         victim = (uint8_t)trn_rng_int(&r, 0, n - 1);
@@ -565,6 +584,7 @@ static void test_capture_to_local_dem(void **state)
     int x, y, done = 0;
     trn_cap_err_t err;
     (void)state;
+    NEED_POINTS(1600);
     memset(&g, 0, sizeof g);
     g.pan_x_m = 0.2f;
     g.pan_z_m = 1.4f;

@@ -16,8 +16,11 @@
 /**
  * Largest number of range points in one stereo capture (the reassembly
  * buffer and the decoded capture are sized from it). 6 bytes per point on
- * the wire plus 12 bytes of decoded point; default 4096 points = 24.6 kB
- * wire buffer + 49 kB decoded.
+ * the wire and 6 decoded; default 4096 points = 24.6 kB
+ * wire buffer + 24.6 kB decoded. It sizes trn_capture_t and
+ * trn_capture_rx_t, so every file that includes capture.h must see the
+ * same value: set it for the whole build (CMake cache variable
+ * TRN_PORT_MAX_CAPTURE_POINTS, which port/proto adds as a PUBLIC define).
  */
 #ifndef TRN_PORT_MAX_CAPTURE_POINTS
 #define TRN_PORT_MAX_CAPTURE_POINTS 4096
