@@ -77,6 +77,7 @@ typedef struct {
 
 /**
  * @brief Check a mast geometry.
+ * @param[in] g the geometry.
  * @retval TRN_OK, TRN_E_NULL
  * @retval TRN_E_ARG a value is not finite, a limit lies outside its range
  *         (pan [-pi, pi], tilt [-pi/2, pi/2]) or min > max
@@ -108,6 +109,11 @@ trn_status_t trn_mast_point_at(const trn_mast_geom_t *g, const trn_rover_pose_t 
 /**
  * @brief The camera-to-map transform at the given joint angles:
  * p_map = R p_cam + t, t = the optical centre in the map frame.
+ * @param[in]  g          geometry (checked).
+ * @param[in]  pose       rover pose.
+ * @param[in]  pan_rad    measured pan.
+ * @param[in]  tilt_rad   measured tilt.
+ * @param[out] cam_to_map the transform.
  * @retval TRN_OK, TRN_E_NULL, TRN_E_ARG (bad geometry, non-finite pose or
  *         angles; angles are not checked against the limits: they are
  *         measured values)
@@ -117,6 +123,10 @@ trn_status_t trn_mast_camera_to_map(const trn_mast_geom_t *g, const trn_rover_po
 
 /**
  * @brief Apply a rigid transform to n points (in and out may be the same array).
+ * @param[in]  T   the transform.
+ * @param[in]  in  n points.
+ * @param[in]  n   number of points.
+ * @param[out] out n points.
  * @retval TRN_OK, TRN_E_NULL (T, or in/out NULL with n > 0)
  */
 trn_status_t trn_rigid_apply(const trn_rigid_t *T, const trn_vec3f_t *in, size_t n, trn_vec3f_t *out);

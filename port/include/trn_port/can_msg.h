@@ -137,7 +137,10 @@ typedef enum {
  */
 trn_can_msg_kind_t trn_can_classify(const trn_can_frame_t *f);
 
-/** @brief Short constant name of a kind ("MAST_CMD", ...; "NONE"). Never NULL. */
+/**
+ * @brief Short constant name of a kind ("MAST_CMD", ...; "NONE"). Never NULL.
+ * @param[in] kind any value (unknown values give "NONE").
+ */
 const char *trn_can_msg_name(trn_can_msg_kind_t kind);
 
 /**
@@ -151,7 +154,11 @@ const char *trn_can_msg_name(trn_can_msg_kind_t kind);
  */
 trn_status_t trn_can_angle_to_raw(float rad, int16_t *raw);
 
-/** @brief Wire counts to radians (exact to float rounding: raw * 1e-4). */
+/**
+ * @brief Wire counts to radians (exact to float rounding: raw * 1e-4).
+ * @param[in] raw angle counts (1e-4 rad).
+ * @return raw * 1e-4 rad.
+ */
 float trn_can_angle_from_raw(int16_t raw);
 
 /**
@@ -164,6 +171,8 @@ trn_status_t trn_can_mast_cmd_encode(const trn_mast_cmd_t *m, trn_can_frame_t *f
 
 /**
  * @brief Decode MAST_CMD.
+ * @param[in]  f the frame.
+ * @param[out] m the command (written only on TRN_OK).
  * @retval TRN_OK, TRN_E_NULL, TRN_E_FORMAT (not 0x120 standard data frame
  *         with DLC 8, or mode out of range)
  */
@@ -171,24 +180,32 @@ trn_status_t trn_can_mast_cmd_decode(const trn_can_frame_t *f, trn_mast_cmd_t *m
 
 /**
  * @brief Encode MAST_STATUS.
+ * @param[in]  m the status.
+ * @param[out] f the frame (id 0x121, dlc 8, flags 0).
  * @retval TRN_OK, TRN_E_NULL, TRN_E_ARG (reserved state or fault bits set)
  */
 trn_status_t trn_can_mast_status_encode(const trn_mast_status_t *m, trn_can_frame_t *f);
 
 /**
  * @brief Decode MAST_STATUS.
+ * @param[in]  f the frame.
+ * @param[out] m the status (written only on TRN_OK).
  * @retval TRN_OK, TRN_E_NULL, TRN_E_FORMAT (ID, format, DLC != 8, reserved bits set)
  */
 trn_status_t trn_can_mast_status_decode(const trn_can_frame_t *f, trn_mast_status_t *m);
 
 /**
  * @brief Encode CAPTURE_CMD.
+ * @param[in]  m the command.
+ * @param[out] f the frame (id 0x130, dlc 4, flags 0).
  * @retval TRN_OK, TRN_E_NULL
  */
 trn_status_t trn_can_capture_cmd_encode(const trn_capture_cmd_t *m, trn_can_frame_t *f);
 
 /**
  * @brief Decode CAPTURE_CMD.
+ * @param[in]  f the frame.
+ * @param[out] m the command (written only on TRN_OK).
  * @retval TRN_OK, TRN_E_NULL, TRN_E_FORMAT (ID, format, DLC != 4)
  */
 trn_status_t trn_can_capture_cmd_decode(const trn_can_frame_t *f, trn_capture_cmd_t *m);
@@ -196,6 +213,9 @@ trn_status_t trn_can_capture_cmd_decode(const trn_can_frame_t *f, trn_capture_cm
 /**
  * @brief Encode a heartbeat of the mast (id TRN_CAN_ID_MAST_HB) or of the
  * stereo head (TRN_CAN_ID_STEREO_HB).
+ * @param[in]  id TRN_CAN_ID_MAST_HB or TRN_CAN_ID_STEREO_HB.
+ * @param[in]  m  the heartbeat.
+ * @param[out] f  the frame (dlc 4, flags 0).
  * @retval TRN_OK, TRN_E_NULL, TRN_E_ARG (id is neither heartbeat ID, or
  *         state not a trn_node_state_t)
  */
@@ -203,6 +223,8 @@ trn_status_t trn_can_heartbeat_encode(uint32_t id, const trn_heartbeat_t *m, trn
 
 /**
  * @brief Decode either heartbeat (the frame's ID tells which node).
+ * @param[in]  f the frame (either heartbeat ID).
+ * @param[out] m the heartbeat (written only on TRN_OK).
  * @retval TRN_OK, TRN_E_NULL, TRN_E_FORMAT (not a heartbeat ID, format,
  *         DLC != 4, state out of range)
  */
@@ -211,6 +233,8 @@ trn_status_t trn_can_heartbeat_decode(const trn_can_frame_t *f, trn_heartbeat_t 
 /**
  * @brief Frames lost between two consecutive counters of one message:
  * (uint8_t)(now - prev - 1), 0 when now follows prev, 255 for a repeat.
+ * @param[in] prev counter of the previous frame.
+ * @param[in] now  counter of this frame.
  */
 uint8_t trn_can_counter_gap(uint8_t prev, uint8_t now);
 

@@ -122,6 +122,10 @@ trn_status_t trn_capture_encode(const trn_capture_t *c, uint8_t *wire, size_t ca
 /**
  * @brief Validate and decode complete capture bytes. out is written only
  * on TRN_OK; err (may be NULL) names the first failed check.
+ * @param[in]  wire capture bytes.
+ * @param[in]  len  their number.
+ * @param[out] out  the capture.
+ * @param[out] err  the named error, NONE on success (may be NULL).
  * @retval TRN_OK, TRN_E_NULL (wire or out)
  * @retval TRN_E_FORMAT   VERSION; TRUNCATED (len below header + CRC or
  *                        below the announced size); OVERFLOW (len above it)
@@ -133,6 +137,9 @@ trn_status_t trn_capture_decode(const uint8_t *wire, size_t len, trn_capture_t *
 /**
  * @brief Number of segments of a capture of wire_len bytes when each
  * carries at most seg_payload capture bytes.
+ * @param[in]  wire_len    capture bytes.
+ * @param[in]  seg_payload capture bytes per segment, 1..4091.
+ * @param[out] count       segments.
  * @retval TRN_OK, TRN_E_NULL, TRN_E_ARG (seg_payload 0 or above
  *         TRN_CAP_SEG_PAYLOAD_MAX, wire_len 0), TRN_E_SIZE (more than 255 segments)
  */
@@ -150,7 +157,10 @@ trn_status_t trn_capture_segment_count(size_t wire_len, size_t seg_payload, uint
 trn_status_t trn_capture_segment(const uint8_t *wire, size_t wire_len, size_t seg_payload, uint8_t index,
                                  uint8_t *out, size_t cap, size_t *out_len);
 
-/** @brief Reset a reassembler: idle, counters zero. @retval TRN_OK, TRN_E_NULL */
+/**
+ * @brief Reset a reassembler: idle, counters zero. @retval TRN_OK, TRN_E_NULL
+ * @param[out] rx the reassembler.
+ */
 trn_status_t trn_capture_rx_init(trn_capture_rx_t *rx);
 
 /**
@@ -174,6 +184,7 @@ trn_status_t trn_capture_rx_segment(trn_capture_rx_t *rx, const uint8_t *seg, si
 /**
  * @brief The transport lost part of a capture (ISO-TP error or timeout):
  * drop the capture in progress, counting TRANSPORT if one was active.
+ * @param[in,out] rx the reassembler.
  * @retval TRN_OK, TRN_E_NULL
  */
 trn_status_t trn_capture_rx_abort(trn_capture_rx_t *rx);
@@ -191,7 +202,10 @@ trn_status_t trn_capture_rx_abort(trn_capture_rx_t *rx);
  */
 trn_status_t trn_capture_points_m(const trn_capture_t *c, trn_vec3f_t *out, size_t capacity, size_t *n);
 
-/** @brief Short constant name of an error ("CRC", ...). Never NULL. */
+/**
+ * @brief Short constant name of an error ("CRC", ...). Never NULL.
+ * @param[in] err any value (unknown values give "UNKNOWN").
+ */
 const char *trn_cap_err_name(trn_cap_err_t err);
 
 #ifdef __cplusplus

@@ -31,10 +31,19 @@ extern "C" {
  */
 uint32_t trn_crc32_update(uint32_t crc, const uint8_t *data, size_t n);
 
-/** @brief Final XOR of a running CRC-32: the value carried on the wire. */
+/**
+ * @brief Final XOR of a running CRC-32: the value carried on the wire.
+ * @param[in] crc running value.
+ * @return crc ^ 0xFFFFFFFF.
+ */
 uint32_t trn_crc32_final(uint32_t crc);
 
-/** @brief CRC-32 of one buffer (update from TRN_CRC32_INIT, then final). */
+/**
+ * @brief CRC-32 of one buffer (update from TRN_CRC32_INIT, then final).
+ * @param[in] data n bytes (may be NULL when n == 0).
+ * @param[in] n    number of bytes.
+ * @return the CRC-32 as carried on the wire.
+ */
 uint32_t trn_crc32(const uint8_t *data, size_t n);
 
 #ifdef __cplusplus

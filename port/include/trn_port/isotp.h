@@ -140,6 +140,7 @@ trn_status_t trn_isotp_decode(const uint8_t *data, uint8_t dlc, trn_isotp_frame_
 
 /**
  * @brief Number of frames a sender needs for a message of len bytes.
+ * @param[in] len message length in bytes.
  * @retval 1 for 1..7 bytes, 1 + ceil((len-6)/7) for 8..4095, 0 otherwise.
  */
 uint16_t trn_isotp_frame_count(size_t len);
@@ -160,6 +161,11 @@ trn_status_t trn_isotp_encode_frame(const uint8_t *msg, size_t len, uint16_t ind
 
 /**
  * @brief Encode a flow-control frame (3 bytes).
+ * @param[in]  fs    flow status, trn_isotp_fs_t.
+ * @param[in]  bs    block size.
+ * @param[in]  stmin STmin raw byte.
+ * @param[out] out   8 bytes (bytes 3..7 zeroed).
+ * @param[out] dlc   3.
  * @retval TRN_OK, TRN_E_NULL, TRN_E_ARG (fs > 2)
  */
 trn_status_t trn_isotp_encode_fc(uint8_t fs, uint8_t bs, uint8_t stmin, uint8_t out[8], uint8_t *dlc);
@@ -167,6 +173,8 @@ trn_status_t trn_isotp_encode_fc(uint8_t fs, uint8_t bs, uint8_t stmin, uint8_t 
 /**
  * @brief STmin byte to microseconds: 0x00..0x7F are milliseconds,
  * 0xF1..0xF9 are 100..900 us; reserved values mean 127 ms (ISO 15765-2).
+ * @param[in] stmin the raw byte of an FC.
+ * @return the separation time in microseconds.
  */
 uint32_t trn_isotp_stmin_us(uint8_t stmin);
 
@@ -203,11 +211,17 @@ trn_status_t trn_isotp_rx_frame(trn_isotp_rx_t *rx, const uint8_t *data, uint8_t
 /**
  * @brief Advance time without a frame: a reception idle for more than
  * n_cr_ms is aborted (TIMEOUT_CR).
+ * @param[in,out] rx     the receiver.
+ * @param[in]     now_ms the caller's millisecond clock.
+ * @param[out]    res    what happened.
  * @retval TRN_OK (no timeout), TRN_E_NULL, TRN_E_TIMEOUT
  */
 trn_status_t trn_isotp_rx_poll(trn_isotp_rx_t *rx, uint32_t now_ms, trn_isotp_rx_result_t *res);
 
-/** @brief Short constant name of an error ("WRONG_SN", ...). Never NULL. */
+/**
+ * @brief Short constant name of an error ("WRONG_SN", ...). Never NULL.
+ * @param[in] err any value (unknown values give "UNKNOWN").
+ */
 const char *trn_isotp_err_name(trn_isotp_err_t err);
 
 /* ---- sender --------------------------------------------------------------- */
@@ -279,6 +293,9 @@ trn_status_t trn_isotp_tx_init(trn_isotp_tx_t *tx, uint32_t n_bs_ms, uint8_t max
 /**
  * @brief Start sending msg (len 1..4095); the first frame goes out at the
  * next trn_isotp_tx_step. A message in progress is abandoned (not counted).
+ * @param[in,out] tx  the sender.
+ * @param[in]     msg the message; must stay unchanged until DONE or an abort.
+ * @param[in]     len its length.
  * @retval TRN_OK, TRN_E_NULL, TRN_E_SIZE (len)
  */
 trn_status_t trn_isotp_tx_start(trn_isotp_tx_t *tx, const uint8_t *msg, size_t len);
@@ -287,12 +304,20 @@ trn_status_t trn_isotp_tx_start(trn_isotp_tx_t *tx, const uint8_t *msg, size_t l
  * @brief Advance the sender to now_us: emits at most one frame (the SF/FF,
  * or the next CF once STmin has passed since the previous CF), or reports
  * the N_Bs timeout. Call again after each EV_FRAME, or at res->wake_us.
+ * @param[in,out] tx     the sender.
+ * @param[in]     now_us the caller's microsecond clock.
+ * @param[out]    res    the frame to send and events.
  * @retval TRN_OK, TRN_E_NULL, TRN_E_TIMEOUT (TIMEOUT_BS)
  */
 trn_status_t trn_isotp_tx_step(trn_isotp_tx_t *tx, uint32_t now_us, trn_isotp_tx_result_t *res);
 
 /**
  * @brief Feed a frame received on the flow-control ID.
+ * @param[in,out] tx     the sender.
+ * @param[in]     data   the received frame bytes.
+ * @param[in]     dlc    0..8.
+ * @param[in]     now_us the caller's microsecond clock.
+ * @param[out]    res    events and error.
  * @retval TRN_OK         CTS (sending resumes) or WAIT within max_wft
  * @retval TRN_E_NULL, TRN_E_ARG (dlc > 8)
  * @retval TRN_E_FORMAT   INVALID_FC, UNEXPECTED_FC
@@ -302,7 +327,10 @@ trn_status_t trn_isotp_tx_step(trn_isotp_tx_t *tx, uint32_t now_us, trn_isotp_tx
 trn_status_t trn_isotp_tx_fc(trn_isotp_tx_t *tx, const uint8_t *data, uint8_t dlc, uint32_t now_us,
                              trn_isotp_tx_result_t *res);
 
-/** @brief Short constant name of a sender error ("TIMEOUT_BS", ...). Never NULL. */
+/**
+ * @brief Short constant name of a sender error ("TIMEOUT_BS", ...). Never NULL.
+ * @param[in] err any value (unknown values give "UNKNOWN").
+ */
 const char *trn_isotp_tx_err_name(trn_isotp_tx_err_t err);
 
 #ifdef __cplusplus

@@ -72,6 +72,9 @@ trn_status_t trn_link_mon_frame(trn_link_mon_t *m, uint8_t counter, uint32_t now
  * @brief Advance time: ALIVE becomes SILENT (once) after timeout_ms without
  * a frame. NEVER_SEEN stays NEVER_SEEN (the caller decides how long a node
  * may take to boot).
+ * @param[in,out] m      the monitor.
+ * @param[in]     now_ms the caller's millisecond clock.
+ * @param[out]    events TRN_LINK_EV_SILENT or 0 (may be NULL).
  * @retval TRN_OK, TRN_E_NULL, TRN_E_TIMEOUT (just became silent; events has SILENT)
  */
 trn_status_t trn_link_mon_poll(trn_link_mon_t *m, uint32_t now_ms, uint8_t *events);
