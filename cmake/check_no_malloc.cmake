@@ -1,4 +1,4 @@
-# check_no_malloc.cmake - fail if the core library references a heap allocator.
+# check_no_malloc.cmake - fail if a library (libtrn.a, libtrn_proto.a) references a heap allocator.
 #
 # The core never allocates (docs/architecture.md, "Fixed memory"). This script
 # proves it mechanically: it lists the undefined symbols of every object in the
@@ -54,6 +54,6 @@ endforeach()
 
 if(offenders)
   list(JOIN offenders "\n" report)
-  message(FATAL_ERROR "no_malloc: the core references heap allocation:\n${report}")
+  message(FATAL_ERROR "no_malloc: ${LIB} references heap allocation:\n${report}")
 endif()
 message(STATUS "no_malloc: ${LIB} references no allocator")

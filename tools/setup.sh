@@ -32,12 +32,15 @@ declare -A PKG_GROUPS=(
   # Debian's source, an initramfs of static programs, boot it under QEMU.
   [vm]="linux-source-6.1 xz-utils make gcc bc bison flex libelf-dev cpio gzip
         busybox-static qemu-system-x86 iproute2 can-utils libgpiod-dev gpiod"
+  # CAN bus tools: the cantools cross-check of the DBC runs in the project
+  # venv (.venv, cantools from PyPI); can-utils to record and replay logs.
+  [can]="python3 python3-venv can-utils"
   # Assurance stages (docs/assurance.md): static analysis (cppcheck + its
   # MISRA addon, clang-tidy), libFuzzer (clang + compiler-rt), coverage (gcovr),
   # the stack tool (python3).
   [assure]="python3 cppcheck clang-tidy clang libclang-rt-14-dev gcovr"
 )
-GROUP_ORDER=(core bench gdal plot vm assure)
+GROUP_ORDER=(core bench gdal can plot vm assure)
 
 usage() {
   echo "usage: $0 [group...]   (default: core)"

@@ -19,5 +19,6 @@
 #include "trn/spread.h"
 #include "trn/select.h"
 #include "trn/field.h"
+#include "trn/mast.h"
 
 #endif /* TRN_TRN_H */
