@@ -1,5 +1,5 @@
 /* test_localize.c - end-to-end localization on synthetic terrain: integer
- * shifts exact, subpixel shifts within 0.1 cell RMS, flat and ridge peaks
+ * shifts exact, subpixel shifts within 0.1 cell RMS (per axis at 4 m, radial at 6.4 m), flat and ridge peaks
  * ill-conditioned, periodic terrain ambiguous, every bad-input class. */
 #include <stdarg.h>
 #include <stddef.h>
@@ -116,28 +116,33 @@ static void test_integer_shift_exact(void **state)
 
 /* The local DEM is the same analytic terrain sampled at a sub-cell offset:
  * the estimate must follow the offset with RMS error <= 0.1 cell per axis. */
-static void test_subpixel_rms(void **state)
+/* One subpixel experiment: a rocky world of n x n cells, `trials` local maps
+ * of L x L cells rendered (resampled, not cropped) at random real-valued
+ * rover positions, localized from a +-10 cell prior. Returns the RMS error
+ * per axis and radial (cells) and the mean (e/sigma)^2 per axis. */
+static void subpixel_run(int L, int n, int trials, uint64_t seed, double *rms_axis,
+                         double *rms_radial, double *mean_norm)
 {
-    enum { L = 40 };
     world_t w;
     synth_terrain_t t;
     trn_rng_t r;
-    static float loc[L * L];
-    double se = 0.0, sn = 0.0, rms_axis, rms_radial;
-    int k, trials = 40;
-    (void)state;
-    rocky(&t, 128, 7);
-    world_render(&w, 128, &t);
-    trn_rng_seed(&r, 3);
+    float *loc = malloc(sizeof(float) * (size_t)L * (size_t)L);
+    double se = 0.0, sn = 0.0;
+    const int margin = L / 2 + 8;
+    int k;
+    assert_non_null(loc);
+    rocky(&t, n, 7);
+    world_render(&w, n, &t);
+    trn_rng_seed(&r, seed);
     for (k = 0; k < trials; ++k) {
         trn_grid_f32_t local;
         trn_loc_result_t res;
-        double tx = trn_rng_int(&r, 30, 97) + trn_rng_unit(&r) - 0.5;
-        double ty = trn_rng_int(&r, 30, 97) + trn_rng_unit(&r) - 0.5;
+        double tx = trn_rng_int(&r, margin, n - 1 - margin) + trn_rng_unit(&r) - 0.5;
+        double ty = trn_rng_int(&r, margin, n - 1 - margin) + trn_rng_unit(&r) - 0.5;
         trn_window_t win;
         double ex, ey;
         synth_render(&t, loc, L, L, (tx - L / 2) * CELL, (ty - L / 2) * CELL, CELL);
-        assert_int_equal(trn_grid_f32_init(&local, loc, L * L, L, L), TRN_OK);
+        assert_int_equal(trn_grid_f32_init(&local, loc, (size_t)L * (size_t)L, L, L), TRN_OK);
         win.x0 = (int)tx - 10;
         win.y0 = (int)ty - 10;
         win.x1 = (int)tx + 10;
@@ -150,17 +155,35 @@ static void test_subpixel_rms(void **state)
         sn += ex * ex / (res.sigma_x_m * res.sigma_x_m / (CELL * CELL)) +
               ey * ey / (res.sigma_y_m * res.sigma_y_m / (CELL * CELL));
     }
-    rms_axis = sqrt(se / (2.0 * trials));
-    rms_radial = sqrt(se / trials);
-    printf("subpixel RMS error per axis %.4f, radial %.4f cells over %d trials; "
-           "mean (e/sigma)^2 per axis %.2f\n", rms_axis, rms_radial, trials, sn / (2.0 * trials));
-    /* Per-axis RMS is the issue's figure; the radial one is bounded too so
-     * that a regression in either axis shows (docs/method.md: pixel locking). */
-    assert_true(rms_axis <= 0.1);
-    assert_true(rms_radial <= 0.15);
-    /* eq. 6's sigma must describe the error: neither far too small nor large */
-    assert_true(sn / (2.0 * trials) > 0.25 && sn / (2.0 * trials) < 4.0);
+    *rms_axis = sqrt(se / (2.0 * trials));
+    *rms_radial = sqrt(se / trials);
+    *mean_norm = sn / (2.0 * trials);
+    printf("subpixel, %dx%d local map (%.1f m): RMS error per axis %.4f, radial %.4f cells over "
+           "%d trials; mean (e/sigma)^2 per axis %.2f\n",
+           L, L, L * CELL, *rms_axis, *rms_radial, trials, *mean_norm);
     world_free(&w);
+    free(loc);
+}
+
+/* Subpixel shifts recovered to <= 0.1 cell RMS. With a 4 m local map the
+ * per-axis RMS meets it but the radial one does not (about 0.11: the local
+ * map's own voxelization noise, docs/method.md section 1); with a 6.4 m map,
+ * a mast stereo view's size, the radial RMS meets it too. Both are asserted,
+ * so a regression in either shows. */
+static void test_subpixel_rms(void **state)
+{
+    double axis, radial, norm;
+    (void)state;
+    subpixel_run(40, 128, 40, 3, &axis, &radial, &norm);
+    assert_true(axis <= 0.1);
+    assert_true(radial <= 0.15);
+    /* eq. 6's sigma must describe the error: neither far too small nor large */
+    assert_true(norm > 0.25 && norm < 4.0);
+
+    subpixel_run(64, 192, 80, 5, &axis, &radial, &norm);
+    assert_true(axis <= 0.1);
+    assert_true(radial <= 0.1);
+    assert_true(norm > 0.25 && norm < 4.0);
 }
 
 /* Least-squares quadratic c0 + c1 x + c2 y + c3 x^2 + c4 xy + c5 y^2 over
