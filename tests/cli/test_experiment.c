@@ -303,6 +303,13 @@ static void test_params_check(void **state) {
   BAD(window_m, 0.5); /* below the 1 m prior error */
   BAD(grid_spacing_m, 11.0);
   BAD(success_cells, 0.0);
+  BAD(sensor, 2);
+  BAD(height_noise_m, 0.01); /* only with the DEM sensor */
+  p.sensor = EXP_SENSOR_DEM;
+  p.height_noise_m = 0.02;
+  assert_null(exp_params_check(&p));
+  p.height_noise_m = -0.01;
+  assert_non_null(exp_params_check(&p));
 #undef BAD
 }
 
@@ -328,6 +335,19 @@ static void test_run_small(void **state) {
   assert_true(a.with.st.rate_ci[0] <= a.with.st.rate && a.with.st.rate <= a.with.st.rate_ci[1]);
   assert_true(a.without.st.rate_ci[0] <= a.without.st.rate && a.without.st.rate <= a.without.st.rate_ci[1]);
   assert_int_equal(a.patch_cells, 21);
+  /* the diagnostic DEM sensor: exact terrain, no noise -> every localization
+   * lands within a cell (the local map is a crop of the global occupancy,
+   * re-filtered with the same context), and the run is deterministic */
+  p.sensor = EXP_SENSOR_DEM;
+  assert_int_equal(exp_run(&p, &a, NULL, NULL, err, sizeof err), 0);
+  assert_int_equal(a.with.success_1cell + a.with.no_target, a.with.localizations);
+  p.height_noise_m = 0.02;
+  assert_int_equal(exp_run(&p, &a, NULL, NULL, err, sizeof err), 0);
+  assert_int_equal(exp_run(&p, &b, NULL, NULL, err, sizeof err), 0);
+  assert_int_equal(a.without.successes, b.without.successes);
+  assert_true(a.without.st.mean == b.without.st.mean || (isnan(a.without.st.mean) && isnan(b.without.st.mean)));
+  p.sensor = EXP_SENSOR_PROB;
+  p.height_noise_m = 0.0;
   /* a map too small for nine targets in reach: a reason, not a hang */
   p.size_cells = 64;
   assert_int_equal(exp_run(&p, &a, NULL, NULL, err, sizeof err), -1);

@@ -107,6 +107,10 @@ if rc == 0:
 else:
     check(False, "--success-cells 5 run failed")
 
+# The diagnostic DEM sensor runs and says so.
+rc, out, err = run(*SMALL, "--sensor", "dem", "--height-noise-m", 0.02, "--json")
+check(rc == 0 and json.loads(out)["parameters"]["sensor"] == "dem", f"--sensor dem: {rc} {err.strip()}")
+
 # ---- the human table ----------------------------------------------------------------
 rc, out, err = run(*SMALL, "--seed", 5)
 check(rc == 0 and "with selection" in out and "without selection" in out and "%" in out,
@@ -127,6 +131,9 @@ expect_error(1, "below the prior error", "--window-m", 0.5, "--prior-error-m", 1
 expect_error(1, "--success-cells", "--success-cells", -1)
 expect_error(1, "smallest rock", "--min-diameter-m", 3, "--trials", 1, "--size-cells", 128)
 expect_error(1, "nine fixed targets", "--size-cells", 64, "--trials", 1)
+expect_error(1, "--sensor", "--sensor", "lidar")
+expect_error(1, "height noise applies only", "--height-noise-m", 0.01)
+expect_error(1, "--height-noise-m", "--sensor", "dem", "--height-noise-m", 2)
 expect_error(2, "unknown option", "--bogus")
 expect_error(2, "--trials", "--trials")
 

@@ -4,6 +4,7 @@
 #define _POSIX_C_SOURCE 200112L /* clock_gettime */
 #include <math.h>
 #include <stdio.h>
+#include <string.h>
 #include <time.h>
 
 #include "cli.h"
@@ -61,6 +62,8 @@ int trn_cmd_experiment(int argc, char **argv) {
   uint64_t seed, tseed;
   double k, dmin, relief, window, prior, spacing, succ;
   int json = 0;
+  const char *sensor = "prob";
+  double hnoise = 0.0;
   char err[512];
   progress_t prog;
   struct timespec t0, t1;
@@ -78,6 +81,8 @@ int trn_cmd_experiment(int argc, char **argv) {
       {"--prior-error-m", CLI_DOUBLE, &prior, 0.0, 10.0, 0, "E", "prior offset from the truth, uniform in +-E m per axis (default 1)", 0},
       {"--grid-spacing-m", CLI_DOUBLE, &spacing, 0.0, 10.0, 0, "G", "spacing of the nine targets without selection (default 2 = one patch)", 0},
       {"--success-cells", CLI_DOUBLE, &succ, 0.1, 100.0, 0, "C", "success: error <= C cells (default 2)", 0},
+      {"--sensor", CLI_STRING, &sensor, 0, 0, 0, "prob|dem", "local-map model: prob = sampled from the probability map (the paper's, default); dem = the true DEM with height noise (diagnostic)", 0},
+      {"--height-noise-m", CLI_DOUBLE, &hnoise, 0.0, 1.0, 0, "H", "with --sensor dem: Gaussian height noise per cell, m (default 0)", 0},
       {"--json", CLI_FLAG, &json, 0, 0, 0, NULL, "print one JSON object instead of the table", 0},
   };
   cli_cmd_t cmd = {"experiment",
@@ -122,6 +127,14 @@ int trn_cmd_experiment(int argc, char **argv) {
   p.prior_error_m = prior;
   p.grid_spacing_m = spacing;
   p.success_cells = succ;
+  p.height_noise_m = hnoise;
+  if (strcmp(sensor, "prob") == 0) {
+    p.sensor = EXP_SENSOR_PROB;
+  } else if (strcmp(sensor, "dem") == 0) {
+    p.sensor = EXP_SENSOR_DEM;
+  } else {
+    return cli_fail(cmd.name, "--sensor: '%s' is not prob or dem", sensor);
+  }
   {
     const char *why = exp_params_check(&p);
     if (why != NULL) {
@@ -161,7 +174,11 @@ int trn_cmd_experiment(int argc, char **argv) {
     json_num(&j, "prior_error_m", prior);
     json_num(&j, "grid_spacing_m", r.grid_cells * p.cell_m);
     json_num(&j, "success_radius_m", r.success_radius_m);
-    json_str(&j, "sensor_model", "each voxel of the sensed patch occupied with probability min(P, 1), eqs. 8-9");
+    json_str(&j, "sensor", p.sensor == EXP_SENSOR_PROB ? "prob" : "dem");
+    json_str(&j, "sensor_model", p.sensor == EXP_SENSOR_PROB
+                                     ? "each voxel of the sensed patch occupied with probability min(P, 1), eqs. 8-9"
+                                     : "true DEM + Gaussian height noise per cell, high-passed and binned on its own");
+    json_num(&j, "height_noise_m", p.height_noise_m);
     json_str(&j, "global_sensing_position", "map centre");
     json_obj_end(&j);
     json_int(&j, "draws", r.draws);
@@ -173,6 +190,8 @@ int trn_cmd_experiment(int argc, char **argv) {
   } else {
     printf("trn experiment: %ld trials, seed %llu; terrain %ld x %ld cells of %g m, k = %g, seed %llu, %zu rocks\n",
            trials, (unsigned long long)seed, size, size, p.cell_m, k, (unsigned long long)p.terrain_seed, r.rocks);
+    printf("sensor: %s\n", p.sensor == EXP_SENSOR_PROB ? "local maps sampled from the probability map (eqs. 8-9)"
+                                                         : "true DEM + height noise (diagnostic, not the paper's)");
     printf("patch %d cells, window +-%g m, prior error +-%g m, grid %g m, success <= %g m; mean traverse %.2f m\n\n",
            r.patch_cells, window, prior, r.grid_cells * p.cell_m, r.success_radius_m, r.mean_traverse_m);
     printf("%-18s %6s %7s  %8s  %14s   %8s  %s\n", "", "locs", "success", "rate", "95 % CI", "mean err",

@@ -261,6 +261,15 @@ const char *exp_params_check(const exp_params_t *p) {
   if (!(p->grid_spacing_m >= 0.0 && p->grid_spacing_m <= 10.0)) {
     return "grid spacing must be in [0, 10] m";
   }
+  if (p->sensor != EXP_SENSOR_PROB && p->sensor != EXP_SENSOR_DEM) {
+    return "sensor must be prob or dem";
+  }
+  if (!(p->height_noise_m >= 0.0 && p->height_noise_m <= 1.0)) {
+    return "height noise must be in [0, 1] m";
+  }
+  if (p->sensor == EXP_SENSOR_PROB && p->height_noise_m != 0.0) {
+    return "height noise applies only to the dem sensor";
+  }
   if (!(p->success_cells > 0.0 && p->success_cells <= 100.0)) {
     return "success radius must be in (0, 100] cells";
   }
@@ -294,6 +303,13 @@ typedef struct {
   float *pvol;
   trn_point_t *pts;
   size_t pts_cap;
+  /* EXP_SENSOR_DEM */
+  float *dem;       /* the true terrain, n x n */
+  float *ldem, *lhp; /* local DEM and its high-pass, (patch + 2 hp) squared */
+  void *hws;
+  size_t hws_b;
+  int hp_cells;
+  trn_terrain_cfg_t tcfg;
 } world_t;
 
 /* Would trn_select accept (tx, ty) as a candidate from the rover cell (px, py)?
@@ -325,6 +341,60 @@ typedef struct {
   size_t n_points;
 } sense_t;
 
+/* Standard normal from two uniforms (Box-Muller, cosine branch). */
+static double rng_normal(exp_rng_t *r) {
+  double u1 = exp_rng_unit(r), u2 = exp_rng_unit(r);
+  return sqrt(-2.0 * log(1.0 - u1)) * cos(2.0 * EXP_PI * u2);
+}
+
+/* EXP_SENSOR_DEM (experiment.h): local map of the patch roi seen from the
+ * true rover cell (fx, fy); points relative to it in w->pts, count in *n. */
+static int dem_sensor(world_t *w, const trn_window_t *roi, int fx, int fy, exp_rng_t *r, size_t *n, char *err,
+                      size_t err_len) {
+  int x0 = roi->x0 - w->hp_cells, y0 = roi->y0 - w->hp_cells;
+  int x1 = roi->x1 + w->hp_cells, y1 = roi->y1 + w->hp_cells, x, y, lw, lh;
+  trn_grid_f32_t lg, hg;
+  trn_status_t st;
+  size_t i, m = 0, np = 0;
+  x0 = x0 < 0 ? 0 : x0;
+  y0 = y0 < 0 ? 0 : y0;
+  x1 = x1 > w->n - 1 ? w->n - 1 : x1;
+  y1 = y1 > w->n - 1 ? w->n - 1 : y1;
+  lw = x1 - x0 + 1;
+  lh = y1 - y0 + 1;
+  for (y = 0; y < lh; ++y) {
+    for (x = 0; x < lw; ++x) {
+      double hgt = (double)w->dem[(size_t)(y0 + y) * (size_t)w->n + (size_t)(x0 + x)];
+      if (w->p->height_noise_m > 0.0) {
+        hgt += w->p->height_noise_m * rng_normal(r);
+      }
+      w->ldem[(size_t)y * (size_t)lw + (size_t)x] = (float)hgt;
+    }
+  }
+  if (trn_grid_f32_init(&lg, w->ldem, (size_t)lw * (size_t)lh, lw, lh) != TRN_OK ||
+      trn_grid_f32_init(&hg, w->lhp, (size_t)lw * (size_t)lh, lw, lh) != TRN_OK) {
+    snprintf(err, err_len, "internal error: local DEM of %d x %d cells rejected", lw, lh);
+    return -1;
+  }
+  if ((st = trn_highpass(&lg, &w->tcfg, &hg, w->hws, w->hws_b)) != TRN_OK) {
+    snprintf(err, err_len, "trn_highpass: %s", trn_strerror(st));
+    return -1;
+  }
+  st = trn_occupancy_points(&hg, &w->tcfg, fx - x0, fy - y0, w->pts, w->pts_cap, &np);
+  if (st != TRN_OK && st != TRN_E_NODATA) {
+    snprintf(err, err_len, "trn_occupancy_points: %s", trn_strerror(st));
+    return -1;
+  }
+  for (i = 0; i < np; ++i) { /* keep the patch */
+    int gx = fx + w->pts[i].x, gy = fy + w->pts[i].y;
+    if (gx >= roi->x0 && gx <= roi->x1 && gy >= roi->y0 && gy <= roi->y1) {
+      w->pts[m++] = w->pts[i];
+    }
+  }
+  *n = m;
+  return 0;
+}
+
 /* Sense the patch centred on (cx, cy) (global cells, the patch actually seen)
  * from the true rover cell (fx, fy), localize in the window around (px, py). */
 static int sense_and_localize(world_t *w, int cx, int cy, int fx, int fy, int px, int py, exp_rng_t *r,
@@ -348,6 +418,12 @@ static int sense_and_localize(world_t *w, int cx, int cy, int fx, int fy, int px
   }
   pw = roi.x1 - roi.x0 + 1;
   ph = roi.y1 - roi.y0 + 1;
+  if (w->p->sensor == EXP_SENSOR_DEM) {
+    if (dem_sensor(w, &roi, fx, fy, r, &n, err, err_len) != 0) {
+      return -1;
+    }
+    goto sensed;
+  }
   pv.data = w->pvol;
   pv.nx = pw;
   pv.ny = ph;
@@ -364,12 +440,13 @@ static int sense_and_localize(world_t *w, int cx, int cy, int fx, int fy, int px
     snprintf(err, err_len, "internal error: %zu sampled points for %zu places", n, w->pts_cap);
     return -1;
   }
+sensed:
   s->n_points = n;
   if (n == 0) {
     s->no_points = 1;
     return 0;
   }
-  if ((st = trn_points_order(w->pts, n, pv.nz)) != TRN_OK) {
+  if ((st = trn_points_order(w->pts, n, w->pg.nz)) != TRN_OK) {
     snprintf(err, err_len, "trn_points_order: %s", trn_strerror(st));
     return -1;
   }
@@ -488,7 +565,8 @@ static int build_world(world_t *w, const exp_params_t *p, exp_result_t *out, voi
     return -1;
   }
   st = trn_map_build(&w->map, &cfg, &g, mbuf, mb);
-  free(dem);
+  w->dem = dem; /* kept for the DEM sensor; freed by exp_run */
+  w->tcfg = cfg.terrain;
   if (st != TRN_OK) {
     snprintf(err, err_len, "trn_map_build: %s", trn_strerror(st));
     return -1;
@@ -551,6 +629,22 @@ static int build_world(world_t *w, const exp_params_t *p, exp_result_t *out, voi
     snprintf(err, err_len, "out of memory for the selection and localization workspaces");
     return -1;
   }
+  if (p->sensor == EXP_SENSOR_DEM) {
+    int side;
+    w->hp_cells = (int)floor((double)w->tcfg.highpass_half_m / (double)w->tcfg.cell_m + 0.5);
+    side = 2 * (w->half + w->hp_cells) + 1;
+    w->ldem = malloc((size_t)side * (size_t)side * sizeof(float));
+    w->lhp = malloc((size_t)side * (size_t)side * sizeof(float));
+    w->hws_b = trn_highpass_workspace_bytes(side, side);
+    w->hws = alloc16(w->hws_b, &raw[6]);
+    free(w->pts);
+    w->pts_cap = (size_t)side * (size_t)side * (size_t)w->pg.nz;
+    w->pts = malloc(w->pts_cap * sizeof *w->pts);
+    if (w->ldem == NULL || w->lhp == NULL || w->hws == NULL || w->pts == NULL) {
+      snprintf(err, err_len, "out of memory for the DEM sensor");
+      return -1;
+    }
+  }
   out->patch_cells = 2 * w->half + 1;
   out->grid_cells = w->grid_cells;
   out->window_cells = w->win_cells;
@@ -562,7 +656,7 @@ static int build_world(world_t *w, const exp_params_t *p, exp_result_t *out, voi
 int exp_run(const exp_params_t *p, exp_result_t *out, exp_progress_fn progress, void *ctx, char *err,
             size_t err_len) {
   world_t w;
-  void *raw[6] = {NULL, NULL, NULL, NULL, NULL, NULL};
+  void *raw[7] = {NULL, NULL, NULL, NULL, NULL, NULL, NULL};
   long *mw = NULL, *kw = NULL, *mo = NULL, *ko = NULL, t;
   double *ew = NULL, *e2w = NULL, *eo = NULL, *e2o = NULL, sum_trav = 0.0;
   const char *why;
@@ -690,9 +784,12 @@ int exp_run(const exp_params_t *p, exp_result_t *out, exp_progress_fn progress, 
   rc = 0;
 
 done:
-  for (i = 0; i < 6; ++i) {
+  for (i = 0; i < 7; ++i) {
     free(raw[i]);
   }
+  free(w.dem);
+  free(w.ldem);
+  free(w.lhp);
   free(w.lws_raw);
   free(w.cands);
   free(w.pts);

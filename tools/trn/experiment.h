@@ -102,7 +102,18 @@ typedef struct {
   double prior_error_m;  /* prior offset bound per axis (1.0) */
   double grid_spacing_m; /* spacing of the nine fixed targets (2.0 = one patch) */
   double success_cells;  /* success radius, cells (2.0) */
+  int sensor;            /* EXP_SENSOR_PROB (the paper's) or EXP_SENSOR_DEM (diagnostic) */
+  double height_noise_m; /* EXP_SENSOR_DEM: per-cell Gaussian height noise, m (0) */
 } exp_params_t;
+
+/* Sensor models. PROB: the paper's, voxels sampled from the probability map
+ * (eq. 9 of the patch). DEM (diagnostic, not the paper's): the true DEM over
+ * the patch grown by the high-pass half-width, plus independent Gaussian
+ * height noise per cell, high-passed and turned into occupancy on its own
+ * (trn_highpass, trn_occupancy_points); the points inside the patch are the
+ * local map. No horizontal error. */
+#define EXP_SENSOR_PROB 0
+#define EXP_SENSOR_DEM 1
 
 void exp_params_default(exp_params_t *p);
 /* NULL if valid, else a one-line reason. */
