@@ -111,6 +111,11 @@ else:
 rc, out, err = run(*SMALL, "--sensor", "dem", "--height-noise-m", 0.02, "--json")
 check(rc == 0 and json.loads(out)["parameters"]["sensor"] == "dem", f"--sensor dem: {rc} {err.strip()}")
 
+# The largest seed is printed as it was given (unsigned 64 bit).
+rc, out, err = run("--size-cells", 128, "--trials", 1, "--seed", 18446744073709551615, "--json")
+check(rc == 0 and json.loads(out)["seed"] == 18446744073709551615 and
+      json.loads(out)["terrain"]["seed"] == 18446744073709551615, f"seed 2^64-1: {rc} {out[:80]!r} {err.strip()}")
+
 # ---- the human table ----------------------------------------------------------------
 rc, out, err = run(*SMALL, "--seed", 5)
 check(rc == 0 and "with selection" in out and "without selection" in out and "%" in out,

@@ -28,6 +28,14 @@ static void json_ci(json_t *j, const char *key, const double ci[2]) {
   }
 }
 
+static void json_u64(json_t *j, const char *key, uint64_t v) {
+  /* json_int takes a signed value: seeds above 2^63 would print negative */
+  fprintf(j->out, "%s", j->first[j->depth] ? "" : ", ");
+  j->first[j->depth] = 0;
+  json_write_string(j->out, key);
+  fprintf(j->out, ": %llu", (unsigned long long)v);
+}
+
 static void json_arm(json_t *j, const char *key, const exp_arm_t *a, long trials) {
   json_obj(j, key);
   json_int(j, "localizations", a->localizations);
@@ -157,12 +165,12 @@ int trn_cmd_experiment(int argc, char **argv) {
     json_t j;
     json_begin(&j, stdout);
     json_int(&j, "trials", trials);
-    json_int(&j, "seed", (long long)seed);
+    json_u64(&j, "seed", seed);
     json_obj(&j, "terrain");
     json_int(&j, "size_cells", size);
     json_num(&j, "cell_m", p.cell_m);
     json_num(&j, "coverage_k", k);
-    json_int(&j, "seed", (long long)p.terrain_seed);
+    json_u64(&j, "seed", p.terrain_seed);
     json_num(&j, "d_min_m", r.d_min_m);
     json_num(&j, "relief_m", p.relief_m);
     json_int(&j, "rocks", (long long)r.rocks);
