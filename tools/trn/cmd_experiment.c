@@ -84,7 +84,7 @@ int trn_cmd_experiment(int argc, char **argv) {
       {"--terrain-seed", CLI_U64, &tseed, 0, 0, 0, "S", "seed of the terrain (default: --seed)", 0},
       {"--min-diameter-m", CLI_DOUBLE, &dmin, 0.1, 10.0, 0, "D", "smallest rock of the terrain (default 2 cells, as `trn terrain`)", 0},
       {"--relief-m", CLI_DOUBLE, &relief, 0.0, 10.0, 0, "A", "RMS of the terrain's smooth background relief (default 0.05, as `trn terrain`)", 0},
-      {"--size-cells", CLI_LONG, &size, 64, 4096, 0, "N", "terrain side, cells of 0.1 m (default 256, as `trn terrain`)", 0},
+      {"--size-cells", CLI_LONG, &size, 64, 1024, 0, "N", "terrain side, cells of 0.1 m (default 256, as `trn terrain`)", 0},
       {"--window-m", CLI_DOUBLE, &window, 0.1, 20.0, 0, "R", "localization window: prior +-R m per axis (default 2)", 0},
       {"--prior-error-m", CLI_DOUBLE, &prior, 0.0, 10.0, 0, "E", "prior offset from the truth, uniform in +-E m per axis (default 1)", 0},
       {"--grid-spacing-m", CLI_DOUBLE, &spacing, 0.0, 10.0, 0, "G", "spacing of the nine targets without selection (default 2 = one patch)", 0},

@@ -234,8 +234,8 @@ const char *exp_params_check(const exp_params_t *p) {
   if (p->trials < 1 || p->trials > 1000000) {
     return "trials must be in 1..1000000";
   }
-  if (p->size_cells < 64 || p->size_cells > TRN_MAX_DIM) {
-    return "map side must be 64..TRN_MAX_DIM cells";
+  if (p->size_cells < 64 || p->size_cells > 1024) { /* 1024: the eq. 8 map is 64 MiB */
+    return "map side must be 64..1024 cells";
   }
   if (!(p->cell_m > 0.0 && p->cell_m <= 10.0)) {
     return "cell size must be in (0, 10] m";
