@@ -5,6 +5,7 @@
                         [--estimate X,Y | --localize-json FILE] [--title T]
     trn_plot.py surface DEM.tif --out surface.png [--zscale Z] [--elev E] [--azim A]
     trn_plot.py raster  MAP.tif --out map.png [--label TEXT] [--cmap NAME] [markers as dem]
+    trn_plot.py experiment RUN.json [RUN.json ...] --out exp.png [--labels A,B,...]
 
 Every input is anything GDAL reads (band 1, no-data and NaN shown as missing);
 axes are map metres from the raster's geotransform (x east, y north). Needs
@@ -244,7 +245,73 @@ def add_raster(sub):
     return p
 
 
-FIGURES = {"dem": (add_dem, fig_dem), "surface": (add_surface, fig_surface), "raster": (add_raster, fig_raster)}
+def fig_experiment(args):
+    """`trn experiment --json` runs: success rates with and without selection (95 % Wilson
+    intervals) and the mean error of the successes (95 % t intervals), one group per run."""
+    runs = []
+    for path in args.runs:
+        try:
+            with open(path) as f:
+                r = json.load(f)
+            for arm in ("with_selection", "without_selection"):
+                for key in ("success_rate", "ci95", "mean_error_m", "successes", "localizations"):
+                    r[arm][key]
+        except (OSError, ValueError, KeyError, TypeError) as e:
+            sys.exit(f"trn_plot: '{path}' is not `trn experiment --json` output: {e}")
+        runs.append(r)
+    if args.labels:
+        labels = args.labels.split(",")
+        if len(labels) != len(runs):
+            sys.exit(f"trn_plot: --labels has {len(labels)} names for {len(runs)} runs")
+    else:
+        labels = [f"k = {r['terrain']['coverage_k']:g}" for r in runs]
+    arms = (("with_selection", "with selection", "#1f77b4"), ("without_selection", "without selection", "#d62728"))
+    x = np.arange(len(runs))
+    wbar = 0.38
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.6))
+
+    def nan(v):
+        return np.nan if v is None else v
+
+    for i, (key, name, colour) in enumerate(arms):
+        off = (i - 0.5) * wbar
+        rate = np.array([100 * r[key]["success_rate"] for r in runs])
+        lo = np.array([100 * nan(r[key]["ci95"][0]) for r in runs])
+        hi = np.array([100 * nan(r[key]["ci95"][1]) for r in runs])
+        a1.bar(x + off, rate, wbar, color=colour, label=name,
+               yerr=np.vstack([rate - lo, hi - rate]), capsize=4, ecolor="black")
+        for xi, v in zip(x + off, rate):
+            a1.text(xi, 2, f"{v:.1f}", ha="center", va="bottom", color="white", fontsize=8, fontweight="bold")
+        err = np.array([100 * nan(r[key]["mean_error_m"]) for r in runs])  # cm
+        elo = np.array([100 * nan((r[key].get("mean_error_ci95") or [None, None])[0]) for r in runs])
+        ehi = np.array([100 * nan((r[key].get("mean_error_ci95") or [None, None])[1]) for r in runs])
+        yerr = np.vstack([np.nan_to_num(err - elo), np.nan_to_num(ehi - err)])
+        a2.bar(x + off, err, wbar, color=colour, label=name, yerr=yerr, capsize=4, ecolor="black")
+    a1.axhline(97.8, color="#1f77b4", ls="--", lw=1, label="paper, with: 97.8 %")
+    a1.axhline(29.5, color="#d62728", ls="--", lw=1, label="paper, without: 29.5 %")
+    a1.set_ylim(0, 105)
+    a1.set_ylabel("localizations within the success radius (%)")
+    a1.set_title("success rate, 95 % Wilson intervals")
+    a2.set_ylabel("mean error of the successes (cm)")
+    a2.set_title("accuracy of the successes, 95 % t intervals")
+    for a in (a1, a2):
+        a.set_xticks(x)
+        a.set_xticklabels([f"{lab}\n{r['trials']} trials" for lab, r in zip(labels, runs)])
+        a.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, frameon=False)
+    fig.suptitle(args.title or "Landmark selection, the paper's section 5 experiment (trn experiment)")
+    fig.tight_layout()
+    return fig
+
+
+def add_experiment(sub):
+    p = sub.add_parser("experiment", help="success rates and errors of `trn experiment --json` runs")
+    p.add_argument("runs", nargs="+", metavar="RUN.json", help="outputs of `trn experiment --json`")
+    p.add_argument("--labels", help="comma-separated names of the runs (default: k = coverage)")
+    return p
+
+
+FIGURES = {"dem": (add_dem, fig_dem), "surface": (add_surface, fig_surface), "raster": (add_raster, fig_raster),
+           "experiment": (add_experiment, fig_experiment)}
 
 
 def main(argv=None):
