@@ -2,13 +2,15 @@
 """tests/cli/test_profile.py - `trn profile` end to end (CTest `cli_profile`,
 and `profile_instructions` with --instructions).
 
-    python3 tests/cli/test_profile.py PATH/TO/trn WORKDIR [--instructions]
+    python3 tests/cli/test_profile.py PATH/TO/trn WORKDIR [--instructions] [--stack-build DIR]
 
 Checks the JSON (every stage with wall_ms, wall_max_ms >= wall_ms,
 workspace_bytes >= scratch_bytes), the workspace figures against sizes
 computed here from the configuration, the table, the budget file parser
 (each error class names the file and line, exit 1, one stderr line), and
 --check's exit status (0 within budget, 3 over, 2 without --budget).
+With --stack-build DIR (a build with GCC's .ci files): tools/profile/add_stack.py
+gives every stage a stack figure, localize's equal to trn_stack.py's for trn_localize_dem.
 With --instructions: two runs under callgrind give identical instruction
 counts for every stage; exit 77 (CTest: skipped) when valgrind is missing.
 Never asserts on wall time.
@@ -22,6 +24,7 @@ import sys
 TRN = os.path.abspath(sys.argv[1])
 WORK = os.path.abspath(sys.argv[2])
 INSTR = "--instructions" in sys.argv[3:]
+STACK_BUILD = sys.argv[sys.argv.index("--stack-build") + 1] if "--stack-build" in sys.argv[3:] else None
 STAGES = ["highpass_occupancy", "chamfer", "map_build", "prob_map", "select",
           "local_occupancy", "search", "peak_fit", "localize"]
 BASE = ["--map-cells", "128", "--local-cells", "32", "--max-range-m", "4"]
@@ -185,9 +188,42 @@ def main():
     check(rc == 1 and "--runs" in err, f"--runs 0: exit {rc}: {err!r}")
     rc, out, err = run("--bogus")
     check(rc == 2, f"--bogus: exit {rc}")
+    if STACK_BUILD:
+        stack_test(out_json=os.path.join(WORK, "prof.json"))
     rc, out, err = run("--help")
     check(rc == 0 and "--budget" in out and "--instructions" in out, "--help")
     return finish()
+
+
+def stack_test(out_json):
+    """add_stack.py: each stage's stack_bytes = the largest trn_stack.py figure of its functions."""
+    root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
+    whole = subprocess.run([sys.executable, os.path.join(root, "tools", "stack", "trn_stack.py"), "--build",
+                            STACK_BUILD], capture_output=True, text=True)
+    if whole.returncode != 0:
+        # add_stack.py needs a clean call graph; the stack stage (tools/test.d/40-stack.sh) owns that.
+        first = (whole.stderr or whole.stdout).strip().splitlines()[:1]
+        print(f"SKIP stack figures: trn_stack.py fails on {STACK_BUILD}: {first}")
+        return
+    rc, out, err = run(*BASE, "--runs", "1", "--json")
+    check(rc == 0, f"json for add_stack: {err.strip()}")
+    with open(out_json, "w") as f:
+        f.write(out)
+    p = subprocess.run([sys.executable, os.path.join(root, "tools", "profile", "add_stack.py"), out_json,
+                        "--build", STACK_BUILD], capture_output=True, text=True)
+    check(p.returncode == 0, f"add_stack.py: exit {p.returncode}: {p.stderr.strip()}")
+    if p.returncode != 0:
+        return
+    j = json.loads(p.stdout)
+    for s in STAGES:
+        check(j["stages"][s].get("stack_bytes", 0) > 0, f"{s}: no stack_bytes")
+    q = subprocess.run([sys.executable, os.path.join(root, "tools", "stack", "trn_stack.py"), "--build", STACK_BUILD,
+                        "--function", "trn_localize_dem"], capture_output=True, text=True)
+    check(q.returncode == 0 and j["stages"]["localize"]["stack_bytes"] == int(q.stdout.split()[-1]),
+          f"localize stack {j['stages']['localize'].get('stack_bytes')} != trn_stack.py {q.stdout!r}")
+    # map_build calls the whole global chain, so it needs at least what highpass_occupancy needs
+    check(j["stages"]["map_build"]["stack_bytes"] >= j["stages"]["chamfer"]["stack_bytes"],
+          f"map_build stack below chamfer's: {j['stages']}")
 
 
 def finish():

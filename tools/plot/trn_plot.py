@@ -272,7 +272,8 @@ def fig_profile(args):
             if n in budgeted:
                 e = stages[n]
                 ax.text(max(worst[names.index(n)], med[names.index(n)]) + 2, yi,
-                        f"{e['target_max_ms']:.3g} / {e['budget_ms']:.4g} ms" + ("  OVER" if e["over"] else ""),
+                        f"{e['target_max_ms']:.3g} / {e['budget_ms']:.4g} ms" + ("  OVER" if e["over"] else "")
+                        + (f"   stack {e['stack_bytes']} B" if "stack_bytes" in e else ""),
                         va="center", fontsize=8)
             else:
                 ax.text(2, yi, "no budget", va="center", fontsize=8, color="#666666")

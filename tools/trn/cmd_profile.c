@@ -84,6 +84,13 @@ static const char *const k_what[ST_COUNT] = {
     "9 x trn_score_pose + trn_peak_fit (eq. 6)",
     "trn_localize_dem, one localization"};
 
+/* The public functions each stage calls (for the stack figures of
+ * tools/profile/add_stack.py). */
+static const char *const k_funcs[ST_COUNT] = {
+    "trn_highpass,trn_occupancy", "trn_chamfer3d", "trn_map_build", "trn_prob_global_map", "trn_select",
+    "trn_highpass,trn_occupancy_points,trn_points_order", "trn_search_bb", "trn_score_pose,trn_peak_fit",
+    "trn_localize_dem"};
+
 /* Everything the stages work on; heap memory of the tool (the core never allocates). */
 typedef struct {
   long n, nl, win_cells;
@@ -775,6 +782,7 @@ int trn_cmd_profile(int argc, char **argv) {
       stage_bytes(&w, (stage_t)s, &sc, &tot);
       json_obj(&j, k_names[s]);
       json_str(&j, "what", k_what[s]);
+      json_str(&j, "functions", k_funcs[s]);
       json_num(&j, "wall_ms", med[s]);
       json_num(&j, "wall_max_ms", mx[s]);
       json_int(&j, "workspace_bytes", (long long)tot);
