@@ -186,6 +186,11 @@ def main():
     expect_error(1, "too small", "--map-cells", "64", "--local-cells", "64")
     rc, out, err = run("--runs", "0")
     check(rc == 1 and "--runs" in err, f"--runs 0: exit {rc}: {err!r}")
+    # --instructions without valgrind on PATH: a one-line reason naming the package.
+    p = subprocess.run([TRN, "profile", *BASE, "--runs", "1", "--instructions"], capture_output=True, text=True,
+                       timeout=600, env={**os.environ, "PATH": "/nonexistent"})
+    check(p.returncode == 1 and "needs valgrind" in p.stderr and len(p.stderr.splitlines()) == 1
+          and p.stdout == "", f"--instructions without valgrind: exit {p.returncode}: {p.stderr!r}")
     rc, out, err = run("--bogus")
     check(rc == 2, f"--bogus: exit {rc}")
     if STACK_BUILD:
