@@ -195,9 +195,41 @@ def main():
     check(rc == 2, f"--bogus: exit {rc}")
     if STACK_BUILD:
         stack_test(out_json=os.path.join(WORK, "prof.json"))
+    plot_test(jt)
     rc, out, err = run("--help")
     check(rc == 0 and "--budget" in out and "--instructions" in out, "--help")
     return finish()
+
+
+def plot_test(prof):
+    """trn_plot.py profile draws a PNG from the JSON, with and without a budget."""
+    root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
+    py = "/usr/bin/python3" if os.path.exists("/usr/bin/python3") else sys.executable
+    probe = subprocess.run([py, "-c", "import matplotlib, numpy; from osgeo import gdal"], capture_output=True)
+    if probe.returncode != 0:
+        print("SKIP plot: no matplotlib / numpy / osgeo for", py, "(bash tools/setup.sh plot)")
+        return
+    for name, data in (("budget", prof), ("plain", {k: v for k, v in prof.items() if k != "budget"})):
+        if name == "plain":
+            data = json.loads(json.dumps(data))
+            for st in data["stages"].values():
+                for k in ("budget_ms", "target_ms", "target_max_ms", "share", "over"):
+                    st.pop(k, None)
+        src = write(f"plot-{name}.json", json.dumps(data))
+        png = os.path.join(WORK, f"plot-{name}.png")
+        if os.path.exists(png):
+            os.remove(png)
+        p = subprocess.run([py, os.path.join(root, "tools", "plot", "trn_plot.py"), "profile", src, "--out", png],
+                           capture_output=True, text=True, timeout=300)
+        ok = p.returncode == 0 and os.path.exists(png)
+        if ok:
+            with open(png, "rb") as f:
+                ok = f.read(8) == b"\x89PNG\r\n\x1a\n"
+        check(ok, f"trn_plot.py profile ({name}): exit {p.returncode}: {p.stderr.strip()}")
+    bad = write("plot-bad.json", "{}")
+    p = subprocess.run([py, os.path.join(root, "tools", "plot", "trn_plot.py"), "profile", bad, "--out",
+                        os.path.join(WORK, "bad.png")], capture_output=True, text=True, timeout=300)
+    check(p.returncode != 0 and "not `trn profile --json` output" in p.stderr, f"bad plot input: {p.stderr!r}")
 
 
 def stack_test(out_json):

@@ -262,8 +262,10 @@ def fig_profile(args):
     fig, ax = plt.subplots(figsize=(8, 0.45 * len(names) + 1.6))
     y = np.arange(len(names))[::-1]
     if budgeted:
-        med = [100.0 * stages[n]["target_ms"] / stages[n]["budget_ms"] if n in budgeted else 0 for n in names]
-        worst = [100.0 * stages[n]["share"] if n in budgeted else 0 for n in names]
+        clip = 300.0  # bars beyond 3x the budget are cut there; the label gives the numbers
+        med = [min(clip, 100.0 * stages[n]["target_ms"] / stages[n]["budget_ms"]) if n in budgeted else 0
+               for n in names]
+        worst = [min(clip, 100.0 * stages[n]["share"]) if n in budgeted else 0 for n in names]
         colours = ["#d62728" if n in budgeted and stages[n]["over"] else "#1f77b4" for n in names]
         ax.barh(y, worst, height=0.25, color="#888888", label="worst of the runs")
         ax.barh(y, med, height=0.6, color=colours, alpha=0.85, label="median")
@@ -279,6 +281,8 @@ def fig_profile(args):
                 ax.text(2, yi, "no budget", va="center", fontsize=8, color="#666666")
         ax.set_xlabel(f"target time as % of budget (host ms x scale {prof['budget']['scale']:g})")
         ax.set_xlim(0, max(120.0, 1.25 * max(worst + med)))
+        if max(worst) >= clip:
+            ax.axvline(clip, color="#d62728", lw=0.8, ls=":")
     else:
         med = [stages[n]["wall_ms"] for n in names]
         worst = [stages[n]["wall_max_ms"] for n in names]
