@@ -39,8 +39,11 @@ declare -A PKG_GROUPS=(
   # MISRA addon, clang-tidy), libFuzzer (clang + compiler-rt), coverage (gcovr),
   # the stack tool (python3).
   [assure]="python3 cppcheck clang-tidy clang libclang-rt-14-dev gcovr"
+  # `trn profile --instructions`: callgrind and its client-request header
+  # (valgrind/callgrind.h), and the CTest profile_instructions.
+  [profile]="valgrind"
 )
-GROUP_ORDER=(core bench gdal can plot vm assure)
+GROUP_ORDER=(core bench gdal can plot vm assure profile)
 
 usage() {
   echo "usage: $0 [group...]   (default: core)"

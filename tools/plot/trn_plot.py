@@ -6,6 +6,7 @@
     trn_plot.py surface DEM.tif --out surface.png [--zscale Z] [--elev E] [--azim A]
     trn_plot.py raster  MAP.tif --out map.png [--label TEXT] [--cmap NAME] [markers as dem]
     trn_plot.py experiment RUN.json [RUN.json ...] --out exp.png [--labels A,B,...]
+    trn_plot.py profile PROFILE.json --out profile.png   (from `trn profile --json [--budget F]`)
 
 Every input is anything GDAL reads (band 1, no-data and NaN shown as missing);
 axes are map metres from the raster's geotransform (x east, y north). Needs
@@ -307,11 +308,69 @@ def add_experiment(sub):
     p = sub.add_parser("experiment", help="success rates and errors of `trn experiment --json` runs")
     p.add_argument("runs", nargs="+", metavar="RUN.json", help="outputs of `trn experiment --json`")
     p.add_argument("--labels", help="comma-separated names of the runs (default: k = coverage)")
+def fig_profile(args):
+    """`trn profile --json` output: time per stage against its budget (a horizontal bar chart).
+
+    With a budget (the JSON holds budget_ms): bars are the target time estimate (median, and the
+    worst of the runs as a thin bar on top) as a share of the stage's budget; over-budget stages
+    are red, the 100 % line is the budget. Without one: host milliseconds, median and max."""
+    try:
+        with open(args.profile_json) as f:
+            prof = json.load(f)
+        stages = prof["stages"]
+    except (OSError, ValueError, KeyError) as e:
+        sys.exit(f"trn_plot: '{args.profile_json}' is not `trn profile --json` output: {e}")
+    names = list(stages)
+    budgeted = [n for n in names if "budget_ms" in stages[n]]
+    fig, ax = plt.subplots(figsize=(8, 0.45 * len(names) + 1.6))
+    y = np.arange(len(names))[::-1]
+    if budgeted:
+        clip = 300.0  # bars beyond 3x the budget are cut there; the label gives the numbers
+        med = [min(clip, 100.0 * stages[n]["target_ms"] / stages[n]["budget_ms"]) if n in budgeted else 0
+               for n in names]
+        worst = [min(clip, 100.0 * stages[n]["share"]) if n in budgeted else 0 for n in names]
+        colours = ["#d62728" if n in budgeted and stages[n]["over"] else "#1f77b4" for n in names]
+        ax.barh(y, worst, height=0.25, color="#888888", label="worst of the runs")
+        ax.barh(y, med, height=0.6, color=colours, alpha=0.85, label="median")
+        ax.axvline(100.0, color="k", lw=1.2, ls="--", label="budget")
+        for yi, n in zip(y, names):
+            if n in budgeted:
+                e = stages[n]
+                ax.text(max(worst[names.index(n)], med[names.index(n)]) + 2, yi,
+                        f"{e['target_max_ms']:.3g} / {e['budget_ms']:.4g} ms" + ("  OVER" if e["over"] else "")
+                        + (f"   stack {e['stack_bytes']} B" if "stack_bytes" in e else ""),
+                        va="center", fontsize=8)
+            else:
+                ax.text(2, yi, "no budget", va="center", fontsize=8, color="#666666")
+        ax.set_xlabel(f"target time as % of budget (host ms x scale {prof['budget']['scale']:g})")
+        ax.set_xlim(0, max(120.0, 1.25 * max(worst + med)))
+        if max(worst) >= clip:
+            ax.axvline(clip, color="#d62728", lw=0.8, ls=":")
+    else:
+        med = [stages[n]["wall_ms"] for n in names]
+        worst = [stages[n]["wall_max_ms"] for n in names]
+        ax.barh(y, worst, height=0.25, color="#888888", label="max")
+        ax.barh(y, med, height=0.6, color="#1f77b4", alpha=0.85, label="median")
+        ax.set_xlabel("host wall time (ms)")
+    ax.set_yticks(y)
+    ax.set_yticklabels(names)
+    ax.legend(loc="lower right", fontsize=8)
+    c = prof.get("config", {})
+    ax.set_title(args.title or f"trn profile: map {c.get('map_cells')} cells, local {c.get('local_cells')}, "
+                 f"window +-{c.get('window_cells')}, {c.get('candidates')} candidates, {c.get('runs')} runs",
+                 fontsize=10)
+    return fig
+
+
+def add_profile(sub):
+    p = sub.add_parser("profile", help="stage time against budget from `trn profile --json`")
+    p.add_argument("profile_json", metavar="PROFILE.json", help="output of trn profile --json [--budget FILE]")
     return p
 
 
 FIGURES = {"dem": (add_dem, fig_dem), "surface": (add_surface, fig_surface), "raster": (add_raster, fig_raster),
-           "experiment": (add_experiment, fig_experiment)}
+           "experiment": (add_experiment, fig_experiment),
+           "profile": (add_profile, fig_profile)}
 
 
 def main(argv=None):
