@@ -180,6 +180,9 @@ int trn_cmd_select(int argc, char **argv) {
       json_arr_end(&j);
       json_int(&j, "candidates", (long long)res.n_candidates);
       json_int(&j, "informative", (long long)res.n_informative);
+      json_num(&j, "min_range_m", so.min_range_m);
+      json_num(&j, "max_range_m", so.max_range_m);
+      json_int(&j, "stride_cells", so.stride_cells);
       json_int(&j, "patch_cells", (long long)res.patch_cells);
       json_num(&j, "patch_m", res.patch_cells * w.dem.cell_m);
       json_num(&j, "cell_m", w.dem.cell_m);
