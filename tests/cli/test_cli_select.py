@@ -158,7 +158,7 @@ if "target" in sel:
     check(abs(rng - t["range_m"]) < 1e-4, f"target range_m {t['range_m']} is the distance {rng}")
     # the target is a cell centre of the map
     fc, fr = (t["x_m"] - X0) / CELL - 0.5, (Y0 + N * CELL - t["y_m"]) / CELL - 0.5
-    check(abs(fc - round(fc)) < 1e-6 and abs(fr - round(fr)) < 1e-6, "target on a cell centre")
+    check(abs(fc - round(fc)) < 1e-4 and abs(fr - round(fr)) < 1e-4, "target on a cell centre (to the micrometre)")
     check(abs(sel["uncertainty_m"] - math.hypot(sel["sigma_x_m"], sel["sigma_y_m"])) < 1e-9,
           "uncertainty_m = hypot(sigma_x, sigma_y)")
     check(-1 < sel["rho"] < 1, "rho in (-1, 1)")

@@ -298,17 +298,17 @@ int trn_cmd_field(int argc, char **argv) {
       double ax0, ay0, ax1, ay1;
       dem_cell_to_map(w.dem.gt, area.x0 - 0.5, area.y1 + 0.5, &ax0, &ay0);
       dem_cell_to_map(w.dem.gt, area.x1 + 0.5, area.y0 - 0.5, &ax1, &ay1);
-      json_num(&j, "x0_m", ax0);
-      json_num(&j, "y0_m", ay0);
-      json_num(&j, "x1_m", ax1);
-      json_num(&j, "y1_m", ay1);
+      json_num(&j, "x0_m", selmap_um(ax0));
+      json_num(&j, "y0_m", selmap_um(ay0));
+      json_num(&j, "x1_m", selmap_um(ax1));
+      json_num(&j, "y1_m", selmap_um(ay1));
     }
     json_obj_end(&j);
     json_int(&j, "cells", (long long)stats.cells);
     json_int(&j, "evaluations", (long long)stats.evaluations);
     json_obj(&j, "best");
-    json_num(&j, "x_m", bx);
-    json_num(&j, "y_m", by);
+    json_num(&j, "x_m", selmap_um(bx));
+    json_num(&j, "y_m", selmap_um(by));
     json_num(&j, "uncertainty_m", vmin);
     json_obj_end(&j);
     json_num(&j, "median_uncertainty_m", vmed);

@@ -25,8 +25,8 @@
 static void target_json(json_t *j, const selmap_t *w, const trn_candidate_t *c) {
   double x, y;
   dem_cell_to_map(w->dem.gt, (double)c->x, (double)c->y, &x, &y);
-  json_num(j, "x_m", x);
-  json_num(j, "y_m", y);
+  json_num(j, "x_m", selmap_um(x));
+  json_num(j, "y_m", selmap_um(y));
   json_num(j, "range_m", (double)c->range_m);
   json_num(j, "bearing_deg", -(double)c->bearing_rad * 180.0 / PI + 0.0);
   json_num(j, "sigma_x_m", c->sigma_x_m);
@@ -157,8 +157,8 @@ int trn_cmd_select(int argc, char **argv) {
       json_t j;
       json_begin(&j, stdout);
       json_obj(&j, "target");
-      json_num(&j, "x_m", tx);
-      json_num(&j, "y_m", ty);
+      json_num(&j, "x_m", selmap_um(tx));
+      json_num(&j, "y_m", selmap_um(ty));
       json_num(&j, "range_m", (double)b->range_m);
       json_num(&j, "bearing_deg", -(double)b->bearing_rad * 180.0 / PI + 0.0);
       json_obj_end(&j);
@@ -189,8 +189,8 @@ int trn_cmd_select(int argc, char **argv) {
       json_arr(&j, "sensors");
       for (i = 0; i < w.n_sensors; ++i) {
         json_obj(&j, NULL);
-        json_num(&j, "x_m", w.sensors_m[i][0]);
-        json_num(&j, "y_m", w.sensors_m[i][1]);
+        json_num(&j, "x_m", selmap_um(w.sensors_m[i][0]));
+        json_num(&j, "y_m", selmap_um(w.sensors_m[i][1]));
         json_obj_end(&j);
       }
       json_arr_end(&j);

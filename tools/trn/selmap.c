@@ -18,6 +18,8 @@ void *selmap_alloc16(size_t n, void **raw) {
   return p + ((16u - ((uintptr_t)p & 15u)) & 15u);
 }
 
+double selmap_um(double v_m) { return isfinite(v_m) ? floor(v_m * 1e6 + 0.5) / 1e6 : v_m; }
+
 double selmap_rho_en(double rho_grid) {
   if (!isfinite(rho_grid)) {
     return rho_grid;

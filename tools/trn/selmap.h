@@ -63,6 +63,10 @@ void selmap_free(selmap_t *w);
 /* 16-byte aligned block; free with free(raw). */
 void *selmap_alloc16(size_t n, void **raw);
 
+/* A map coordinate for printing: rounded to the micrometre, so a cell centre
+ * prints as 2019.45, not 2019.4499999999998. */
+double selmap_um(double v_m);
+
 /* Core correlation (column, row) -> east-north (sign flipped, no -0). */
 double selmap_rho_en(double rho_grid);
 
