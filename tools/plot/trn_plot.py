@@ -11,6 +11,13 @@ axes are map metres from the raster's geotransform (x east, y north). Needs
 Debian's python3-matplotlib, python3-numpy and python3-gdal
 (`bash tools/setup.sh plot`); run with /usr/bin/python3.
 
+Selection figures (`trn select --json`, `--out-map`; `trn field`):
+
+    trn_plot.py select      DEM.tif --select-json SEL.json --out select.png
+    trn_plot.py uncertainty DEM.tif CANDIDATES.tif [--select-json SEL.json] [--clip PCT] --out fig2b.png
+    trn_plot.py field       DEM.tif FIELD.tif [--evaluated EV.tif] [--field-json F.json] --out fig3.png
+    trn_plot.py surface     DEM.tif --select-json SEL.json --out fig2c.png
+
 Adding a figure: write `def fig_NAME(args)` that returns a matplotlib Figure,
 and `def add_NAME(sub)` that adds its subparser; list it in FIGURES. The
 shared pieces are read_raster (heights + extent), add_markers (rover, target,
@@ -260,6 +267,23 @@ def add_raster(sub):
     return p
 
 
+FIGURES = {"dem": (add_dem, fig_dem), "surface": (add_surface, fig_surface), "raster": (add_raster, fig_raster)}
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="trn_plot.py", description="Figures from the trn command line's outputs.")
+    sub = ap.add_subparsers(dest="figure", required=True, metavar="FIGURE")
+    for name, (add, _) in FIGURES.items():
+        p = add(sub)
+        p.add_argument("--out", required=True, metavar="PNG", help="image to write")
+        p.add_argument("--title", help="figure title")
+        p.add_argument("--dpi", type=int, default=120, help="resolution (default 120)")
+    args = ap.parse_args(argv)
+    fig = FIGURES[args.figure][1](args)
+    save(fig, args.out, args.dpi)
+    return 0
+
+
 # ---------------------------------------------------------------------------
 # landmark selection figures (trn select / trn field)
 # ---------------------------------------------------------------------------
@@ -464,24 +488,9 @@ def add_field(sub):
     return p
 
 
-FIGURES = {"dem": (add_dem, fig_dem), "surface": (add_surface, fig_surface), "raster": (add_raster, fig_raster)}
+
 FIGURES.update({"select": (add_select, fig_select), "uncertainty": (add_uncertainty, fig_uncertainty),
                 "field": (add_field, fig_field)})
-
-
-def main(argv=None):
-    ap = argparse.ArgumentParser(prog="trn_plot.py", description="Figures from the trn command line's outputs.")
-    sub = ap.add_subparsers(dest="figure", required=True, metavar="FIGURE")
-    for name, (add, _) in FIGURES.items():
-        p = add(sub)
-        p.add_argument("--out", required=True, metavar="PNG", help="image to write")
-        p.add_argument("--title", help="figure title")
-        p.add_argument("--dpi", type=int, default=120, help="resolution (default 120)")
-    args = ap.parse_args(argv)
-    fig = FIGURES[args.figure][1](args)
-    save(fig, args.out, args.dpi)
-    return 0
-
 
 if __name__ == "__main__":
     sys.exit(main())
