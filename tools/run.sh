@@ -5,7 +5,7 @@
 #   1. trn terrain     256 x 256 cells of 0.1 m, Golombek & Rapp rocks     terrain.tif
 #   2. trn select      rover at the map's centre: the landmark to sense     select.json, candidates.tif
 #   3. trn field       the sensor uncertainty field over the whole map      field.json, field.tif, evaluated.tif
-#   4. trn experiment  selection vs no selection (only if `trn experiment` exists)   experiment.json
+#   4. trn experiment  selection vs no selection, same terrain (if `trn experiment` exists)  experiment.json
 #   5. figures         tools/plot/trn_plot.py                               *.png
 #
 # then prints where the files are and a short summary. tools/setup.sh installs the packages
@@ -71,7 +71,7 @@ step "3/5 field (every rover position of the map, coarse to fine; about a minute
 step "4/5 experiment"
 EXPERIMENT=no
 if "$T" experiment --help > /dev/null 2>&1; then
-  "$T" experiment --trials "$TRIALS" --json > experiment.json
+  "$T" experiment --trials "$TRIALS" --seed "$SEED" --json > experiment.json
   EXPERIMENT=yes
 else
   rm -f experiment.json
@@ -123,8 +123,10 @@ if os.path.exists(os.path.join(out, "experiment.json")):
         ci = r.get("ci95")
         ci = f" (95 % CI {100 * ci[0]:.0f}-{100 * ci[1]:.0f} %)" if isinstance(ci, list) and len(ci) == 2 else ""
         return f"{100 * r.get('success_rate', float('nan')):.0f} %{ci}"
-    print(f"experiment   {e.get('trials')} trials: localized with selection {rate(w)}, "
-          f"without {rate(wo)}     experiment.json")
+    print(f"experiment   {e.get('trials')} trials (seed {e.get('seed')}): localized with selection {rate(w)}, "
+          f"without {rate(wo)}")
+    cm = lambda r: f"{100 * r['mean_error_m']:.1f} cm" if isinstance(r.get("mean_error_m"), (int, float)) else "-"
+    print(f"             mean error of the successes: {cm(w)} with selection, {cm(wo)} without   experiment.json")
 else:
     print("experiment   skipped (no `trn experiment` in this build)")
 pngs = sorted(n for n in os.listdir(out) if n.endswith(".png"))
