@@ -306,6 +306,27 @@ def hillshade(ax, r, alpha=1.0):
               interpolation="bilinear")
 
 
+def posinf_mask(path):
+    """Cells holding +inf (ill-conditioned candidate, no informative target), north-up like read_raster."""
+    ds = gdal.Open(path)  # keep the dataset alive while its band is read
+    raw = ds.GetRasterBand(1).ReadAsArray()
+    gt = ds.GetGeoTransform()
+    ds = None
+    if gt[5] > 0:
+        raw = raw[::-1, :]
+    if gt[1] < 0:
+        raw = raw[:, ::-1]
+    return np.isposinf(raw)
+
+
+def draw_posinf(ax, mask, extent, label):
+    """+inf cells in one flat colour, with a legend entry."""
+    if mask.any():
+        ax.imshow(np.ma.masked_where(~mask, np.ones(mask.shape)), extent=extent, origin="upper",
+                  cmap=matplotlib.colors.ListedColormap(["#ff4fa3"]), interpolation="nearest", alpha=0.9)
+        ax.scatter([], [], marker="s", c="#ff4fa3", label=label)
+
+
 def selection_overlay(ax, sel, patch=True, reach=True, next_best=True):
     """Rover, range ring, selected target (with its patch) and next-best targets from `trn select --json`."""
     rx, ry = sel["rover"]["x_m"], sel["rover"]["y_m"]
@@ -398,15 +419,7 @@ def fig_uncertainty(args):
     """Predicted uncertainty of every candidate target over the DEM (the paper's Fig. 2b)."""
     r = read_raster(args.dem)
     u = read_raster(args.map)
-    # read_raster turns +inf into NaN; read the raw band again for the ill-conditioned candidates
-    ds = gdal.Open(args.map)  # keep the dataset alive while its band is read
-    raw = ds.GetRasterBand(1).ReadAsArray()
-    gt = ds.GetGeoTransform()
-    ds = None
-    if gt[5] > 0:
-        raw = raw[::-1, :]
-    if gt[1] < 0:
-        raw = raw[:, ::-1]
+    inf = posinf_mask(args.map)  # read_raster turns +inf into NaN
     fig, ax = plt.subplots(figsize=(7.5, 6.5))
     hillshade(ax, r)
     v = u.z
@@ -417,15 +430,11 @@ def fig_uncertainty(args):
     cmap.set_over("#3b0f70")
     im = ax.imshow(np.ma.masked_invalid(v), extent=u.extent, origin="upper", cmap=cmap, norm=norm[0],
                    interpolation="nearest", alpha=0.9)
-    inf = np.ma.masked_where(~np.isposinf(raw), np.ones_like(raw))
-    if inf.count():
-        ax.imshow(inf, extent=u.extent, origin="upper", cmap=matplotlib.colors.ListedColormap(["#ff4fa3"]),
-                  interpolation="nearest", alpha=0.9)
-        ax.scatter([], [], marker="s", c="#ff4fa3", label="no fix (featureless patch)")
+    draw_posinf(ax, inf, u.extent, "no fix (featureless patch)")
     uncertainty_colorbar(fig, ax, im, norm, "predicted uncertainty √(σx²+σy²)")
     if args.select_json:
         selection_overlay(ax, read_json(args.select_json), patch=False, next_best=False)
-    elif inf.count():
+    elif inf.any():
         ax.legend(loc="upper right", fontsize=8, framealpha=0.85)
     map_axes(ax, r)
     n = int(np.isfinite(v).sum())
@@ -457,6 +466,7 @@ def fig_field(args):
     im = ax.imshow(np.ma.masked_invalid(v), extent=f.extent, origin="upper", cmap=cmap, norm=norm[0],
                    interpolation="bilinear", alpha=0.75)
     uncertainty_colorbar(fig, ax, im, norm, "uncertainty of the best landmark")
+    draw_posinf(ax, posinf_mask(args.field), f.extent, "no informative target")
     if args.evaluated:
         e = read_raster(args.evaluated)
         x, y = e.centres()
