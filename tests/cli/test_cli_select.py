@@ -208,6 +208,17 @@ sel_asc = run_json("select", "--dem", g_asc, "--rover", f"{rover[0]},{rover[1]}"
 check(sel_asc.get("target") == sel.get("target") and sel_asc.get("uncertainty_m") == sel.get("uncertainty_m"),
       "select: AAIGrid gives the GeoTIFF's answer")
 
+# a CRS on the input is kept on the outputs
+g_crs = p("global_utm.tif")
+gdal.Translate(g_crs, g_tif, outputSRS="EPSG:32611")
+rc, out, err = run("select", "--dem", g_crs, "--rover", f"{rover[0]},{rover[1]}", *SMALL, "--out-map", p("cand_utm.tif"))
+rc2, out2, err2 = run("field", "--dem", g_crs, "--out", p("field_utm.tif"), *SMALL, "--area-m",
+                      "1004,2004,1005,2005", "--coarse-step-cells", "4")
+for path, ok in ((p("cand_utm.tif"), rc == 0), (p("field_utm.tif"), rc2 == 0)):
+    ds = gdal.Open(path) if ok else None
+    check(ds is not None and "UTM zone 11N" in ds.GetProjection(), f"{path} keeps the input's CRS ({err}{err2})")
+    ds = None
+
 # more sensing positions change the prediction (eq. 8)
 sel2 = run_json("select", "--dem", g_tif, "--rover", f"{rover[0]},{rover[1]}", *SMALL, "--json",
                 "--sensors", "1000,2000;1009.6,2009.6")
