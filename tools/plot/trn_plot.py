@@ -13,6 +13,13 @@ axes are map metres from the raster's geotransform (x east, y north). Needs
 Debian's python3-matplotlib, python3-numpy and python3-gdal
 (`bash tools/setup.sh plot`); run with /usr/bin/python3.
 
+Selection figures (`trn select --json`, `--out-map`; `trn field`):
+
+    trn_plot.py select      DEM.tif --select-json SEL.json --out select.png
+    trn_plot.py uncertainty DEM.tif CANDIDATES.tif [--select-json SEL.json] [--clip PCT] --out fig2b.png
+    trn_plot.py field       DEM.tif FIELD.tif [--evaluated EV.tif] [--field-json F.json] --out fig3.png
+    trn_plot.py surface     DEM.tif --select-json SEL.json --out fig2c.png
+
 Adding a figure: write `def fig_NAME(args)` that returns a matplotlib Figure,
 and `def add_NAME(sub)` that adds its subparser; list it in FIGURES. The
 shared pieces are read_raster (heights + extent), add_markers (rover, target,
@@ -26,6 +33,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.patches  # noqa: E402
 import matplotlib.ticker  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.colors import LightSource  # noqa: E402
@@ -206,6 +214,20 @@ def fig_surface(args):
     ax.set_box_aspect((xr, yr, zr * args.zscale))
     ax.view_init(elev=args.elev, azim=args.azim)
     ax.ticklabel_format(useOffset=False, style="plain")
+    if getattr(args, "select_json", None):  # rover and selected target, on stalks above the ground
+        sel = read_json(args.select_json)
+        top = np.nanmax(zs) + 0.6 * zr
+        ax.computed_zorder = False  # draw the markers over the surface
+        for key, m, c, sz, label in (("rover", "o", "#ff2d2d", 60, "rover"),
+                                     ("target", "*", "#00e5ff", 220, "selected target")):
+            px, py = sel[key]["x_m"], sel[key]["y_m"]
+            col = int(np.clip(np.searchsorted(x, px), 0, x.size - 1))
+            row = int(np.clip(np.searchsorted(-y, -py), 0, y.size - 1))
+            ground = z[row, col] if np.isfinite(z[row, col]) else np.nanmin(zs)
+            ax.plot([px, px], [py, py], [ground, top], color=c, lw=1.5, zorder=10)
+            ax.scatter([px], [py], [top], marker=m, c=c, s=sz, edgecolors="black", label=label, zorder=11,
+                       depthshade=False)
+        ax.legend(loc="upper left", fontsize=8)
     ax.set_title(args.title or f"{args.dem.split('/')[-1]} (heights x{args.zscale:g})")
     return fig
 
@@ -217,6 +239,7 @@ def add_surface(sub):
     p.add_argument("--elev", type=float, default=35.0, help="view elevation, degrees (default 35)")
     p.add_argument("--azim", type=float, default=-60.0, help="view azimuth, degrees (default -60)")
     p.add_argument("--max-cells", type=int, default=256, help="largest side drawn; coarser grids are subsampled")
+    p.add_argument("--select-json", metavar="FILE", help="output of `trn select --json`: marks rover and target")
     return p
 
 
@@ -386,6 +409,224 @@ def main(argv=None):
     save(fig, args.out, args.dpi)
     return 0
 
+
+# ---------------------------------------------------------------------------
+# landmark selection figures (trn select / trn field)
+# ---------------------------------------------------------------------------
+def read_json(path):
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except (OSError, ValueError) as e:
+        sys.exit(f"trn_plot: cannot read JSON '{path}': {e}")
+
+
+def hillshade(ax, r, alpha=1.0):
+    """Grey shaded relief of DEM r as a background; missing heights white."""
+    z = r.z
+    valid = np.isfinite(z)
+    filled = np.where(valid, z, np.nanmin(z) if valid.any() else 0.0)
+    hs = LightSource(azdeg=315, altdeg=40).hillshade(filled, vert_exag=2.0, dx=r.cell, dy=r.cell)
+    hs = np.where(valid, hs, 1.0)
+    ax.imshow(hs, extent=r.extent, origin="upper", cmap="gray", vmin=0, vmax=1, alpha=alpha,
+              interpolation="bilinear")
+
+
+def posinf_mask(path):
+    """Cells holding +inf (ill-conditioned candidate, no informative target), north-up like read_raster."""
+    ds = gdal.Open(path)  # keep the dataset alive while its band is read
+    raw = ds.GetRasterBand(1).ReadAsArray()
+    gt = ds.GetGeoTransform()
+    ds = None
+    if gt[5] > 0:
+        raw = raw[::-1, :]
+    if gt[1] < 0:
+        raw = raw[:, ::-1]
+    return np.isposinf(raw)
+
+
+def draw_posinf(ax, mask, extent, label):
+    """+inf cells in one flat colour, with a legend entry."""
+    if mask.any():
+        ax.imshow(np.ma.masked_where(~mask, np.ones(mask.shape)), extent=extent, origin="upper",
+                  cmap=matplotlib.colors.ListedColormap(["#ff4fa3"]), interpolation="nearest", alpha=0.9)
+        ax.scatter([], [], marker="s", c="#ff4fa3", label=label)
+
+
+def selection_overlay(ax, sel, patch=True, reach=True, next_best=True):
+    """Rover, range ring, selected target (with its patch) and next-best targets from `trn select --json`."""
+    rx, ry = sel["rover"]["x_m"], sel["rover"]["y_m"]
+    tx, ty = sel["target"]["x_m"], sel["target"]["y_m"]
+    half = 0.5 * sel.get("patch_m", 0.0)
+    if reach and "max_range_m" in sel:
+        ax.add_patch(matplotlib.patches.Circle((rx, ry), sel["max_range_m"], fill=False, ls="--", lw=1.0,
+                                               ec="white", alpha=0.8, zorder=4))
+    if next_best:
+        nb = sel.get("next_best", [])
+        for i, t in enumerate(nb):
+            if patch:
+                ax.add_patch(matplotlib.patches.Rectangle((t["x_m"] - half, t["y_m"] - half), 2 * half, 2 * half,
+                                                          fill=False, ec="#ffb000", lw=1.0, zorder=4))
+            ax.annotate(str(i + 2), (t["x_m"], t["y_m"]), color="#ffb000", fontsize=9, fontweight="bold",
+                        ha="center", va="center", zorder=6)
+        if nb:
+            ax.scatter([], [], marker="s", facecolors="none", edgecolors="#ffb000", s=80,
+                       label=f"next best ({len(nb)}, numbered)")
+    if patch:
+        ax.add_patch(matplotlib.patches.Rectangle((tx - half, ty - half), 2 * half, 2 * half, fill=False,
+                                                  ec="#00e5ff", lw=2.0, zorder=5))
+    ax.plot([rx, tx], [ry, ty], color="#00e5ff", lw=1.0, ls=":", zorder=5)
+    ax.scatter([rx], [ry], marker="o", c="#ff2d2d", s=70, edgecolors="black", label="rover", zorder=7)
+    ax.scatter([tx], [ty], marker="*", c="#00e5ff", s=260, edgecolors="black",
+               label=f"selected target ({1000 * sel['uncertainty_m']:.1f} mm)", zorder=7)
+    ax.legend(loc="upper right", fontsize=8, framealpha=0.85)
+
+
+def log_colorbar_ticks(cb):
+    """Plain numbers on a log colour bar: decades and their 2x, 3x, 5x multiples."""
+    def fmt(x, _):
+        m = x / 10 ** np.floor(np.log10(x) + 1e-9)
+        return f"{x:.3g}" if min(abs(m - k) for k in (1, 2, 3, 5)) < 1e-6 else ""
+    cb.ax.yaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(fmt))
+    cb.ax.yaxis.set_minor_formatter(matplotlib.ticker.FuncFormatter(fmt))
+
+
+def uncertainty_norm(v, clip_pct):
+    """Colour scale from the smallest value to the clip_pct percentile (values above saturate):
+    logarithmic when that spans a factor 3 or more, linear otherwise. Returns (norm, scale word)."""
+    f = v[np.isfinite(v)]
+    lo = float(f.min())
+    hi = float(np.percentile(f, clip_pct))
+    if hi <= lo * 1.01:
+        hi = lo * 1.01 + 1e-12
+    if hi >= 3 * lo:
+        return matplotlib.colors.LogNorm(vmin=lo, vmax=hi), "log"
+    return matplotlib.colors.Normalize(vmin=lo, vmax=hi), "linear"
+
+
+def uncertainty_colorbar(fig, ax, im, norm, label):
+    cb = fig.colorbar(im, ax=ax, shrink=0.8, extend="max", label=f"{label} (m, {norm[1]} scale)")
+    if norm[1] == "log":
+        log_colorbar_ticks(cb)
+    return cb
+
+
+def fig_select(args):
+    """The DEM with the rover, the selected target, its patch and the next-best targets."""
+    r = read_raster(args.dem)
+    sel = read_json(args.select_json)
+    fig, ax = plt.subplots(figsize=(7.5, 6.5))
+    z = r.z
+    lo, hi = np.nanpercentile(z, [1, 99.5])
+    valid = np.isfinite(z)
+    rgb = LightSource(azdeg=315, altdeg=40).shade(np.where(valid, z, np.nanmin(z)), cmap=plt.get_cmap("gist_earth"),
+                                                   vmin=lo, vmax=hi, vert_exag=2.0, dx=r.cell, dy=r.cell,
+                                                   blend_mode="overlay")
+    rgb[~valid] = (0.6, 0.6, 0.6, 1.0)
+    ax.imshow(rgb, extent=r.extent, origin="upper", interpolation="nearest")
+    fig.colorbar(plt.cm.ScalarMappable(cmap="gist_earth", norm=plt.Normalize(lo, hi)), ax=ax, shrink=0.8,
+                 label="height (m)")
+    selection_overlay(ax, sel)
+    map_axes(ax, r)
+    ax.set_title(args.title or
+                 f"Landmark selection: target at {sel['target']['range_m']:.1f} m, predicted "
+                 f"σx {1000 * sel['sigma_x_m']:.1f} mm, σy {1000 * sel['sigma_y_m']:.1f} mm", fontsize=10)
+    return fig
+
+
+def add_select(sub):
+    p = sub.add_parser("select", help="DEM with rover, selected target and next-best targets (trn select --json)")
+    p.add_argument("dem", help="DEM (any GDAL raster)")
+    p.add_argument("--select-json", required=True, metavar="FILE", help="output of `trn select --json`")
+    return p
+
+
+def fig_uncertainty(args):
+    """Predicted uncertainty of every candidate target over the DEM (the paper's Fig. 2b)."""
+    r = read_raster(args.dem)
+    u = read_raster(args.map)
+    inf = posinf_mask(args.map)  # read_raster turns +inf into NaN
+    fig, ax = plt.subplots(figsize=(7.5, 6.5))
+    hillshade(ax, r)
+    v = u.z
+    if not np.isfinite(v).any():
+        sys.exit(f"trn_plot: '{args.map}' has no finite uncertainty")
+    norm = uncertainty_norm(v, args.clip)
+    cmap = plt.get_cmap("viridis_r").copy()
+    cmap.set_over("#3b0f70")
+    im = ax.imshow(np.ma.masked_invalid(v), extent=u.extent, origin="upper", cmap=cmap, norm=norm[0],
+                   interpolation="nearest", alpha=0.9)
+    draw_posinf(ax, inf, u.extent, "no fix (featureless patch)")
+    uncertainty_colorbar(fig, ax, im, norm, "predicted uncertainty √(σx²+σy²)")
+    if args.select_json:
+        selection_overlay(ax, read_json(args.select_json), patch=False, next_best=False)
+    elif inf.any():
+        ax.legend(loc="upper right", fontsize=8, framealpha=0.85)
+    map_axes(ax, r)
+    n = int(np.isfinite(v).sum())
+    ax.set_title(args.title or f"Predicted uncertainty of each candidate target ({n} informative;\n"
+                 f"colours saturate above the {args.clip:g}th percentile)", fontsize=10)
+    return fig
+
+
+def add_uncertainty(sub):
+    p = sub.add_parser("uncertainty", help="per-candidate uncertainty (trn select --out-map) over the DEM (Fig. 2b)")
+    p.add_argument("dem", help="DEM (any GDAL raster)")
+    p.add_argument("map", help="uncertainty map from `trn select --out-map`")
+    p.add_argument("--select-json", metavar="FILE", help="output of `trn select --json`: marks rover and target")
+    p.add_argument("--clip", type=float, default=95.0, help="colour scale top, percentile (default 95)")
+    return p
+
+
+def fig_field(args):
+    """The sensor uncertainty field (the paper's Fig. 3) over the DEM, its minimum marked."""
+    r = read_raster(args.dem)
+    f = read_raster(args.field)
+    v = f.z
+    if not np.isfinite(v).any():
+        sys.exit(f"trn_plot: '{args.field}' has no finite value")
+    fig, ax = plt.subplots(figsize=(7.5, 6.5))
+    hillshade(ax, r)
+    norm = uncertainty_norm(v, args.clip)
+    cmap = plt.get_cmap("magma_r").copy()
+    im = ax.imshow(np.ma.masked_invalid(v), extent=f.extent, origin="upper", cmap=cmap, norm=norm[0],
+                   interpolation="bilinear", alpha=0.75)
+    uncertainty_colorbar(fig, ax, im, norm, "uncertainty of the best landmark")
+    draw_posinf(ax, posinf_mask(args.field), f.extent, "no informative target")
+    if args.evaluated:
+        e = read_raster(args.evaluated)
+        x, y = e.centres()
+        rows, cols = np.nonzero(e.z > 0.5)
+        ax.scatter(x[cols], y[rows], s=1.0, c="#1f5fbf", alpha=0.4, linewidths=0,
+                   label=f"evaluated positions ({rows.size})")
+    i = np.nanargmin(v)
+    row, col = np.unravel_index(i, v.shape)
+    x, y = f.centres()
+    ax.scatter([x[col]], [y[row]], marker="*", s=260, c="#00e5ff", edgecolors="black", zorder=6,
+               label=f"best rover position ({1000 * v[row, col]:.1f} mm)")
+    ax.legend(loc="upper right", fontsize=8, framealpha=0.85, markerscale=1.0)
+    map_axes(ax, r)
+    info = ""
+    if args.field_json:
+        fj = read_json(args.field_json)
+        info = f": {fj['evaluations']} of {fj['cells']} positions evaluated"
+    ax.set_title(args.title or f"Sensor uncertainty field{info}", fontsize=10)
+    return fig
+
+
+def add_field(sub):
+    p = sub.add_parser("field", help="sensor uncertainty field (trn field) over the DEM (Fig. 3)")
+    p.add_argument("dem", help="DEM (any GDAL raster)")
+    p.add_argument("field", help="field from `trn field --out`")
+    p.add_argument("--evaluated", metavar="FILE", help="`trn field --evaluated-out` map: dots where computed")
+    p.add_argument("--field-json", metavar="FILE", help="output of `trn field --json` (evaluations in the title)")
+    p.add_argument("--clip", type=float, default=99.0, help="colour scale top, percentile (default 99)")
+    return p
+
+
+
+FIGURES.update({"select": (add_select, fig_select), "uncertainty": (add_uncertainty, fig_uncertainty),
+                "field": (add_field, fig_field)})
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -312,6 +312,22 @@ void json_obj_end(json_t *j) {
   }
 }
 
+void json_arr(json_t *j, const char *key) {
+  json_key(j, key);
+  fputc('[', j->out);
+  if (j->depth + 1 < (int)(sizeof j->first / sizeof j->first[0])) {
+    j->depth++;
+  }
+  j->first[j->depth] = 1;
+}
+
+void json_arr_end(json_t *j) {
+  fputc(']', j->out);
+  if (j->depth > 0) {
+    j->depth--;
+  }
+}
+
 void json_str(json_t *j, const char *key, const char *v) {
   json_key(j, key);
   json_write_string(j->out, v);

@@ -82,6 +82,10 @@ void json_begin(json_t *j, FILE *out);          /* "{" */
 void json_end(json_t *j);                       /* "}\n" */
 void json_obj(json_t *j, const char *key);      /* "key": { */
 void json_obj_end(json_t *j);                   /* } */
+/* Arrays: json_arr(j, "key") "[", elements with key NULL (json_obj(j, NULL),
+ * json_num(j, NULL, v) ...), json_arr_end "]". */
+void json_arr(json_t *j, const char *key);
+void json_arr_end(json_t *j);
 void json_str(json_t *j, const char *key, const char *v);
 void json_num(json_t *j, const char *key, double v); /* non-finite -> null */
 void json_int(json_t *j, const char *key, long long v);

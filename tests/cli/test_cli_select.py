@@ -1,0 +1,368 @@
+#!/usr/bin/env python3
+"""tests/cli/test_cli_select.py - `trn select` and `trn field` end to end (CTest `cli_select`).
+
+    python3 tests/cli/test_cli_select.py PATH/TO/trn WORKDIR
+
+Oracles: an elongated rock at a known map position and orientation (the
+selected target must cover it; a ridge running north-east must give a positive
+east-north correlation, north-west a negative one, east-west a larger sigma_x,
+north-south a larger sigma_y: the frame conversion checked absolutely); the
+pan limits relative to a heading (targets in the right half-plane); the
+per-candidate GeoTIFF against the JSON; the field at evaluated positions equal
+to `trn select` at the same position; the same answers from a second GDAL
+format; each bad-input class with its exit status and one-line message.
+Maps are small (96 x 96 cells) with a short reach so the ASan build stays fast.
+"""
+import json
+import math
+import os
+import pty
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+from osgeo import gdal
+
+gdal.UseExceptions()
+
+TRN = os.path.abspath(sys.argv[1])
+WORK = os.path.abspath(sys.argv[2])
+failures = []
+checks = 0
+
+
+def check(cond, what):
+    global checks
+    checks += 1
+    if not cond:
+        failures.append(what)
+        print("FAIL:", what)
+
+
+def run(*args):
+    p = subprocess.run([TRN] + [str(a) for a in args], capture_output=True, text=True, timeout=600)
+    return p.returncode, p.stdout, p.stderr
+
+
+def expect_error(rc_want, needle, *args):
+    """Exit code, exactly one stderr line `trn <cmd>: ...` holding needle, no stdout."""
+    rc, out, err = run(*args)
+    label = "trn " + " ".join(str(a) for a in args)
+    check(rc == rc_want, f"{label}: exit {rc}, want {rc_want} (stderr: {err.strip()!r})")
+    check(len(err.splitlines()) == 1, f"{label}: want one stderr line: {err!r}")
+    check(err.startswith(f"trn {args[0]}: "), f"{label}: message does not start with 'trn {args[0]}: ': {err!r}")
+    check(needle in err, f"{label}: message lacks {needle!r}: {err!r}")
+    check(out == "", f"{label}: stdout not empty: {out!r}")
+
+
+def run_json(*args):
+    rc, out, err = run(*args)
+    label = "trn " + " ".join(str(a) for a in args)
+    check(rc == 0, f"{label}: exit {rc}: {err.strip()}")
+    try:
+        obj = json.loads(out)
+    except ValueError:
+        check(False, f"{label}: stdout is not one JSON object: {out!r}")
+        return {}
+    check(out.count("\n") == 1, f"{label}: JSON is not one line")
+    return obj
+
+
+def write_raster(path, arr, gt, fmt="GTiff"):
+    mem = gdal.GetDriverByName("MEM").Create("", arr.shape[1], arr.shape[0], 1, gdal.GDT_Float32)
+    mem.SetGeoTransform(gt)
+    mem.GetRasterBand(1).WriteArray(arr.astype(np.float32))
+    gdal.GetDriverByName(fmt).CreateCopy(path, mem)
+    mem = None
+
+
+def read(path):
+    ds = gdal.Open(path)
+    arr = ds.GetRasterBand(1).ReadAsArray().astype(np.float64)
+    gt = ds.GetGeoTransform()
+    ds = None
+    return gt, arr
+
+
+def p(name):
+    return os.path.join(WORK, name)
+
+
+shutil.rmtree(WORK, ignore_errors=True)
+os.makedirs(WORK)
+
+N, CELL = 96, 0.1
+X0, Y0 = 1000.0, 2000.0  # south-west corner: a georeferenced map not at 0,0
+GT = (X0, CELL, 0.0, Y0 + N * CELL, 0.0, -CELL)
+SMALL = ["--max-range-m", "3", "--patch-m", "1", "--separation-m", "0.5"]  # short reach: quick under ASan
+
+for cmd in ("select", "field"):
+    rc, out, err = run(cmd, "--help")
+    check(rc == 0 and out.startswith(f"usage: trn {cmd}") and err == "", f"trn {cmd} --help")
+rc, out, err = run("--help")
+check(rc == 0 and "select" in out and "field" in out, "trn --help lists select and field")
+
+# ---- frames: an elongated rock of known orientation ------------------------
+# A 1.2 m x 0.24 m block, 0.3 m high, centred at map (1004.8, 2006.0), on
+# flat ground; the rover 3 m south looks north (heading 90) through a narrow
+# pan, so the candidates are the patches over the rock.
+ROCK = (1004.8, 2006.0)
+ROVER = (1004.8, 2003.0)
+
+
+def block_dem(angle_deg):
+    row, col = np.mgrid[0:N, 0:N]
+    x = X0 + (col + 0.5) * CELL
+    y = Y0 + (N - (row + 0.5)) * CELL
+    a = math.radians(angle_deg)
+    u = (x - ROCK[0]) * math.cos(a) + (y - ROCK[1]) * math.sin(a)
+    v = -(x - ROCK[0]) * math.sin(a) + (y - ROCK[1]) * math.cos(a)
+    return np.where((np.abs(u) < 0.6) & (np.abs(v) < 0.12), 0.3, 0.0) + 0.05
+
+
+aim = ["--rover", f"{ROVER[0]},{ROVER[1]}", "--heading-deg", "90", "--pan-deg", "-5,5",
+       "--min-range-m", "2.8", "--max-range-m", "3.2", "--patch-m", "1.5", "--json"]
+res = {}
+for ang in (0, 90, 45, -45):
+    write_raster(p(f"block{ang}.tif"), block_dem(ang), GT)
+    r = run_json("select", "--dem", p(f"block{ang}.tif"), *aim)
+    res[ang] = r
+    if "target" in r:
+        d = math.hypot(r["target"]["x_m"] - ROCK[0], r["target"]["y_m"] - ROCK[1])
+        check(d < 0.5, f"block {ang} deg: target {r['target']} within 0.5 m of the rock ({d:.2f} m)")
+        check(abs(r["target"]["bearing_deg"]) <= 5.0 + 1e-6, f"block {ang}: bearing within the pan")
+        print(f"block {ang:4d} deg: sigma_x {r['sigma_x_m']:.4f} sigma_y {r['sigma_y_m']:.4f} rho {r['rho']:+.3f}")
+if all("rho" in res[a] for a in res):
+    check(res[0]["sigma_x_m"] > 1.5 * res[0]["sigma_y_m"], "east-west rock: sigma_x (along it) > sigma_y")
+    check(res[90]["sigma_y_m"] > 1.5 * res[90]["sigma_x_m"], "north-south rock: sigma_y (along it) > sigma_x")
+    check(res[45]["rho"] > 0.3, f"north-east rock: rho > 0 in the east-north frame ({res[45]['rho']})")
+    check(res[-45]["rho"] < -0.3, f"north-west rock: rho < 0 ({res[-45]['rho']})")
+    check(abs(res[45]["rho"] + res[-45]["rho"]) < 1e-9, "mirror images: opposite rho")
+
+# ---- select on a rocky terrain ------------------------------------------------
+g_tif = p("global.tif")
+rc, out, err = run("terrain", "--out", g_tif, "--size-cells", N, "--origin", f"{X0:g},{Y0:g}", "--coverage", "0.2",
+                   "--seed", "5")
+check(rc == 0, f"terrain for select: {err}")
+rover = (1004.85, 2004.75)
+sel = run_json("select", "--dem", g_tif, "--rover", f"{rover[0]},{rover[1]}", "--out-map", p("cand.tif"), *SMALL,
+               "--next-best", "4", "--json")
+for key in ("target", "sigma_x_m", "sigma_y_m", "rho", "uncertainty_m", "next_best", "candidates", "informative",
+            "rover", "patch_cells"):
+    check(key in sel, f"select --json has {key}")
+if "target" in sel:
+    t = sel["target"]
+    rng = math.hypot(t["x_m"] - rover[0], t["y_m"] - rover[1])
+    check(1.0 - 1e-6 <= rng <= 3.0 + 1e-6, f"target range {rng:.3f} m within 1..3 m")
+    check(abs(rng - t["range_m"]) < 1e-4, f"target range_m {t['range_m']} is the distance {rng}")
+    # the target is a cell centre of the map
+    fc, fr = (t["x_m"] - X0) / CELL - 0.5, (Y0 + N * CELL - t["y_m"]) / CELL - 0.5
+    check(abs(fc - round(fc)) < 1e-4 and abs(fr - round(fr)) < 1e-4, "target on a cell centre (to the micrometre)")
+    check(abs(sel["uncertainty_m"] - math.hypot(sel["sigma_x_m"], sel["sigma_y_m"])) < 1e-9,
+          "uncertainty_m = hypot(sigma_x, sigma_y)")
+    check(-1 < sel["rho"] < 1, "rho in (-1, 1)")
+    check(0 < sel["informative"] <= sel["candidates"], "informative <= candidates")
+    nb = sel["next_best"]
+    check(1 <= len(nb) <= 4, f"next_best has 1..4 entries ({len(nb)})")
+    us = [sel["uncertainty_m"]] + [q["uncertainty_m"] for q in nb]
+    check(all(a <= b for a, b in zip(us, us[1:])), f"ranked by uncertainty: {us}")
+    pts = [(t["x_m"], t["y_m"])] + [(q["x_m"], q["y_m"]) for q in nb]
+    check(all(math.hypot(a[0] - b[0], a[1] - b[1]) >= 0.5 - 1e-9 for i, a in enumerate(pts) for b in pts[:i]),
+          "ranked targets at least --separation-m apart")
+    # the per-candidate map: same grid, NaN = not a candidate, its minimum at the target
+    gt, m = read(p("cand.tif"))
+    check(all(abs(a - b) < 1e-9 for a, b in zip(gt, GT)), f"--out-map geotransform {gt}")
+    check(int((~np.isnan(m)).sum()) == sel["candidates"], "--out-map: one value per candidate")
+    check(int(np.isfinite(m).sum()) == sel["informative"], "--out-map: finite where informative, +inf otherwise")
+    col, row = int(round(fc)), int(round(fr))
+    check(abs(m[row, col] - sel["uncertainty_m"]) < 1e-6 * sel["uncertainty_m"], "--out-map at the target")
+    check(np.nanmin(np.where(np.isfinite(m), m, np.nan)) >= np.float32(sel["uncertainty_m"]) - 1e-9,
+          "--out-map: no candidate better than the target")
+rc, out, err = run("select", "--dem", g_tif, "--rover", f"{rover[0]},{rover[1]}", *SMALL)
+check(rc == 0 and out.startswith("rover") and "target" in out and "candidates" in out and err == "",
+      "select human summary")
+
+# heading and pan: looking east with +-60 deg, every ranked target lies east of the rover
+east = run_json("select", "--dem", g_tif, "--rover", f"{rover[0]},{rover[1]}", *SMALL, "--heading-deg", "0",
+                "--pan-deg", "-60,60", "--json")
+west = run_json("select", "--dem", g_tif, "--rover", f"{rover[0]},{rover[1]}", *SMALL, "--heading-deg", "180",
+                "--pan-deg", "-60,60", "--json")
+north = run_json("select", "--dem", g_tif, "--rover", f"{rover[0]},{rover[1]}", *SMALL, "--heading-deg", "90",
+                 "--pan-deg", "0,60", "--json")
+for name, r, ok in (("east", east, lambda x, y: x - rover[0] >= 0.5 * math.hypot(x - rover[0], y - rover[1])),
+                    ("west", west, lambda x, y: rover[0] - x >= 0.5 * math.hypot(x - rover[0], y - rover[1])),
+                    ("north, pan 0..60 (CCW: north-west)",
+                     north, lambda x, y: y > rover[1] and x <= rover[0] + 1e-9)):
+    if "target" in r:
+        pts = [(r["target"]["x_m"], r["target"]["y_m"])] + [(q["x_m"], q["y_m"]) for q in r["next_best"]]
+        check(all(ok(x, y) for x, y in pts), f"heading {name}: targets {pts}")
+check(east.get("candidates", 0) + west.get("candidates", 0) < 2 * sel.get("candidates", 0),
+      "pan limits reduce the candidates")
+
+# second GDAL format (ESRI ASCII grid), same answer
+g_asc = p("global.asc")
+gdal.Translate(g_asc, g_tif, format="AAIGrid")
+sel_asc = run_json("select", "--dem", g_asc, "--rover", f"{rover[0]},{rover[1]}", *SMALL, "--next-best", "4",
+                   "--json")
+check(sel_asc.get("target") == sel.get("target") and sel_asc.get("uncertainty_m") == sel.get("uncertainty_m"),
+      "select: AAIGrid gives the GeoTIFF's answer")
+
+# a CRS on the input is kept on the outputs
+g_crs = p("global_utm.tif")
+gdal.Translate(g_crs, g_tif, outputSRS="EPSG:32611")
+rc, out, err = run("select", "--dem", g_crs, "--rover", f"{rover[0]},{rover[1]}", *SMALL, "--out-map", p("cand_utm.tif"))
+rc2, out2, err2 = run("field", "--dem", g_crs, "--out", p("field_utm.tif"), *SMALL, "--area-m",
+                      "1004,2004,1005,2005", "--coarse-step-cells", "4")
+for path, ok in ((p("cand_utm.tif"), rc == 0), (p("field_utm.tif"), rc2 == 0)):
+    ds = gdal.Open(path) if ok else None
+    check(ds is not None and "UTM zone 11N" in ds.GetProjection(), f"{path} keeps the input's CRS ({err}{err2})")
+    ds = None
+
+# more sensing positions change the prediction (eq. 8)
+sel2 = run_json("select", "--dem", g_tif, "--rover", f"{rover[0]},{rover[1]}", *SMALL, "--json",
+                "--sensors", "1000,2000;1009.6,2009.6")
+check(len(sel2.get("sensors", [])) == 2, "--sensors: two sensing positions reported")
+
+# ---- select: featureless terrain and no candidate: exit 3 -----------------------
+write_raster(p("flat.tif"), np.zeros((N, N)), GT)
+expect_error(3, "no informative target", "select", "--dem", p("flat.tif"), "--rover", "1004.8,2004.8", *SMALL)
+expect_error(3, "no candidate lies within reach", "select", "--dem", g_tif, "--rover", "1004.8,2004.8",
+             "--min-range-m", "20", "--max-range-m", "30")
+
+# ---- select: bad input ----------------------------------------------------------
+R = ["--rover", f"{rover[0]},{rover[1]}"]
+expect_error(1, "--dem: cannot read", "select", "--dem", p("missing.tif"), *R)
+with open(p("notes.txt"), "w") as f:
+    f.write("not a raster\n")
+expect_error(1, "--dem: cannot read", "select", "--dem", p("notes.txt"), *R)
+expect_error(1, "has 1 band, no band 2", "select", "--dem", g_tif, "--band", "2", *R)
+expect_error(1, "is off the map", "select", "--dem", g_tif, "--rover", "0,0")
+expect_error(1, "is off the map", "select", "--dem", g_tif, "--rover", f"{X0 + N * CELL + 0.01},{Y0 + 1}")
+expect_error(1, "--rover: '1004' is not a pair", "select", "--dem", g_tif, "--rover", "1004")
+expect_error(1, "--max-range-m: -1 is out of range", "select", "--dem", g_tif, *R, "--max-range-m", "-1")
+expect_error(1, "--min-range-m 5 is above --max-range-m 3", "select", "--dem", g_tif, *R, "--min-range-m", "5",
+             "--max-range-m", "3")
+expect_error(1, "--pan-deg 50,10", "select", "--dem", g_tif, *R, "--pan-deg", "50,10")
+expect_error(1, "--pan-deg -200,10", "select", "--dem", g_tif, *R, "--pan-deg", "-200,10")
+expect_error(1, "at least 3 cells", "select", "--dem", g_tif, *R, "--patch-m", "0.1")
+expect_error(1, "--stride-cells: 0 is out of range", "select", "--dem", g_tif, *R, "--stride-cells", "0")
+expect_error(1, "--heading-deg: 'north' is not a finite number", "select", "--dem", g_tif, *R,
+             "--heading-deg", "north")
+expect_error(1, "--sensors: '1,2,3' is not a pair", "select", "--dem", g_tif, *R, "--sensors", "1,2,3")
+expect_error(1, "--next-best: 65 is out of range", "select", "--dem", g_tif, *R, "--next-best", "65")
+expect_error(1, "--out-map: cannot create", "select", "--dem", g_tif, *R, *SMALL, "--out-map", p("no/dir/x.tif"))
+expect_error(2, "missing required option '--rover'", "select", "--dem", g_tif)
+expect_error(2, "unknown option '--prior'", "select", "--dem", g_tif, *R, "--prior", "1,2")
+
+# ---- field ------------------------------------------------------------------------
+AREA = "1002.4,2002.4,1007.2,2007.2"  # 48 x 48 rover positions inside the map
+FCFG = [*SMALL, "--coarse-step-cells", "8", "--area-m", AREA]
+fj = run_json("field", "--dem", g_tif, "--out", p("field.tif"), "--evaluated-out", p("ev.tif"), *FCFG, "--json")
+for key in ("file", "width", "height", "cells", "evaluations", "best", "seconds"):
+    check(key in fj, f"field --json has {key}")
+if "evaluations" in fj:
+    check(fj["width"] == 48 and fj["height"] == 48 and fj["cells"] == 48 * 48, f"field area 48 x 48: {fj}")
+    check(0 < fj["evaluations"] < fj["cells"], f"field evaluates fewer positions than cells ({fj['evaluations']})")
+    gt, F = read(p("field.tif"))
+    _, E = read(p("ev.tif"))
+    check(all(abs(a - b) < 1e-9 for a, b in zip(gt, GT)), f"field geotransform {gt}")
+    inside = ~np.isnan(F)
+    check(int(inside.sum()) == 48 * 48, "field: NaN outside --area-m, values inside")
+    rows, cols = np.nonzero(inside)
+    check(rows.min() == 24 and rows.max() == 71 and cols.min() == 24 and cols.max() == 71, "field area cells")
+    check(int((E == 1).sum()) == fj["evaluations"], "--evaluated-out marks every evaluation")
+    fin = F[np.isfinite(F)]
+    check(abs(fin.min() - fj["best"]["uncertainty_m"]) < 1e-6, "field minimum = best.uncertainty_m")
+    bc = int(round((fj["best"]["x_m"] - X0) / CELL - 0.5))
+    br = int(round((Y0 + N * CELL - fj["best"]["y_m"]) / CELL - 0.5))
+    check(E[br, bc] == 1 and abs(F[br, bc] - fj["best"]["uncertainty_m"]) < 1e-6, "best is an evaluated cell")
+    # evaluated cells equal `trn select` (stride 2, as the field) at that rover position
+    er, ec = np.nonzero(E == 1)
+    rng = np.random.default_rng(7)
+    for i in list(rng.choice(er.size, 4, replace=False)) + [int(np.argmin(np.where(E == 1, F, np.inf)[er, ec]))]:
+        x = X0 + (ec[i] + 0.5) * CELL
+        y = Y0 + N * CELL - (er[i] + 0.5) * CELL
+        r = run_json("select", "--dem", g_tif, "--rover", f"{x:.6f},{y:.6f}", *SMALL, "--stride-cells", "2", "--json")
+        if "uncertainty_m" in r:
+            check(abs(r["uncertainty_m"] - F[er[i], ec[i]]) <= 1e-6 * r["uncertainty_m"],
+                  f"field at ({x:.2f}, {y:.2f}) = select there: {F[er[i], ec[i]]} vs {r['uncertainty_m']}")
+    # second format, same field
+    fa = run_json("field", "--dem", g_asc, "--out", p("field_asc.tif"), *FCFG, "--json")
+    check(fa.get("evaluations") == fj["evaluations"] and fa.get("best") == fj["best"], "field: AAIGrid = GeoTIFF")
+    check(np.array_equal(read(p("field_asc.tif"))[1], F, equal_nan=True), "field: AAIGrid map = GeoTIFF map")
+rc, out, err = run("field", "--dem", g_tif, "--out", p("field2.tif"), *FCFG)
+check(rc == 0 and out.startswith("wrote ") and "evaluated" in out and err == "",
+      f"field human summary, quiet stderr off a terminal: {err!r}")
+
+# progress on a terminal (pseudo-terminal)
+master, slave = pty.openpty()
+pr = subprocess.Popen([TRN, "field", "--dem", g_tif, "--out", p("tty.tif"), *FCFG], stdout=subprocess.DEVNULL,
+                      stderr=slave)
+os.close(slave)
+tty = b""
+while True:
+    try:
+        chunk = os.read(master, 65536)
+    except OSError:
+        break
+    if not chunk:
+        break
+    tty += chunk
+pr.wait(timeout=600)
+os.close(master)
+check(pr.returncode == 0 and b"field: coarse lattice 49/49" in tty and b"positions evaluated" in tty,
+      f"field draws its progress on a terminal: {tty[-160:]!r}")
+
+# featureless: exit 3, nothing written
+expect_error(3, "no informative target", "field", "--dem", p("flat.tif"), "--out", p("flat_field.tif"), *FCFG)
+check(not os.path.exists(p("flat_field.tif")), "featureless field: nothing written")
+
+# ---- field: bad input -----------------------------------------------------------------
+O = ["--out", p("x.tif")]
+expect_error(1, "--dem: cannot read", "field", "--dem", p("missing.tif"), *O)
+expect_error(1, "--dem: cannot read", "field", "--dem", p("notes.txt"), *O)
+expect_error(1, "has 1 band, no band 3", "field", "--dem", g_tif, *O, "--band", "3")
+expect_error(1, "--coarse-step-cells 12 is not a power of two", "field", "--dem", g_tif, *O,
+             "--coarse-step-cells", "12")
+expect_error(1, "--coarse-step-cells: 512 is out of range", "field", "--dem", g_tif, *O, "--coarse-step-cells", "512")
+expect_error(1, "--area-m: '1,2,3' is not X0,Y0,X1,Y1", "field", "--dem", g_tif, *O, "--area-m", "1,2,3")
+expect_error(1, "--area-m: want X0 <= X1", "field", "--dem", g_tif, *O, "--area-m", "1005,2000,1001,2005")
+expect_error(1, "holds no cell centre of the map", "field", "--dem", g_tif, *O, "--area-m", "0,0,10,10")
+expect_error(1, "--margin-rel: -1 is out of range", "field", "--dem", g_tif, *O, "--margin-rel", "-1")
+expect_error(1, "--change-rel: 'x' is not a finite number", "field", "--dem", g_tif, *O, "--change-rel", "x")
+expect_error(1, "at least 3 cells", "field", "--dem", g_tif, *O, "--patch-m", "0.1")
+expect_error(1, "--out: cannot create", "field", "--dem", g_tif, "--out", p("no/dir/f.tif"), *FCFG)
+expect_error(2, "missing required option '--out'", "field", "--dem", g_tif)
+
+# ---- figures (tools/plot/trn_plot.py) ----------------------------------------------------
+try:
+    import matplotlib  # noqa: F401
+    have_mpl = True
+except ImportError:
+    have_mpl = False
+    print("note: matplotlib missing, figures not checked")
+if have_mpl and "target" in sel and "evaluations" in fj:
+    plot = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools", "plot", "trn_plot.py")
+    with open(p("sel.json"), "w") as f:
+        json.dump(sel, f)
+    with open(p("field.json"), "w") as f:
+        json.dump(fj, f)
+    for fig, args in (("select", [g_tif, "--select-json", p("sel.json")]),
+                      ("uncertainty", [g_tif, p("cand.tif"), "--select-json", p("sel.json")]),
+                      ("field", [g_asc, p("field.tif"), "--evaluated", p("ev.tif"), "--field-json", p("field.json")]),
+                      ("surface", [g_tif, "--select-json", p("sel.json")])):
+        png = p(f"fig_{fig}.png")
+        r = subprocess.run([sys.executable, plot, fig, *args, "--out", png], capture_output=True, text=True,
+                           timeout=300)
+        ok = r.returncode == 0 and os.path.exists(png) and os.path.getsize(png) > 20000
+        if ok:
+            with open(png, "rb") as f:
+                ok = f.read(8) == b"\x89PNG\r\n\x1a\n"
+        check(ok, f"trn_plot.py {fig}: {r.returncode} {r.stderr.strip()[-300:]}")
+    r = subprocess.run([sys.executable, plot, "field", g_tif, p("flat_field.tif"), "--out", p("no.png")],
+                       capture_output=True, text=True, timeout=60)
+    check(r.returncode != 0 and "cannot read" in r.stderr, "trn_plot.py field on a missing file fails with a reason")
+
+print(f"{checks} checks, {len(failures)} failed")
+sys.exit(1 if failures else 0)

@@ -1,0 +1,233 @@
+/* tools/trn/selmap.c - see selmap.h. */
+#include "selmap.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define PI 3.14159265358979323846
+
+void *selmap_alloc16(size_t n, void **raw) {
+  uint8_t *p = malloc(n + 16u);
+  *raw = p;
+  if (p == NULL) {
+    return NULL;
+  }
+  return p + ((16u - ((uintptr_t)p & 15u)) & 15u);
+}
+
+double selmap_um(double v_m) { return isfinite(v_m) ? floor(v_m * 1e6 + 0.5) / 1e6 : v_m; }
+
+double selmap_rho_en(double rho_grid) {
+  if (!isfinite(rho_grid)) {
+    return rho_grid;
+  }
+  return rho_grid == 0.0 ? 0.0 : -rho_grid;
+}
+
+void selmap_opts_default(selmap_opts_t *o, long stride_cells) {
+  trn_select_cfg_t c;
+  trn_select_cfg_default(&c);
+  memset(o, 0, sizeof *o);
+  o->band = 1;
+  o->heading_deg = 0.0;
+  o->pan_deg[0] = -180.0;
+  o->pan_deg[1] = 180.0;
+  o->min_range_m = c.min_range_m;
+  o->max_range_m = c.max_range_m;
+  o->footprint_m = c.footprint_radius_m;
+  o->patch_m = c.patch_m;
+  o->separation_m = c.min_separation_m;
+  o->stride_cells = stride_cells;
+  o->sensors = NULL;
+}
+
+void selmap_opts(selmap_opts_t *o, cli_opt_t *d) {
+  const cli_opt_t t[SELMAP_N_OPTS] = {
+      {"--band", CLI_LONG, &o->band, 1, 65535, 0, "N", "band of --dem (default 1)", 0},
+      {"--heading-deg", CLI_DOUBLE, &o->heading_deg, -360.0, 360.0, 0, "A",
+       "rover heading, degrees counter-clockwise from east (default 0)", 0},
+      {"--pan-deg", CLI_XY, o->pan_deg, 0, 0, 0, "MIN,MAX",
+       "bearings the mast can look at, degrees from the heading, CCW positive (default -180,180)", 0},
+      {"--min-range-m", CLI_DOUBLE, &o->min_range_m, 0.0, 1000.0, 0, "R", "nearest target, m (default 1)", 0},
+      {"--max-range-m", CLI_DOUBLE, &o->max_range_m, 1e-3, 1000.0, 0, "R", "farthest target, m (default 10)", 0},
+      {"--footprint-m", CLI_DOUBLE, &o->footprint_m, 0.0, 100.0, 0, "R",
+       "rover footprint radius no patch may touch, m (default 0.5)", 0},
+      {"--patch-m", CLI_DOUBLE, &o->patch_m, 1e-3, 1000.0, 0, "S",
+       "side of the sensed patch, m (default 2; at least 3 cells)", 0},
+      {"--stride-cells", CLI_LONG, &o->stride_cells, 1, 64, 0, "N", NULL, 0},
+      {"--separation-m", CLI_DOUBLE, &o->separation_m, 0.0, 1000.0, 0, "D",
+       "least distance between ranked targets, m (default 1)", 0},
+      {"--sensors", CLI_STRING, &o->sensors, 0, 0, 0, "X,Y[;X,Y..]",
+       "where the global map was sensed from, map m, up to 64 (default: the DEM's centre)", 0},
+  };
+  memcpy(d, t, sizeof t);
+}
+
+void selmap_free(selmap_t *w) {
+  free(w->mraw);
+  free(w->pgraw);
+  dem_free(&w->dem);
+  w->mraw = w->pgraw = NULL;
+}
+
+/* "X,Y;X,Y;..." -> map metres; 1 ok, 0 with a reason in err. */
+static int parse_sensors(const char *text, double out[][2], size_t cap, size_t *n, char *err, size_t err_len) {
+  char buf[4096], *tok, *next;
+  size_t len = strlen(text);
+  *n = 0;
+  if (len == 0 || len >= sizeof buf) {
+    snprintf(err, err_len, "--sensors: expected X,Y[;X,Y...], got '%s'", text);
+    return 0;
+  }
+  memcpy(buf, text, len + 1);
+  for (tok = buf; tok != NULL; tok = next) {
+    next = strchr(tok, ';');
+    if (next != NULL) {
+      *next++ = '\0';
+    }
+    if (*n >= cap) {
+      snprintf(err, err_len, "--sensors: more than %zu positions", cap);
+      return 0;
+    }
+    if (!cli_parse_xy(tok, &out[*n][0], &out[*n][1])) {
+      snprintf(err, err_len, "--sensors: '%s' is not a pair X,Y of finite numbers", tok);
+      return 0;
+    }
+    ++*n;
+  }
+  if (*n == 0) {
+    snprintf(err, err_len, "--sensors: expected X,Y[;X,Y...], got '%s'", text);
+    return 0;
+  }
+  return 1;
+}
+
+int selmap_prepare(selmap_t *w, const char *cmd, const char *dem_path, const selmap_opts_t *o) {
+  char err[768];
+  double cell, col, row;
+  size_t i, mb, nvox, wb;
+  trn_grid_f32_t gg;
+  trn_status_t st;
+  void *wraw = NULL, *ws, *mbuf;
+  trn_sigma_model_t gm;
+  trn_select_cfg_t *c = &w->scfg;
+
+  memset(w, 0, sizeof *w);
+  /* Options that need no DEM first: cheap mistakes fail fast. */
+  if (o->pan_deg[0] < -180.0 || o->pan_deg[1] > 180.0 || o->pan_deg[0] > o->pan_deg[1]) {
+    return cli_fail(cmd, "--pan-deg %g,%g: want -180 <= MIN <= MAX <= 180", o->pan_deg[0], o->pan_deg[1]);
+  }
+  if (o->min_range_m > o->max_range_m) {
+    return cli_fail(cmd, "--min-range-m %g is above --max-range-m %g", o->min_range_m, o->max_range_m);
+  }
+  if (o->sensors != NULL &&
+      !parse_sensors(o->sensors, w->sensors_m, TRN_SPREAD_MAX_SENSORS, &w->n_sensors, err, sizeof err)) {
+    return cli_fail(cmd, "%s", err);
+  }
+  if (dem_read(dem_path, (int)o->band, TRN_MAX_DIM, &w->dem, err, sizeof err) != 0) {
+    return cli_fail(cmd, "--dem: %s", err);
+  }
+  cell = w->dem.cell_m;
+  if (cell > 1000.0) {
+    cli_fail(cmd, "cell size %g m is above the 1000 m the core accepts", cell);
+    goto fail;
+  }
+
+  /* Selection rules in the grid frame. */
+  trn_select_cfg_default(c);
+  c->min_range_m = (float)o->min_range_m;
+  c->max_range_m = (float)o->max_range_m;
+  c->pan_min_rad = (float)(-o->pan_deg[1] * PI / 180.0);
+  c->pan_max_rad = (float)(-o->pan_deg[0] * PI / 180.0);
+  c->footprint_radius_m = (float)o->footprint_m;
+  c->patch_m = (float)o->patch_m;
+  c->stride_cells = (int32_t)o->stride_cells;
+  c->min_separation_m = (float)o->separation_m;
+  if ((st = trn_select_cfg_check(c, (float)cell)) != TRN_OK) {
+    if (o->patch_m / cell < 2.5) {
+      cli_fail(cmd, "--patch-m %g is %.1f cells of %g m; at least 3 cells are needed", o->patch_m,
+               o->patch_m / cell, cell);
+    } else {
+      cli_fail(cmd, "selection rules rejected for %g m cells (range up to %g m = %.0f cells, at most %d): %s",
+               cell, o->max_range_m, o->max_range_m / cell, TRN_MAX_DIM, trn_strerror(st));
+    }
+    goto fail;
+  }
+  w->heading_grid_rad = (float)(-o->heading_deg * PI / 180.0);
+
+  /* Map configuration scaled to the cell (docs/method.md section 7). */
+  trn_map_cfg_default(&w->cfg);
+  w->cfg.terrain.cell_m = (float)cell;
+  w->cfg.terrain.zbin_m = (float)cell;
+  w->cfg.terrain.highpass_half_m = (float)(10.0 * cell);
+  w->cfg.sigma_m = (float)cell;
+  if ((st = trn_map_cfg_check(&w->cfg)) != TRN_OK) {
+    cli_fail(cmd, "map configuration for %g m cells rejected: %s", cell, trn_strerror(st));
+    goto fail;
+  }
+  if (trn_grid_f32_init(&gg, w->dem.data, (size_t)w->dem.width * (size_t)w->dem.height, w->dem.width,
+                        w->dem.height) != TRN_OK) {
+    cli_fail(cmd, "DEM size %d x %d rejected by the core", w->dem.width, w->dem.height);
+    goto fail;
+  }
+  mb = trn_map_bytes(&w->cfg, w->dem.width, w->dem.height);
+  mbuf = mb > 0 ? selmap_alloc16(mb, &w->mraw) : NULL;
+  if (mbuf == NULL) {
+    cli_fail(cmd, "cannot allocate %zu bytes for the prepared map", mb);
+    goto fail;
+  }
+  if ((st = trn_map_build(&w->map, &w->cfg, &gg, mbuf, mb)) != TRN_OK) {
+    cli_fail(cmd, "--dem: cannot prepare the map: %s", trn_strerror(st));
+    goto fail;
+  }
+  if ((st = trn_kernels_build(&w->k, TRN_KERNEL_SIGMA0_DEFAULT_CELLS)) != TRN_OK) {
+    cli_fail(cmd, "kernels: %s", trn_strerror(st));
+    goto fail;
+  }
+
+  /* Sensing positions of the global map: given, or the DEM's centre. */
+  if (w->n_sensors == 0) {
+    dem_cell_to_map(w->dem.gt, 0.5 * (w->dem.width - 1), 0.5 * (w->dem.height - 1), &w->sensors_m[0][0],
+                    &w->sensors_m[0][1]);
+    w->n_sensors = 1;
+  }
+  for (i = 0; i < w->n_sensors; ++i) {
+    dem_map_to_cell(w->dem.gt, w->sensors_m[i][0], w->sensors_m[i][1], &col, &row);
+    if (fabs(col) > 1e6 || fabs(row) > 1e6) {
+      cli_fail(cmd, "--sensors: %g,%g is %.0f cells from the map (at most 1e6)", w->sensors_m[i][0],
+               w->sensors_m[i][1], fmax(fabs(col), fabs(row)));
+      goto fail;
+    }
+    w->sensors[i].x_cells = (float)col;
+    w->sensors[i].y_cells = (float)row;
+  }
+
+  /* Eq. 8. */
+  nvox = (size_t)w->dem.width * (size_t)w->dem.height * (size_t)w->map.dist.nz;
+  w->pg.data = selmap_alloc16(nvox * sizeof(float), &w->pgraw);
+  wb = trn_prob_global_workspace_bytes(w->dem.width, w->dem.height);
+  ws = wb > 0 ? selmap_alloc16(wb, &wraw) : NULL;
+  if (w->pg.data == NULL || ws == NULL) {
+    free(wraw);
+    cli_fail(cmd, "cannot allocate %zu bytes for the probability map", nvox * sizeof(float) + wb);
+    goto fail;
+  }
+  w->pg.nx = w->dem.width;
+  w->pg.ny = w->dem.height;
+  w->pg.nz = w->map.dist.nz;
+  trn_sigma_global_default(&gm);
+  st = trn_prob_global_map(&w->k, &gm, w->sensors, w->n_sensors, &w->map, &w->pg, ws, wb);
+  free(wraw);
+  if (st != TRN_OK) {
+    cli_fail(cmd, "probability map (eq. 8): %s", trn_strerror(st));
+    goto fail;
+  }
+  return 0;
+
+fail:
+  selmap_free(w);
+  return CLI_BAD_INPUT;
+}
