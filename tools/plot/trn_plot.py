@@ -331,6 +331,9 @@ def add_experiment(sub):
     p = sub.add_parser("experiment", help="success rates and errors of `trn experiment --json` runs")
     p.add_argument("runs", nargs="+", metavar="RUN.json", help="outputs of `trn experiment --json`")
     p.add_argument("--labels", help="comma-separated names of the runs (default: k = coverage)")
+    return p
+
+
 def fig_profile(args):
     """`trn profile --json` output: time per stage against its budget (a horizontal bar chart).
 
