@@ -8,7 +8,7 @@ void trn_field_cfg_default(trn_field_cfg_t *cfg)
 {
     if (cfg != NULL) {
         cfg->coarse_step_cells = 16;
-        cfg->margin_rel = 0.5f;
+        cfg->margin_rel = 0.4f;
         cfg->change_rel = 1.5f;
     }
 }
@@ -229,8 +229,13 @@ trn_status_t trn_field(const trn_map_t *map, const trn_kernels_t *k, const trn_v
                 if (!known || nfin == 0) {
                     continue;
                 }
-                refine = nfin < 4 || vmin <= best + band ||
-                         vmax - vmin > (double)fcfg->change_rel * spread;
+                /* low squares are refined down to single cells; squares that
+                 * only change fast (or are partly uninformative) down to a
+                 * quarter of the coarse step: enough to place the edge of a
+                 * rock's shadow, without resolving cell-to-cell noise */
+                refine = vmin <= best + band ||
+                         (4 * step > fcfg->coarse_step_cells &&
+                          (nfin < 4 || vmax - vmin > (double)fcfg->change_rel * spread));
                 if (!refine) {
                     continue;
                 }

@@ -131,11 +131,13 @@ trn_status_t trn_highpass(const trn_grid_f32_t *dem, const trn_terrain_cfg_t *cf
 static int32_t bin_of(float hp, const trn_terrain_cfg_t *cfg)
 {
     double k;
-    const int32_t mid_bin = cfg->nz / 2; /* bin of h' = 0 (integer division intended) */
+    const int32_t mid_bin = cfg->nz / 2; /* bin centred on h' = 0 (integer division intended) */
     if (!valid_h(hp)) {
         return -1;
     }
-    k = floor((double)hp / (double)cfg->zbin_m) + (double)mid_bin;
+    /* Bins are centred on multiples of zbin_m: flat ground (h' = 0 after the
+     * high-pass) sits mid-bin, not on a bin edge where millimetres flip it. */
+    k = floor((double)hp / (double)cfg->zbin_m + 0.5) + (double)mid_bin;
     if (k < 0.0) {
         return 0;
     }

@@ -695,7 +695,7 @@ static void test_highpass_box_wider_than_grid(void **state)
 /* occupancy                                                                 */
 /* ------------------------------------------------------------------------ */
 
-/* The documented bin: floor(h / zbin) + nz/2, clamped; -1 when missing. The
+/* The documented bin: floor(h / zbin + 1/2) + nz/2, clamped; -1 when missing. The
  * quotient is taken in double (see docs/modules/terrain.md). */
 static int32_t oracle_bin(float h, const trn_terrain_cfg_t *cfg)
 {
@@ -703,7 +703,7 @@ static int32_t oracle_bin(float h, const trn_terrain_cfg_t *cfg)
     if (!isfinite(h)) {
         return -1;
     }
-    k = floor((double)h / (double)cfg->zbin_m) + (double)(cfg->nz / 2);
+    k = floor((double)h / (double)cfg->zbin_m + 0.5) + (double)(cfg->nz / 2);
     if (k < 0.0) {
         k = 0.0;
     }
@@ -757,12 +757,13 @@ static uint32_t oracle_occupancy(const trn_grid_f32_t *hp, const trn_terrain_cfg
 static void test_occupancy_analytic(void **state)
 {
     /* 3 x 2 grid, zbin 1 m, nz 8 (bin of 0 m = 4):
-     *   row 0:  0.0 (bin 4)   2.5 (bin 6)   NaN
-     *   row 1: -0.5 (bin 3)  -100 (bin 0)   100 (bin 7)
-     * columns: (0,0) 4..4; (1,0) 1..6 (lowest neighbour (1,1) bin 0);
-     * (0,1) 1..3; (1,1) 0..0; (2,1) 1..7; (2,0) none. 18 voxels. */
+     *   row 0:  0.0 (bin 4)   2.5 (bin 7)   NaN
+     *   row 1: -0.5 (bin 4)  -100 (bin 0)   100 (bin 7)
+     * (bins centred: -0.5 and 2.5 are the rounding edges, rounded up)
+     * columns: (0,0) 4..4; (1,0) 1..7 (lowest neighbour (1,1) bin 0);
+     * (0,1) 1..4; (1,1) 0..0; (2,1) 1..7; (2,0) none. 20 voxels. */
     static float d[6] = {0.0f, 2.5f, NAN, -0.5f, -100.0f, 100.0f};
-    static const int32_t lo[6] = {4, 1, -1, 1, 0, 1}, hi[6] = {4, 6, -1, 3, 0, 7};
+    static const int32_t lo[6] = {4, 1, -1, 1, 0, 1}, hi[6] = {4, 7, -1, 4, 0, 7};
     static uint8_t vbuf[3 * 2 * 8];
     const trn_terrain_cfg_t cfg = make_cfg(1.0f, 1.0f, 1.0f, 8);
     trn_grid_f32_t hp;
@@ -776,7 +777,7 @@ static void test_occupancy_analytic(void **state)
     assert_int_equal(trn_vol_u8_init(&occ, vbuf, sizeof vbuf, 3, 2, 8), TRN_OK);
     memset(vbuf, 0xAB, sizeof vbuf);
     assert_int_equal(trn_occupancy(&hp, &cfg, &occ, &n), TRN_OK);
-    assert_int_equal(n, 18u);
+    assert_int_equal(n, 20u);
     for (z = 0; z < 8; ++z) {
         for (y = 0; y < 2; ++y) {
             for (x = 0; x < 3; ++x) {
@@ -788,7 +789,7 @@ static void test_occupancy_analytic(void **state)
     }
     /* points relative to rover cell (1, 1), in (z, y, x) order */
     assert_int_equal(trn_occupancy_points(&hp, &cfg, 1, 1, pts, 32u, &np), TRN_OK);
-    assert_int_equal(np, 18u);
+    assert_int_equal(np, 20u);
     for (z = 0; z < 8; ++z) {
         for (y = 0; y < 2; ++y) {
             for (x = 0; x < 3; ++x) {
@@ -803,7 +804,7 @@ static void test_occupancy_analytic(void **state)
             }
         }
     }
-    assert_int_equal(k, 18u);
+    assert_int_equal(k, 20u);
 }
 
 static void test_occupancy_bins(void **state)
@@ -814,12 +815,16 @@ static void test_occupancy_bins(void **state)
         float h, zbin;
         int32_t nz, bin;
     } cases[] = {
-        {0.0f, 1.0f, 5, 2},   {-0.0f, 1.0f, 5, 2},  {0.999f, 1.0f, 5, 2}, {1.0f, 1.0f, 5, 3},
-        {-1e-6f, 1.0f, 5, 1}, {-1.0f, 1.0f, 5, 1},  {-1.5f, 1.0f, 5, 0},  {-2.0f, 1.0f, 5, 0},
+        /* bins centred on multiples of zbin: k = floor(h/zbin + 1/2) + nz/2 */
+        {0.0f, 1.0f, 5, 2},   {-0.0f, 1.0f, 5, 2},  {0.999f, 1.0f, 5, 3}, {1.0f, 1.0f, 5, 3},
+        {-1e-6f, 1.0f, 5, 2}, {-1.0f, 1.0f, 5, 1},  {-1.5f, 1.0f, 5, 1},  {-2.0f, 1.0f, 5, 0},
         {-2.5f, 1.0f, 5, 0},  {2.999f, 1.0f, 5, 4}, {3.0f, 1.0f, 5, 4},   {1e30f, 1.0f, 5, 4},
-        {-1e30f, 1.0f, 5, 0}, {0.75f, 0.25f, 8, 7}, {0.74f, 0.25f, 8, 6}, {-1.0f, 0.25f, 8, 0},
+        {-1e30f, 1.0f, 5, 0}, {0.75f, 0.25f, 8, 7}, {0.74f, 0.25f, 8, 7}, {-1.0f, 0.25f, 8, 0},
         {-0.9f, 0.25f, 8, 0}, {-0.74f, 0.25f, 8, 1}, {5.0f, 1.0f, 1, 0},  {-5.0f, 1.0f, 1, 0},
-        {0.3f, 0.1f, 128, 67}, {-12.75f, 0.5f, 64, 6},
+        {0.3f, 0.1f, 128, 67}, {-12.75f, 0.5f, 64, 7},
+        /* the rounding edges at +-zbin/2: ground flat within them stays in one bin */
+        {0.5f, 1.0f, 5, 3},   {0.4999f, 1.0f, 5, 2}, {-0.5f, 1.0f, 5, 2}, {-0.5001f, 1.0f, 5, 1},
+        {0.049f, 0.1f, 16, 8}, {-0.049f, 0.1f, 16, 8},
     };
     size_t i;
     (void)state;

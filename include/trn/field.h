@@ -14,7 +14,8 @@
  *    the smallest value found before this level and the band
  *    margin_rel * S * step / coarse_step_cells narrowing as the step halves, or
  *  - it changes fast: v_max - v_min > change_rel * S, or some corners are
- *    finite and some infinite.
+ *    finite and some infinite; this reason refines only while the step is
+ *    above a quarter of coarse_step_cells (edges placed, noise not chased).
  * Squares whose corners are all infinite are not refined. The loop stops at
  * step 1; no recursion, every loop bounded by the area. Cells never
  * evaluated get the bilinear interpolation of the finest known square that

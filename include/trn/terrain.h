@@ -7,8 +7,9 @@
  *    [x-r, x+r] x [y-r, y+r] (r = round(highpass_half_m / cell_m) cells,
  *    clipped at the borders). Removes slope and absolute height so the pose
  *    search is over (x, y) only.
- * 2. Occupancy: height bin k(h') = floor(h' / zbin_m) + nz/2, clamped to
- *    [0, nz-1]. Cell (x, y) occupies bins lo..k(h'), where lo = k(h') unless a
+ * 2. Occupancy: height bin k(h') = floor(h' / zbin_m + 1/2) + nz/2, clamped
+ *    to [0, nz-1]: bins are centred on multiples of zbin_m, so flat ground
+ *    (h' = 0) is mid-bin, never on a bin edge. Cell (x, y) occupies bins lo..k(h'), where lo = k(h') unless a
  *    valid 4-neighbour is lower: then lo = (lowest neighbour's bin) + 1, so the
  *    occupied surface has no vertical holes (rock faces are seen as faces).
  *
