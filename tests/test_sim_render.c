@@ -181,6 +181,29 @@ static void test_seeds_and_limits(void **state)
     assert_int_equal(na, 0);
 }
 
+/* Rows rendered in chunks give exactly the whole image (points and noise). */
+static void test_rows_in_chunks(void **state)
+{
+    sim_dem_t d = plane(0.05f, 0.02f, 0.0f);
+    sim_camera_t c = camera(0.004f);
+    trn_rigid_t T = pose(-0.5f, 0.7f);
+    sim_rng_t a = {11u}, b = {11u};
+    size_t na = 0, nb = 0;
+    int32_t r;
+    (void)state;
+    assert_int_equal(sim_render(&d, &c, &T, &a, g_a, MAXP, &na), TRN_OK);
+    for (r = 0; r < c.rows; r += 5) {
+        assert_int_equal(sim_render_rows(&d, &c, &T, &b, r, r + 5 > c.rows ? c.rows : r + 5, g_b, MAXP, &nb),
+                         TRN_OK);
+    }
+    assert_int_equal(na, nb);
+    assert_memory_equal(g_a, g_b, na * sizeof g_a[0]);
+    assert_int_equal(sim_render_rows(&d, &c, &T, &b, 5, 4, g_b, MAXP, &nb), TRN_E_RANGE);
+    assert_int_equal(sim_render_rows(&d, &c, &T, &b, 0, c.rows + 1, g_b, MAXP, &nb), TRN_E_RANGE);
+    nb = MAXP + 1u;
+    assert_int_equal(sim_render_rows(&d, &c, &T, &b, 0, 1, g_b, MAXP, &nb), TRN_E_RANGE);
+}
+
 static void test_dem_height(void **state)
 {
     sim_dem_t d = plane(0.0f, 0.0f, 0.0f);
@@ -255,6 +278,7 @@ int main(void)
         cmocka_unit_test(test_sloped_plane),
         cmocka_unit_test(test_noise_grows_with_range_squared),
         cmocka_unit_test(test_seeds_and_limits),
+        cmocka_unit_test(test_rows_in_chunks),
         cmocka_unit_test(test_dem_height),
         cmocka_unit_test(test_bad_input),
     };

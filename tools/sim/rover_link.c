@@ -130,48 +130,65 @@ static rover_outcome_t done(rover_link_t *r, rover_outcome_t o)
     return o;
 }
 
-/* Receive raw frames for up to wait_ms (one frame at most), update the
- * status and monitors; bus-off and silence end by name. */
+/* Handle one received frame: status and heartbeats. */
+static void on_frame(rover_link_t *r, const trn_lcan_frame_t *f, uint32_t t)
+{
+    trn_can_frame_t pf;
+    memset(&pf, 0, sizeof pf);
+    pf.id = f->id;
+    pf.dlc = f->len;
+    pf.flags = f->extended ? TRN_CAN_FLAG_EXT : 0u;
+    memcpy(pf.data, f->data, 8u);
+    switch (trn_can_classify(&pf)) {
+    case TRN_CAN_MSG_MAST_STATUS: {
+        trn_mast_status_t m;
+        if (trn_can_mast_status_decode(&pf, &m) == TRN_OK) {
+            r->status = m;
+            r->have_status = 1;
+            ++r->status_frames;
+        }
+        break;
+    }
+    case TRN_CAN_MSG_MAST_HB:
+    case TRN_CAN_MSG_STEREO_HB: {
+        trn_heartbeat_t hb;
+        if (trn_can_heartbeat_decode(&pf, &hb) == TRN_OK) {
+            (void)trn_link_mon_frame(f->id == TRN_CAN_ID_MAST_HB ? &r->mast_hb : &r->stereo_hb, hb.counter, t,
+                                     NULL, NULL);
+        }
+        break;
+    }
+    default:
+        break;
+    }
+}
+
+/* Receive raw frames: wait up to wait_ms for the first, then take every
+ * frame already queued (at most ROVER_DRAIN), and only then judge the link
+ * monitors, so a backlog (the rover was busy) never looks like a silence.
+ * Bus-off and silence end by name. */
+#define ROVER_DRAIN 256
 static rover_outcome_t service(rover_link_t *r, int32_t wait_ms)
 {
-    trn_lcan_frame_t f;
-    trn_can_frame_t pf;
-    trn_status_t st = trn_lcan_recv(&r->can, &f, wait_ms);
+    int k;
     uint32_t t = now_ms();
-    if (st == TRN_E_BUS) {
-        if (r->can.bus.state == TRN_LCAN_BUS_OFF) {
-            return ROVER_E_BUS_OFF;
+    for (k = 0; k < ROVER_DRAIN; ++k) {
+        trn_lcan_frame_t f;
+        trn_status_t st = trn_lcan_recv(&r->can, &f, k == 0 ? wait_ms : 0);
+        t = now_ms();
+        if (st == TRN_E_TIMEOUT) {
+            break;
         }
-    } else if (st == TRN_OK) {
-        memset(&pf, 0, sizeof pf);
-        pf.id = f.id;
-        pf.dlc = f.len;
-        pf.flags = f.extended ? TRN_CAN_FLAG_EXT : 0u;
-        memcpy(pf.data, f.data, 8u);
-        switch (trn_can_classify(&pf)) {
-        case TRN_CAN_MSG_MAST_STATUS: {
-            trn_mast_status_t m;
-            if (trn_can_mast_status_decode(&pf, &m) == TRN_OK) {
-                r->status = m;
-                r->have_status = 1;
-                ++r->status_frames;
+        if (st == TRN_E_BUS) {
+            if (r->can.bus.state == TRN_LCAN_BUS_OFF) {
+                return ROVER_E_BUS_OFF;
             }
-            break;
+            continue;
         }
-        case TRN_CAN_MSG_MAST_HB:
-        case TRN_CAN_MSG_STEREO_HB: {
-            trn_heartbeat_t hb;
-            if (trn_can_heartbeat_decode(&pf, &hb) == TRN_OK) {
-                (void)trn_link_mon_frame(f.id == TRN_CAN_ID_MAST_HB ? &r->mast_hb : &r->stereo_hb,
-                                         hb.counter, t, NULL, NULL);
-            }
-            break;
+        if (st != TRN_OK) {
+            return ROVER_E_IO;
         }
-        default:
-            break;
-        }
-    } else if (st != TRN_E_TIMEOUT) {
-        return ROVER_E_IO;
+        on_frame(r, &f, t);
     }
     (void)trn_link_mon_poll(&r->mast_hb, t, NULL);
     (void)trn_link_mon_poll(&r->stereo_hb, t, NULL);

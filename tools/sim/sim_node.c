@@ -24,6 +24,8 @@
 #define SIM_STALL_MS 200u
 #define SIM_STATUS_MS 20u
 #define SIM_HB_MS 100u
+/** Ray rows rendered per loop iteration. */
+#define SIM_ROWS_PER_STEP 2
 
 static trn_vec3f_t g_render[SIM_RENDER_MAX];
 static trn_capture_t g_cap;
@@ -45,6 +47,12 @@ typedef struct {
     trn_mast_status_t trig_status;
     float trig_pan, trig_tilt;
     uint32_t trig_ms;
+    /* rendering, a few rows per loop iteration (heartbeats go on meanwhile) */
+    int rendering;
+    int32_t render_row;
+    size_t render_n;
+    trn_rigid_t render_T;
+    uint16_t render_maxp;
     /* capture transfer */
     int sending;
     size_t wire_len;
@@ -213,11 +221,11 @@ static void on_mast_cmd(const sim_cfg_t *cfg, sim_state_t *s, const trn_mast_cmd
 
 /* Expose, render, encode; starts the transfer. */
 static void on_capture_cmd(const sim_cfg_t *cfg, sim_state_t *s, const trn_capture_cmd_t *m,
-                           trn_lcan_t *can, uint32_t now_ms, sim_rng_t *rng, sim_stats_t *stats)
+                           trn_lcan_t *can, uint32_t now_ms, sim_stats_t *stats)
 {
     trn_mast_status_t at;
     trn_rigid_t T;
-    size_t n = 0u, i, maxp, keep;
+    size_t maxp;
     uint32_t t_ms = now_ms;
     float pan_true = s->pan, tilt_true = s->tilt;
     ++stats->capture_cmds;
@@ -232,7 +240,7 @@ static void on_capture_cmd(const sim_cfg_t *cfg, sim_state_t *s, const trn_captu
         s->off_bus = 1;
         return;
     }
-    if (s->sending) {
+    if (s->sending || s->rendering) {
         return; /* one capture at a time */
     }
     at = s->last_status;
@@ -248,13 +256,6 @@ static void on_capture_cmd(const sim_cfg_t *cfg, sim_state_t *s, const trn_captu
     if (trn_mast_camera_to_map(&cfg->geom, &cfg->pose, pan_true, tilt_true, &T) != TRN_OK) {
         return;
     }
-    if (sim_render(&cfg->dem, &cfg->cam, &T, rng, g_render, SIM_RENDER_MAX, &n) != TRN_OK) {
-        n = 0u;
-    }
-    maxp = m->max_points != 0u ? m->max_points : cfg->max_points;
-    if (maxp > TRN_PORT_MAX_CAPTURE_POINTS) {
-        maxp = TRN_PORT_MAX_CAPTURE_POINTS;
-    }
     memset(&g_cap, 0, sizeof g_cap);
     g_cap.capture_id = m->capture_id;
     g_cap.time_ms = t_ms;
@@ -262,6 +263,36 @@ static void on_capture_cmd(const sim_cfg_t *cfg, sim_state_t *s, const trn_captu
     g_cap.tilt_100urad = at.tilt_100urad;
     g_cap.mast_state = at.state;
     g_cap.mast_faults = at.faults;
+    maxp = m->max_points != 0u ? m->max_points : cfg->max_points;
+    if (maxp > TRN_PORT_MAX_CAPTURE_POINTS) {
+        maxp = TRN_PORT_MAX_CAPTURE_POINTS;
+    }
+    s->render_maxp = (uint16_t)maxp;
+    s->render_T = T;
+    s->render_row = 0;
+    s->render_n = 0u;
+    s->rendering = 1;
+}
+
+/* Render the next rows; once all are done, pick the points, encode, start sending. */
+static void render_step(const sim_cfg_t *cfg, sim_state_t *s, sim_rng_t *rng, sim_stats_t *stats)
+{
+    size_t n, i, maxp = s->render_maxp, keep;
+    int32_t r1 = s->render_row + SIM_ROWS_PER_STEP;
+    if (r1 > cfg->cam.rows) {
+        r1 = cfg->cam.rows;
+    }
+    if (sim_render_rows(&cfg->dem, &cfg->cam, &s->render_T, rng, s->render_row, r1, g_render, SIM_RENDER_MAX,
+                        &s->render_n) != TRN_OK) {
+        s->rendering = 0;
+        return;
+    }
+    s->render_row = r1;
+    if (r1 < cfg->cam.rows) {
+        return;
+    }
+    s->rendering = 0;
+    n = s->render_n;
     keep = 0u;
     for (i = 0; i < n && keep < maxp; ++i) {
         /* evenly spread subset when there are more points than allowed */
@@ -293,8 +324,8 @@ static void on_capture_cmd(const sim_cfg_t *cfg, sim_state_t *s, const trn_captu
     stats->last_points = (uint32_t)keep;
     stats->last_bytes = (uint32_t)s->wire_len;
     stats->last_segments = s->seg_count;
-    stats->last_pan_100urad = at.pan_100urad;
-    stats->last_tilt_100urad = at.tilt_100urad;
+    stats->last_pan_100urad = g_cap.pan_100urad;
+    stats->last_tilt_100urad = g_cap.tilt_100urad;
     s->seg_index = 0u;
     s->frame_no = 0u;
     s->sending = 1;
@@ -477,9 +508,12 @@ trn_status_t sim_run(const sim_cfg_t *cfg, volatile sig_atomic_t *stop, sim_stat
                 s.trig_level = v;
             }
         }
+        if (s.rendering) {
+            render_step(cfg, &s, &rng, stats);
+        }
         again = pump_tx(cfg, &s, &can, frames_per_ms, stats);
-        wait = again ? 0 : 1;
-        if (!s.sending && cfg->trigger_path == NULL) {
+        wait = again || s.rendering ? 0 : 1;
+        if (!s.sending && !s.rendering && cfg->trigger_path == NULL) {
             uint32_t nd = next_status < next_hb ? next_status : next_hb;
             wait = nd > el ? (int32_t)(nd - el) : 0;
         }
@@ -508,7 +542,7 @@ trn_status_t sim_run(const sim_cfg_t *cfg, volatile sig_atomic_t *stop, sim_stat
         case TRN_CAN_MSG_CAPTURE_CMD: {
             trn_capture_cmd_t m;
             if (trn_can_capture_cmd_decode(&pf, &m) == TRN_OK) {
-                on_capture_cmd(cfg, &s, &m, &can, now_ms, &rng, stats);
+                on_capture_cmd(cfg, &s, &m, &can, now_ms, stats);
             }
             break;
         }

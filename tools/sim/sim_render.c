@@ -79,18 +79,19 @@ trn_status_t sim_dem_height(const sim_dem_t *dem, float x_m, float y_m, float *h
     return TRN_OK;
 }
 
-trn_status_t sim_render(const sim_dem_t *dem, const sim_camera_t *cam, const trn_rigid_t *cam_to_map,
-                        sim_rng_t *rng, trn_vec3f_t *out, size_t capacity, size_t *n)
+trn_status_t sim_render_rows(const sim_dem_t *dem, const sim_camera_t *cam, const trn_rigid_t *cam_to_map,
+                             sim_rng_t *rng, int32_t row0, int32_t row1, trn_vec3f_t *out, size_t capacity,
+                             size_t *n)
 {
     double step, tx, ty;
     int32_t i, j, k, nsteps;
-    size_t cnt = 0u;
+    size_t cnt;
     const float *R;
     if (dem == NULL || cam == NULL || cam_to_map == NULL || rng == NULL || out == NULL || n == NULL ||
         dem->heights == NULL) {
         return TRN_E_NULL;
     }
-    *n = 0u;
+    cnt = *n;
     if (!dem_ok(dem) || !finite_f(cam->hfov_rad) || !finite_f(cam->vfov_rad) || cam->hfov_rad <= 0.0f ||
         cam->hfov_rad >= 3.0f || cam->vfov_rad <= 0.0f || cam->vfov_rad >= 3.0f || cam->cols < 1 ||
         cam->rows < 1 || cam->cols > SIM_MAX_RAYS_SIDE || cam->rows > SIM_MAX_RAYS_SIDE ||
@@ -107,6 +108,9 @@ trn_status_t sim_render(const sim_dem_t *dem, const sim_camera_t *cam, const trn
     if (!finite_f(cam_to_map->t.x) || !finite_f(cam_to_map->t.y) || !finite_f(cam_to_map->t.z)) {
         return TRN_E_ARG;
     }
+    if (row0 < 0 || row1 < row0 || row1 > cam->rows || cnt > capacity) {
+        return TRN_E_RANGE;
+    }
     step = 0.5 * (double)dem->cell_m;
     if ((double)(cam->max_range_m - cam->min_range_m) / step > (double)SIM_MAX_STEPS) {
         return TRN_E_ARG;
@@ -115,7 +119,7 @@ trn_status_t sim_render(const sim_dem_t *dem, const sim_camera_t *cam, const trn
     tx = tan(0.5 * (double)cam->hfov_rad);
     ty = tan(0.5 * (double)cam->vfov_rad);
     R = cam_to_map->r;
-    for (j = 0; j < cam->rows; ++j) {
+    for (j = row0; j < row1; ++j) {
         for (i = 0; i < cam->cols; ++i) {
             double dc[3], dm[3], norm, r0, r1, rr, h = 0.0;
             int found = 0, s;
@@ -178,4 +182,14 @@ trn_status_t sim_render(const sim_dem_t *dem, const sim_camera_t *cam, const trn
     }
     *n = cnt;
     return TRN_OK;
+}
+
+trn_status_t sim_render(const sim_dem_t *dem, const sim_camera_t *cam, const trn_rigid_t *cam_to_map,
+                        sim_rng_t *rng, trn_vec3f_t *out, size_t capacity, size_t *n)
+{
+    if (n == NULL || cam == NULL) {
+        return TRN_E_NULL;
+    }
+    *n = 0u;
+    return sim_render_rows(dem, cam, cam_to_map, rng, 0, cam->rows, out, capacity, n);
 }

@@ -85,6 +85,19 @@ trn_status_t sim_dem_height(const sim_dem_t *dem, float x_m, float y_m, float *h
 trn_status_t sim_render(const sim_dem_t *dem, const sim_camera_t *cam, const trn_rigid_t *cam_to_map,
                         sim_rng_t *rng, trn_vec3f_t *out, size_t capacity, size_t *n);
 
+/**
+ * @brief sim_render for the ray rows [row0, row1) only, appending to out
+ * from index *n (so a caller can spread one image over several calls, e.g.
+ * to keep answering the bus while rendering; rows rendered in order give
+ * exactly sim_render's points and noise).
+ * @param[in]     row0, row1 0 <= row0 <= row1 <= cam->rows.
+ * @param[in,out] n  points already in out; points added on return.
+ * @retval as sim_render, plus TRN_E_RANGE (rows out of order or range, or *n > capacity)
+ */
+trn_status_t sim_render_rows(const sim_dem_t *dem, const sim_camera_t *cam, const trn_rigid_t *cam_to_map,
+                             sim_rng_t *rng, int32_t row0, int32_t row1, trn_vec3f_t *out, size_t capacity,
+                             size_t *n);
+
 /** @brief Standard normal draw (Box-Muller on two splitmix64 draws).
  * @param[in,out] rng the generator. */
 double sim_rng_normal(sim_rng_t *rng);
