@@ -6,7 +6,7 @@
  * Per seeded run: a synthetic global DEM (tests/support/synth, 19.2 m at
  * 0.1 m) -> trn_map_build + eq. 8 probability map -> trn_select picks the
  * target from the rover's believed position (the truth plus a prior offset
- * of up to 0.8 m per axis) -> trn_mast_point_at -> MAST_CMD until MAST_STATUS
+ * of up to 0.8 m per axis; bearings within the mast's pan limits) -> trn_mast_point_at -> MAST_CMD until MAST_STATUS
  * says in position -> trigger pulse on the GPIO line (the simulator samples
  * the gpio-sim side and exposes at the rising edge) -> CAPTURE_CMD ->
  * capture over the kernel's ISO-TP socket into trn_capture_rx_segment ->
@@ -193,6 +193,14 @@ static loop_result_t one_run(int run, int record)
     trn_select_cfg_default(&scfg);
     scfg.min_range_m = 2.0f;
     scfg.max_range_m = 4.5f;
+    {
+        /* only targets the mast can reach: its pan limits, less a margin for
+         * the camera's offset from the pan axis */
+        sim_cfg_t d;
+        sim_cfg_default(&d);
+        scfg.pan_min_rad = d.geom.pan_min_rad + 0.1f;
+        scfg.pan_max_rad = d.geom.pan_max_rad - 0.1f;
+    }
     rv.pos.x_cells = (float)(believed.x_m / CELL);
     rv.pos.y_cells = (float)(believed.y_m / CELL);
     rv.heading_rad = believed.heading_rad;
