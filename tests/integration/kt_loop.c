@@ -72,7 +72,7 @@ static pid_t candump_start(void)
         execl("/usr/bin/candump", "candump", "-l", ifname, (char *)NULL);
         _exit(127);
     }
-    kt_sleep_ms(200);
+    KT_CHECK(rover_idle(&g_rover, 200u) == ROVER_OK); /* candump is up; the link stays serviced */
     return pid;
 }
 
@@ -88,7 +88,7 @@ static void candump_stop(pid_t pid, uint16_t cap_id)
     unsigned data_frames = 0, data_bytes = 0, fc_frames = 0, other = 0, lines = 0;
     double t_first = -1.0, t_last = -1.0;
     (void)cap_id;
-    kt_sleep_ms(100);
+    KT_CHECK(rover_idle(&g_rover, 100u) == ROVER_OK);
     kill(pid, SIGINT);
     KT_CHECK(waitpid(pid, &wst, 0) == pid);
     d = opendir("/tmp");
@@ -264,6 +264,9 @@ static loop_result_t one_run(int run, int record)
     if (record) {
         candump_stop(dump, (uint16_t)(0x100 + run));
     }
+    /* the link stayed healthy: no silence, no lost heartbeat */
+    KT_CHECK(g_rover.mast_hb.n_silences == 0u && g_rover.stereo_hb.n_silences == 0u);
+    KT_CHECK(g_rover.mast_hb.n_gaps == 0u && g_rover.stereo_hb.n_gaps == 0u);
     rover_close(&g_rover);
     KT_CHECK(simrun_stop(&sim) == 0);
     KT_CHECK(sim.stats.triggers == 1u && sim.stats.triggered_exposures == 1u);

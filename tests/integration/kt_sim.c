@@ -4,8 +4,9 @@
  * run in the VM.
  *
  * Round trips of every message: heartbeats of both nodes (consecutive
- * counters), MAST_CMD -> MAST_STATUS (angles reached at the slew rate, seq
- * acknowledged, counters consecutive), a command outside the limits
+ * counters), MAST_CMD -> MAST_STATUS (angles reached at the default slew
+ * rate and at the command's rate_max, seq acknowledged, STOP mid-move holds
+ * between start and target), a command outside the limits
  * (flt_cmd_invalid), CAPTURE_CMD -> capture over ISO-TP with flow control
  * (id echoed, pose at exposure = the status, max_points honoured, the
  * simulator's own counts). Each injected fault ends in its named outcome
@@ -98,6 +99,20 @@ static void heartbeats_and_status(void)
     /* outside the limits (tilt max 0.8 rad): rejected by name */
     KT_CHECK(rover_point(&g_rover, 0.0f, 1.0f, &at) == ROVER_E_MAST_FAULT);
     KT_CHECK(at.faults == TRN_MAST_FLT_CMD_INVALID);
+    /* rate_max: 0.5 rad at 1 rad/s takes about half the time of the default 0.5 rad/s */
+    g_rover.cfg.rate_rad_s = 1.0f;
+    t0 = kt_now_ms();
+    KT_CHECK(rover_point(&g_rover, 0.5f, -0.3f, &at) == ROVER_OK);
+    printf("KT-INFO slew 0.5 rad at rate_max 1 rad/s: %lld ms\n", kt_now_ms() - t0);
+    KT_CHECK(kt_now_ms() - t0 >= 450 && kt_now_ms() - t0 < 850);
+    KT_CHECK(abs(at.pan_100urad - 5000) <= 20);
+    g_rover.cfg.rate_rad_s = 0.0f;
+    /* STOP mid-move: the mast holds between start and target */
+    KT_CHECK(rover_move_nowait(&g_rover, -1.5f, -0.3f) == ROVER_OK);
+    KT_CHECK(rover_idle(&g_rover, 600u) == ROVER_OK);
+    KT_CHECK(rover_stop(&g_rover, &at) == ROVER_OK);
+    KT_CHECK(at.pan_100urad < 4500 && at.pan_100urad > -10000 && at.cmd_seq_ack == g_rover.seq);
+    KT_CHECK((at.state & TRN_MAST_ST_IN_POSITION) && !(at.state & TRN_MAST_ST_MOVING));
     /* heartbeats: every counter consecutive, nothing lost, nobody silent */
     KT_CHECK(g_rover.mast_hb.n_frames >= 10u && g_rover.stereo_hb.n_frames >= 10u);
     KT_CHECK(g_rover.mast_hb.n_gaps == 0u && g_rover.stereo_hb.n_gaps == 0u);

@@ -198,6 +198,22 @@ static rover_outcome_t service(rover_link_t *r, int32_t wait_ms)
     return ROVER_OK;
 }
 
+rover_outcome_t rover_idle(rover_link_t *r, uint32_t ms)
+{
+    uint32_t t0, it;
+    if (r == NULL) {
+        return ROVER_E_IO;
+    }
+    t0 = now_ms();
+    for (it = 0; it < ROVER_MAX_ITER && now_ms() - t0 < ms; ++it) {
+        rover_outcome_t o = service(r, 5);
+        if (o != ROVER_OK) {
+            return done(r, o);
+        }
+    }
+    return ROVER_OK;
+}
+
 rover_outcome_t rover_wait_alive(rover_link_t *r)
 {
     uint32_t t0, it;
@@ -220,29 +236,86 @@ rover_outcome_t rover_wait_alive(rover_link_t *r)
     return done(r, ROVER_E_SILENT);
 }
 
+/* Build MAST_CMD (new seq) as a port frame. */
+static int make_cmd(rover_link_t *r, float pan_rad, float tilt_rad, uint8_t mode, trn_mast_cmd_t *cmd,
+                    trn_lcan_frame_t *f)
+{
+    trn_can_frame_t pf;
+    float rate = r->cfg.rate_rad_s * 1e4f;
+    memset(cmd, 0, sizeof *cmd);
+    if (trn_can_angle_to_raw(pan_rad, &cmd->pan_100urad) != TRN_OK ||
+        trn_can_angle_to_raw(tilt_rad, &cmd->tilt_100urad) != TRN_OK || !(rate >= 0.0f && rate <= 65535.0f)) {
+        return 0;
+    }
+    cmd->rate_100urad_s = (uint16_t)(rate + 0.5f);
+    cmd->seq = ++r->seq;
+    cmd->mode = mode;
+    if (trn_can_mast_cmd_encode(cmd, &pf) != TRN_OK) {
+        return 0;
+    }
+    memset(f, 0, sizeof *f);
+    f->id = pf.id;
+    f->len = pf.dlc;
+    memcpy(f->data, pf.data, 8u);
+    return 1;
+}
+
+rover_outcome_t rover_move_nowait(rover_link_t *r, float pan_rad, float tilt_rad)
+{
+    trn_mast_cmd_t cmd;
+    trn_lcan_frame_t f;
+    if (r == NULL) {
+        return ROVER_E_IO;
+    }
+    if (!make_cmd(r, pan_rad, tilt_rad, TRN_MAST_MODE_MOVE, &cmd, &f) || trn_lcan_send(&r->can, &f, 100) != TRN_OK) {
+        return done(r, ROVER_E_IO);
+    }
+    return ROVER_OK;
+}
+
+rover_outcome_t rover_stop(rover_link_t *r, trn_mast_status_t *at)
+{
+    trn_mast_cmd_t cmd;
+    trn_lcan_frame_t f;
+    uint32_t t0, it, frames0;
+    if (r == NULL) {
+        return ROVER_E_IO;
+    }
+    if (!make_cmd(r, 0.0f, 0.0f, TRN_MAST_MODE_STOP, &cmd, &f) || trn_lcan_send(&r->can, &f, 100) != TRN_OK) {
+        return done(r, ROVER_E_IO);
+    }
+    t0 = now_ms();
+    frames0 = r->status_frames;
+    for (it = 0; it < ROVER_MAX_ITER; ++it) {
+        rover_outcome_t o = service(r, 5);
+        if (o != ROVER_OK) {
+            return done(r, o);
+        }
+        if (r->have_status && r->status_frames != frames0 && r->status.cmd_seq_ack == cmd.seq &&
+            !(r->status.state & TRN_MAST_ST_MOVING)) {
+            if (at != NULL) {
+                *at = r->status;
+            }
+            return done(r, r->status.faults != 0u ? ROVER_E_MAST_FAULT : ROVER_OK);
+        }
+        if (now_ms() - t0 >= r->cfg.move_timeout_ms) {
+            return done(r, ROVER_E_MAST_TIMEOUT);
+        }
+    }
+    return done(r, ROVER_E_MAST_TIMEOUT);
+}
+
 rover_outcome_t rover_point(rover_link_t *r, float pan_rad, float tilt_rad, trn_mast_status_t *at)
 {
     trn_mast_cmd_t cmd;
-    trn_can_frame_t pf;
     trn_lcan_frame_t f;
     uint32_t t0, t_sent, it, frames0;
     if (r == NULL) {
         return ROVER_E_IO;
     }
-    memset(&cmd, 0, sizeof cmd);
-    if (trn_can_angle_to_raw(pan_rad, &cmd.pan_100urad) != TRN_OK ||
-        trn_can_angle_to_raw(tilt_rad, &cmd.tilt_100urad) != TRN_OK) {
+    if (!make_cmd(r, pan_rad, tilt_rad, TRN_MAST_MODE_MOVE, &cmd, &f)) {
         return done(r, ROVER_E_IO);
     }
-    cmd.seq = ++r->seq;
-    cmd.mode = TRN_MAST_MODE_MOVE;
-    if (trn_can_mast_cmd_encode(&cmd, &pf) != TRN_OK) {
-        return done(r, ROVER_E_IO);
-    }
-    memset(&f, 0, sizeof f);
-    f.id = pf.id;
-    f.len = pf.dlc;
-    memcpy(f.data, pf.data, 8u);
     t0 = now_ms();
     t_sent = t0;
     frames0 = r->status_frames;

@@ -45,6 +45,7 @@ typedef struct {
     uint32_t power_offset;        /**< mast power enable output */
     uint32_t deployed_offset;     /**< mast deployed input */
     uint32_t trigger_pulse_us;    /**< pulse width */
+    float rate_rad_s;             /**< MAST_CMD rate_max, rad/s; 0 = the mast's default */
     uint32_t alive_timeout_ms;    /**< wait for both heartbeats */
     uint32_t move_timeout_ms;     /**< wait for in_position */
     uint32_t capture_timeout_ms;  /**< wait for the capture */
@@ -94,6 +95,24 @@ rover_outcome_t rover_wait_alive(rover_link_t *r);
  * @param[in] pan_rad, tilt_rad the angles.
  * @param[out] at the status that ended the wait (may be NULL). */
 rover_outcome_t rover_point(rover_link_t *r, float pan_rad, float tilt_rad, trn_mast_status_t *at);
+
+/** @brief Keep servicing the link (status, heartbeats, monitors) for ms
+ * milliseconds. The monitors time frames when they are taken from the
+ * socket, so a rover that does not service it for longer than the 300 ms
+ * silence threshold counts a silence even if the heartbeats were queued:
+ * wait with this, not with sleep.
+ * @retval ROVER_OK, ROVER_E_SILENT, ROVER_E_BUS_OFF, ROVER_E_IO */
+rover_outcome_t rover_idle(rover_link_t *r, uint32_t ms);
+
+/** @brief Send MAST_CMD STOP (new seq) and wait for a status that
+ * acknowledges it with moving clear (the mast holds where it stopped).
+ * @param[out] at that status (may be NULL).
+ * @retval as rover_point (ROVER_E_MAST_TIMEOUT after move_timeout_ms) */
+rover_outcome_t rover_stop(rover_link_t *r, trn_mast_status_t *at);
+
+/** @brief Send one MAST_CMD MOVE without waiting (for tests of STOP).
+ * @retval ROVER_OK, ROVER_E_IO */
+rover_outcome_t rover_move_nowait(rover_link_t *r, float pan_rad, float tilt_rad);
 
 /** @brief Take one capture: trigger pulse on GPIO (when configured), then
  * CAPTURE_CMD, then segments from the ISO-TP socket into the reassembler
