@@ -54,6 +54,15 @@ for lib in $(ldd "$ipbin" | grep -o '/[^ ]*'); do
   mkdir -p "$root$(dirname "$lib")"
   cp -L "$lib" "$root$lib"
 done
+# candump (can-utils) and its libraries, for recordings of the bus (kt_loop).
+if cdump=$(command -v candump); then
+  mkdir -p "$root$(dirname "$cdump")"
+  cp "$cdump" "$root$cdump"
+  for lib in $(ldd "$cdump" | grep -o '/[^ ]*'); do
+    mkdir -p "$root$(dirname "$lib")"
+    cp -L "$lib" "$root$lib"
+  done
+fi
 cp "$helper" "$root/bin/kt_exit"
 cp "$HERE/init.sh" "$root/init"
 chmod 755 "$root/init"

@@ -42,6 +42,8 @@ check traffic traffic.log 0
 check faults faults.log 0
 check faults_strict faults.log 1 --strict
 check malformed malformed.log 1
+# a capture of the simulator (tools/sim) recorded with candump -l in the VM (kt_loop)
+check sim_capture sim_capture.log 0 --strict
 
 # reading standard input gives the same decode
 "$trn" can-decode - <traffic.log >"$tmp/stdin.out" 2>&1 || { echo "FAIL stdin: exit status $?"; fail=1; }
@@ -55,7 +57,7 @@ diff -q traffic.out "$tmp/stdin.out" >/dev/null || { echo "FAIL stdin: output di
 # the fixtures are real candump -l syntax: can-utils' own parser (log2asc,
 # tools/setup.sh group `can`) reads every line of them as one event
 if command -v log2asc >/dev/null 2>&1; then
-  for log in traffic.log faults.log; do
+  for log in traffic.log faults.log sim_capture.log; do
     n_in=$(grep -c . "$log")
     n_out=$(log2asc -I "$log" vcan0 | tail -n +4 | grep -c .)
     if [ "$n_in" -ne "$n_out" ]; then
