@@ -43,16 +43,17 @@ static double ln_p1(uint32_t dc, const trn_lik_cfg_t *cfg)
 trn_status_t trn_outlier_density(const trn_vol_u8_t *dist, const trn_lik_cfg_t *cfg,
                                  double *k_per_m)
 {
-    /* One histogram, filled run by run: a run of equal distances (long runs
-     * of cap are the norm) costs one increment instead of one per voxel.
-     * Counts fit in uint32_t: at most TRN_MAX_DIM^2 * TRN_MAX_ZBINS voxels
-     * (2^31). One histogram keeps the stack near 1 KiB (TRN_STACK_LIMIT_BYTES). */
+    /* One histogram (about 1 KiB of stack, TRN_STACK_LIMIT_BYTES). Voxels at
+     * the cap, most of the volume, are not counted one by one: blocks of 16
+     * that are all cap are skipped by a vectorizable test, and hist[cap] is
+     * what remains of the total. Counts fit in uint32_t: at most
+     * TRN_MAX_DIM^2 * TRN_MAX_ZBINS voxels (2^31). */
     uint32_t hist[TRN_CHAMFER_CAP_MAX + 1];
     trn_status_t st;
-    size_t i, run_end, total;
+    size_t i, total, others = 0u;
     double k = 0.0;
     uint32_t d;
-    uint8_t vmax = 0u;
+    uint8_t capb;
     const uint8_t *v;
 
     if (dist == NULL || cfg == NULL || k_per_m == NULL) {
@@ -64,25 +65,33 @@ trn_status_t trn_outlier_density(const trn_vol_u8_t *dist, const trn_lik_cfg_t *
     for (d = 0; d <= TRN_CHAMFER_CAP_MAX; ++d) {
         hist[d] = 0u;
     }
+    capb = (uint8_t)cfg->cap;
     total = (size_t)dist->nx * (size_t)dist->ny * (size_t)dist->nz;
     v = dist->data;
-    i = 0u;
-    while (i < total) {
-        const uint8_t c = v[i];
-        run_end = i + 1u;
-        while (run_end < total && v[run_end] == c) {
-            ++run_end;
+    for (i = 0u; i < total; i += 16u) {
+        const size_t n = (total - i < 16u) ? total - i : 16u;
+        size_t j;
+        uint8_t diff = 0u;
+        if (n == 16u) {
+            for (j = 0u; j < 16u; ++j) {
+                diff = (uint8_t)(diff | (uint8_t)(v[i + j] ^ capb));
+            }
+            if (diff == 0u) {
+                continue; /* all 16 at the cap */
+            }
         }
-        vmax = c > vmax ? c : vmax;
-        if (vmax > TRN_CHAMFER_CAP_MAX) {
-            return TRN_E_ARG; /* keeps every index below in range */
+        for (j = 0u; j < n; ++j) {
+            const uint8_t c = v[i + j];
+            if (c != capb) {
+                if (c > capb) {
+                    return TRN_E_ARG; /* above the cap: not this table's transform */
+                }
+                hist[c] += 1u;
+                ++others;
+            }
         }
-        hist[c] += (uint32_t)(run_end - i);
-        i = run_end;
     }
-    if (vmax > cfg->cap) {
-        return TRN_E_ARG;
-    }
+    hist[capb] = (uint32_t)(total - others);
     for (d = 0; d <= cfg->cap; ++d) {
         const double n = (double)hist[d];
         if (n != 0.0) {
