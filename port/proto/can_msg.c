@@ -48,7 +48,7 @@ const char *trn_can_msg_name(trn_can_msg_kind_t kind)
     case TRN_CAN_MSG_CAPTURE_FC: return "CAPTURE_FC";
     case TRN_CAN_MSG_MAST_HB: return "MAST_HB";
     case TRN_CAN_MSG_STEREO_HB: return "STEREO_HB";
-    case TRN_CAN_MSG_NONE: return "NONE";
+    case TRN_CAN_MSG_NONE:
     default: return "NONE";
     }
 }

@@ -4,7 +4,8 @@
 For each function declared in the public headers (include/trn/*.h,
 port/include/**/*.h) the statuses named in its doc comment (@retval and
 @return lines: TRN_OK, TRN_E_*) are collected; "as <function>" inherits that
-function's list. Then the tests (tests/test_*.c) are split into statements; a
+function's list. Then the tests (tests/test_*.c, and the kernel tests tests/integration/kt_*.c
+that run the Linux port in a VM, stage 50-kernel) are split into statements; a
 status counts as tested for F when a statement calls F( and names the status,
 or assigns F's result (st = F(...)) and one of the next four statements names
 the status. Prints the missing (function, status) pairs and exits 1 if any.
@@ -45,7 +46,8 @@ def documented():
 
 def tested():
     seen = {}
-    for t in sorted(glob.glob(os.path.join(ROOT, "tests/test_*.c"))):
+    for t in sorted(glob.glob(os.path.join(ROOT, "tests/test_*.c")) +
+                    glob.glob(os.path.join(ROOT, "tests/integration/kt_*.c"))):
         text = open(t, encoding="utf-8").read()
         text = re.sub(r'/\*.*?\*/', ' ', text, flags=re.S)
         stmts = text.split(";")
