@@ -148,7 +148,8 @@ trn_status_t trn_rigid_apply(const trn_rigid_t *T, const trn_vec3f_t *in, size_t
  * @retval TRN_OK
  * @retval TRN_E_NULL  dem, pose or cfg NULL, or pts NULL with n > 0
  * @retval TRN_E_SIZE  dem is not a valid grid
- * @retval TRN_E_ARG   cell_m not finite and > 0, row_north not +-1,
+ * @retval TRN_E_ARG   cell_m not finite and > 0 (or so small that
+ *                     1 / cell_m overflows), row_north not +-1,
  *                     rover cell farther than TRN_MAX_DIM from the grid,
  *                     pose not finite
  * @retval TRN_E_NODATA no point landed in the grid (dem is all NaN)
