@@ -62,10 +62,10 @@ static trn_cap_err_t check_header(const uint8_t *wire, size_t *expected)
     return TRN_CAP_ERR_NONE;
 }
 
+/* The status of an error (never called with TRN_CAP_ERR_NONE). */
 static trn_status_t err_status(trn_cap_err_t e)
 {
     switch (e) {
-    case TRN_CAP_ERR_NONE: return TRN_OK;
     case TRN_CAP_ERR_MISSING:
     case TRN_CAP_ERR_DUPLICATE:
     case TRN_CAP_ERR_OUT_OF_ORDER:
