@@ -443,7 +443,32 @@ static void test_select_clauses(void **state)
     rb.pos.y_cells = (float)N - 0.4f;
     assert_int_equal(SEL(&w.map, &w.pg, &rb, ws, wsb), TRN_E_RANGE);
     assert_int_equal(SEL(&w.map, &w.pg, &rv, ws + 1, wsb), TRN_E_WORKSPACE);
+    mb = w.map;
+    mb.lnp.cap = (uint8_t)(TRN_CHAMFER_CAP_MAX + 1);
+    assert_int_equal(SEL(&mb, &w.pg, &rv, ws, wsb), TRN_E_SIZE);
+    /* a kernel table that was never built has no workspace size */
+    assert_int_equal(trn_select(&w.map, &kb, &w.pg, &cfg, &rv, c, cap, rk, 4, &res, ws, wsb),
+                     TRN_E_WORKSPACE);
+    assert_int_equal(trn_select(&w.map, &w.k, &w.pg, &cfg, &rv, c, 0u, rk, 4, &res, ws, wsb),
+                     TRN_E_CAPACITY);
 #undef SEL
+    /* more ranks asked than there are separated informative targets: the
+     * ranking stops early, each rank at least min_separation from the others */
+    {
+        size_t *all = malloc(cap * sizeof *all), a, b2;
+        double sep = (double)cfg.min_separation_m / (double)CELL;
+        assert_int_equal(trn_select(&w.map, &w.k, &w.pg, &cfg, &rv, c, cap, all, cap, &res, ws, wsb),
+                         TRN_OK);
+        assert_true(res.n_ranked >= 1u && res.n_ranked < cap && res.n_ranked <= res.n_informative);
+        for (a = 0; a < res.n_ranked; ++a) {
+            for (b2 = 0; b2 < a; ++b2) {
+                const double ex = (double)(c[all[a]].x - c[all[b2]].x);
+                const double ey = (double)(c[all[a]].y - c[all[b2]].y);
+                assert_true(ex * ex + ey * ey >= sep * sep);
+            }
+        }
+        free(all);
+    }
     free(c);
     free(ws);
     selworld_free(&w);
@@ -525,6 +550,17 @@ static void test_field_clauses_and_featureless(void **state)
     gb = g;
     gb.height = 5;
     assert_int_equal(F(&w.map, &w.k, &w.pg, &area, &gb, ws, wsb), TRN_E_SIZE);
+    /* one column and one row wide: the fill has no interval to interpolate over */
+    ab = area;
+    ab.x1 = ab.x0;
+    assert_int_equal(trn_grid_f32_init(&gb, out, 48, 1, 6), TRN_OK);
+    assert_int_equal(F(&w.map, &w.k, &w.pg, &ab, &gb, ws, wsb), TRN_OK);
+    assert_true(isinf(out[0]) && isinf(out[5]));
+    ab = area;
+    ab.y1 = ab.y0;
+    assert_int_equal(trn_grid_f32_init(&gb, out, 48, 8, 1), TRN_OK);
+    assert_int_equal(F(&w.map, &w.k, &w.pg, &ab, &gb, ws, wsb), TRN_OK);
+    assert_true(isinf(out[0]) && isinf(out[7]));
     assert_int_equal(F(&w.map, &w.k, &w.pg, &area, &g, ws + 1, wsb), TRN_E_WORKSPACE);
 #undef F
     free(ws);
