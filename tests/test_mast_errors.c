@@ -174,6 +174,33 @@ static void test_point_at_unreachable_and_limits(void **state)
     assert_true(pan > 0.0f && pan <= 3.1415927f);
 }
 
+/* fuzz_mast, crash-8d82e3590081e466674209ecc5dc1631d60d7b0a (a harness
+ * invariant, not a code defect): the tilt axis 14.4 m ahead of the pan axis,
+ * the target at the rover's origin behind it. atan2 gives about -pi and the
+ * camera offset takes asin(12 / 13.9) more: tilt -4.18 rad, not wrapped, as
+ * mast.h now states; the status is TRN_E_RANGE for every such tilt. */
+static void test_point_at_target_behind_the_tilt_axis(void **state)
+{
+    trn_mast_geom_t g;
+    const trn_rover_pose_t p = {0.0f, 0.0f, 0.0f, 0.0f};
+    const trn_vec3f_t t = {0.0f, 0.0f, 0.0f};
+    float pan = 0.0f, tilt = 0.0f;
+    (void)state;
+    memset(&g, 0, sizeof g);
+    g.pan_x_m = 0.5f;
+    g.pan_y_m = 0.1f;
+    g.tilt_fwd_m = 14.4f;
+    g.tilt_up_m = 1.0e-6f; /* the target slightly below the axis: atan2 near -pi, not +pi */
+    g.cam_up_m = 12.0f;
+    g.tilt_min_rad = -1.5f;
+    g.tilt_max_rad = 1.5f;
+    g.pan_min_rad = -3.1f;
+    g.pan_max_rad = 3.1f;
+    assert_int_equal(trn_mast_point_at(&g, &p, &t, &pan, &tilt), TRN_E_RANGE);
+    assert_true(tilt < -3.1415927f && tilt > -4.7123890f);
+    assert_true(fabsf(pan) <= 3.1415927f);
+}
+
 static void test_camera_to_map_each_argument(void **state)
 {
     trn_mast_geom_t g, b;
@@ -270,6 +297,7 @@ int main(void)
         cmocka_unit_test(test_geom_check_each_field),
         cmocka_unit_test(test_point_at_each_argument),
         cmocka_unit_test(test_point_at_unreachable_and_limits),
+        cmocka_unit_test(test_point_at_target_behind_the_tilt_axis),
         cmocka_unit_test(test_camera_to_map_each_argument),
         cmocka_unit_test(test_local_dem_checks_and_skips),
     };

@@ -94,8 +94,10 @@ trn_status_t trn_mast_geom_check(const trn_mast_geom_t *g);
  * @param[in]  g      geometry (checked).
  * @param[in]  pose   rover pose (finite).
  * @param[in]  target map point.
- * @param[out] pan_rad, tilt_rad  angles, pan wrapped to [-pi, pi]; written
- *             also when TRN_E_RANGE is returned.
+ * @param[out] pan_rad, tilt_rad  angles, pan wrapped to [-pi, pi]; tilt
+ *             not wrapped, in [-3pi/2, 3pi/2] (beyond +-pi only for a target
+ *             behind the tilt axis, always outside the tilt limits, so
+ *             TRN_E_RANGE); written also when TRN_E_RANGE is returned.
  * @retval TRN_OK     reachable within the limits
  * @retval TRN_E_RANGE the angles lie outside the joint limits
  * @retval TRN_E_NULL an argument NULL

@@ -8,8 +8,9 @@
  * otherwise the raw bits are used (NaN, inf, 3.4e38, subnormals).
  * Invariants:
  * - only the documented statuses;
- * - point_at: on OK / RANGE both angles are finite, pan in [-pi, pi] (+ float
- *   slack); OK only inside the joint limits, RANGE only outside; in sane
+ * - point_at: on OK / RANGE both angles are finite, pan in [-pi, pi], tilt
+ *   in [-3pi/2, 3pi/2] and beyond +-pi only with RANGE (+ float slack); OK
+ *   only inside the joint limits, RANGE only outside; in sane
  *   mode, OK means the boresight from the camera_to_map transform at those
  *   angles passes within 1 mm per metre (+ 1 mm) of the target, ahead;
  * - camera_to_map: R orthonormal with det +1 (1e-5) for any finite angles;
@@ -91,7 +92,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         int inside = pan >= g.pan_min_rad && pan <= g.pan_max_rad && tilt >= g.tilt_min_rad &&
                      tilt <= g.tilt_max_rad;
         FZ_CHECK(isfinite(pan) && isfinite(tilt));
-        FZ_CHECK(fabsf(pan) <= 3.1416f && fabsf(tilt) <= 3.1416f);
+        /* pan wrapped to [-pi, pi]; tilt atan2 - asin, not wrapped (mast.h) */
+        FZ_CHECK(fabsf(pan) <= 3.1416f && fabsf(tilt) <= 4.7124f);
+        if (fabsf(tilt) > 3.1416f) {
+            FZ_CHECK(st == TRN_E_RANGE);
+        }
         FZ_CHECK(inside == (st == TRN_OK));
     }
     if (st == TRN_OK && sane) {
