@@ -567,6 +567,61 @@ static void test_field_clauses_and_featureless(void **state)
     selworld_free(&w);
 }
 
+/* One rock on a flat plain: rover positions within reach of it have an
+ * informative target, positions far from it have none, so some coarse
+ * squares of the field have one to three informative corners. The field is
+ * finite near the rock, +inf far from it, and never below its minimum. */
+static void test_field_one_rock_on_a_plain(void **state)
+{
+    selworld_t w;
+    synth_terrain_t t;
+    synth_rock_t rock = {1.0, 1.0, 0.2, 0.3};
+    float *dem = malloc(sizeof(float) * N * N);
+    trn_sigma_model_t gm;
+    trn_xy_t sp = {10.0f, 10.0f};
+    trn_select_cfg_t sc;
+    trn_field_cfg_t fc;
+    trn_field_stats_t st;
+    trn_window_t area = {6, 6, 33, 33};
+    trn_grid_f32_t g;
+    float out[28 * 28];
+    uint8_t ev[28 * 28];
+    size_t wsb, i, nfin = 0u, ninf = 0u;
+    uint8_t *ws;
+    (void)state;
+    memset(&t, 0, sizeof t);
+    t.rocks = &rock;
+    t.n_rocks = 1u;
+    t.bg_wave_m = 7.0; /* no background: bg_amp_m is 0 */
+    synth_render(&t, dem, N, N, 0.0, 0.0, (double)CELL);
+    trn_sigma_global_default(&gm);
+    assert_int_equal(selworld_init(&w, N, dem, &gm, &sp, 1), TRN_OK);
+    free(dem);
+    small_cfg(&sc);
+    trn_field_cfg_default(&fc);
+    fc.coarse_step_cells = 8;
+    assert_int_equal(trn_grid_f32_init(&g, out, 28u * 28u, 28, 28), TRN_OK);
+    wsb = trn_field_workspace_bytes(&sc, &w.map, &w.k);
+    ws = selworld_alloc(wsb);
+    assert_int_equal(trn_field(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 28u * 28u, &st,
+                               ws, wsb), TRN_OK);
+    assert_true(isfinite(st.best_m));
+    for (i = 0; i < 28u * 28u; ++i) {
+        if (isfinite(out[i])) {
+            ++nfin;
+            assert_true((double)out[i] >= st.best_m - 1e-6);
+        } else {
+            ++ninf;
+        }
+    }
+    assert_true(nfin > 0u && ninf > 0u);
+    /* the best position sees the rock: within reach plus half a patch of it */
+    assert_true(hypot((double)st.best_x - 10.0, (double)st.best_y - 10.0) * (double)CELL <=
+                (double)sc.max_range_m + (double)sc.patch_m);
+    free(ws);
+    selworld_free(&w);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -579,6 +634,7 @@ int main(void)
         cmocka_unit_test(test_select_clauses),
         cmocka_unit_test(test_field_cfg_and_size_clauses),
         cmocka_unit_test(test_field_clauses_and_featureless),
+        cmocka_unit_test(test_field_one_rock_on_a_plain),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
