@@ -454,10 +454,11 @@ static uint8_t pyr_src(const uint8_t *r, int32_t lo, int32_t nx, int32_t x, uint
  * goes by PYR_LANES-wide blocks (the last one may overlap the one before:
  * the output never aliases a source); the few columns at each end one by one.
  */
-static void pyr_row(uint8_t *row, const uint8_t *r0, const uint8_t *r1, int32_t lo, int32_t nx,
+static void pyr_row(uint8_t *row, const uint8_t *r0_in, const uint8_t *r1_in, int32_t lo, int32_t nx,
                     int32_t pad, int32_t h, uint8_t cap)
 {
     const int32_t pnx = nx + pad;
+    const uint8_t *r0 = r0_in, *r1 = r1_in;
     int32_t x, a, b;
     if (r0 == NULL && r1 == NULL) {
         for (x = 0; x < pnx; ++x) {

@@ -170,7 +170,8 @@ trn_status_t trn_mast_local_dem(const trn_vec3f_t *pts, size_t n, const trn_rove
     if (trn_grid_f32_check(dem) != TRN_OK) {
         return TRN_E_SIZE;
     }
-    if (!isfinite(cfg->cell_m) || !(cfg->cell_m > 0.0f) || (cfg->row_north != 1 && cfg->row_north != -1) ||
+    if (!isfinite(cfg->cell_m) || !(cfg->cell_m > 0.0f) || !isfinite(1.0f / cfg->cell_m) ||
+        (cfg->row_north != 1 && cfg->row_north != -1) ||
         cfg->rover_col < -TRN_MAX_DIM || cfg->rover_col > dem->width + TRN_MAX_DIM ||
         cfg->rover_row < -TRN_MAX_DIM || cfg->rover_row > dem->height + TRN_MAX_DIM ||
         !isfinite(pose->x_m) || !isfinite(pose->y_m)) {
@@ -191,8 +192,8 @@ trn_status_t trn_mast_local_dem(const trn_vec3f_t *pts, size_t n, const trn_rove
         fc = floorf((pts[i].x - pose->x_m) * inv + 0.5f);
         fr = floorf((pts[i].y - pose->y_m) * inv + 0.5f);
         /* outside +-2*TRN_MAX_DIM cells cannot be on the grid; keeps the
-         * conversion to int32 defined */
-        if (fabsf(fc) > (float)(2 * TRN_MAX_DIM) || fabsf(fr) > (float)(2 * TRN_MAX_DIM)) {
+         * conversion to int32 defined (written so that NaN is skipped too) */
+        if (!(fabsf(fc) <= (float)(2 * TRN_MAX_DIM)) || !(fabsf(fr) <= (float)(2 * TRN_MAX_DIM))) {
             continue;
         }
         c = cfg->rover_col + (int32_t)fc;

@@ -12,6 +12,7 @@
 #include <float.h>
 #include <math.h>
 
+#include "trn/mast.h"
 #include "trn/peakfit.h"
 #include "trn/terrain.h"
 
@@ -122,6 +123,34 @@ static void test_highpass_extreme_heights_stay_finite(void **state)
     assert_true(out_buf[1 * W + 4] == FLT_MAX);  /* clamped, not +inf */
 }
 
+/* fuzz_mast (raw mode), input build/fuzz/artifacts/mast-subnormal-cell
+ * (crafted while writing the harness from the reading of mast.c, then run
+ * through it): cell_m = 1e-45 m is finite and > 0, so accepted, but
+ * 1 / cell_m overflows to +inf; a point exactly at the rover position gives
+ * 0 * inf = NaN cells, and the NaN went into an int32_t conversion
+ * (undefined behaviour; clang's UBSan: "-nan is outside the range of
+ * representable values of type 'int'"; on x86 the point was silently
+ * dropped, TRN_E_NODATA). Contract after the fix: a cell size whose
+ * reciprocal is not finite is TRN_E_ARG, like a non-finite one. */
+static void test_mast_local_dem_subnormal_cell(void **state)
+{
+    const trn_vec3f_t pt = { 0.0f, 0.0f, 1.0f };
+    const trn_rover_pose_t pose = { 0.0f, 0.0f, 0.0f, 0.0f };
+    trn_local_dem_cfg_t cfg = { 1.0e-45f, 2, 2, 1 };
+    float cells[25];
+    trn_grid_f32_t dem;
+    size_t used = 99u;
+    (void)state;
+    assert_int_equal(trn_grid_f32_init(&dem, cells, 25u, 5, 5), TRN_OK);
+    assert_true(cfg.cell_m > 0.0f && isinf(1.0f / cfg.cell_m));
+    assert_int_equal(trn_mast_local_dem(&pt, 1u, &pose, &cfg, &dem, &used), TRN_E_ARG);
+    /* the smallest normal float still bins the point into the rover cell */
+    cfg.cell_m = FLT_MIN;
+    assert_int_equal(trn_mast_local_dem(&pt, 1u, &pose, &cfg, &dem, &used), TRN_OK);
+    assert_int_equal((int)used, 1);
+    assert_true(TRN_GRID_AT(&dem, 2, 2) == 1.0f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -129,6 +158,7 @@ int main(void)
         cmocka_unit_test(test_peakfit_gradient_overflow),
         cmocka_unit_test(test_peakfit_difference_limit),
         cmocka_unit_test(test_highpass_extreme_heights_stay_finite),
+        cmocka_unit_test(test_mast_local_dem_subnormal_cell),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

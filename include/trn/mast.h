@@ -94,8 +94,10 @@ trn_status_t trn_mast_geom_check(const trn_mast_geom_t *g);
  * @param[in]  g      geometry (checked).
  * @param[in]  pose   rover pose (finite).
  * @param[in]  target map point.
- * @param[out] pan_rad, tilt_rad  angles, pan wrapped to [-pi, pi]; written
- *             also when TRN_E_RANGE is returned.
+ * @param[out] pan_rad, tilt_rad  angles, pan wrapped to [-pi, pi]; tilt
+ *             not wrapped, in [-3pi/2, 3pi/2] (beyond +-pi only for a target
+ *             behind the tilt axis, always outside the tilt limits, so
+ *             TRN_E_RANGE); written also when TRN_E_RANGE is returned.
  * @retval TRN_OK     reachable within the limits
  * @retval TRN_E_RANGE the angles lie outside the joint limits
  * @retval TRN_E_NULL an argument NULL
@@ -148,7 +150,8 @@ trn_status_t trn_rigid_apply(const trn_rigid_t *T, const trn_vec3f_t *in, size_t
  * @retval TRN_OK
  * @retval TRN_E_NULL  dem, pose or cfg NULL, or pts NULL with n > 0
  * @retval TRN_E_SIZE  dem is not a valid grid
- * @retval TRN_E_ARG   cell_m not finite and > 0, row_north not +-1,
+ * @retval TRN_E_ARG   cell_m not finite and > 0 (or so small that
+ *                     1 / cell_m overflows), row_north not +-1,
  *                     rover cell farther than TRN_MAX_DIM from the grid,
  *                     pose not finite
  * @retval TRN_E_NODATA no point landed in the grid (dem is all NaN)

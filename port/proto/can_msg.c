@@ -48,7 +48,7 @@ const char *trn_can_msg_name(trn_can_msg_kind_t kind)
     case TRN_CAN_MSG_CAPTURE_FC: return "CAPTURE_FC";
     case TRN_CAN_MSG_MAST_HB: return "MAST_HB";
     case TRN_CAN_MSG_STEREO_HB: return "STEREO_HB";
-    case TRN_CAN_MSG_NONE: return "NONE";
+    case TRN_CAN_MSG_NONE:
     default: return "NONE";
     }
 }
@@ -64,13 +64,11 @@ trn_status_t trn_can_angle_to_raw(float rad, int16_t *raw)
     }
     /* 10000 is exact in float, so rad * 10000 carries one rounding only */
     counts = rad * 10000.0f;
-    if (!(counts >= -32768.5f && counts < 32767.5f)) {
+    /* exactly the counts that round (ties away from zero) into int16 */
+    if (!(counts > -32768.5f && counts < 32767.5f)) {
         return TRN_E_ARG;
     }
     counts = (counts >= 0.0f) ? floorf(counts + 0.5f) : -floorf(-counts + 0.5f);
-    if (counts < -32768.0f || counts > 32767.0f) {
-        return TRN_E_ARG;
-    }
     *raw = (int16_t)counts;
     return TRN_OK;
 }

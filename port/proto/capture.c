@@ -62,10 +62,10 @@ static trn_cap_err_t check_header(const uint8_t *wire, size_t *expected)
     return TRN_CAP_ERR_NONE;
 }
 
+/* The status of an error (never called with TRN_CAP_ERR_NONE). */
 static trn_status_t err_status(trn_cap_err_t e)
 {
     switch (e) {
-    case TRN_CAP_ERR_NONE: return TRN_OK;
     case TRN_CAP_ERR_MISSING:
     case TRN_CAP_ERR_DUPLICATE:
     case TRN_CAP_ERR_OUT_OF_ORDER:
@@ -252,6 +252,7 @@ trn_status_t trn_capture_rx_segment(trn_capture_rx_t *rx, const uint8_t *seg, si
     uint16_t id;
     uint8_t idx, cnt;
     size_t plen, room, take, i, expected = TRN_CAP_WIRE_MAX;
+    int overlong;
     trn_cap_err_t e;
     trn_status_t restarted = TRN_OK;
     if (rx == NULL || seg == NULL || out == NULL || complete == NULL) {
@@ -288,7 +289,8 @@ trn_status_t trn_capture_rx_segment(trn_capture_rx_t *rx, const uint8_t *seg, si
     /* append what fits, then judge the header, then the length */
     plen = len - TRN_CAP_SEG_HEADER_BYTES;
     room = TRN_CAP_WIRE_MAX - rx->got;
-    take = (plen < room) ? plen : room;
+    overlong = (plen > room) ? 1 : 0;
+    take = (overlong != 0) ? room : plen;
     for (i = 0u; i < take; ++i) {
         rx->wire[rx->got + i] = seg[TRN_CAP_SEG_HEADER_BYTES + i];
     }
@@ -302,7 +304,7 @@ trn_status_t trn_capture_rx_segment(trn_capture_rx_t *rx, const uint8_t *seg, si
             return rx_fail(rx, e, err);
         }
     }
-    if (take < plen || rx->got > expected) {
+    if (overlong != 0 || rx->got > expected) {
         return rx_fail(rx, TRN_CAP_ERR_OVERFLOW, err);
     }
     rx->next_index = (uint8_t)(idx + 1u);
@@ -364,7 +366,7 @@ const char *trn_cap_err_name(trn_cap_err_t err)
     case TRN_CAP_ERR_TRUNCATED: return "TRUNCATED";
     case TRN_CAP_ERR_CRC: return "CRC";
     case TRN_CAP_ERR_TRANSPORT: return "TRANSPORT";
-    case TRN_CAP_ERR_COUNT: return "UNKNOWN";
+    case TRN_CAP_ERR_COUNT:
     default: return "UNKNOWN";
     }
 }

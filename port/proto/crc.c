@@ -3,20 +3,21 @@
 
 uint32_t trn_crc32_update(uint32_t crc, const uint8_t *data, size_t n)
 {
+    uint32_t c = crc; /* the parameter stays unmodified (MISRA 17.8) */
     size_t i;
     if (data == NULL) {
-        return crc;
+        return c;
     }
     for (i = 0u; i < n; ++i) {
         unsigned bit;
-        crc ^= (uint32_t)data[i];
+        c ^= (uint32_t)data[i];
         for (bit = 0u; bit < 8u; ++bit) {
             /* mask is all ones when the low bit is set */
-            uint32_t mask = 0u - (crc & 1u);
-            crc = (crc >> 1) ^ (0xEDB88320u & mask);
+            uint32_t mask = 0u - (c & 1u);
+            c = (c >> 1) ^ (0xEDB88320u & mask);
         }
     }
-    return crc;
+    return c;
 }
 
 uint32_t trn_crc32_final(uint32_t crc)

@@ -366,7 +366,7 @@ const char *trn_isotp_err_name(trn_isotp_err_t err)
     case TRN_ISOTP_ERR_TIMEOUT_CR: return "TIMEOUT_CR";
     case TRN_ISOTP_ERR_UNEXPECTED_FC: return "UNEXPECTED_FC";
     case TRN_ISOTP_ERR_SHORT_CF: return "SHORT_CF";
-    case TRN_ISOTP_ERR_COUNT: return "UNKNOWN";
+    case TRN_ISOTP_ERR_COUNT:
     default: return "UNKNOWN";
     }
 }
@@ -553,7 +553,7 @@ const char *trn_isotp_tx_err_name(trn_isotp_tx_err_t err)
     case TRN_ISOTP_TX_ERR_OVERFLOW: return "OVERFLOW";
     case TRN_ISOTP_TX_ERR_INVALID_FC: return "INVALID_FC";
     case TRN_ISOTP_TX_ERR_UNEXPECTED_FC: return "UNEXPECTED_FC";
-    case TRN_ISOTP_TX_ERR_COUNT: return "UNKNOWN";
+    case TRN_ISOTP_TX_ERR_COUNT:
     default: return "UNKNOWN";
     }
 }

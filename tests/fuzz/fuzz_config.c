@@ -1,7 +1,9 @@
 /* fuzz_config.c - configuration and view validation with arbitrary values:
  * trn_terrain_cfg_check, trn_lik_cfg_check, trn_map_cfg_check, the grid and
  * volume view checks and constructors, and the sizing functions
- * (trn_highpass_workspace_bytes, trn_pyramid_bytes, trn_map_bytes). They take
+ * (trn_highpass_workspace_bytes, trn_pyramid_bytes, trn_map_bytes); then
+ * trn_sigma_model_check, trn_kernels_build (taps sum to 1), trn_select_cfg_check
+ * with trn_select_max_candidates, trn_field_cfg_check, trn_mast_geom_check. They take
  * numbers straight from a configuration file or a link, so they must accept
  * every bit pattern: no UB (UBSan aborts on signed overflow, bad shifts,
  * float-to-int overflow), and a size only for a configuration that checks OK. */
@@ -89,5 +91,72 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         FZ_CHECK((size_t)v.nx * (size_t)v.ny * (size_t)v.nz <= 64u);
     }
     FZ_CHECK(trn_strerror((trn_status_t)fz_i32(&f)) != NULL);
+
+    /* the configurations of spread, select, field and mast (appended, so
+     * the older seed files still mean what they meant) */
+    {
+        static trn_kernels_t k;
+        trn_sigma_model_t sm;
+        trn_select_cfg_t sc;
+        trn_field_cfg_t fc;
+        trn_mast_geom_t mg;
+        float cell, *gf = (float *)(void *)&mg;
+        size_t i;
+        int32_t j;
+
+        sm.sigma_min_m = fz_f32(&f);
+        sm.k_per_m = fz_f32(&f);
+        st = trn_sigma_model_check(&sm);
+        FZ_CHECK(st == TRN_OK || st == TRN_E_ARG);
+        if (st == TRN_OK) {
+            FZ_CHECK(sm.sigma_min_m >= 0.0f && sm.sigma_min_m <= 100.0f && sm.k_per_m >= 0.0f &&
+                     sm.k_per_m <= 100.0f);
+        }
+        st = trn_kernels_build(&k, fz_f32(&f));
+        FZ_CHECK(st == TRN_OK || st == TRN_E_ARG);
+        if (st == TRN_OK) {
+            for (j = 0; j < TRN_KERNEL_COUNT; ++j) {
+                double sum = 0.0;
+                FZ_CHECK(k.radius[j] >= 1 && k.radius[j] <= TRN_KERNEL_MAX_RADIUS);
+                for (i = 0; i < 2u * TRN_KERNEL_MAX_RADIUS + 1u; ++i) {
+                    FZ_CHECK(k.taps[j][i] >= 0.0f);
+                    sum += (double)k.taps[j][i];
+                }
+                FZ_CHECK(sum > 1.0 - 1.0e-5 && sum < 1.0 + 1.0e-5);
+            }
+            FZ_CHECK(trn_kernel_pick(&k, fz_f32(&f)) < TRN_KERNEL_COUNT);
+        }
+        sc.min_range_m = fz_f32(&f);
+        sc.max_range_m = fz_f32(&f);
+        sc.pan_min_rad = fz_f32(&f);
+        sc.pan_max_rad = fz_f32(&f);
+        sc.footprint_radius_m = fz_f32(&f);
+        sc.patch_m = fz_f32(&f);
+        sc.stride_cells = fz_i32(&f);
+        sc.min_separation_m = fz_f32(&f);
+        sc.local_sigma = sm;
+        cell = fz_f32(&f);
+        st = trn_select_cfg_check(&sc, cell);
+        FZ_CHECK(st == TRN_OK || st == TRN_E_ARG);
+        /* a count only for a configuration that checks OK */
+        FZ_CHECK((trn_select_max_candidates(&sc, cell) > 0u) == (st == TRN_OK));
+        fc.coarse_step_cells = fz_i32(&f);
+        fc.margin_rel = fz_f32(&f);
+        fc.change_rel = fz_f32(&f);
+        st = trn_field_cfg_check(&fc);
+        FZ_CHECK(st == TRN_OK || st == TRN_E_ARG);
+        if (st == TRN_OK) {
+            FZ_CHECK(fc.coarse_step_cells >= 1 && fc.coarse_step_cells <= 256 &&
+                     (fc.coarse_step_cells & (fc.coarse_step_cells - 1)) == 0);
+        }
+        for (i = 0; i < sizeof mg / sizeof(float); ++i) {
+            gf[i] = fz_f32(&f);
+        }
+        st = trn_mast_geom_check(&mg);
+        FZ_CHECK(st == TRN_OK || st == TRN_E_ARG);
+        if (st == TRN_OK) {
+            FZ_CHECK(mg.pan_min_rad <= mg.pan_max_rad && mg.tilt_min_rad <= mg.tilt_max_rad);
+        }
+    }
     return 0;
 }

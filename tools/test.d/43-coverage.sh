@@ -5,7 +5,15 @@
 #
 #   src/          lines >= 95 %, branches >= 95 %   (the core)
 #   port/proto/   lines and branches 100 %          (protocol, reassembly)
-#   port/         lines >= 80 %, branches >= 70 %   (OS code; rest of port/)
+#   port/         lines >= 65 %, branches >= 60 %   (OS code; rest of port/)
+#
+# The OS code's floor is what the host can reach: argument checks, the
+# framing, error-frame and timeout logic through a Unix socket pair, failing
+# system calls on pipes and closed descriptors (tests/test_port_linux*.c).
+# Opening a CAN or can-isotp socket and everything after opening a GPIO chip
+# needs vcan, can-isotp or gpio-sim: the kernel tests run that in a VM
+# (stage 50-kernel, tests/integration), whose static programs gcov does not
+# count (docs/assurance.md, "Coverage").
 #
 # A floor applies to the directory's total, so new code merged into a
 # directory must arrive with its tests to keep the total there. A directory
@@ -48,5 +56,5 @@ floor() {
 }
 floor 'src/' 'core src/' 95 95
 floor 'port/proto/' 'port/proto/' 100 100
-floor 'port/(?!proto/)' 'port/ (OS code)' 80 70
+floor 'port/(?!proto/)' 'port/ (OS code)' 65 60
 exit $fail
