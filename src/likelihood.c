@@ -806,9 +806,11 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
 
 trn_status_t trn_points_order(trn_point_t *pts, size_t n, int32_t nz)
 {
-    /* uint32_t bookkeeping (n <= UINT32_MAX is checked) keeps the frame near
-     * 1.6 KiB on every target (TRN_STACK_LIMIT_BYTES). */
-    uint32_t count[TRN_MAX_ZBINS], next[TRN_MAX_ZBINS], end[TRN_MAX_ZBINS];
+    /* uint32_t bookkeeping (n <= UINT32_MAX is checked), and count[] reused
+     * as each bin's end once the starts are known, keep the frame near
+     * 1.2 KiB on every target (TRN_STACK_LIMIT_BYTES). */
+    uint32_t count[TRN_MAX_ZBINS], next[TRN_MAX_ZBINS];
+    uint32_t *const end = count; /* after the prefix sums: end of each bin */
     uint8_t rank[TRN_MAX_ZBINS];
     uint32_t pos;
     size_t i, moves;
@@ -850,7 +852,7 @@ trn_status_t trn_points_order(trn_point_t *pts, size_t n, int32_t nz)
     for (a = 0; a < nz; ++a) {
         next[rank[a]] = pos;
         pos += count[rank[a]];
-        end[rank[a]] = pos;
+        end[rank[a]] = pos; /* overwrites count[rank[a]], read just above */
     }
     /* In-place bucket permutation: every inner step puts one point into its
      * bin's next free slot for good, so there are at most n of them. */
