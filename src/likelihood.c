@@ -68,27 +68,33 @@ trn_status_t trn_outlier_density(const trn_vol_u8_t *dist, const trn_lik_cfg_t *
     capb = (uint8_t)cfg->cap;
     total = (size_t)dist->nx * (size_t)dist->ny * (size_t)dist->nz;
     v = dist->data;
-    for (i = 0u; i < total; i += 16u) {
-        const size_t n = (total - i < 16u) ? total - i : 16u;
+    for (i = 0u; i + 16u <= total; i += 16u) {
         size_t j;
         uint8_t diff = 0u;
-        if (n == 16u) {
-            for (j = 0u; j < 16u; ++j) {
-                diff = (uint8_t)(diff | (uint8_t)(v[i + j] ^ capb));
-            }
-            if (diff == 0u) {
-                continue; /* all 16 at the cap */
-            }
+        for (j = 0u; j < 16u; ++j) {
+            diff = (uint8_t)(diff | (uint8_t)(v[i + j] ^ capb));
         }
-        for (j = 0u; j < n; ++j) {
-            const uint8_t c = v[i + j];
-            if (c != capb) {
+        if (diff != 0u) { /* not all 16 at the cap */
+            for (j = 0u; j < 16u; ++j) {
+                const uint8_t c = v[i + j];
                 if (c > capb) {
                     return TRN_E_ARG; /* above the cap: not this table's transform */
                 }
-                hist[c] += 1u;
-                ++others;
+                if (c != capb) {
+                    hist[c] += 1u;
+                    ++others;
+                }
             }
+        }
+    }
+    for (; i < total; ++i) { /* the last total % 16 voxels */
+        const uint8_t c = v[i];
+        if (c > capb) {
+            return TRN_E_ARG;
+        }
+        if (c != capb) {
+            hist[c] += 1u;
+            ++others;
         }
     }
     hist[capb] = (uint32_t)(total - others);
