@@ -64,8 +64,8 @@ if [ "$rc" -ne 0 ]; then
   exit "$rc"
 fi
 
-# The whole 256 x 256 field with the library's defaults: about 7,700 selections, 45-53 s of CPU
-# (44-71 s wall on the shared 2-core development machine).
+# The whole 256 x 256 field with the library's defaults: about 5,200 selections (12.7x fewer
+# than cells), about 45 s wall on the shared 2-core development machine (2026-11-25).
 step "3/5 field (every rover position of the map, coarse to fine; about a minute)"
 "$T" field --dem terrain.tif --out field.tif --evaluated-out evaluated.tif --json > field.json
 
