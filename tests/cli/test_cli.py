@@ -22,36 +22,18 @@ from osgeo import gdal
 
 gdal.UseExceptions()
 
+import clitest  # noqa: E402  (tests/cli/, the script's own directory)
+
 TRN = os.path.abspath(sys.argv[1])
 WORK = os.path.abspath(sys.argv[2])
-failures = []
-checks = 0
+H = clitest.Harness(TRN, sub=())
+check, run, expect_error = H.check, H.run, H.expect_error
 
 
-def check(cond, what):
-    global checks
-    checks += 1
-    if not cond:
-        failures.append(what)
-        print("FAIL:", what)
 
 
-def run(*args):
-    p = subprocess.run([TRN] + [str(a) for a in args], capture_output=True, text=True, timeout=300)
-    return p.returncode, p.stdout, p.stderr
 
 
-def expect_error(rc_want, needle, *args):
-    """A bad input: exit code, exactly one stderr line `trn <cmd>: ...` holding needle, no stdout."""
-    rc, out, err = run(*args)
-    cmd = args[0]
-    lines = err.splitlines()
-    label = "trn " + " ".join(str(a) for a in args)
-    check(rc == rc_want, f"{label}: exit {rc}, want {rc_want} (stderr: {err.strip()!r})")
-    check(len(lines) == 1, f"{label}: {len(lines)} stderr lines, want 1: {err!r}")
-    check(err.startswith(f"trn {cmd}: "), f"{label}: message does not start with 'trn {cmd}: ': {err!r}")
-    check(needle in err, f"{label}: message lacks {needle!r}: {err!r}")
-    check(out == "", f"{label}: stdout not empty: {out!r}")
 
 
 def run_json(*args):
@@ -325,5 +307,4 @@ if have_mpl:
     check(r.returncode != 0 and "cannot read" in r.stderr and not os.path.exists(p("no.png")),
           "trn_plot.py dem on a missing file fails with a reason")
 
-print(f"{checks} checks, {len(failures)} failed")
-sys.exit(1 if failures else 0)
+sys.exit(H.finish())

@@ -17,33 +17,18 @@ import shutil
 import subprocess
 import sys
 
+import clitest  # noqa: E402  (tests/cli/, the script's own directory)
+
 TRN = os.path.abspath(sys.argv[1])
 WORK = os.path.abspath(sys.argv[2])
-failures = []
-checks = 0
+H = clitest.Harness(TRN, sub=("experiment",))
+check, run, expect_error = H.check, H.run, H.expect_error
 
 
-def check(cond, what):
-    global checks
-    checks += 1
-    if not cond:
-        failures.append(what)
-        print("FAIL:", what)
 
 
-def run(*args):
-    p = subprocess.run([TRN, "experiment"] + [str(a) for a in args], capture_output=True, text=True, timeout=300)
-    return p.returncode, p.stdout, p.stderr
 
 
-def expect_error(rc_want, needle, *args):
-    rc, out, err = run(*args)
-    label = "trn experiment " + " ".join(str(a) for a in args)
-    check(rc == rc_want, f"{label}: exit {rc}, want {rc_want} (stderr: {err.strip()!r})")
-    check(len(err.splitlines()) == 1, f"{label}: want one stderr line: {err!r}")
-    check(err.startswith("trn experiment: "), f"{label}: message lacks the 'trn experiment: ' prefix: {err!r}")
-    check(needle in err, f"{label}: message lacks {needle!r}: {err!r}")
-    check(out == "", f"{label}: stdout not empty: {out!r}")
 
 
 shutil.rmtree(WORK, ignore_errors=True)
@@ -172,5 +157,4 @@ if have_mpl:
     check(p.returncode != 0 and "not `trn experiment --json` output" in p.stderr
           and not os.path.exists(os.path.join(WORK, "no.png")), "trn_plot.py experiment on a wrong JSON")
 
-print(f"{checks} checks, {len(failures)} failed")
-sys.exit(1 if failures else 0)
+sys.exit(H.finish())

@@ -21,6 +21,8 @@ import shutil
 import subprocess
 import sys
 
+import clitest  # noqa: E402  (tests/cli/, the script's own directory)
+
 TRN = os.path.abspath(sys.argv[1])
 WORK = os.path.abspath(sys.argv[2])
 INSTR = "--instructions" in sys.argv[3:]
@@ -29,22 +31,12 @@ STAGES = ["highpass_occupancy", "chamfer", "map_build", "prob_map", "select",
           "local_occupancy", "search", "peak_fit", "localize"]
 BASE = ["--map-cells", "128", "--local-cells", "32", "--max-range-m", "4"]
 SMALL = BASE + ["--window-cells", "10", "--runs", "3"]
-failures = []
-checks = 0
+H = clitest.Harness(TRN, sub=("profile",), timeout=600)
+check, run, expect_error = H.check, H.run, H.expect_error
 
 
-def check(cond, what):
-    global checks
-    checks += 1
-    if not cond:
-        failures.append(what)
-        print("FAIL:", what)
 
 
-def run(*args, timeout=600):
-    p = subprocess.run([TRN, "profile"] + [str(a) for a in args], capture_output=True, text=True,
-                       timeout=timeout)
-    return p.returncode, p.stdout, p.stderr
 
 
 def write(name, text):
@@ -54,15 +46,6 @@ def write(name, text):
     return path
 
 
-def expect_error(rc_want, needle, *args):
-    rc, out, err = run(*args)
-    label = "trn profile " + " ".join(str(a) for a in args)
-    lines = err.splitlines()
-    check(rc == rc_want, f"{label}: exit {rc}, want {rc_want} ({err.strip()!r})")
-    check(len(lines) == 1, f"{label}: {len(lines)} stderr lines, want 1: {err!r}")
-    check(err.startswith("trn profile: "), f"{label}: message does not start with 'trn profile: ': {err!r}")
-    check(needle in err, f"{label}: message lacks {needle!r}: {err!r}")
-    check(out == "", f"{label}: stdout not empty")
 
 
 def instructions_test():
@@ -264,8 +247,7 @@ def stack_test(out_json):
 
 
 def finish():
-    print(f"test_profile: {checks} checks, {len(failures)} failed")
-    return 1 if failures else 0
+    return H.finish("test_profile")
 
 
 if __name__ == "__main__":

@@ -137,7 +137,7 @@ int trn_cmd_field(int argc, char **argv) {
   opts[3] = (cli_opt_t){"--coarse-step-cells", CLI_LONG, &coarse, 1, 256, 0, "N",
                         "first lattice step, a power of two (default 16)", 0};
   opts[4] = (cli_opt_t){"--margin-rel", CLI_DOUBLE, &margin, 0.0, 100.0, 0, "M",
-                        "refine squares within M x spread of the best (default 0.5)", 0};
+                        "refine squares within M x spread of the best (default 0.4)", 0};
   opts[5] = (cli_opt_t){"--change-rel", CLI_DOUBLE, &change, 0.0, 100.0, 0, "C",
                         "refine squares changing by more than C x spread (default 1.5)", 0};
   opts[6] = (cli_opt_t){"--evaluated-out", CLI_STRING, &ev_out, 0, 0, 0, "FILE.tif",

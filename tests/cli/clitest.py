@@ -1,0 +1,45 @@
+"""clitest.py - the harness the `trn` command-line tests share.
+
+A Harness runs build/<preset>/trn (optionally with a fixed subcommand in front
+of every call), counts checks, records failures, and checks the error
+convention of bad input: the given exit code, exactly one stderr line
+`trn <cmd>: <reason>` holding an expected phrase, and nothing on stdout.
+"""
+import subprocess
+
+
+class Harness:
+    def __init__(self, trn, sub=(), timeout=300):
+        self.trn = trn
+        self.sub = [str(a) for a in sub]
+        self.timeout = timeout
+        self.checks = 0
+        self.failures = []
+
+    def check(self, cond, what):
+        self.checks += 1
+        if not cond:
+            self.failures.append(what)
+            print("FAIL:", what)
+
+    def run(self, *args, timeout=None):
+        p = subprocess.run([self.trn] + self.sub + [str(a) for a in args], capture_output=True,
+                           text=True, timeout=timeout or self.timeout)
+        return p.returncode, p.stdout, p.stderr
+
+    def expect_error(self, rc_want, needle, *args):
+        rc, out, err = self.run(*args)
+        words = self.sub + [str(a) for a in args]
+        label = "trn " + " ".join(words)
+        lines = err.splitlines()
+        self.check(rc == rc_want, f"{label}: exit {rc}, want {rc_want} (stderr: {err.strip()!r})")
+        self.check(len(lines) == 1, f"{label}: {len(lines)} stderr lines, want 1: {err!r}")
+        self.check(err.startswith(f"trn {words[0]}: "),
+                   f"{label}: message does not start with 'trn {words[0]}: ': {err!r}")
+        self.check(needle in err, f"{label}: message lacks {needle!r}: {err!r}")
+        self.check(out == "", f"{label}: stdout not empty: {out!r}")
+
+    def finish(self, name=""):
+        """Print the tally; return the exit status (1 if any check failed)."""
+        print(f"{name + ': ' if name else ''}{self.checks} checks, {len(self.failures)} failed")
+        return 1 if self.failures else 0
