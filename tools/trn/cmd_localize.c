@@ -119,7 +119,7 @@ int trn_cmd_localize(int argc, char **argv) {
   dem_cell_to_map(l.gt, (double)rx, (double)ry, &dx_m, &dy_m);
 
   if (!dem_cell_of(&g, prior[0], prior[1], &pcol, &prow)) {
-    cli_fail(cmd.name, "--prior %g,%g is off the map (x %.3f..%.3f, y %.3f..%.3f)", prior[0], prior[1], g.gt[0],
+    cli_fail(cmd.name, "--prior %.3f,%.3f is off the map (x %.3f..%.3f, y %.3f..%.3f)", prior[0], prior[1], g.gt[0],
              g.gt[0] + g.width * cell, g.gt[3] - g.height * cell, g.gt[3]);
     goto done;
   }

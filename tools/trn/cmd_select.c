@@ -90,7 +90,7 @@ int trn_cmd_select(int argc, char **argv) {
   }
   rc = CLI_BAD_INPUT;
   if (!dem_cell_of(&w.dem, rover_m[0], rover_m[1], &rcol, &rrow)) {
-    cli_fail(cmd.name, "--rover %g,%g is off the map (x %.3f..%.3f, y %.3f..%.3f)", rover_m[0], rover_m[1],
+    cli_fail(cmd.name, "--rover %.3f,%.3f is off the map (x %.3f..%.3f, y %.3f..%.3f)", rover_m[0], rover_m[1],
              w.dem.gt[0], w.dem.gt[0] + w.dem.width * w.dem.cell_m, w.dem.gt[3] - w.dem.height * w.dem.cell_m,
              w.dem.gt[3]);
     goto done;

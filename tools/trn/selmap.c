@@ -197,7 +197,7 @@ int selmap_prepare(selmap_t *w, const char *cmd, const char *dem_path, const sel
   for (i = 0; i < w->n_sensors; ++i) {
     dem_map_to_cell(w->dem.gt, w->sensors_m[i][0], w->sensors_m[i][1], &col, &row);
     if (fabs(col) > 1e6 || fabs(row) > 1e6) {
-      cli_fail(cmd, "--sensors: %g,%g is %.0f cells from the map (at most 1e6)", w->sensors_m[i][0],
+      cli_fail(cmd, "--sensors: %.3f,%.3f is %.0f cells from the map (at most 1e6)", w->sensors_m[i][0],
                w->sensors_m[i][1], fmax(fabs(col), fabs(row)));
       goto fail;
     }
