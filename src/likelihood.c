@@ -258,16 +258,6 @@ static int score_chunks(const level_view_t *L, const int32_t *lnp, const trn_poi
     return 1;
 }
 
-static int32_t lnp_max(const trn_lnp_table_t *t)
-{
-    int32_t m = t->lnp[0];
-    unsigned d;
-    for (d = 1u; d <= (unsigned)t->cap; ++d) {
-        m = t->lnp[d] > m ? t->lnp[d] : m;
-    }
-    return m;
-}
-
 static level_view_t base_view(const trn_vol_u8_t *dist, uint8_t cap)
 {
     level_view_t L;
@@ -674,11 +664,10 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
     trn_status_t st;
     block_t *tops;
     suffix_t *tops_suf, *stack_suf, *kid_suf;
-    suffix_t lim; /* (points from chunk c on) x largest table entry */
     block_t *stack; /* in the workspace: keeps the frame under TRN_STACK_LIMIT_BYTES */
     level_view_t L0;
-    size_t ntop = 0, ntop_max, i, c;
-    int32_t top_lv, bs, x, y, lmax;
+    size_t ntop = 0, ntop_max, i;
+    int32_t top_lv, bs, x, y;
     bbox_t bb;
     int found = 0;
     uint64_t scored = 0, bounded = 0;
@@ -708,10 +697,6 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
     stack = (block_t *)(void *)((uint8_t *)ws + TRN_ALIGN_UP(ntop_max * sizeof(block_t)) +
                                 TRN_ALIGN_UP(ntop_max * sizeof(suffix_t)) +
                                 TRN_ALIGN_UP((TRN_BB_STACK + 4u) * sizeof(suffix_t)));
-    lmax = lnp_max(t);
-    for (c = 0; c <= BB_NCH; ++c) {
-        lim.s[c] = (int64_t)(n - chunk_lo(n, c)) * (int64_t)lmax;
-    }
     bb = points_bbox(pts, n);
     L0 = pyr_view(p, 0);
     {
@@ -727,7 +712,9 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
                 tb->y = y;
                 tb->level = top_lv;
                 tb->slot = (int32_t)ntop;
-                if (score_chunks(&L, t->lnp, pts, n, &bb, x, y, found ? &lim : NULL,
+                /* no bound yet (nothing found before the top level is
+                 * scored), so no early exit: every top block is scored whole */
+                if (score_chunks(&L, t->lnp, pts, n, &bb, x, y, NULL,
                                  best->score, &tb->bound, &tops_suf[ntop])) {
                     ++ntop;
                 }
@@ -843,12 +830,12 @@ trn_status_t trn_points_order(trn_point_t *pts, size_t n, int32_t nz)
     for (i = 0; i < n; ++i) {
         ++count[pts[i].z];
     }
-    /* bins by increasing population, ties by bin (insertion sort, nz <= 255) */
+    /* bins by increasing population, ties by bin: a stable insertion sort of
+     * the bins in increasing order (nz <= 255) */
     for (a = 1; a < nz; ++a) {
         const uint8_t v = rank[a];
         b = a;
-        while (b > 0 && (count[rank[b - 1]] > count[v] ||
-                         (count[rank[b - 1]] == count[v] && rank[b - 1] > v))) {
+        while (b > 0 && count[rank[b - 1]] > count[v]) {
             rank[b] = rank[b - 1];
             --b;
         }
