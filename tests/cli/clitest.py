@@ -5,6 +5,7 @@ of every call), counts checks, records failures, and checks the error
 convention of bad input: the given exit code, exactly one stderr line
 `trn <cmd>: <reason>` holding an expected phrase, and nothing on stdout.
 """
+import json
 import subprocess
 
 
@@ -39,7 +40,37 @@ class Harness:
         self.check(needle in err, f"{label}: message lacks {needle!r}: {err!r}")
         self.check(out == "", f"{label}: stdout not empty: {out!r}")
 
+    def run_json(self, *args):
+        """A run that must succeed and print exactly one line of JSON; returns the object."""
+        rc, out, err = self.run(*args)
+        label = "trn " + " ".join(self.sub + [str(a) for a in args])
+        self.check(rc == 0, f"{label}: exit {rc}: {err.strip()}")
+        try:
+            obj = json.loads(out)
+        except ValueError:
+            self.check(False, f"{label}: stdout is not one JSON object: {out!r}")
+            return {}
+        self.check(out.count("\n") == 1, f"{label}: JSON is not one line")
+        return obj
+
     def finish(self, name=""):
         """Print the tally; return the exit status (1 if any check failed)."""
         print(f"{name + ': ' if name else ''}{self.checks} checks, {len(self.failures)} failed")
         return 1 if self.failures else 0
+
+
+def write_raster(path, arr, gt, fmt="GTiff", nodata=None, srs=None):
+    """Write a float32 one-band raster through a MEM dataset (any GDAL driver with CreateCopy)."""
+    from osgeo import gdal  # only the tests that write rasters need GDAL
+
+    mem = gdal.GetDriverByName("MEM").Create("", arr.shape[1], arr.shape[0], 1, gdal.GDT_Float32)
+    if gt is not None:
+        mem.SetGeoTransform(gt)
+    if srs:
+        mem.SetProjection(srs)
+    band = mem.GetRasterBand(1)
+    if nodata is not None:
+        band.SetNoDataValue(nodata)
+    band.WriteArray(arr)
+    gdal.GetDriverByName(fmt).CreateCopy(path, mem)
+    mem = None

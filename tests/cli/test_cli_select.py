@@ -31,34 +31,8 @@ import clitest  # noqa: E402  (tests/cli/, the script's own directory)
 TRN = os.path.abspath(sys.argv[1])
 WORK = os.path.abspath(sys.argv[2])
 H = clitest.Harness(TRN, sub=(), timeout=600)
-check, run, expect_error = H.check, H.run, H.expect_error
-
-
-
-
-
-
-
-
-def run_json(*args):
-    rc, out, err = run(*args)
-    label = "trn " + " ".join(str(a) for a in args)
-    check(rc == 0, f"{label}: exit {rc}: {err.strip()}")
-    try:
-        obj = json.loads(out)
-    except ValueError:
-        check(False, f"{label}: stdout is not one JSON object: {out!r}")
-        return {}
-    check(out.count("\n") == 1, f"{label}: JSON is not one line")
-    return obj
-
-
-def write_raster(path, arr, gt, fmt="GTiff"):
-    mem = gdal.GetDriverByName("MEM").Create("", arr.shape[1], arr.shape[0], 1, gdal.GDT_Float32)
-    mem.SetGeoTransform(gt)
-    mem.GetRasterBand(1).WriteArray(arr.astype(np.float32))
-    gdal.GetDriverByName(fmt).CreateCopy(path, mem)
-    mem = None
+check, run, expect_error, run_json = H.check, H.run, H.expect_error, H.run_json
+write_raster = clitest.write_raster
 
 
 def read(path):

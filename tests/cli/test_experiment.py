@@ -25,12 +25,6 @@ H = clitest.Harness(TRN, sub=("experiment",))
 check, run, expect_error = H.check, H.run, H.expect_error
 
 
-
-
-
-
-
-
 shutil.rmtree(WORK, ignore_errors=True)
 os.makedirs(WORK)
 SMALL = ["--size-cells", 128, "--trials", 6]

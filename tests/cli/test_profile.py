@@ -35,17 +35,11 @@ H = clitest.Harness(TRN, sub=("profile",), timeout=600)
 check, run, expect_error = H.check, H.run, H.expect_error
 
 
-
-
-
-
 def write(name, text):
     path = os.path.join(WORK, name)
     with open(path, "w") as f:
         f.write(text)
     return path
-
-
 
 
 def instructions_test():
