@@ -2,14 +2,25 @@
  * (see trn/chamfer.h and method.md 2.4).
  *
  * Algorithm. Two raster passes over the volume. The forward pass visits
- * voxels in z, y, x increasing order and relaxes each voxel against its 13
- * already-visited neighbours; the backward pass does the mirror image. Every
- * step of a forward (backward) pass goes to a later (earlier) voxel in raster
- * order, so one pass carries a value along any path made only of forward
- * (backward) steps. A shortest 3-4-5 path between two voxels can be taken
- * monotone in each axis and reordered as "all forward steps, then all
- * backward steps" without leaving the box spanned by its ends, so after the
- * two passes every voxel holds min(exact 26-neighbour chamfer distance, cap).
+ * rows in z, y increasing order and relaxes each voxel against its 12
+ * already-visited neighbours outside its own row ("causal" steps); a row
+ * that holds an occupied voxel is then closed along x in both directions
+ * (the in-row scans below). The backward pass visits rows in z, y
+ * decreasing order and relaxes each voxel against its 12 neighbours in
+ * later rows ("anti-causal" steps), with no in-row work at all.
+ *
+ * Why that is exact. A shortest 3-4-5 path from an occupied voxel s to a
+ * voxel p can be taken monotone in each axis, so its steps can be reordered
+ * at will without leaving the box spanned by s and p: take first its in-row
+ * steps (+-x, ending at q1 in the row of s), then its causal out-of-row
+ * steps (ending at q2), then its anti-causal ones. The row of s holds an
+ * occupied voxel, so its closure gives forward(q1) <= 3 |q1 - s|; every
+ * causal step goes to a later row, whose relaxation accounts for it, so
+ * forward(q2) <= forward(q1) + (their weights); the backward pass likewise
+ * adds the anti-causal steps. Every stored value is the length of some path
+ * (or cap), so after the two passes every voxel holds min(exact
+ * 26-neighbour chamfer distance, cap). Rows without an occupied voxel never
+ * need the closure: the argument only uses the rows of sources.
  *
  * Row decomposition (forward pass; the backward pass mirrors y and z). The
  * 12 causal neighbours of voxel (x, y, z) outside its own row lie in the rows
@@ -21,26 +32,25 @@
  * (check: P-[x] + 4 edge, P-[x+-1] + 5 corner, P0[x] + 3 face, P0[x+-1] + 4
  * edge, C-[x] + 3 face, C-[x+-1] + 4 edge). This is element-wise work over a
  * row. A missing neighbour row (volume face) is replaced by a row whose term
- * dominates it, so one kernel serves every row. The 13th neighbour,
- * (x-1, y, z), is then folded in by the in-row scan d[x] = min(d[x],
- * d[x-1] + 3), done without a serial chain where it matters (see "In-row
- * scans" below).
+ * dominates it, so one kernel serves every row. The in-row steps
+ * (x+-1, y, z) are the in-row scans d[x] = min(d[x], d[x-+1] + 3), done
+ * without a serial chain where it matters (see "In-row scans" below).
  *
  * Speed. Every kernel is written as blocks of LANES bytes whose fixed-count
  * inner loops compilers turn into 128-bit vector instructions at -O2 (SSE2
  * on x86-64, NEON on AArch64; GCC's -O2 cost model vectorizes only loops
  * with a known trip count) and into short scalar loops on cores without
  * SIMD. A block reads everything it needs before it writes, so in-place use
- * needs no aliasing analysis. Per row and pass the work is a few passes over
- * L1-resident rows: T into a scratch, A (fused with the occupancy-to-0/cap
- * start in the forward pass), a dirty check, and rarely a few doubling
- * steps. In the forward pass a row without occupied voxels skips its scan
- * altogether (see trn_chamfer3d). Measured on the project's x86-64 machine
- * (GCC 12, -O2, cap 60, synthetic terrain, 256^2 and 512^2 x 16 voxels):
- * about 0.35 ns a voxel, 0.18x the time of two scalar d[i-1] streaming scans
- * and 6.5-7x two SIMD row-to-row streaming passes (which do 2 loads and a
- * store per 16 bytes; a 3-4-5 pass needs about 8 loads and 2 stores, its 12
- * out-of-row neighbours lying in 4 rows, before any in-row scan).
+ * needs no aliasing analysis. Per row and pass the work is two passes over
+ * L1-resident rows: T into a scratch, then A (fused with the
+ * occupancy-to-0/cap start in the forward pass); rows with an occupied
+ * voxel (about a third on terrain) add two dirty checks and a few doubling
+ * steps. Measured on the project's x86-64 machine (GCC 12, -O2, cap 60,
+ * synthetic terrain, 256^2 and 512^2 x 16 voxels): see docs/benchmarks.md
+ * ("Chamfer"); the relaxation alone, T and A, costs 3.7-3.9x one SIMD
+ * row-to-row streaming pass (7 loads and 2 stores per 16 voxels against 2
+ * and 1: its 12 out-of-row neighbours lie in 4 rows and need their
+ * x-neighbours), which is why the transform stays above 3x two such passes.
  *
  * Arithmetic. Stored values never exceed cap <= TRN_CHAMFER_CAP_MAX <= 250,
  * so T <= cap + 1, A(T) + 3 <= cap + 5 <= 255 and a scan sum d + 3 <= 253:
@@ -233,10 +243,12 @@ static unsigned relax_row(uint8_t *row, const uint8_t *src, uint8_t cap, const u
  *     which is > cap and so changes nothing. Reading a value some earlier
  *     block of the same step already lowered only tightens the bound and
  *     never goes below the exact scan, so the last block may overlap.
- * The backward scan is the mirror image. Rows with a dirty voxel are common
- * (every row with a new source, and in the backward pass most rows within
- * reach of one), but the spread bound keeps the step count near 2 in dense
- * volumes and the span bound keeps the range short in sparse ones.
+ * The backward scan is the mirror image. Both run only on rows with an
+ * occupied voxel, in the forward pass, right after the row's relaxation.
+ * Most such rows have a dirty voxel (measured: 81-84 % on the benchmark
+ * terrain, 2.7 doubling steps over about 70 % of the row on average), but
+ * the spread bound keeps the step count near 2 in dense volumes and the span
+ * bound keeps the range short in sparse ones.
  */
 
 /** Most doubling steps ever needed: shifts 1..64 cover offsets up to 127. */
@@ -482,7 +494,7 @@ static void scan_backward(uint8_t *row, size_t nx)
 }
 
 /**
- * One row (y, z) of a pass, before its in-row scan: relax it against the
+ * One row (y, z) of a pass, before any in-row scan: relax it against the
  * out-of-row neighbours of the pass. dir = -1 (forward: previous row and
  * plane) or +1 (backward: next ones); the neighbours used are rows
  * (y+dir, z) and (y-1..y+1, z+dir) where they exist. A missing row is
@@ -575,24 +587,20 @@ trn_status_t trn_chamfer3d(const trn_vol_u8_t *occ, trn_vol_u8_t *dist, uint8_t 
             const size_t off = (z * ny + y) * nx;
             const unsigned row_any =
                 relax_neighbours(vol, occ->data + off, cap, nx, ny, nz, y, z, -1);
-            /* A row with no occupied voxel needs no forward scan: its relaxed
-             * values min(cap, A(T) + 3) already satisfy d[x] <= d[x-1] + 3,
-             * because every row T is made of was forward-scanned (so T does,
-             * and A and min keep it). Only a 0 at an occupied voxel can
-             * start a run the scan must carry. */
+            /* Only the rows of occupied voxels are closed along x (see the
+             * file comment); the others are already closed anyway, as
+             * min(cap, A(T) + 3) of closed rows. */
             any |= row_any;
             if (row_any != 0u) {
                 scan_forward(vol + off, nx);
+                scan_backward(vol + off, nx);
             }
         }
     }
-    /* Backward pass: z, y, x decreasing. */
+    /* Backward pass: rows in z, y decreasing, out-of-row steps only. */
     for (z = 0u; z < nz; z++) {
         for (y = 0u; y < ny; y++) {
-            const size_t zz = nz - 1u - z;
-            const size_t yy = ny - 1u - y;
-            (void)relax_neighbours(vol, NULL, cap, nx, ny, nz, yy, zz, +1);
-            scan_backward(vol + (zz * ny + yy) * nx, nx);
+            (void)relax_neighbours(vol, NULL, cap, nx, ny, nz, ny - 1u - y, nz - 1u - z, +1);
         }
     }
     return (any != 0u) ? TRN_OK : TRN_E_NODATA;

@@ -6,8 +6,9 @@
  *
  * Weights are Borgefors' 3-4-5 (face, edge and corner steps of the 3x3x3
  * neighbourhood), so one voxel side is 3 chamfer units. Two raster passes
- * (forward with the 13 causal neighbours, backward with the 13 anti-causal
- * ones) give the exact shortest path length over those 26 steps. Distances
+ * (forward: the 12 neighbours in earlier rows, then both in-row neighbours
+ * on rows holding an occupied voxel; backward: the 12 neighbours in later
+ * rows) give the exact shortest path length over those 26 steps. Distances
  * are capped: a voxel farther than `cap` from every occupied voxel holds `cap`.
  * Voxels are treated as cubes (choose the height bin equal to the cell size).
  */
