@@ -43,6 +43,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "bench_floor.h"
 #include "bench_select.h"
 #include "ref_chamfer.h"
 #include "rng.h"
@@ -408,6 +409,23 @@ static int run_stream_rows(void *p)
 
 typedef struct {
     const uint8_t *occ;
+    uint8_t *v;
+    size_t nx, ny, nz;
+    uint8_t cap;
+    uint8_t *scratch;
+} floor_ctx_t;
+
+/* The relaxation-only floor of a two-pass transform (bench_floor.c). */
+static int run_relax_floor(void *p)
+{
+    floor_ctx_t *c = (floor_ctx_t *)p;
+    bench_relax_floor(c->occ, c->v, c->nx, c->ny, c->nz, c->cap, c->scratch);
+    g_sink += c->v[(c->nx * c->ny * c->nz) / 2u];
+    return 0;
+}
+
+typedef struct {
+    const uint8_t *occ;
     uint8_t *out;
     int nx, ny, nz;
     unsigned cap;
@@ -605,6 +623,7 @@ typedef struct {
     int32_t n;
     double chamfer_vs_stream; /* median trn_chamfer3d / median SIMD streaming passes */
     double chamfer_vs_scan;   /* median trn_chamfer3d / median scalar scan passes */
+    double floor_vs_stream;   /* median relaxation floor / median SIMD streaming passes */
     int32_t win[N_WINDOWS];   /* half-widths used (clamped on small maps) */
     double search_speedup[N_WINDOWS]; /* median exhaustive / median branch-and-bound */
     bench_select_result_t sel;/* landmark selection rows */
@@ -766,7 +785,7 @@ static int bench_chamfer(world_t *w, const opts_t *o, size_result_t *r)
     chamfer_ctx_t cc;
     stream_ctx_t sc;
     dijkstra_ctx_t dc;
-    timing_t t_scan = {0}, t_rows = {0}, t_dij = {0};
+    timing_t t_scan = {0}, t_rows = {0}, t_dij = {0}, t_floor = {0};
     char note[160];
     int same;
 
@@ -789,6 +808,25 @@ static int bench_chamfer(world_t *w, const opts_t *o, size_result_t *r)
     g_sink += sum_u8(w->scratch, w->nvox);
     print_row(n, "chamfer: streaming 2 passes, SIMD (target ref)", &t_rows,
               "v[i]=min(v[i],v[i-+nx]+1): memory-bound floor");
+    {
+        floor_ctx_t fc;
+        uint8_t *fscratch = malloc(bench_relax_floor_scratch((size_t)n));
+        if (fscratch == NULL) {
+            fprintf(stderr, "trn_bench: out of memory at size %d\n", (int)n);
+            return 3;
+        }
+        fc.occ = w->occ;
+        fc.v = w->scratch;
+        fc.nx = (size_t)n;
+        fc.ny = (size_t)n;
+        fc.nz = (size_t)w->nz;
+        fc.cap = w->cfg.cap;
+        fc.scratch = fscratch;
+        (void)time_fn(run_relax_floor, &fc, 1, o->repeats, 0.0, &t_floor);
+        free(fscratch);
+        print_row(n, "chamfer: relaxation only, 2 passes (floor)", &t_floor,
+                  "no in-row steps, wrong distances: timing only");
+    }
     (void)time_fn(run_stream_scan, &sc, 1, o->repeats, 0.0, &t_scan);
     g_sink += sum_u8(w->scratch, w->nvox);
     print_row(n, "chamfer: streaming 2 passes, scalar scan (info)", &t_scan,
@@ -843,6 +881,8 @@ static int bench_chamfer(world_t *w, const opts_t *o, size_result_t *r)
         }
         print_ratio("trn_chamfer3d / streaming SIMD (memory-bound)", &w->t_ch, &t_rows,
                     "(target <= 3)");
+        print_ratio("relaxation floor / streaming SIMD", &t_floor, &t_rows,
+                    "(trn_chamfer3d's relaxation, no in-row steps)");
         print_ratio("trn_chamfer3d / streaming scalar scan", &w->t_ch, &t_scan, NULL);
         print_ratio("naive Dijkstra / trn_chamfer3d", &t_dij, &w->t_ch, NULL);
         for (k = 0; k < 3; ++k) {
@@ -852,12 +892,15 @@ static int bench_chamfer(world_t *w, const opts_t *o, size_result_t *r)
 #else
     print_ratio("trn_chamfer3d / streaming SIMD (memory-bound)", &w->t_ch, &t_rows,
                 "(target <= 3)");
+    print_ratio("relaxation floor / streaming SIMD", &t_floor, &t_rows,
+                "(trn_chamfer3d's relaxation, no in-row steps)");
     print_ratio("trn_chamfer3d / streaming scalar scan", &w->t_ch, &t_scan, NULL);
     print_ratio("naive Dijkstra / trn_chamfer3d", &t_dij, &w->t_ch, NULL);
     printf("      (OpenCV reference not built: OpenCV not found at configure time)\n");
 #endif
     r->chamfer_vs_stream = w->t_ch.med_ms / t_rows.med_ms;
     r->chamfer_vs_scan = w->t_ch.med_ms / t_scan.med_ms;
+    r->floor_vs_stream = t_floor.med_ms / t_rows.med_ms;
     return 0;
 }
 
@@ -1177,6 +1220,10 @@ int main(int argc, char **argv)
            worst_ch <= 3.0 ? "PASS" : "MISS", worst_ch, buf);
     for (i = 0; i < o.nsizes; ++i) {
         printf("%s%d: %.2fx", i ? ", " : " ", (int)res[i].n, res[i].chamfer_vs_scan);
+    }
+    printf("; the out-of-row relaxation alone, no in-row steps:");
+    for (i = 0; i < o.nsizes; ++i) {
+        printf("%s%d: %.2fx", i ? ", " : " ", (int)res[i].n, res[i].floor_vs_stream);
     }
     printf(")\n");
     len = 0u;
