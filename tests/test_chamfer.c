@@ -23,7 +23,12 @@
  * or on the wrong rows; off-by-one overlapping last blocks; no overflow
  * clamp; a missing scalar tail or forgotten occupancy start; NODATA, cap
  * range and overlap checks removed. Correct variants (other chunk sizes, no
- * scan skipping) pass.
+ * scan skipping) pass. Session 3 moved all in-row work into the forward pass
+ * (both directions, rows with an occupied voxel); against that design these
+ * mutants each fail test_matches_dijkstra_random: the backward in-row scan
+ * dropped, the forward one dropped, the closure skipped on plane 0, or on
+ * row 0 of each plane; correct variants (the closure on every row, the
+ * backward scan before the forward one) pass.
  */
 #include <stdarg.h>
 #include <stddef.h>
