@@ -47,10 +47,12 @@
  * voxel (about a third on terrain) add two dirty checks and a few doubling
  * steps. Measured on the project's x86-64 machine (GCC 12, -O2, cap 60,
  * synthetic terrain, 256^2 and 512^2 x 16 voxels): see docs/benchmarks.md
- * ("Chamfer"); the relaxation alone, T and A, costs 3.7-3.9x one SIMD
- * row-to-row streaming pass (7 loads and 2 stores per 16 voxels against 2
- * and 1: its 12 out-of-row neighbours lie in 4 rows and need their
- * x-neighbours), which is why the transform stays above 3x two such passes.
+ * ("Chamfer"). The relaxation alone, T and A, costs 3.7-3.9x one SIMD
+ * row-to-row streaming pass on one L1-resident row, and 3.1-3.2x two such
+ * passes over the whole volume (trn_bench's floor row): it does 7 loads and
+ * 2 stores per 16 voxels against 2 and 1, its 12 out-of-row neighbours
+ * lying in 4 rows and needing their x-neighbours. That is why the transform
+ * stays above 3x two streaming passes.
  *
  * Arithmetic. Stored values never exceed cap <= TRN_CHAMFER_CAP_MAX <= 250,
  * so T <= cap + 1, A(T) + 3 <= cap + 5 <= 255 and a scan sum d + 3 <= 253:
