@@ -1,6 +1,7 @@
 /* localize.c - prepared maps and end-to-end localization (see trn/localize.h). */
 #include "trn/localize.h"
 
+#include <float.h>
 #include <math.h>
 
 void trn_map_cfg_default(trn_map_cfg_t *cfg)
@@ -17,6 +18,10 @@ void trn_map_cfg_default(trn_map_cfg_t *cfg)
     cfg->cap = 60u;
     cfg->levels = 4;
     cfg->min_exclusion_cells = 2;
+    cfg->local_highpass = TRN_LOCAL_HP_BOX;
+    cfg->refine = 0;
+    cfg->noise_m = 0.01f;
+    cfg->noise_k_per_m = 0.004f;
 }
 
 static trn_lik_cfg_t lik_of(const trn_map_cfg_t *cfg)
@@ -44,16 +49,26 @@ trn_status_t trn_map_cfg_check(const trn_map_cfg_t *cfg)
         return st;
     }
     if (cfg->levels < 1 || cfg->levels > TRN_MAX_LEVELS || cfg->min_exclusion_cells < 1 ||
-        cfg->min_exclusion_cells > TRN_MAX_DIM) {
+        cfg->min_exclusion_cells > TRN_MAX_DIM ||
+        (cfg->local_highpass != TRN_LOCAL_HP_BOX && cfg->local_highpass != TRN_LOCAL_HP_MAP) ||
+        (cfg->refine != 0 && cfg->refine != 1) || !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
+        !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f)) {
         return TRN_E_ARG;
     }
     return TRN_OK;
 }
 
-/* Layout of the map buffer: [dist | pyramid | hp grid | highpass scratch];
- * the last two are scratch used only while building. */
+/* The configuration keeps the DEM's heights and low-pass in the map. */
+static int needs_heights(const trn_map_cfg_t *cfg)
+{
+    return cfg->refine != 0 || cfg->local_highpass == TRN_LOCAL_HP_MAP;
+}
+
+/* Layout of the map buffer: [dist | pyramid | heights | lowpass | hp grid |
+ * highpass scratch]; heights and lowpass only when needs_heights(), the last
+ * two are scratch used only while building. */
 typedef struct {
-    size_t dist, pyr, hp, hpws, total;
+    size_t dist, pyr, heights, lowpass, hp, hpws, total;
 } map_layout_t;
 
 static int map_layout(const trn_map_cfg_t *cfg, int32_t w, int32_t h, map_layout_t *lay)
@@ -66,7 +81,13 @@ static int map_layout(const trn_map_cfg_t *cfg, int32_t w, int32_t h, map_layout
     hpws = trn_highpass_workspace_bytes(w, h);
     lay->dist = 0u;
     lay->pyr = TRN_ALIGN_UP((size_t)w * (size_t)h * (size_t)cfg->terrain.nz);
-    lay->hp = lay->pyr + pyr;
+    lay->heights = lay->pyr + pyr;
+    lay->lowpass = lay->heights;
+    lay->hp = lay->heights;
+    if (needs_heights(cfg)) {
+        lay->lowpass = lay->heights + TRN_ALIGN_UP((size_t)w * (size_t)h * sizeof(float));
+        lay->hp = lay->lowpass + TRN_ALIGN_UP((size_t)w * (size_t)h * sizeof(float));
+    }
     lay->hpws = lay->hp + TRN_ALIGN_UP((size_t)w * (size_t)h * sizeof(float));
     lay->total = lay->hpws + hpws;
     return 1;
@@ -110,12 +131,121 @@ trn_status_t trn_map_build(trn_map_t *map, const trn_map_cfg_t *cfg, const trn_g
         (st = trn_chamfer3d(&map->dist, &map->dist, cfg->cap)) != TRN_OK) {
         return st;
     }
+    map->heights.data = NULL;
+    map->lowpass.data = NULL;
+    map->heights.width = map->heights.height = map->heights.stride = 0;
+    map->lowpass = map->heights;
+    if (needs_heights(cfg)) {
+        int32_t x, y;
+        size_t cells = (size_t)dem->width * (size_t)dem->height;
+        if ((st = trn_grid_f32_init(&map->heights, (float *)(void *)(b + lay.heights), cells, dem->width,
+                                    dem->height)) != TRN_OK ||
+            (st = trn_grid_f32_init(&map->lowpass, (float *)(void *)(b + lay.lowpass), cells, dem->width,
+                                    dem->height)) != TRN_OK) {
+            return st;
+        }
+        for (y = 0; y < dem->height; ++y) {
+            for (x = 0; x < dem->width; ++x) {
+                float v = TRN_GRID_AT(dem, x, y);
+                float f = TRN_GRID_AT(&hp, x, y);
+                int ok = isfinite(v) && isfinite(f);
+                TRN_GRID_AT(&map->heights, x, y) = ok ? v : NAN;
+                TRN_GRID_AT(&map->lowpass, x, y) = ok ? (float)((double)v - (double)f) : NAN;
+            }
+        }
+    }
     lik = lik_of(cfg);
     if ((st = trn_outlier_density(&map->dist, &lik, &k)) != TRN_OK ||
         (st = trn_lnp_table_build(&map->lnp, &lik, k)) != TRN_OK ||
         (st = trn_pyramid_build(&map->pyr, &map->dist, cfg->cap, cfg->levels, b + lay.pyr,
-                                lay.hp - lay.pyr)) != TRN_OK) {
+                                lay.heights - lay.pyr)) != TRN_OK) {
         return st;
+    }
+    return TRN_OK;
+}
+
+size_t trn_map_cfg_auto_workspace_bytes(int32_t width, int32_t height)
+{
+    size_t hpws = trn_highpass_workspace_bytes(width, height);
+    if (hpws == 0u) {
+        return 0u;
+    }
+    return TRN_ALIGN_UP((size_t)width * (size_t)height * sizeof(float)) + hpws;
+}
+
+trn_status_t trn_map_cfg_auto(trn_map_cfg_t *cfg, const trn_grid_f32_t *dem, float cell_m,
+                              void *ws, size_t ws_bytes, double *sigma_h_m)
+{
+    trn_status_t st;
+    trn_map_cfg_t c;
+    trn_grid_f32_t hp;
+    size_t need, cells, n = 0;
+    double s1 = 0.0, s2 = 0.0, sig, zb, noise10, r10;
+    int32_t x, y;
+    long nz;
+
+    if (cfg == NULL || dem == NULL || ws == NULL) {
+        return TRN_E_NULL;
+    }
+    if ((st = trn_grid_f32_check(dem)) != TRN_OK) {
+        return st;
+    }
+    trn_map_cfg_default(&c);
+    c.noise_m = cfg->noise_m;
+    c.noise_k_per_m = cfg->noise_k_per_m;
+    c.terrain.cell_m = cell_m;
+    c.terrain.zbin_m = cell_m;
+    c.terrain.highpass_half_m = 10.0f * cell_m;
+    c.sigma_m = cell_m;
+    c.local_highpass = TRN_LOCAL_HP_MAP;
+    c.refine = 1;
+    if (!(cell_m > 0.0f && cell_m <= 100.0f) || trn_map_cfg_check(&c) != TRN_OK) {
+        return TRN_E_ARG;
+    }
+    need = trn_map_cfg_auto_workspace_bytes(dem->width, dem->height);
+    if (need == 0u) {
+        return TRN_E_SIZE;
+    }
+    if (ws_bytes < need) {
+        return TRN_E_WORKSPACE;
+    }
+    cells = (size_t)dem->width * (size_t)dem->height;
+    if ((st = trn_grid_f32_init(&hp, (float *)ws, cells, dem->width, dem->height)) != TRN_OK ||
+        (st = trn_highpass(dem, &c.terrain, &hp, (uint8_t *)ws + TRN_ALIGN_UP(cells * sizeof(float)),
+                           ws_bytes - TRN_ALIGN_UP(cells * sizeof(float)))) != TRN_OK) {
+        return st;
+    }
+    for (y = 0; y < dem->height; ++y) {
+        for (x = 0; x < dem->width; ++x) {
+            float v = TRN_GRID_AT(&hp, x, y);
+            if (isfinite(v)) {
+                s1 += (double)v;
+                s2 += (double)v * (double)v;
+                ++n;
+            }
+        }
+    }
+    if (n == 0u) {
+        return TRN_E_NODATA;
+    }
+    sig = s2 / (double)n - (s1 / (double)n) * (s1 / (double)n);
+    sig = sig > 0.0 ? sqrt(sig) : 0.0;
+    r10 = 10.0 * (double)cell_m;
+    noise10 = (double)c.noise_m + (double)c.noise_k_per_m * r10 * r10;
+    zb = 0.5 * sig > 2.0 * noise10 ? 0.5 * sig : 2.0 * noise10;
+    zb = zb < (double)cell_m ? zb : (double)cell_m;
+    nz = 2L * (long)ceil(4.0 * sig / zb) + 1L;
+    nz = nz < 16L ? 16L : nz;
+    nz = nz > 64L ? 64L : nz;
+    nz = nz > (long)TRN_MAX_ZBINS ? (long)TRN_MAX_ZBINS : nz;
+    c.terrain.zbin_m = (float)zb;
+    c.terrain.nz = (int32_t)nz;
+    if ((st = trn_map_cfg_check(&c)) != TRN_OK) {
+        return st;
+    }
+    *cfg = c;
+    if (sigma_h_m != NULL) {
+        *sigma_h_m = sig;
     }
     return TRN_OK;
 }
@@ -123,7 +253,11 @@ trn_status_t trn_map_build(trn_map_t *map, const trn_map_cfg_t *cfg, const trn_g
 static int map_ok(const trn_map_t *map)
 {
     return trn_map_cfg_check(&map->cfg) == TRN_OK && trn_vol_u8_check(&map->dist) == TRN_OK &&
-           map->pyr.nlevels == map->cfg.levels && map->lnp.cap == map->cfg.cap;
+           map->pyr.nlevels == map->cfg.levels && map->lnp.cap == map->cfg.cap &&
+           (!needs_heights(&map->cfg) ||
+            (trn_grid_f32_check(&map->heights) == TRN_OK && trn_grid_f32_check(&map->lowpass) == TRN_OK &&
+             map->heights.width == map->dist.nx && map->heights.height == map->dist.ny &&
+             map->lowpass.width == map->dist.nx && map->lowpass.height == map->dist.ny));
 }
 
 size_t trn_localize_workspace_bytes(const trn_map_t *map, const trn_window_t *win)
@@ -167,6 +301,7 @@ trn_status_t trn_localize_points(const trn_map_t *map, const trn_point_t *pts, s
     if (st != TRN_OK) {
         return st;
     }
+    out->refined = 0;
     out->ix = best.x;
     out->iy = best.y;
     out->ll_best = nats(best.score);
@@ -260,6 +395,80 @@ size_t trn_localize_dem_workspace_bytes(const trn_map_t *map, int32_t width, int
     return loc_layout(map, width, height, max_points, win, &lay) ? lay.total : 0u;
 }
 
+/* Local high-pass against the global low-pass (TRN_LOCAL_HP_MAP): cell
+ * (x, y) of the local DEM lies on global cell (cx + x - rx, cy + y - ry) at
+ * the reference pose (cx, cy); its filtered height is its height minus the
+ * global low-pass there minus the mean of that difference over the seen
+ * cells. A cell with no global low-pass under it is left unseen. */
+static trn_status_t highpass_by_map(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
+                                    int32_t ry, int32_t cx, int32_t cy, trn_grid_f32_t *out)
+{
+    int32_t x, y;
+    double sum = 0.0, ref = 0.0;
+    size_t n = 0;
+    for (y = 0; y < local->height; ++y) {
+        for (x = 0; x < local->width; ++x) {
+            int64_t gx = (int64_t)cx + x - rx, gy = (int64_t)cy + y - ry;
+            float h = TRN_GRID_AT(local, x, y), v = NAN;
+            if (isfinite(h) && gx >= 0 && gy >= 0 && gx < map->lowpass.width && gy < map->lowpass.height) {
+                float lp = TRN_GRID_AT(&map->lowpass, (int32_t)gx, (int32_t)gy);
+                if (isfinite(lp)) {
+                    double d = (double)h - (double)lp;
+                    if (n == 0u) {
+                        ref = d;
+                    }
+                    sum += d - ref;
+                    ++n;
+                    v = (float)d;
+                }
+            }
+            TRN_GRID_AT(out, x, y) = v;
+        }
+    }
+    if (n == 0u) {
+        return TRN_E_NODATA;
+    }
+    {
+        double mean = ref + sum / (double)n;
+        for (y = 0; y < local->height; ++y) {
+            for (x = 0; x < local->width; ++x) {
+                float v = TRN_GRID_AT(out, x, y);
+                if (isfinite(v)) {
+                    double f = (double)v - mean;
+                    f = f > (double)FLT_MAX ? (double)FLT_MAX : f < -(double)FLT_MAX ? -(double)FLT_MAX : f;
+                    TRN_GRID_AT(out, x, y) = (float)f;
+                }
+            }
+        }
+    }
+    return TRN_OK;
+}
+
+/* trn_refine_pose from the search's integer pose; on success its pose and
+ * covariance replace eq. 6's. */
+static void refine_result(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
+                          trn_loc_result_t *out)
+{
+    trn_refine_cfg_t rc;
+    double cell = (double)map->cfg.terrain.cell_m;
+    rc.cell_m = map->cfg.terrain.cell_m;
+    rc.noise_m = map->cfg.noise_m;
+    rc.noise_k_per_m = map->cfg.noise_k_per_m;
+    out->refined = 0;
+    if (trn_refine_pose(&map->heights, local, rx, ry, out->ix, out->iy, &rc, &out->refinement) != TRN_OK) {
+        return;
+    }
+    out->refined = 1;
+    out->x = out->refinement.x;
+    out->y = out->refinement.y;
+    out->cov_m2[0] = out->refinement.cov_cells[0] * cell * cell;
+    out->cov_m2[1] = out->refinement.cov_cells[1] * cell * cell;
+    out->cov_m2[2] = out->refinement.cov_cells[2] * cell * cell;
+    out->sigma_x_m = sqrt(out->cov_m2[0]);
+    out->sigma_y_m = sqrt(out->cov_m2[1]);
+    out->rho = out->cov_m2[2] / (out->sigma_x_m * out->sigma_y_m);
+}
+
 trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_dem,
                               int32_t rover_x, int32_t rover_y, size_t max_points,
                               const trn_window_t *win, void *ws, size_t ws_bytes,
@@ -294,9 +503,16 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
     pts = (trn_point_t *)(void *)(b + lay.pts);
     if ((st = trn_grid_f32_init(&hp, (float *)(void *)(b + lay.hp),
                                 (size_t)local_dem->width * (size_t)local_dem->height,
-                                local_dem->width, local_dem->height)) != TRN_OK ||
-        (st = trn_highpass(local_dem, &map->cfg.terrain, &hp, b + lay.hpws, lay.pts - lay.hpws)) !=
-            TRN_OK ||
+                                local_dem->width, local_dem->height)) != TRN_OK) {
+        return st;
+    }
+    if (map->cfg.local_highpass == TRN_LOCAL_HP_MAP) {
+        st = highpass_by_map(map, local_dem, rover_x, rover_y, (win->x0 + win->x1) / 2,
+                             (win->y0 + win->y1) / 2, &hp);
+    } else {
+        st = trn_highpass(local_dem, &map->cfg.terrain, &hp, b + lay.hpws, lay.pts - lay.hpws);
+    }
+    if (st != TRN_OK ||
         (st = trn_occupancy_points(&hp, &map->cfg.terrain, rover_x, rover_y, pts, max_points, &n)) !=
             TRN_OK) {
         return st;
@@ -305,5 +521,23 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
     if ((st = trn_points_order(pts, n, map->cfg.terrain.nz)) != TRN_OK) {
         return st;
     }
-    return trn_localize_points(map, pts, n, win, b + lay.search, ws_bytes - lay.search, out);
+    st = trn_localize_points(map, pts, n, win, b + lay.search, ws_bytes - lay.search, out);
+    if ((st == TRN_OK || st == TRN_E_ILLCOND) && map->cfg.local_highpass == TRN_LOCAL_HP_MAP &&
+        (out->ix != (win->x0 + win->x1) / 2 || out->iy != (win->y0 + win->y1) / 2)) {
+        /* Second pass: the local filter referred to the pose just found
+         * (the low-pass's curvature times the prior's error is gone there). */
+        if ((st = highpass_by_map(map, local_dem, rover_x, rover_y, out->ix, out->iy, &hp)) != TRN_OK ||
+            (st = trn_occupancy_points(&hp, &map->cfg.terrain, rover_x, rover_y, pts, max_points, &n)) !=
+                TRN_OK ||
+            (st = trn_points_order(pts, n, map->cfg.terrain.nz)) != TRN_OK) {
+            return st;
+        }
+        st = trn_localize_points(map, pts, n, win, b + lay.search, ws_bytes - lay.search, out);
+    }
+    if ((st == TRN_OK || st == TRN_E_ILLCOND) && map->cfg.refine != 0) {
+        refine_result(map, local_dem, rover_x, rover_y, out);
+        /* No consistent height match around the voxel optimum: flag it. */
+        st = out->refined ? TRN_OK : TRN_E_ILLCOND;
+    }
+    return st;
 }

@@ -42,8 +42,14 @@ declare -A PKG_GROUPS=(
   # `trn profile --instructions`: callgrind and its client-request header
   # (valgrind/callgrind.h), and the CTest profile_instructions.
   [profile]="valgrind"
+  # Real-terrain benchmark (tools/real/): the OpenCV peer (cv2.matchTemplate),
+  # numpy, GDAL (gdalwarp to UTM, GeoTIFF I/O) and the figures; python3-venv
+  # for the project venv (.venv) used only by DEMs shipped on PyPI alone;
+  # the DEM recipes of tools/real/dems.py: python-matplotlib-data (jacksboro).
+  [real]="python3 python3-venv python3-opencv python3-numpy python3-gdal gdal-bin
+          python3-matplotlib python-matplotlib-data"
 )
-GROUP_ORDER=(core bench gdal can plot vm assure profile)
+GROUP_ORDER=(core bench gdal can plot vm assure profile real)
 
 usage() {
   echo "usage: $0 [group...]   (default: core)"

@@ -16,11 +16,26 @@
 #include "trn/chamfer.h"
 #include "trn/likelihood.h"
 #include "trn/peakfit.h"
+#include "trn/refine.h"
 #include "trn/terrain.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/** How trn_localize_dem high-passes the local DEM. */
+typedef enum {
+    /** The paper's filter on the local DEM alone: each cell minus the mean of
+     *  the seen heights in its box. Biased where the box is cut by the edge
+     *  of what was seen, on any slope (docs/method.md section 9). */
+    TRN_LOCAL_HP_BOX = 0,
+    /** Each local cell minus the GLOBAL map's low-pass (its full, uncut box)
+     *  at the window centre's pose, minus one constant (the mean difference):
+     *  a slope or an absolute offset cancels exactly; what remains is the
+     *  low-pass's curvature times the prior's error. Needs the map's stored
+     *  heights (trn_map_bytes grows by 8 bytes per cell). */
+    TRN_LOCAL_HP_MAP = 1
+} trn_local_hp_t;
 
 /** Everything that shapes a prepared map. */
 typedef struct {
@@ -31,6 +46,13 @@ typedef struct {
     int32_t levels;              /**< pyramid levels of the fast search, 1..TRN_MAX_LEVELS */
     int32_t min_exclusion_cells; /**< least radius around the best pose excluded when
                                       looking for the competing hypothesis, 1..TRN_MAX_DIM */
+    int32_t local_highpass;      /**< trn_local_hp_t */
+    int32_t refine;              /**< 1: trn_localize_dem refines the pose over heights
+                                      (trn_refine_pose) and reports that covariance;
+                                      0: eq. 6 only (the paper). Needs stored heights. */
+    float noise_m;               /**< local map height noise, constant part, metres (0, 1000] */
+    float noise_k_per_m;         /**< local map height noise, range-squared part, 1/m [0, 1000]:
+                                      s(r) = noise_m + noise_k_per_m r^2 */
 } trn_map_cfg_t;
 
 /** A prepared global map. All pointers point into the caller's buffer. */
@@ -40,6 +62,9 @@ typedef struct {
     trn_pyramid_t pyr;     /**< min-filtered distances for branch-and-bound */
     trn_lnp_table_t lnp;   /**< ln p(d), with K of this map */
     uint32_t n_occupied;   /**< occupied voxels of the global map */
+    trn_grid_f32_t heights; /**< the DEM (NaN = unknown); data NULL unless the
+                                 configuration needs it (TRN_LOCAL_HP_MAP or refine) */
+    trn_grid_f32_t lowpass; /**< heights minus their high-pass (same condition) */
 } trn_map_t;
 
 /** Result of one localization. Pose values are global cells. */
@@ -57,12 +82,37 @@ typedef struct {
     int32_t on_window_edge;           /**< best pose on the window border: truth may lie outside */
     size_t n_points;                  /**< occupied local voxels matched */
     trn_search_stats_t stats;         /**< work of the first search */
+    int32_t refined;                  /**< 1: x, y, sigmas and cov_m2 come from
+                                           trn_refine_pose, not from eq. 6 */
+    trn_refine_t refinement;          /**< its details (valid when cfg.refine) */
 } trn_loc_result_t;
 
-/** @brief Defaults used by the tools: 0.1 m cells and bins, 1 m high-pass
- * half-width, 16 bins, s = 0.1 m, a = 0.95, cap 60 (20 cells), 4 levels,
- * exclusion at least 2 cells. */
+/** @brief The paper's configuration on its rock fields: 0.1 m cells and
+ * bins, 1 m high-pass half-width, 16 bins, s = 0.1 m, a = 0.95, cap 60
+ * (20 cells), 4 levels, exclusion at least 2 cells, the local DEM filtered on
+ * its own (TRN_LOCAL_HP_BOX), no refinement; height noise 0.01 m + 0.004/m r^2 (= 0.0004 r^2 / cell). */
 void trn_map_cfg_default(trn_map_cfg_t *cfg);
+
+/** @brief Workspace bytes of trn_map_cfg_auto for a width x height DEM (0 if invalid). */
+size_t trn_map_cfg_auto_workspace_bytes(int32_t width, int32_t height);
+
+/**
+ * @brief The configuration chosen from the data (docs/method.md section 9):
+ * high-pass half-width 10 cells; sigma_H = standard deviation of the DEM's
+ * high-passed heights; height bin zbin = min(cell, max(sigma_H / 2,
+ * 2 s(10 cells))) with s the local map's height noise; nz = 2 ceil(4 sigma_H /
+ * zbin) + 1 clamped to [16, min(64, TRN_MAX_ZBINS)];
+ * s = one cell; TRN_LOCAL_HP_MAP and refinement on; the rest as
+ * trn_map_cfg_default. The noise model is the caller's (cfg->noise_m,
+ * cfg->noise_k_per_m on entry are kept).
+ * @param[in,out] cfg  noise_m and noise_k_per_m read; everything else written.
+ * @param[in] cell_m   the DEM's cell, metres.
+ * @param[out] sigma_h_m sigma_H (may be NULL).
+ * @retval TRN_OK, TRN_E_NULL, TRN_E_ARG (cell or noise out of range),
+ *         TRN_E_SIZE, TRN_E_WORKSPACE, TRN_E_NODATA (no valid height)
+ */
+trn_status_t trn_map_cfg_auto(trn_map_cfg_t *cfg, const trn_grid_f32_t *dem, float cell_m,
+                              void *ws, size_t ws_bytes, double *sigma_h_m);
 
 /** @brief Check a map configuration. @retval TRN_OK, TRN_E_NULL, TRN_E_ARG, TRN_E_SIZE. */
 trn_status_t trn_map_cfg_check(const trn_map_cfg_t *cfg);
@@ -103,9 +153,13 @@ size_t trn_localize_dem_workspace_bytes(const trn_map_t *map, int32_t width, int
                                         size_t max_points, const trn_window_t *win);
 
 /**
- * @brief Localize a local DEM: high-pass and occupancy with the map's
- * terrain configuration, trn_points_order on the points (the result does not
- * depend on it; the searches get cheaper), then trn_localize_points.
+ * @brief Localize a local DEM: high-pass (cfg.local_highpass; with
+ * TRN_LOCAL_HP_MAP against the map's low-pass at the window's centre) and
+ * occupancy with the map's terrain configuration, trn_points_order on the
+ * points (the result does not depend on it; the searches get cheaper), then
+ * trn_localize_points; with cfg.refine, trn_refine_pose from its integer
+ * pose: when that succeeds (out->refined = 1) x, y, the sigmas and cov_m2
+ * are the refinement's; otherwise eq. 6's are kept (out->refined = 0).
  * @param[in] rover_x, rover_y the rover's cell in local_dem's grid.
  * @param[in] max_points       largest local occupancy accepted.
  * @retval as trn_localize_points, plus TRN_E_CAPACITY (more than max_points

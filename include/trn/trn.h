@@ -14,6 +14,7 @@
 #include "trn/chamfer.h"
 #include "trn/likelihood.h"
 #include "trn/peakfit.h"
+#include "trn/refine.h"
 #include "trn/localize.h"
 #include "trn/kernels.h"
 #include "trn/spread.h"

@@ -245,8 +245,41 @@ expect_error(1, "--prior: '1,2,3' is not a pair", "localize", "--dem", g_tif, "-
              "--prior", "1,2,3")
 expect_error(1, "--prior: '1014' is not a pair", "localize", "--dem", g_tif, "--local", local_tif,
              "--prior", "1014")
-expect_error(2, "missing required option '--local'", "localize", "--dem", g_tif, "--prior", prior)
+expect_error(2, "give --local FILE and --prior X,Y, or --batch LIST", "localize", "--dem", g_tif, "--prior", prior)
 expect_error(2, "unknown option '--rover'", "localize", "--dem", g_tif, *common, "--rover", "1,2")
+
+# ---- localize: the map configuration options and --batch ----------------------
+expect_error(2, "--batch replaces --local and --prior", "localize", "--dem", g_tif, *common, "--batch", p("x.txt"))
+expect_error(1, "--map-config must be auto or paper", "localize", "--dem", g_tif, *common, "--map-config", "best")
+expect_error(1, "--local-highpass must be box or map", "localize", "--dem", g_tif, *common, "--local-highpass", "disc")
+expect_error(1, "--nz: 0 is out of range", "localize", "--dem", g_tif, *common, "--nz", "0")
+expect_error(1, "--refine: 2 is out of range", "localize", "--dem", g_tif, *common, "--refine", "2")
+expect_error(1, "--zbin-m: -0.1 is out of range", "localize", "--dem", g_tif, *common, "--zbin-m", "-0.1")
+expect_error(1, "map configuration rejected", "localize", "--dem", g_tif, *common, "--highpass-m", "0.01")
+expect_error(1, "--batch " + p("missing.txt") + ": cannot open", "localize", "--dem", g_tif, "--batch", p("missing.txt"))
+with open(p("bad_batch.txt"), "w") as f:
+    f.write(f"{local_tif} 1014.75\n")
+expect_error(1, "line 1: expected 'LOCAL PRIOR_X PRIOR_Y [WINDOW_M]'", "localize", "--dem", g_tif,
+             "--batch", p("bad_batch.txt"))
+# Batch = the single-case command, line by line; a bad case is reported in its line, the rest go on.
+with open(p("batch.txt"), "w") as f:
+    f.write(f"# comment\n{local_tif} {prior.replace(',', ' ')}\n\n{p('missing.tif')} {prior.replace(',', ' ')} 1.0\n"
+            f"{local_tif} {prior.replace(',', ' ')} 1.5\n")
+single = run_json("localize", "--dem", g_tif, *common, "--json")
+single15 = run_json("localize", "--dem", g_tif, *common, "--window-m", "1.5", "--json")
+out = run("localize", "--dem", g_tif, "--batch", p("batch.txt"))
+lines = [json.loads(x) for x in out[1].splitlines() if x.strip()]
+check(len(lines) == 3, f"batch: three result lines: {len(lines)}")
+if len(lines) == 3:
+    for got, want in ((lines[0], single), (lines[2], single15)):
+        check(all(got[k] == want[k] for k in ("x_m", "y_m", "sigma_x_m", "sigma_y_m", "failure_probability", "status")),
+              f"batch line equals the single-case result: {got} vs {want}")
+    check(lines[1]["status"] == "error" and "cannot read" in lines[1]["error"], f"batch: bad case reported: {lines[1]}")
+for mode in ("auto", "paper"):
+    r = run_json("localize", "--dem", g_tif, *common, "--map-config", mode, "--json")
+    err = math.hypot(r["x_m"] - truth[0], r["y_m"] - truth[1]) if r.get("x_m") is not None else 1e9
+    check(err < 0.5 * CELL and r["status"] == "ok", f"--map-config {mode}: error {err:.4f} m, {r['status']}")
+    check(r["map_config"]["refine"] == (1 if mode == "auto" else 0), f"--map-config {mode}: refine {r['map_config']}")
 
 # ---- figures (tools/plot/trn_plot.py), when matplotlib is there -----------------
 try:

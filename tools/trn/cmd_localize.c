@@ -9,15 +9,18 @@
  * the core's pose is where that cell's centre lands in the global grid. The
  * rover's map position is that point minus the cell centre's offset from the
  * rover. */
+#define _POSIX_C_SOURCE 200112L /* clock_gettime */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "cli.h"
 #include "commands.h"
 #include "dem_io.h"
+#include "mapopt.h"
 #include "trn/trn.h"
 
 /* 16-byte aligned block; free with free(raw). */
@@ -34,43 +37,253 @@ static const char *status_word(trn_status_t st) {
   return st == TRN_OK ? "ok" : st == TRN_E_ILLCOND ? "ill_conditioned" : "error";
 }
 
-int trn_cmd_localize(int argc, char **argv) {
-  const char *dem_path = NULL, *local_path = NULL;
-  double prior[2] = {0.0, 0.0};
-  double window_m = 2.5;
-  long band = 1, local_band = 1, max_local = 1024;
-  int json = 0;
-  cli_opt_t opts[] = {
-      {"--dem", CLI_STRING, &dem_path, 0, 0, 1, "FILE", "global DEM (any GDAL raster; map frame)", 0},
-      {"--local", CLI_STRING, &local_path, 0, 0, 1, "FILE", "local DEM in the rover frame (rover at 0,0; x east, y north)", 0},
-      {"--prior", CLI_XY, prior, 0, 0, 1, "X,Y", "where the rover believes it is, map metres", 0},
-      {"--window-m", CLI_DOUBLE, &window_m, 0.0, 1e6, 0, "R", "prior uncertainty searched: +-R metres per axis (default 2.5)", 0},
-      {"--band", CLI_LONG, &band, 1, 65535, 0, "N", "band of --dem (default 1)", 0},
-      {"--local-band", CLI_LONG, &local_band, 1, 65535, 0, "N", "band of --local (default 1)", 0},
-      {"--max-local-cells", CLI_LONG, &max_local, 8, TRN_MAX_DIM, 0, "N", "largest local map side accepted, cells (default 1024)", 0},
-      {"--json", CLI_FLAG, &json, 0, 0, 0, NULL, "print one JSON object instead of the summary", 0},
-  };
-  cli_cmd_t cmd = {"localize", "Localize a rover: match its local DEM against the global DEM (paper section 2).",
-                   "Both DEMs must have the same square cell size; heights in metres, no-data and NaN\n"
-                   "mean \"not seen\". The map configuration scales with the cell size c: high-pass\n"
-                   "half-width 10c, height bins c, inlier sigma c (at c = 0.1 m: trn_map_cfg_default).\n"
-                   "Output: x_m, y_m (map), sigma_x_m (east), sigma_y_m (north), rho (east-north),\n"
-                   "failure_probability, status (ok | ill_conditioned).",
-                   opts, sizeof opts / sizeof opts[0]};
-  dem_t g, l;
-  char err[768];
-  double cell, rcol, rrow, dx_m, dy_m, pc, pr, ex, ey, est_x, est_y, rho_en;
-  long radius;
-  int rx, ry, pcol, prow, rc;
+/* What every localization of one run shares: the global map, prepared once. */
+typedef struct {
+  const char *name;
+  dem_t g;
   trn_map_cfg_t cfg;
   trn_map_t map;
-  trn_grid_f32_t gg, lg;
-  trn_window_t win;
+  void *mraw;
+  long local_band, max_local;
+} loc_ctx_t;
+
+static double now_ms(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return (double)t.tv_sec * 1e3 + (double)t.tv_nsec * 1e-6;
+}
+
+/* The result of one case in map terms. */
+typedef struct {
+  double x_m, y_m, rho_en, cov_en[3], time_ms;
+  long radius;
   trn_loc_result_t res;
   trn_status_t st;
-  size_t mb, wb, max_pts;
-  void *mraw = NULL, *wraw = NULL, *mbuf, *ws;
+} loc_out_t;
 
+/* Localize the local DEM at local_path around prior (map metres). Returns 0,
+ * or -1 with a one-line reason in err. */
+static int localize_one(loc_ctx_t *c, const char *local_path, const double prior[2], double window_m,
+                        loc_out_t *o, char *err, size_t err_len) {
+  dem_t l;
+  double cell = c->g.cell_m, rcol, rrow, dx_m, dy_m, pc, pr, ex, ey, t0;
+  int rx, ry, pcol, prow, rc = -1;
+  trn_grid_f32_t lg;
+  trn_window_t win;
+  size_t wb, max_pts;
+  void *wraw = NULL, *ws;
+
+  if (dem_read(local_path, (int)c->local_band, TRN_MAX_DIM, &l, err, err_len) != 0) {
+    return -1;
+  }
+  if (l.width > c->max_local || l.height > c->max_local) {
+    snprintf(err, err_len, "--local is %d x %d cells, larger than --max-local-cells %ld", l.width, l.height,
+             c->max_local);
+    goto done;
+  }
+  if (l.width > c->g.width || l.height > c->g.height) {
+    snprintf(err, err_len, "--local (%d x %d cells) is larger than --dem (%d x %d cells)", l.width, l.height,
+             c->g.width, c->g.height);
+    goto done;
+  }
+  if (fabs(l.cell_m - cell) > 1e-6 * cell) {
+    snprintf(err, err_len, "cell sizes differ: --dem %g m, --local %g m (resample the local DEM to %g m, e.g. gdalwarp -tr %g %g -r bilinear)",
+             cell, l.cell_m, cell, cell, cell);
+    goto done;
+  }
+  /* The rover (0, 0 in the rover frame) in the local grid. */
+  dem_map_to_cell(l.gt, 0.0, 0.0, &rcol, &rrow);
+  if (fabs(rcol) > (double)TRN_MAX_DIM || fabs(rrow) > (double)TRN_MAX_DIM) {
+    snprintf(err, err_len, "--local: the rover (0,0 of its geotransform) is %.0f, %.0f cells from the grid; is it "
+                           "in the rover frame?", rcol, rrow);
+    goto done;
+  }
+  rx = (int)floor(rcol + 0.5);
+  ry = (int)floor(rrow + 0.5);
+  /* Offset of that local cell's centre from the rover, map metres. */
+  dem_cell_to_map(l.gt, (double)rx, (double)ry, &dx_m, &dy_m);
+  if (!dem_cell_of(&c->g, prior[0], prior[1], &pcol, &prow)) {
+    snprintf(err, err_len, "--prior %.3f,%.3f is off the map (x %.3f..%.3f, y %.3f..%.3f)", prior[0], prior[1],
+             c->g.gt[0], c->g.gt[0] + c->g.width * cell, c->g.gt[3] - c->g.height * cell, c->g.gt[3]);
+    goto done;
+  }
+  o->radius = (long)ceil(window_m / cell - 1e-9);
+  if (o->radius > TRN_MAX_DIM) {
+    snprintf(err, err_len, "--window-m %g is %ld cells, more than the %d the core searches", window_m, o->radius,
+             TRN_MAX_DIM);
+    goto done;
+  }
+  /* Window of poses of the local cell (rx, ry), clipped to the map. */
+  dem_map_to_cell(c->g.gt, prior[0] + dx_m, prior[1] + dy_m, &pc, &pr);
+  pcol = (int)floor(pc + 0.5);
+  prow = (int)floor(pr + 0.5);
+  win.x0 = (int32_t)(pcol - o->radius < 0 ? 0 : pcol - o->radius);
+  win.y0 = (int32_t)(prow - o->radius < 0 ? 0 : prow - o->radius);
+  win.x1 = (int32_t)(pcol + o->radius > c->g.width - 1 ? c->g.width - 1 : pcol + o->radius);
+  win.y1 = (int32_t)(prow + o->radius > c->g.height - 1 ? c->g.height - 1 : prow + o->radius);
+  if (win.x0 > win.x1 || win.y0 > win.y1) {
+    snprintf(err, err_len, "the searched window around --prior lies off the map");
+    goto done;
+  }
+  if (trn_grid_f32_init(&lg, l.data, (size_t)l.width * (size_t)l.height, l.width, l.height) != TRN_OK) {
+    snprintf(err, err_len, "local DEM size rejected by the core");
+    goto done;
+  }
+  max_pts = (size_t)l.width * (size_t)l.height * (size_t)c->cfg.terrain.nz;
+  wb = trn_localize_dem_workspace_bytes(&c->map, l.width, l.height, max_pts, &win);
+  ws = wb > 0 ? alloc16(wb, &wraw) : NULL;
+  if (ws == NULL) {
+    snprintf(err, err_len, "cannot allocate %zu bytes of localization workspace", wb);
+    goto done;
+  }
+  t0 = now_ms();
+  o->st = trn_localize_dem(&c->map, &lg, rx, ry, max_pts, &win, ws, wb, &o->res);
+  o->time_ms = now_ms() - t0;
+  if (o->st != TRN_OK && o->st != TRN_E_ILLCOND) {
+    snprintf(err, err_len, "localization failed: %s", trn_strerror(o->st));
+    goto done;
+  }
+  /* Pose (global cells, y = row = south) -> rover position (map, y north). */
+  dem_cell_to_map(c->g.gt, o->res.x, o->res.y, &ex, &ey);
+  o->x_m = ex - dx_m;
+  o->y_m = ey - dy_m;
+  /* The core's row axis points south: flip the correlation's sign (no -0). */
+  o->rho_en = isfinite(o->res.rho) && o->res.rho != 0.0 ? -o->res.rho : o->res.rho == 0.0 ? 0.0 : o->res.rho;
+  o->cov_en[0] = o->res.cov_m2[0];
+  o->cov_en[1] = o->res.cov_m2[1];
+  o->cov_en[2] = o->res.cov_m2[2] != 0.0 ? -o->res.cov_m2[2] : 0.0;
+  rc = 0;
+done:
+  free(wraw);
+  dem_free(&l);
+  return rc;
+}
+
+static void print_json(const loc_ctx_t *c, const char *local, const double prior[2], double window_m,
+                       const loc_out_t *o, int batch) {
+  json_t j;
+  json_begin(&j, stdout);
+  json_num(&j, "x_m", o->x_m);
+  json_num(&j, "y_m", o->y_m);
+  json_num(&j, "sigma_x_m", o->res.sigma_x_m);
+  json_num(&j, "sigma_y_m", o->res.sigma_y_m);
+  json_num(&j, "rho", o->rho_en);
+  json_arr(&j, "cov_m2");
+  json_num(&j, NULL, o->cov_en[0]);
+  json_num(&j, NULL, o->cov_en[1]);
+  json_num(&j, NULL, o->cov_en[2]);
+  json_arr_end(&j);
+  json_num(&j, "failure_probability", o->res.failure_probability);
+  json_str(&j, "status", status_word(o->st));
+  json_bool(&j, "refined", o->res.refined != 0);
+  json_obj(&j, "prior");
+  json_num(&j, "x_m", prior[0]);
+  json_num(&j, "y_m", prior[1]);
+  json_obj_end(&j);
+  json_num(&j, "window_m", window_m);
+  json_num(&j, "cell_m", c->g.cell_m);
+  json_bool(&j, "on_window_edge", o->res.on_window_edge != 0);
+  json_int(&j, "local_points", (long long)o->res.n_points);
+  json_num(&j, "log_likelihood", o->res.ll_best);
+  json_int(&j, "poses_scored", (long long)o->res.stats.poses_scored);
+  json_num(&j, "time_ms", o->time_ms);
+  if (batch) {
+    json_str(&j, "local", local);
+  } else {
+    mapopt_json(&j, &c->cfg);
+  }
+  json_end(&j);
+}
+
+/* --batch: one case per line, "LOCAL PRIOR_X PRIOR_Y [WINDOW_M]"; blank
+ * lines and lines starting with # are skipped. A case that cannot be
+ * localized prints {"status": "error", "error": ...} and the run goes on;
+ * a malformed line stops it (exit 1). */
+static int run_batch(loc_ctx_t *c, const char *path, double window_m) {
+  FILE *f = fopen(path, "r");
+  char line[4096], local[4096], err[768];
+  long lineno = 0;
+  int bad = 0;
+  if (f == NULL) {
+    return cli_fail(c->name, "--batch %s: cannot open", path);
+  }
+  while (fgets(line, sizeof line, f) != NULL) {
+    double prior[2], w = window_m;
+    int nf;
+    loc_out_t o;
+    char extra[8];
+    ++lineno;
+    if (line[0] == '#' || strspn(line, " \t\r\n") == strlen(line)) {
+      continue;
+    }
+    nf = sscanf(line, "%4095s %lf %lf %lf %7s", local, &prior[0], &prior[1], &w, extra);
+    if (nf < 3 || nf > 4 || !isfinite(prior[0]) || !isfinite(prior[1]) || !(w >= 0.0 && w <= 1e6)) {
+      fclose(f);
+      return cli_fail(c->name, "--batch %s line %ld: expected 'LOCAL PRIOR_X PRIOR_Y [WINDOW_M]'", path, lineno);
+    }
+    memset(&o, 0, sizeof o);
+    if (localize_one(c, local, prior, w, &o, err, sizeof err) != 0) {
+      json_t j;
+      json_begin(&j, stdout);
+      json_str(&j, "status", "error");
+      json_str(&j, "error", err);
+      json_str(&j, "local", local);
+      json_end(&j);
+      ++bad;
+      continue;
+    }
+    print_json(c, local, prior, w, &o, 1);
+  }
+  fclose(f);
+  (void)bad;
+  return 0;
+}
+
+int trn_cmd_localize(int argc, char **argv) {
+  const char *dem_path = NULL, *local_path = NULL, *batch_path = NULL;
+  double prior[2] = {0.0, 0.0};
+  double window_m = 2.5, cell;
+  long band = 1;
+  int json = 0;
+  mapopt_t mo;
+  loc_ctx_t c;
+  cli_opt_t opts[8 + MAPOPT_N] = {
+      {"--dem", CLI_STRING, &dem_path, 0, 0, 1, "FILE", "global DEM (any GDAL raster; map frame)", 0},
+      {"--local", CLI_STRING, &local_path, 0, 0, 0, "FILE", "local DEM in the rover frame (rover at 0,0; x east, y north)", 0},
+      {"--prior", CLI_XY, prior, 0, 0, 0, "X,Y", "where the rover believes it is, map metres", 0},
+      {"--batch", CLI_STRING, &batch_path, 0, 0, 0, "LIST", "many cases, one per line 'LOCAL PRIOR_X PRIOR_Y [WINDOW_M]': the map is prepared once, one JSON line per case", 0},
+      {"--window-m", CLI_DOUBLE, &window_m, 0.0, 1e6, 0, "R", "prior uncertainty searched: +-R metres per axis (default 2.5)", 0},
+      {"--band", CLI_LONG, &band, 1, 65535, 0, "N", "band of --dem (default 1)", 0},
+      {"--local-band", CLI_LONG, &c.local_band, 1, 65535, 0, "N", "band of --local (default 1)", 0},
+      {"--max-local-cells", CLI_LONG, &c.max_local, 8, TRN_MAX_DIM, 0, "N", "largest local map side accepted, cells (default 1024)", 0},
+  };
+  cli_opt_t json_opt = {"--json", CLI_FLAG, &json, 0, 0, 0, NULL, "print one JSON object instead of the summary", 0};
+  cli_opt_t all[9 + MAPOPT_N];
+  cli_cmd_t cmd = {"localize", "Localize a rover: match its local DEM against the global DEM (paper section 2).",
+                   "Both DEMs must have the same square cell size; heights in metres, no-data and NaN\n"
+                   "mean \"not seen\". Give --local and --prior, or --batch. The map configuration is\n"
+                   "chosen from the global DEM (--map-config auto, docs/method.md section 9); every\n"
+                   "part of it can be set. Output: x_m, y_m (map), sigma_x_m (east), sigma_y_m (north),\n"
+                   "rho (east-north), cov_m2 [var_east, var_north, cov_en], failure_probability,\n"
+                   "status (ok | ill_conditioned: no finite covariance, or the height refinement\n"
+                   "found no consistent match: treat as not localized), time_ms (the localization).",
+                   all, sizeof all / sizeof all[0]};
+  char err[768];
+  int rc;
+  loc_out_t o;
+  trn_grid_f32_t gg;
+  trn_status_t st;
+  size_t mb;
+  void *mbuf;
+
+  memset(&c, 0, sizeof c);
+  c.name = cmd.name;
+  c.local_band = 1;
+  c.max_local = 1024;
+  mapopt_init(&mo);
+  memcpy(all, opts, 8 * sizeof opts[0]);
+  mapopt_cli(&mo, all + 8);
+  all[8 + MAPOPT_N] = json_opt;
   rc = cli_parse(&cmd, argc, argv);
   if (rc == CLI_HELP) {
     return 0;
@@ -78,152 +291,68 @@ int trn_cmd_localize(int argc, char **argv) {
   if (rc != CLI_OK) {
     return rc;
   }
-  if (dem_read(dem_path, (int)band, TRN_MAX_DIM, &g, err, sizeof err) != 0) {
+  if (batch_path == NULL && (local_path == NULL || !all[2].seen)) {
+    fprintf(stderr, "trn localize: give --local FILE and --prior X,Y, or --batch LIST (see --help)\n");
+    return CLI_USAGE;
+  }
+  if (batch_path != NULL && (local_path != NULL || all[2].seen)) {
+    fprintf(stderr, "trn localize: --batch replaces --local and --prior; give one or the other (see --help)\n");
+    return CLI_USAGE;
+  }
+  if (dem_read(dem_path, (int)band, TRN_MAX_DIM, &c.g, err, sizeof err) != 0) {
     return cli_fail(cmd.name, "--dem: %s", err);
   }
-  if (dem_read(local_path, (int)local_band, TRN_MAX_DIM, &l, err, sizeof err) != 0) {
-    dem_free(&g);
-    return cli_fail(cmd.name, "--local: %s", err);
-  }
   rc = CLI_BAD_INPUT;
-  cell = g.cell_m;
-  if (l.width > max_local || l.height > max_local) {
-    cli_fail(cmd.name, "--local is %d x %d cells, larger than --max-local-cells %ld", l.width, l.height,
-             max_local);
+  cell = c.g.cell_m;
+  if (mapopt_config(&mo, c.g.data, c.g.width, c.g.height, cell, &c.cfg, NULL, err, sizeof err) != 0) {
+    cli_fail(cmd.name, "--dem: %s", err);
     goto done;
   }
-  if (l.width > g.width || l.height > g.height) {
-    cli_fail(cmd.name, "--local (%d x %d cells) is larger than --dem (%d x %d cells)", l.width, l.height,
-             g.width, g.height);
-    goto done;
-  }
-  if (fabs(l.cell_m - cell) > 1e-6 * cell) {
-    cli_fail(cmd.name, "cell sizes differ: --dem %g m, --local %g m (resample one to the other)", cell,
-             l.cell_m);
-    goto done;
-  }
-  if (cell > 1000.0) {
-    cli_fail(cmd.name, "cell size %g m is above the 1000 m the core accepts", cell);
-    goto done;
-  }
-  /* The rover (0, 0 in the rover frame) in the local grid. */
-  dem_map_to_cell(l.gt, 0.0, 0.0, &rcol, &rrow);
-  if (fabs(rcol) > (double)TRN_MAX_DIM || fabs(rrow) > (double)TRN_MAX_DIM) {
-    cli_fail(cmd.name, "--local: the rover (0,0 of its geotransform) is %.0f, %.0f cells from the grid; is it "
-                       "in the rover frame?", rcol, rrow);
-    goto done;
-  }
-  rx = (int)floor(rcol + 0.5);
-  ry = (int)floor(rrow + 0.5);
-  /* Offset of that local cell's centre from the rover, map metres. */
-  dem_cell_to_map(l.gt, (double)rx, (double)ry, &dx_m, &dy_m);
-
-  if (!dem_cell_of(&g, prior[0], prior[1], &pcol, &prow)) {
-    cli_fail(cmd.name, "--prior %.3f,%.3f is off the map (x %.3f..%.3f, y %.3f..%.3f)", prior[0], prior[1], g.gt[0],
-             g.gt[0] + g.width * cell, g.gt[3] - g.height * cell, g.gt[3]);
-    goto done;
-  }
-  radius = (long)ceil(window_m / cell - 1e-9);
-  if (radius > TRN_MAX_DIM) {
-    cli_fail(cmd.name, "--window-m %g is %ld cells, more than the %d the core searches", window_m, radius,
-             TRN_MAX_DIM);
-    goto done;
-  }
-  /* Window of poses of the local cell (rx, ry), clipped to the map. */
-  dem_map_to_cell(g.gt, prior[0] + dx_m, prior[1] + dy_m, &pc, &pr);
-  pcol = (int)floor(pc + 0.5);
-  prow = (int)floor(pr + 0.5);
-  win.x0 = (int32_t)(pcol - radius < 0 ? 0 : pcol - radius);
-  win.y0 = (int32_t)(prow - radius < 0 ? 0 : prow - radius);
-  win.x1 = (int32_t)(pcol + radius > g.width - 1 ? g.width - 1 : pcol + radius);
-  win.y1 = (int32_t)(prow + radius > g.height - 1 ? g.height - 1 : prow + radius);
-  if (win.x0 > win.x1 || win.y0 > win.y1) {
-    cli_fail(cmd.name, "the searched window around --prior lies off the map");
-    goto done;
-  }
-
-  trn_map_cfg_default(&cfg);
-  cfg.terrain.cell_m = (float)cell;
-  cfg.terrain.zbin_m = (float)cell;
-  cfg.terrain.highpass_half_m = (float)(10.0 * cell);
-  cfg.sigma_m = (float)cell;
-  if ((st = trn_map_cfg_check(&cfg)) != TRN_OK) {
-    cli_fail(cmd.name, "map configuration for %g m cells rejected: %s", cell, trn_strerror(st));
-    goto done;
-  }
-  if (trn_grid_f32_init(&gg, g.data, (size_t)g.width * (size_t)g.height, g.width, g.height) != TRN_OK ||
-      trn_grid_f32_init(&lg, l.data, (size_t)l.width * (size_t)l.height, l.width, l.height) != TRN_OK) {
+  if (trn_grid_f32_init(&gg, c.g.data, (size_t)c.g.width * (size_t)c.g.height, c.g.width, c.g.height) != TRN_OK) {
     cli_fail(cmd.name, "DEM sizes rejected by the core");
     goto done;
   }
-  mb = trn_map_bytes(&cfg, g.width, g.height);
-  mbuf = mb > 0 ? alloc16(mb, &mraw) : NULL;
+  mb = trn_map_bytes(&c.cfg, c.g.width, c.g.height);
+  mbuf = mb > 0 ? alloc16(mb, &c.mraw) : NULL;
   if (mbuf == NULL) {
     cli_fail(cmd.name, "cannot allocate %zu bytes for the prepared map", mb);
     goto done;
   }
-  st = trn_map_build(&map, &cfg, &gg, mbuf, mb);
+  st = trn_map_build(&c.map, &c.cfg, &gg, mbuf, mb);
   if (st != TRN_OK) {
     cli_fail(cmd.name, "--dem: cannot prepare the map: %s", trn_strerror(st));
     goto done;
   }
-  max_pts = (size_t)l.width * (size_t)l.height * (size_t)cfg.terrain.nz;
-  wb = trn_localize_dem_workspace_bytes(&map, l.width, l.height, max_pts, &win);
-  ws = wb > 0 ? alloc16(wb, &wraw) : NULL;
-  if (ws == NULL) {
-    cli_fail(cmd.name, "cannot allocate %zu bytes of localization workspace", wb);
+  if (batch_path != NULL) {
+    rc = run_batch(&c, batch_path, window_m);
     goto done;
   }
-  st = trn_localize_dem(&map, &lg, rx, ry, max_pts, &win, ws, wb, &res);
-  if (st != TRN_OK && st != TRN_E_ILLCOND) {
-    cli_fail(cmd.name, "localization failed: %s", trn_strerror(st));
+  memset(&o, 0, sizeof o);
+  if (localize_one(&c, local_path, prior, window_m, &o, err, sizeof err) != 0) {
+    cli_fail(cmd.name, "%s", err);
     goto done;
   }
-
-  /* Pose (global cells, y = row = south) -> rover position (map, y north). */
-  dem_cell_to_map(g.gt, res.x, res.y, &ex, &ey);
-  est_x = ex - dx_m;
-  est_y = ey - dy_m;
-  /* The core's row axis points south: flip the correlation's sign (no -0). */
-  rho_en = isfinite(res.rho) && res.rho != 0.0 ? -res.rho : res.rho == 0.0 ? 0.0 : res.rho;
   if (json) {
-    json_t j;
-    json_begin(&j, stdout);
-    json_num(&j, "x_m", est_x);
-    json_num(&j, "y_m", est_y);
-    json_num(&j, "sigma_x_m", res.sigma_x_m);
-    json_num(&j, "sigma_y_m", res.sigma_y_m);
-    json_num(&j, "rho", rho_en);
-    json_num(&j, "failure_probability", res.failure_probability);
-    json_str(&j, "status", status_word(st));
-    json_obj(&j, "prior");
-    json_num(&j, "x_m", prior[0]);
-    json_num(&j, "y_m", prior[1]);
-    json_obj_end(&j);
-    json_num(&j, "window_m", window_m);
-    json_num(&j, "cell_m", cell);
-    json_bool(&j, "on_window_edge", res.on_window_edge != 0);
-    json_int(&j, "local_points", (long long)res.n_points);
-    json_num(&j, "log_likelihood", res.ll_best);
-    json_int(&j, "poses_scored", (long long)res.stats.poses_scored);
-    json_end(&j);
+    print_json(&c, local_path, prior, window_m, &o, 0);
   } else {
-    printf("estimate     x = %.3f m   y = %.3f m   status: %s\n", est_x, est_y, status_word(st));
+    printf("estimate     x = %.3f m   y = %.3f m   status: %s\n", o.x_m, o.y_m, status_word(o.st));
     printf("prior        x = %.3f m   y = %.3f m   (window +-%g m = %ld cells)\n", prior[0], prior[1], window_m,
-           radius);
-    printf("covariance   sigma_x = %.4f m  sigma_y = %.4f m  rho = %.3f\n", res.sigma_x_m, res.sigma_y_m,
-           rho_en);
-    printf("failure      probability %.3g%s\n", res.failure_probability,
-           res.on_window_edge ? "   (best pose on the window edge: widen --window-m)" : "");
-    printf("matched      %zu local voxels, %llu poses scored exactly\n", res.n_points,
-           (unsigned long long)res.stats.poses_scored);
+           o.radius);
+    printf("covariance   sigma_x = %.4f m  sigma_y = %.4f m  rho = %.3f%s\n", o.res.sigma_x_m, o.res.sigma_y_m,
+           o.rho_en, o.res.refined ? "   (height refinement)" : "   (eq. 6)");
+    printf("failure      probability %.3g%s\n", o.res.failure_probability,
+           o.res.on_window_edge ? "   (best pose on the window edge: widen --window-m)" : "");
+    printf("matched      %zu local voxels, %llu poses scored exactly, %.1f ms\n", o.res.n_points,
+           (unsigned long long)o.res.stats.poses_scored, o.time_ms);
+    printf("map          bin %.4g m x %d, high-pass %.4g m, s %.4g m, local filter %s, refine %s\n",
+           (double)c.cfg.terrain.zbin_m, (int)c.cfg.terrain.nz, (double)c.cfg.terrain.highpass_half_m,
+           (double)c.cfg.sigma_m, c.cfg.local_highpass == TRN_LOCAL_HP_MAP ? "map" : "box",
+           c.cfg.refine ? "on" : "off");
   }
   rc = 0;
 
 done:
-  free(mraw);
-  free(wraw);
-  dem_free(&g);
-  dem_free(&l);
+  free(c.mraw);
+  dem_free(&c.g);
   return rc;
 }

@@ -70,12 +70,202 @@ static char *dup_string(const char *s) {
   return d;
 }
 
+/* A unit name (a band's unit type) -> metres per unit; 1 if known, 0 if not.
+ * Case, surrounding blanks, '_' and '-' are ignored ("US_survey_foot" is
+ * "us survey foot"). An empty name is the metre (GDAL's "unknown"). */
+static int height_unit_to_m(const char *name, double *to_m) {
+  static const struct {
+    const char *name;
+    double to_m;
+  } units[] = {
+      {"", 1.0},
+      {"m", 1.0},
+      {"metre", 1.0},
+      {"metres", 1.0},
+      {"meter", 1.0},
+      {"meters", 1.0},
+      {"ft", 0.3048},
+      {"foot", 0.3048},
+      {"feet", 0.3048},
+      {"international foot", 0.3048},
+      {"international feet", 0.3048},
+      {"us survey foot", 1200.0 / 3937.0},
+      {"us survey feet", 1200.0 / 3937.0},
+      {"survey foot", 1200.0 / 3937.0},
+      {"survey feet", 1200.0 / 3937.0},
+      {"ftus", 1200.0 / 3937.0},
+      {"us ft", 1200.0 / 3937.0},
+      {"ft us", 1200.0 / 3937.0},
+      {"foot us", 1200.0 / 3937.0},
+      {"us foot", 1200.0 / 3937.0},
+      {"us feet", 1200.0 / 3937.0},
+      {"cm", 0.01},
+      {"centimetre", 0.01},
+      {"centimetres", 0.01},
+      {"centimeter", 0.01},
+      {"centimeters", 0.01},
+      {"mm", 0.001},
+      {"millimetre", 0.001},
+      {"millimetres", 0.001},
+      {"millimeter", 0.001},
+      {"millimeters", 0.001},
+      {"km", 1000.0},
+      {"kilometre", 1000.0},
+      {"kilometres", 1000.0},
+      {"kilometer", 1000.0},
+      {"kilometers", 1000.0},
+  };
+  char norm[64];
+  size_t i, k = 0, len;
+  while (*name == ' ' || *name == '\t') {
+    ++name;
+  }
+  len = strlen(name);
+  while (len > 0 && (name[len - 1] == ' ' || name[len - 1] == '\t')) {
+    --len;
+  }
+  if (len >= sizeof norm) {
+    return 0;
+  }
+  for (i = 0; i < len; ++i) {
+    char ch = name[i];
+    if (ch == '_' || ch == '-') {
+      ch = ' ';
+    } else if (ch >= 'A' && ch <= 'Z') {
+      ch = (char)(ch - 'A' + 'a');
+    }
+    norm[k++] = ch;
+  }
+  norm[k] = '\0';
+  for (i = 0; i < sizeof units / sizeof units[0]; ++i) {
+    if (strcmp(norm, units[i].name) == 0) {
+      *to_m = units[i].to_m;
+      return 1;
+    }
+  }
+  return 0;
+}
+
+/* Values at or beyond this magnitude are not heights. The rule covers
+ * +-FLT_MAX, the usual float "missing" fillers near it (ESRI's and PDS's
+ * -3.4028226550889e38), and the five ISIS special pixels of 32-bit float
+ * cubes (NULL, LOW_REPR_SAT, LOW_INSTR_SAT, HIGH_INSTR_SAT, HIGH_REPR_SAT:
+ * the bit patterns 0xFF7FFFFB..0xFF7FFFFF, -3.40282266e38 .. -FLT_MAX),
+ * whether or not the file declares them as no-data. */
+#define DEM_NOT_SEEN_ABS 3.0e38
+
+/* The dataset's CRS, checked and brought to metres. No CRS: nothing to do
+ * (a local DEM in the rover frame; its units are taken as metres). A
+ * geographic or geocentric CRS is refused. A projected or local CRS whose
+ * linear unit is not the metre (US survey feet, feet ...) has its
+ * geotransform scaled to metres; *out_srs is then a clone of the CRS with
+ * metre units (the caller finishes it), else NULL. *vert_to_m is the
+ * vertical CRS's unit in metres when the CRS is compound, else 0. */
+static int crs_to_metres(GDALDatasetH ds, const char *path, double gt[6], OGRSpatialReferenceH *out_srs,
+                         double *vert_to_m, char *err, size_t err_len) {
+  OGRSpatialReferenceH srs = GDALGetSpatialRef(ds);
+  char *unit = NULL;
+  double to_m;
+
+  *out_srs = NULL;
+  *vert_to_m = 0.0;
+  if (srs == NULL) {
+    return 0;
+  }
+  if (OSRIsGeographic(srs) || OSRIsGeocentric(srs)) {
+    set_err(err, err_len,
+            "'%s' is in a %s CRS (%s); reproject it to metres first, e.g. gdalwarp -t_srs EPSG:326NN "
+            "(the UTM zone of the site) -r bilinear IN.tif OUT.tif",
+            path, OSRIsGeographic(srs) ? "geographic" : "geocentric",
+            OSRIsGeographic(srs) ? "degrees" : "earth-centred axes");
+    return -1;
+  }
+  if (OSRIsCompound(srs)) {
+    char *vunit = NULL;
+    double v = OSRGetTargetLinearUnits(srs, "VERT_CS", &vunit);
+    if (isfinite(v) && v > 0.0) {
+      *vert_to_m = v;
+    }
+  }
+  to_m = OSRGetLinearUnits(srs, &unit);
+  if (!(isfinite(to_m) && to_m > 0.0)) {
+    set_err(err, err_len,
+            "'%s': its CRS's linear unit '%s' has no length in metres; reproject it to a metre CRS first, "
+            "e.g. gdalwarp -t_srs EPSG:326NN (the UTM zone of the site) -r bilinear IN.tif OUT.tif",
+            path, unit != NULL ? unit : "?");
+    return -1;
+  }
+  if (fabs(to_m - 1.0) > 1e-12) {
+    OGRSpatialReferenceH m = OSRClone(srs);
+    OGRErr e = OGRERR_FAILURE;
+    if (m != NULL) {
+      e = OGRERR_NONE;
+      if (OSRIsCompound(m)) {
+        e = OSRStripVertical(m);
+      }
+      if (e == OGRERR_NONE) {
+        e = OSRIsProjected(m) ? OSRSetLinearUnitsAndUpdateParameters(m, SRS_UL_METER, 1.0)
+                              : OSRSetLinearUnits(m, SRS_UL_METER, 1.0);
+      }
+    }
+    if (e != OGRERR_NONE) {
+      set_err(err, err_len,
+              "'%s': cannot express its CRS (linear unit '%s') in metres; reproject it to a metre CRS first, "
+              "e.g. gdalwarp -t_srs EPSG:326NN (the UTM zone of the site) -r bilinear IN.tif OUT.tif",
+              path, unit != NULL ? unit : "?");
+      if (m != NULL) {
+        OSRDestroySpatialReference(m);
+      }
+      return -1;
+    }
+    gt[0] *= to_m;
+    gt[1] *= to_m;
+    gt[3] *= to_m;
+    gt[5] *= to_m;
+    *out_srs = m;
+  }
+  return 0;
+}
+
+/* Heights in metres: raw * scale + offset (the band's own), times the
+ * height unit. Returns 0 or -1 with a reason. */
+static int band_height_scale(GDALRasterBandH b, int band, const char *path, double vert_to_m, double *scale,
+                             double *offset, double *to_m, char *err, size_t err_len) {
+  int ok_s = 0, ok_o = 0;
+  const char *unit = GDALGetRasterUnitType(b);
+  double s = GDALGetRasterScale(b, &ok_s);
+  double o = GDALGetRasterOffset(b, &ok_o);
+
+  *scale = ok_s ? s : 1.0;
+  *offset = ok_o ? o : 0.0;
+  if (!(isfinite(*scale) && *scale != 0.0 && isfinite(*offset))) {
+    set_err(err, err_len, "band %d of '%s' has an unusable scale %g / offset %g", band, path, *scale, *offset);
+    return -1;
+  }
+  if (unit == NULL) {
+    unit = "";
+  }
+  if (!height_unit_to_m(unit, to_m)) {
+    set_err(err, err_len,
+            "band %d of '%s' has heights in unit '%s', which trn does not know (metres, feet, US survey "
+            "feet, cm, mm, km); convert the heights to metres first",
+            band, path, unit);
+    return -1;
+  }
+  /* No unit on the band: the compound CRS's vertical unit, when it has one. */
+  if (unit[0] == '\0' && vert_to_m > 0.0) {
+    *to_m = vert_to_m;
+  }
+  return 0;
+}
+
 int dem_read(const char *path, int band, int max_dim, dem_t *dem, char *err, size_t err_len) {
   GDALDatasetH ds;
   GDALRasterBandH b;
+  OGRSpatialReferenceH msrs = NULL;
   double gt[6];
   int w, h, nbands, has_nodata = 0, mask_flags, r, c;
-  double nodata;
+  double nodata, vert_to_m, zscale, zoffset, zunit;
   const char *wkt;
   size_t n;
   float *data;
@@ -97,8 +287,17 @@ int dem_read(const char *path, int band, int max_dim, dem_t *dem, char *err, siz
   }
   w = GDALGetRasterXSize(ds);
   h = GDALGetRasterYSize(ds);
-  if (w < 1 || h < 1 || w > max_dim || h > max_dim) {
-    set_err(err, err_len, "'%s' is %d x %d cells; the maximum side is %d cells", path, w, h, max_dim);
+  if (w < 1 || h < 1) {
+    set_err(err, err_len, "'%s' is %d x %d cells: it has no cells", path, w, h);
+    GDALClose(ds);
+    return -1;
+  }
+  if (w > max_dim || h > max_dim) {
+    set_err(err, err_len,
+            "'%s' is %d x %d cells; the maximum side is %d cells: cut the area you need with gdal_translate "
+            "-srcwin XOFF YOFF XSIZE YSIZE IN.tif OUT.tif, or coarsen it with gdalwarp -tr CELL CELL "
+            "-r bilinear IN.tif OUT.tif",
+            path, w, h, max_dim);
     GDALClose(ds);
     return -1;
   }
@@ -118,11 +317,26 @@ int dem_read(const char *path, int band, int max_dim, dem_t *dem, char *err, siz
     GDALClose(ds);
     return -1;
   }
+  if (crs_to_metres(ds, path, gt, &msrs, &vert_to_m, err, err_len) != 0) {
+    GDALClose(ds);
+    return -1;
+  }
   cell = fabs(gt[1]);
   rel = fabs(fabs(gt[5]) - cell) / cell;
   if (rel > 1e-6) {
     set_err(err, err_len, "'%s' has non-square cells (%g x %g m); resample it to square cells first",
             path, cell, fabs(gt[5]));
+    if (msrs != NULL) {
+      OSRDestroySpatialReference(msrs);
+    }
+    GDALClose(ds);
+    return -1;
+  }
+  b = GDALGetRasterBand(ds, band);
+  if (band_height_scale(b, band, path, vert_to_m, &zscale, &zoffset, &zunit, err, err_len) != 0) {
+    if (msrs != NULL) {
+      OSRDestroySpatialReference(msrs);
+    }
     GDALClose(ds);
     return -1;
   }
@@ -131,18 +345,23 @@ int dem_read(const char *path, int band, int max_dim, dem_t *dem, char *err, siz
   data = malloc(n * sizeof *data);
   if (data == NULL) {
     set_err(err, err_len, "out of memory for a %d x %d DEM", w, h);
+    if (msrs != NULL) {
+      OSRDestroySpatialReference(msrs);
+    }
     GDALClose(ds);
     return -1;
   }
-  b = GDALGetRasterBand(ds, band);
   if (GDALRasterIO(b, GF_Read, 0, 0, w, h, data, w, h, GDT_Float32, 0, 0) != CE_None) {
     set_err(err, err_len, "cannot read band %d of '%s': %s", band, path, last_gdal_msg());
     free(data);
+    if (msrs != NULL) {
+      OSRDestroySpatialReference(msrs);
+    }
     GDALClose(ds);
     return -1;
   }
 
-  /* Not seen: no-data value, mask, non-finite. */
+  /* Not seen: no-data value, mask, non-finite, |value| >= DEM_NOT_SEEN_ABS. */
   nodata = GDALGetRasterNoDataValue(b, &has_nodata);
   mask_flags = GDALGetMaskFlags(b);
   if (!(mask_flags & GMF_ALL_VALID) && !(mask_flags & GMF_NODATA)) {
@@ -150,6 +369,9 @@ int dem_read(const char *path, int band, int max_dim, dem_t *dem, char *err, siz
     if (m == NULL) {
       set_err(err, err_len, "out of memory for a %d x %d mask", w, h);
       free(data);
+      if (msrs != NULL) {
+        OSRDestroySpatialReference(msrs);
+      }
       GDALClose(ds);
       return -1;
     }
@@ -157,6 +379,9 @@ int dem_read(const char *path, int band, int max_dim, dem_t *dem, char *err, siz
       set_err(err, err_len, "cannot read the mask of band %d of '%s': %s", band, path, last_gdal_msg());
       free(m);
       free(data);
+      if (msrs != NULL) {
+        OSRDestroySpatialReference(msrs);
+      }
       GDALClose(ds);
       return -1;
     }
@@ -170,12 +395,19 @@ int dem_read(const char *path, int band, int max_dim, dem_t *dem, char *err, siz
   {
     /* The band is read as float32, so compare with the no-data value as
      * float32 (a double no-data value is rounded the same way the heights
-     * are). A NaN no-data value needs no comparison. */
+     * are). A NaN no-data value needs no comparison. The tests run on the
+     * stored values (a no-data value or an ISIS special pixel is a stored
+     * value), then once more on the heights in metres. */
     int use_nd = has_nodata && isfinite(nodata) && fabs(nodata) <= 3.4e38;
     float nd = use_nd ? (float)nodata : 0.0f;
+    int convert = zscale != 1.0 || zoffset != 0.0 || zunit != 1.0;
     for (size_t i = 0; i < n; ++i) {
-      if (!isfinite(data[i]) || (use_nd && data[i] == nd)) {
+      float v = data[i];
+      if (!isfinite(v) || fabsf(v) >= (float)DEM_NOT_SEEN_ABS || (use_nd && v == nd)) {
         data[i] = NAN;
+      } else if (convert) {
+        double z = ((double)v * zscale + zoffset) * zunit;
+        data[i] = (isfinite(z) && fabs(z) < DEM_NOT_SEEN_ABS) ? (float)z : NAN;
       }
     }
   }
@@ -207,9 +439,29 @@ int dem_read(const char *path, int band, int max_dim, dem_t *dem, char *err, siz
     gt[1] = -gt[1];
   }
 
-  wkt = GDALGetProjectionRef(ds);
-  if (wkt != NULL && *wkt != '\0') {
-    dem->srs_wkt = dup_string(wkt);
+  /* The CRS handed on: the file's own, or its metre version after a unit
+   * conversion (horizontal only when the heights were converted too, so no
+   * vertical CRS claims a unit the heights no longer have). */
+  if (msrs == NULL && zunit != 1.0 && vert_to_m > 0.0) {
+    OGRSpatialReferenceH srs = GDALGetSpatialRef(ds);
+    msrs = srs != NULL ? OSRClone(srs) : NULL;
+    if (msrs != NULL && OSRStripVertical(msrs) != OGRERR_NONE) {
+      OSRDestroySpatialReference(msrs);
+      msrs = NULL;
+    }
+  }
+  if (msrs != NULL) {
+    char *mwkt = NULL;
+    if (OSRExportToWkt(msrs, &mwkt) == OGRERR_NONE && mwkt != NULL && *mwkt != '\0') {
+      dem->srs_wkt = dup_string(mwkt);
+    }
+    CPLFree(mwkt);
+    OSRDestroySpatialReference(msrs);
+  } else {
+    wkt = GDALGetProjectionRef(ds);
+    if (wkt != NULL && *wkt != '\0') {
+      dem->srs_wkt = dup_string(wkt);
+    }
   }
   GDALClose(ds);
 

@@ -23,15 +23,24 @@ typedef struct {
   float *data;    /* width*height heights, row-major, NaN = not seen */
   int width;      /* columns */
   int height;     /* rows */
-  double gt[6];   /* GDAL geotransform, north-up after normalisation */
+  double gt[6];   /* GDAL geotransform in metres, north-up after normalisation */
   double cell_m;  /* gt[1] = -gt[5] */
-  char *srs_wkt;  /* the file's CRS as WKT, or NULL when it had none */
+  char *srs_wkt;  /* the file's CRS as WKT (in metres when converted), or NULL when it had none */
 } dem_t;
 
-/* Read band `band` (1-based) of anything GDAL opens. The band's no-data
- * value, its mask (when not all-valid) and non-finite heights become NaN.
- * max_dim bounds width and height. Returns 0 on success; on failure returns
- * -1 and writes a one-line reason (no trailing newline) into err. */
+/* Read band `band` (1-based) of anything GDAL opens, in metres. Not seen
+ * (NaN): the band's no-data value, its mask (when not all-valid), non-finite
+ * values and |value| >= 3.0e38 (+-FLT_MAX, the ISIS special pixels of float
+ * cubes, the PDS/ESRI -3.4028226550889e38 filler). A geographic or
+ * geocentric CRS is refused (no CRS is accepted: a rover-frame map); a CRS
+ * whose linear unit is not the metre (feet, US survey feet) has its
+ * geotransform converted to metres and srs_wkt is that CRS in metres.
+ * Heights: raw * band scale + band offset, times the band's unit (metres,
+ * feet, US survey feet, cm, mm, km; none: a compound CRS's vertical unit,
+ * else metres); any other unit is refused. max_dim bounds width and height
+ * (the reason names the gdal_translate cut). Returns 0 on success; on
+ * failure returns -1 and writes a one-line reason (no trailing newline)
+ * into err. */
 int dem_read(const char *path, int band, int max_dim, dem_t *dem, char *err, size_t err_len);
 
 /* Write data (width x height, north-up as dem_t) as a one-band float32

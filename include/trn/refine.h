@@ -1,0 +1,81 @@
+/**
+ * @file refine.h
+ * @brief Continuous sub-cell refinement of a matched pose over heights, with
+ * its covariance (trn's natural-terrain extension; docs/method.md section 9).
+ *
+ * Model: a seen local height h_i at rover-relative cell (x_i, y_i) is the
+ * global DEM's height at the pose plus one unknown vertical offset plus
+ * Gaussian noise: h_i = dz + G(px + x_i, py + y_i) + e_i, with G bilinear
+ * between global cell centres and e_i ~ N(0, s_i^2),
+ * s_i = noise_m + noise_k_per_m * r_i^2 (r_i the cell's range from the
+ * rover, metres). Maximum likelihood over (px, py, dz) by Gauss-Newton from
+ * the integer pose of the voxel search. Beside the noise model, one model
+ * variance m^2 common to all points (the global DEM's own interpolation
+ * error, a map older than the terrain) is estimated from the residuals at
+ * every step, s_i^2 -> s_i^2 + m^2, so that the inliers' mean squared
+ * residual equals their mean variance; points whose residual exceeds
+ * TRN_REFINE_CLIP of their s_i are outliers (a mixture model's hard
+ * limit), re-decided every step. Covariance = (J^T W J)^-1, scaled by the
+ * reduced chi-square when it exceeds 1.
+ */
+#ifndef TRN_REFINE_H
+#define TRN_REFINE_H
+
+#include "trn/grid.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Residual clip, in robust scales. */
+#define TRN_REFINE_CLIP 3.0
+/** Farthest the refined pose may move from the integer start, cells per
+ *  axis: the voxel search can land one cell off on a smooth slope (its
+ *  height bins are coarse there); beyond this the start was not this peak. */
+#define TRN_REFINE_MAX_SHIFT 2.0
+/** Largest Gauss-Newton iterations. */
+#define TRN_REFINE_MAX_ITER 12
+
+/** Height-noise model of the local map: s(r) = noise_m + noise_k_per_m r^2. */
+typedef struct {
+    float cell_m;        /**< cell of both grids, metres, (0, 1000] */
+    float noise_m;       /**< constant part, metres, (0, 1000] */
+    float noise_k_per_m; /**< range-squared part, 1/m, [0, 1000] */
+} trn_refine_cfg_t;
+
+/** Result of trn_refine_pose. Pose in global cells (x = column, y = row). */
+typedef struct {
+    double x, y;        /**< refined pose of the local rover cell */
+    double dz_m;        /**< vertical offset local - global, metres */
+    double model_m;     /**< model error estimated beside the noise, metres */
+    double cov_cells[3];/**< var_x, var_y, cov_xy in cells^2 */
+    double chi2_dof;    /**< reduced chi-square of the inliers (before the >= 1 floor) */
+    int32_t n_used;     /**< inlier points of the last iteration */
+    int32_t n_seen;     /**< seen local points with a global height under them */
+    int32_t iterations; /**< Gauss-Newton steps taken */
+} trn_refine_t;
+
+/**
+ * @brief Refine the pose of a local DEM in a global DEM from an integer
+ * start (ix, iy) (the voxel search's best pose).
+ * @param[in] global  global heights, metres (NaN = unknown)
+ * @param[in] local   local heights, metres, same cell size (NaN = not seen)
+ * @param[in] rover_x, rover_y the rover's cell in local's grid
+ * @retval TRN_OK
+ * @retval TRN_E_NULL, TRN_E_SIZE (bad grids), TRN_E_ARG (cfg, or a rover
+ *         cell farther than TRN_MAX_DIM from the local grid)
+ * @retval TRN_E_RANGE   start pose off the global grid
+ * @retval TRN_E_NODATA  fewer than 8 seen points with global heights
+ * @retval TRN_E_ILLCOND the normal matrix is singular (flat terrain), the
+ *         estimate left the start pose's neighbourhood (|dx| or |dy|
+ *         over TRN_REFINE_MAX_SHIFT cells), or fewer than half of the points are inliers: the
+ *         out values are then the start pose and infinite variances
+ */
+trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
+                             int32_t rover_x, int32_t rover_y, int32_t ix, int32_t iy,
+                             const trn_refine_cfg_t *cfg, trn_refine_t *out);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* TRN_REFINE_H */

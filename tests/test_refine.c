@@ -1,0 +1,228 @@
+/* test_refine.c - continuous pose refinement over heights (refine.h).
+ *
+ * Oracles: a global DEM of an analytic smooth surface and a local DEM that is
+ * exactly that DEM's bilinear interpolation at a known sub-cell pose plus a
+ * vertical offset (the refinement's own model, so the pose must come back to
+ * rounding); the same with Gaussian noise of the documented model, where the
+ * reported covariance must cover the errors as a 2-D normal does; outliers;
+ * and one assertion per documented @retval.
+ */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdio.h>
+
+#include "trn/refine.h"
+#include "rng.h"
+
+#define GW 64
+#define LW 31 /* local side; rover at its centre cell */
+
+static float g_data[GW * GW];
+static float l_data[LW * LW];
+
+static double surface(double x, double y)
+{
+    return 100.0 + 0.3 * x - 0.2 * y + 4.0 * sin(x * 0.37) * cos(y * 0.23) + 2.5 * sin(0.51 * x + 0.44 * y);
+}
+
+static double gauss(trn_rng_t *r)
+{
+    double u1 = trn_rng_unit(r), u2 = trn_rng_unit(r);
+    u1 = u1 < 1e-300 ? 1e-300 : u1;
+    return sqrt(-2.0 * log(u1)) * cos(6.283185307179586 * u2);
+}
+
+static void make_global(trn_grid_f32_t *g)
+{
+    int x, y;
+    for (y = 0; y < GW; ++y) {
+        for (x = 0; x < GW; ++x) {
+            g_data[y * GW + x] = (float)surface(x, y);
+        }
+    }
+    assert_int_equal(trn_grid_f32_init(g, g_data, GW * GW, GW, GW), TRN_OK);
+}
+
+static double bilin(double x, double y)
+{
+    int x0 = (int)floor(x), y0 = (int)floor(y);
+    double fx = x - x0, fy = y - y0;
+    double a = g_data[y0 * GW + x0], b = g_data[y0 * GW + x0 + 1], c = g_data[(y0 + 1) * GW + x0],
+           d = g_data[(y0 + 1) * GW + x0 + 1];
+    return (a * (1 - fx) + b * fx) * (1 - fy) + (c * (1 - fx) + d * fx) * fy;
+}
+
+/* Local DEM seen from pose (tx, ty): offset dz, noise of cfg times `noise`. */
+static void make_local(trn_grid_f32_t *l, double tx, double ty, double dz, double noise,
+                       const trn_refine_cfg_t *cfg, trn_rng_t *r)
+{
+    int x, y, c = LW / 2;
+    for (y = 0; y < LW; ++y) {
+        for (x = 0; x < LW; ++x) {
+            double rm = cfg->cell_m * sqrt((double)((x - c) * (x - c) + (y - c) * (y - c)));
+            double s = cfg->noise_m + cfg->noise_k_per_m * rm * rm;
+            l_data[y * LW + x] = (float)(bilin(tx + x - c, ty + y - c) + dz + noise * s * gauss(r));
+        }
+    }
+    l_data[c * LW + c] = NAN; /* the rover's own cell is never seen */
+    assert_int_equal(trn_grid_f32_init(l, l_data, LW * LW, LW, LW), TRN_OK);
+}
+
+static trn_refine_cfg_t cfg_of(void)
+{
+    trn_refine_cfg_t c;
+    c.cell_m = 1.0f;
+    c.noise_m = 0.01f;
+    c.noise_k_per_m = 0.0004f;
+    return c;
+}
+
+static void test_exact_model(void **state)
+{
+    trn_grid_f32_t g, l;
+    trn_refine_cfg_t c = cfg_of();
+    trn_refine_t out;
+    trn_rng_t r;
+    int i;
+    double worst = 0.0;
+    (void)state;
+    trn_rng_seed(&r, 11);
+    make_global(&g);
+    for (i = 0; i < 50; ++i) {
+        double tx = 24.0 + 12.0 * trn_rng_unit(&r), ty = 24.0 + 12.0 * trn_rng_unit(&r);
+        int ix = (int)floor(tx + 0.5) + (i % 3) - 1, iy = (int)floor(ty + 0.5); /* start up to 1.5 cells off */
+        make_local(&l, tx, ty, -37.5, 0.0, &c, &r);
+        assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, ix, iy, &c, &out), TRN_OK);
+        worst = fmax(worst, fmax(fabs(out.x - tx), fabs(out.y - ty)));
+        assert_true(fabs(out.dz_m + 37.5) < 1e-3);
+        assert_true(out.n_used == LW * LW - 1);
+    }
+    printf("exact model: worst pose error %.2e cells over 50 poses\n", worst);
+    assert_true(worst < 1e-4); /* float heights: ~1e-6 measured */
+}
+
+/* With the documented noise the errors fall inside the 1/2/3-sigma ellipses
+ * as a 2-D normal's do (39.3 / 86.5 / 98.9 %); 400 trials. */
+static void test_noise_coverage(void **state)
+{
+    trn_grid_f32_t g, l;
+    trn_refine_cfg_t c = cfg_of();
+    trn_refine_t out;
+    trn_rng_t r;
+    int i, in[3] = {0, 0, 0}, n = 400;
+    (void)state;
+    trn_rng_seed(&r, 5);
+    make_global(&g);
+    for (i = 0; i < n; ++i) {
+        double tx = 24.0 + 12.0 * trn_rng_unit(&r), ty = 24.0 + 12.0 * trn_rng_unit(&r), ex, ey, det, m2;
+        make_local(&l, tx, ty, 3.0, 1.0, &c, &r);
+        assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, (int)floor(tx + 0.5), (int)floor(ty + 0.5), &c,
+                                         &out),
+                         TRN_OK);
+        ex = out.x - tx;
+        ey = out.y - ty;
+        det = out.cov_cells[0] * out.cov_cells[1] - out.cov_cells[2] * out.cov_cells[2];
+        m2 = (out.cov_cells[1] * ex * ex - 2.0 * out.cov_cells[2] * ex * ey + out.cov_cells[0] * ey * ey) / det;
+        in[0] += m2 <= 1.0;
+        in[1] += m2 <= 4.0;
+        in[2] += m2 <= 9.0;
+    }
+    printf("noise coverage 1/2/3 sigma: %.1f / %.1f / %.1f %%\n", 100.0 * in[0] / n, 100.0 * in[1] / n,
+           100.0 * in[2] / n);
+    assert_true(fabs(100.0 * in[0] / n - 39.3) < 8.0);
+    assert_true(fabs(100.0 * in[1] / n - 86.5) < 6.0);
+    assert_true(100.0 * in[2] / n > 95.0);
+}
+
+/* A 6 x 6 patch (4 % of the seen cells) with gross errors (a rock the map
+ * does not have): clipped, the pose still comes back. (A quarter of the
+ * cells with 5-7 m errors is NOT rejected: the model variance absorbs them;
+ * measured, open problem in docs/method.md section 9.) */
+static void test_outliers(void **state)
+{
+    trn_grid_f32_t g, l;
+    trn_refine_cfg_t c = cfg_of();
+    trn_refine_t out;
+    trn_rng_t r;
+    int x, y;
+    (void)state;
+    trn_rng_seed(&r, 3);
+    make_global(&g);
+    make_local(&l, 30.3, 29.6, 0.0, 1.0, &c, &r);
+    for (y = 2; y < 8; ++y) {
+        for (x = 2; x < 8; ++x) {
+            l_data[y * LW + x] += 5.0f + (float)(x % 3);
+        }
+    }
+    assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, 30, 30, &c, &out), TRN_OK);
+    assert_true(fabs(out.x - 30.3) < 0.05 && fabs(out.y - 29.6) < 0.05);
+    assert_true(out.n_used <= out.n_seen - 36);
+}
+
+static void test_errors(void **state)
+{
+    trn_grid_f32_t g, l, flat;
+    trn_refine_cfg_t c = cfg_of(), bad;
+    trn_refine_t out;
+    trn_rng_t r;
+    static float flat_data[GW * GW];
+    int i;
+    (void)state;
+    trn_rng_seed(&r, 1);
+    make_global(&g);
+    make_local(&l, 30.0, 30.0, 0.0, 0.0, &c, &r);
+    assert_int_equal(trn_refine_pose(NULL, &l, 15, 15, 30, 30, &c, &out), TRN_E_NULL);
+    assert_int_equal(trn_refine_pose(&g, NULL, 15, 15, 30, 30, &c, &out), TRN_E_NULL);
+    assert_int_equal(trn_refine_pose(&g, &l, 15, 15, 30, 30, NULL, &out), TRN_E_NULL);
+    assert_int_equal(trn_refine_pose(&g, &l, 15, 15, 30, 30, &c, NULL), TRN_E_NULL);
+    bad = c;
+    bad.noise_m = 0.0f;
+    assert_int_equal(trn_refine_pose(&g, &l, 15, 15, 30, 30, &bad, &out), TRN_E_ARG);
+    bad = c;
+    bad.noise_k_per_m = NAN;
+    assert_int_equal(trn_refine_pose(&g, &l, 15, 15, 30, 30, &bad, &out), TRN_E_ARG);
+    bad = c;
+    bad.cell_m = -1.0f;
+    assert_int_equal(trn_refine_pose(&g, &l, 15, 15, 30, 30, &bad, &out), TRN_E_ARG);
+    assert_int_equal(trn_refine_pose(&g, &l, -TRN_MAX_DIM - 1, 15, 30, 30, &c, &out), TRN_E_ARG);
+    assert_int_equal(trn_refine_pose(&g, &l, 15, 15, GW, 30, &c, &out), TRN_E_RANGE);
+    assert_int_equal(trn_refine_pose(&g, &l, 15, 15, 30, -1, &c, &out), TRN_E_RANGE);
+    g.width = 0;
+    assert_int_equal(trn_refine_pose(&g, &l, 15, 15, 30, 30, &c, &out), TRN_E_SIZE);
+    make_global(&g);
+    for (i = 0; i < LW * LW; ++i) {
+        l_data[i] = NAN;
+    }
+    assert_int_equal(trn_refine_pose(&g, &l, 15, 15, 30, 30, &c, &out), TRN_E_NODATA);
+    /* Flat ground: no horizontal information, singular normal matrix. */
+    for (i = 0; i < GW * GW; ++i) {
+        flat_data[i] = 7.0f;
+    }
+    assert_int_equal(trn_grid_f32_init(&flat, flat_data, GW * GW, GW, GW), TRN_OK);
+    make_local(&l, 30.0, 30.0, 0.0, 0.0, &c, &r);
+    for (i = 0; i < LW * LW; ++i) {
+        l_data[i] = isnan(l_data[i]) ? NAN : 7.0f;
+    }
+    assert_int_equal(trn_refine_pose(&flat, &l, 15, 15, 30, 30, &c, &out), TRN_E_ILLCOND);
+    assert_true(isinf(out.cov_cells[0]) && out.x == 30.0);
+    /* Start far from the truth: the estimate leaves the neighbourhood. */
+    make_local(&l, 30.0, 30.0, 0.0, 0.0, &c, &r);
+    assert_int_equal(trn_refine_pose(&g, &l, 15, 15, 36, 30, &c, &out), TRN_E_ILLCOND);
+    assert_true(isinf(out.cov_cells[1]));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_exact_model),
+        cmocka_unit_test(test_noise_coverage),
+        cmocka_unit_test(test_outliers),
+        cmocka_unit_test(test_errors),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,374 @@
+#!/usr/bin/python3
+"""tools/real/bench_real.py - seeded real-terrain benchmark: trn against two peers.
+
+    /usr/bin/python3 tools/real/bench_real.py [--dem ID ...] [--cases N] [--seed S]
+        [--radius R] [--resample bilinear|cubic] [--subcell axis|quad2d] [--trn PATH] [--trn-mode auto|batch|single]
+        [--out DIR] [--keep-cases] [--no-plot] [-- TRN_ARGS...]
+
+For each DEM of tools/real/dems.py (default: all; made or found under build/real/),
+N seeded cases (tools/real/cases.py: a rover at a random off-centre position, its
+(2R+1)^2 rover-frame local DEM with a height offset, range-dependent noise and a
+120 deg field of view; a prior within +-4 cells; a +-6 cell search window) are
+localized by
+
+* trn: `trn localize --dem G.tif --batch LIST --json [TRN_ARGS]` (one map build,
+  one JSON line per case) when this trn has --batch, else one `trn localize --dem G
+  --local L --prior X,Y --window-m W --json [TRN_ARGS]` per case (then the time is
+  the call's wall time, map build included, unless the JSON carries time_ms);
+* ssd: mean-removed SSD over the window + per-axis parabola (tools/real/peers.py);
+* ncc: OpenCV matchTemplate TM_CCOEFF_NORMED + per-axis parabola;
+
+each peer timed with time.perf_counter per localization in the same run.
+
+Metrics per DEM and method: success (radial error <= 1.5 cells) rate, median error
+(cells) over all cases and over the successes, median time per localization (ms);
+trn also: confidently wrong (error > 1.5 cells, status ok, failure_probability < 0.5),
+calibration over the successful cases with a finite covariance (fraction inside the
+1, 2, 3-sigma ellipses of the reported 2x2 covariance; targets 39.3 / 86.5 / 98.9 %)
+and reliability (bins of failure_probability against the observed failure rate).
+Prints a table per DEM; writes OUT/bench.json, OUT/reliability.png and
+OUT/match_<ID>.png (tools/real/plot_real.py). OUT defaults to build/real/.
+Exit status 0 ok, 1 bad input or a failed run (one line on stderr).
+"""
+import argparse
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+
+import cases as casemod  # noqa: E402
+import dems  # noqa: E402
+import peers  # noqa: E402
+
+SUCCESS_CELLS = 1.5
+# Mahalanobis^2 of the k-sigma ellipse of a 2-D Gaussian is k^2; the mass inside
+# is 1 - exp(-k^2 / 2) = 0.3935, 0.8647, 0.9889 (1, 2, 3 sigma).
+CHI2_2D = (1.0, 4.0, 9.0)
+CAL_TARGET = (39.3, 86.5, 98.9)
+REL_EDGES = (0.0, 0.01, 0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 0.9, 1.0)
+METHODS = ("trn", "ssd", "ncc")
+
+
+class Fail(Exception):
+    """One-line reason; exit 1."""
+
+
+class Parser(argparse.ArgumentParser):
+    def error(self, message):
+        raise Fail(message)
+
+
+def parse_args(argv):
+    trn_extra = []
+    if "--" in argv:
+        k = argv.index("--")
+        argv, trn_extra = argv[:k], argv[k + 1:]
+    ap = Parser(prog="bench_real.py", description=__doc__.split("\n\n")[0])
+    ap.add_argument("--dem", action="append", help="DEM id of tools/real/dems.py (repeatable; default all)")
+    ap.add_argument("--cases", type=int, default=200, help="cases per DEM (default 200)")
+    ap.add_argument("--seed", type=int, default=1, help="seed (default 1)")
+    ap.add_argument("--radius", type=int, default=20, help="local map radius R, cells (default 20)")
+    ap.add_argument("--resample", default="bilinear", choices=("bilinear", "cubic"),
+                    help="local DEM sampling (default bilinear)")
+    ap.add_argument("--subcell", default="axis", choices=("axis", "quad2d"),
+                    help="peers' sub-cell fit: a parabola per axis (default) or the 3x3 2-D quadratic")
+    ap.add_argument("--trn", default=os.path.join(dems.ROOT, "build", "host-release", "trn"),
+                    help="trn binary (default build/host-release/trn)")
+    ap.add_argument("--trn-mode", default="auto", choices=("auto", "batch", "single"),
+                    help="trn --batch or one call per case (default: batch when supported)")
+    ap.add_argument("--out", default=dems.BUILD, help="output folder (default build/real)")
+    ap.add_argument("--keep-cases", action="store_true", help="keep the local DEMs under OUT/cases_ID/")
+    ap.add_argument("--no-plot", action="store_true", help="no figures")
+    ap.add_argument("--trn-arg", action="append", default=[],
+                    help="one extra argument for trn localize (repeatable; or put them after --)")
+    a = ap.parse_args(argv)
+    a.trn_extra = a.trn_arg + trn_extra
+    a.dem = a.dem or [d.id for d in dems.REGISTRY]
+    for d in a.dem:
+        if d not in dems.BY_ID:
+            raise Fail(f"unknown DEM '{d}' (known: {', '.join(dems.BY_ID)})")
+    if a.cases < 1:
+        raise Fail(f"--cases {a.cases}: must be >= 1")
+    if not 2 <= a.radius <= 500:
+        raise Fail(f"--radius {a.radius}: must be in 2..500")
+    if not (os.path.isfile(a.trn) and os.access(a.trn, os.X_OK)):
+        raise Fail(f"trn binary {a.trn} not found or not executable (cmake --build --preset host-release)")
+    if peers.cv2 is None:
+        raise Fail("OpenCV's python3 module missing (bash tools/setup.sh real)")
+    return a
+
+
+# --- trn ------------------------------------------------------------------------
+def trn_has_batch(trn):
+    r = subprocess.run([trn, "localize", "--help"], capture_output=True, text=True)
+    return "--batch" in (r.stdout + r.stderr)
+
+
+def trn_result(j, wall_ms=None):
+    """A trn JSON object -> the per-case record fields."""
+    out = {"x": j.get("x_m"), "y": j.get("y_m"), "status": j.get("status", "error"),
+           "failure_probability": j.get("failure_probability")}
+    cov = j.get("cov_m2")
+    if cov is None and all(j.get(k) is not None for k in ("sigma_x_m", "sigma_y_m", "rho")):
+        sx, sy, rho = j["sigma_x_m"], j["sigma_y_m"], j["rho"]
+        cov = [sx * sx, sy * sy, rho * sx * sy]
+    out["cov_m2"] = cov
+    if j.get("time_ms") is not None:
+        out["time_ms"], out["time_includes_map_build"] = float(j["time_ms"]), False
+    else:
+        out["time_ms"], out["time_includes_map_build"] = wall_ms, True
+    if j.get("error"):
+        out["error"] = j["error"]
+    return out
+
+
+def run_trn_batch(a, dem_path, lst, cs):
+    cmd = [a.trn, "localize", "--dem", dem_path, "--batch", lst, "--json"] + a.trn_extra
+    t0 = time.perf_counter()
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    wall = (time.perf_counter() - t0) * 1e3
+    lines = [ln for ln in r.stdout.splitlines() if ln.strip()]
+    if r.returncode != 0 and not lines:
+        raise Fail(f"trn --batch failed (exit {r.returncode}): {(r.stderr.strip().splitlines() or [''])[0]}")
+    res = []
+    for k, cs_ in enumerate(cs):
+        if k >= len(lines):
+            res.append({"status": "error", "error": "no output line", "time_ms": None})
+            continue
+        try:
+            j = json.loads(lines[k])
+        except json.JSONDecodeError:
+            res.append({"status": "error", "error": "bad JSON line", "time_ms": None})
+            continue
+        if j.get("local") not in (None, cs_.path):
+            raise Fail(f"trn --batch line {k + 1} is for {j.get('local')}, expected {cs_.path}")
+        res.append(trn_result(j))
+    return res, wall
+
+
+def run_trn_single(a, dem_path, cs):
+    res = []
+    t_all = time.perf_counter()
+    for cs_ in cs:
+        cmd = [a.trn, "localize", "--dem", dem_path, "--local", cs_.path,
+               "--prior", f"{cs_.prior[0]!r},{cs_.prior[1]!r}", "--window-m", repr(cs_.window_m),
+               "--json"] + a.trn_extra
+        t0 = time.perf_counter()
+        r = subprocess.run(cmd, capture_output=True, text=True)
+        wall = (time.perf_counter() - t0) * 1e3
+        if r.returncode == 2:
+            raise Fail(f"trn usage error: {(r.stderr.strip().splitlines() or [''])[0]}")
+        try:
+            j = json.loads(r.stdout) if r.returncode == 0 else None
+        except json.JSONDecodeError:
+            j = None
+        if j is None:
+            res.append({"status": "error", "error": (r.stderr.strip().splitlines() or [""])[0],
+                        "time_ms": wall, "time_includes_map_build": True})
+        else:
+            res.append(trn_result(j, wall))
+    return res, (time.perf_counter() - t_all) * 1e3
+
+
+# --- metrics --------------------------------------------------------------------
+def radial_cells(rec, truth, c):
+    if rec.get("x") is None or rec.get("y") is None:
+        return math.inf
+    return math.hypot(rec["x"] - truth[0], rec["y"] - truth[1]) / c
+
+
+def mahalanobis2(rec, truth):
+    cov = rec.get("cov_m2")
+    if cov is None or any(v is None or not math.isfinite(v) for v in cov):
+        return None
+    C = np.array([[cov[0], cov[2]], [cov[2], cov[1]]])
+    if np.linalg.det(C) <= 0 or C[0, 0] <= 0:
+        return None
+    e = np.array([rec["x"] - truth[0], rec["y"] - truth[1]])
+    return float(e @ np.linalg.solve(C, e))
+
+
+def med(v):
+    v = [x for x in v if x is not None]
+    return float(np.median(v)) if v else None
+
+
+def metrics(records, method):
+    errs = [r[method]["err_cells"] for r in records]
+    ok = [e <= SUCCESS_CELLS for e in errs]
+    n = len(records)
+    m = {"n": n, "success": int(sum(ok)), "rate": sum(ok) / n,
+         "median_err_cells": med([e if math.isfinite(e) else 1e9 for e in errs]),
+         "median_err_success_cells": med([e for e, s in zip(errs, ok) if s]),
+         "median_time_ms": med([r[method].get("time_ms") for r in records])}
+    if method != "trn":
+        return m
+    t = [r["trn"] for r in records]
+    m["status"] = {s: sum(1 for x in t if x["status"] == s) for s in sorted({x["status"] for x in t})}
+    cw = [not s and x["status"] == "ok" and x.get("failure_probability") is not None
+          and x["failure_probability"] < 0.5 for x, s in zip(t, ok)]
+    m["confidently_wrong"] = int(sum(cw))
+    m["confidently_wrong_rate"] = sum(cw) / n
+    m["time_includes_map_build"] = any(x.get("time_includes_map_build") for x in t)
+    d2 = [x.get("mahalanobis2") for x, s in zip(t, ok) if s]
+    d2 = [v for v in d2 if v is not None]
+    m["calibration"] = {"n": len(d2), "target_pct": list(CAL_TARGET),
+                        "inside_pct": [100.0 * sum(v <= k for v in d2) / len(d2) if d2 else None
+                                       for k in CHI2_2D]}
+    bins = []
+    fp = [(x.get("failure_probability"), not s) for x, s in zip(t, ok)]
+    fp = [(p, f) for p, f in fp if p is not None and math.isfinite(p)]
+    for lo, hi in zip(REL_EDGES[:-1], REL_EDGES[1:]):
+        inb = [(p, f) for p, f in fp if lo <= p < hi or (hi == 1.0 and p == 1.0)]
+        bins.append({"lo": lo, "hi": hi, "n": len(inb),
+                     "mean_predicted": float(np.mean([p for p, _ in inb])) if inb else None,
+                     "observed": float(np.mean([f for _, f in inb])) if inb else None})
+    m["reliability"] = bins
+    m["brier"] = float(np.mean([(p - f) ** 2 for p, f in fp])) if fp else None
+    return m
+
+
+def fmt(v, spec):
+    return "-" if v is None else format(v, spec)
+
+
+def print_table(dem_id, meta, ms):
+    print(f"\n{dem_id} ({meta['character']}, held_out={meta['held_out']}): {meta['cols']} x {meta['rows']} "
+          f"cells of {meta['cell_m']:g} m, {ms['trn']['n']} cases, R = {meta['radius']} cells, "
+          f"{meta['resample']}, trn {meta['trn_mode']}")
+    print(f"  {'method':6s} {'success':>12s} {'med err':>8s} {'med err ok':>10s} {'med ms':>8s}  (errors in cells)")
+    for k in METHODS:
+        m = ms[k]
+        note = " (incl. map build)" if m.get("time_includes_map_build") else ""
+        print(f"  {k:6s} {m['success']:5d} {100 * m['rate']:5.1f} % {fmt(m['median_err_cells'], '8.3f')} "
+              f"{fmt(m['median_err_success_cells'], '10.3f')} {fmt(m['median_time_ms'], '8.2f')}{note}")
+    t = ms["trn"]
+    print(f"  trn status {t['status']}; confidently wrong {t['confidently_wrong']} "
+          f"({100 * t['confidently_wrong_rate']:.1f} %); Brier {fmt(t['brier'], '.4f')}")
+    cal = t["calibration"]
+    ins = " / ".join(fmt(v, ".1f") for v in cal["inside_pct"])
+    print(f"  trn calibration (n = {cal['n']} successes): inside 1/2/3 sigma {ins} % "
+          f"(target 39.3 / 86.5 / 98.9)")
+    rel = "  ".join(f"[{b['lo']:g},{b['hi']:g}) {b['n']}: {fmt(b['observed'], '.2f')}"
+                    for b in t["reliability"] if b["n"])
+    print(f"  trn reliability (bin n: observed failure rate): {rel}")
+
+
+# --- one DEM --------------------------------------------------------------------
+def bench_dem(a, dem_id, batch):
+    try:
+        path = dems.get(dem_id)
+    except Exception as e:  # a recipe failed: name it
+        raise Fail(f"DEM {dem_id}: {e}")
+    dem = casemod.read_dem(path)
+    p = casemod.CaseParams(radius=a.radius, resample=a.resample)
+    tmp = tempfile.mkdtemp(prefix=f"bench_real_{dem_id}_")
+    try:
+        t0 = time.perf_counter()
+        cs = casemod.generate(dem, a.cases, a.seed, p, tmp)
+        gen_s = time.perf_counter() - t0
+        lst = os.path.join(tmp, "cases.txt")
+        print(f"bench_real: {dem_id}: {a.cases} cases in {gen_s:.1f} s; trn ({'batch' if batch else 'single'})",
+              file=sys.stderr, flush=True)
+        if batch:
+            trn_res, trn_wall = run_trn_batch(a, path, lst, cs)
+        else:
+            trn_res, trn_wall = run_trn_single(a, path, cs)
+        print(f"bench_real: {dem_id}: trn {trn_wall / 1e3:.1f} s; peers", file=sys.stderr, flush=True)
+        records = []
+        for cs_, tr in zip(cs, trn_res):
+            rec = {"index": cs_.index, "truth": list(cs_.truth), "prior": list(cs_.prior),
+                   "window_m": cs_.window_m, "azimuth_deg": cs_.azimuth_deg, "offset_m": cs_.offset_m,
+                   "seen_cells": int(cs_.seen.sum())}
+            tr["err_cells"] = radial_cells(tr, cs_.truth, dem.c)
+            tr["mahalanobis2"] = mahalanobis2(tr, cs_.truth) if math.isfinite(tr["err_cells"]) else None
+            rec["trn"] = tr
+            for name, fn in peers.PEERS.items():
+                t1 = time.perf_counter()
+                try:
+                    out = fn(dem, cs_.local, cs_.seen, cs_.prior, cs_.window_m, a.subcell)
+                except ValueError:
+                    out = None
+                dt = (time.perf_counter() - t1) * 1e3
+                r = {"x": None, "y": None, "time_ms": dt} if out is None else \
+                    {"x": out[0], "y": out[1], "pose": list(out[2]), "time_ms": dt}
+                r["err_cells"] = radial_cells(r, cs_.truth, dem.c)
+                rec[name] = r
+            records.append(rec)
+        meta = {"path": path, "character": dems.BY_ID[dem_id].character,
+                "held_out": dems.BY_ID[dem_id].held_out, "description": dems.BY_ID[dem_id].description,
+                "cell_m": dem.c, "rows": dem.z.shape[0], "cols": dem.z.shape[1], "radius": a.radius,
+                "window_m": p.window_cells * dem.c, "prior_cells": p.prior_cells, "resample": a.resample,
+                "trn_mode": "batch" if batch else "single", "trn_wall_ms": trn_wall,
+                "opencv_mask": peers.mask_supported()}
+        # the figure's case: the first trn success (else case 0); keep its local DEM
+        pick = next((r["index"] for r in records if r["trn"]["err_cells"] <= SUCCESS_CELLS), 0)
+        os.makedirs(a.out, exist_ok=True)
+        keep = os.path.join(a.out, f"match_{dem_id}_local.tif")
+        shutil.copyfile(cs[pick].path, keep)
+        meta["figure_case"] = pick
+        meta["figure_local"] = keep
+        if a.keep_cases:
+            dst = os.path.join(a.out, f"cases_{dem_id}")
+            shutil.rmtree(dst, ignore_errors=True)
+            shutil.copytree(tmp, dst)
+            meta["cases_dir"] = dst
+        ms = {k: metrics(records, k) for k in METHODS}
+        return {"meta": meta, "metrics": ms, "cases": records}
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def finite(v):
+    """v with non-finite floats as None (strict JSON)."""
+    if isinstance(v, dict):
+        return {k: finite(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [finite(x) for x in v]
+    if isinstance(v, (float, np.floating)):
+        return float(v) if math.isfinite(v) else None
+    if isinstance(v, np.integer):
+        return int(v)
+    if isinstance(v, np.bool_):
+        return bool(v)
+    return v
+
+
+def main(argv):
+    try:
+        a = parse_args(argv)
+        mode = a.trn_mode
+        batch = trn_has_batch(a.trn) if mode == "auto" else mode == "batch"
+        res = {"config": {"cases": a.cases, "seed": a.seed, "radius": a.radius, "resample": a.resample,
+                          "subcell": a.subcell, "trn": a.trn, "trn_args": a.trn_extra, "success_cells": SUCCESS_CELLS},
+               "dems": {}}
+        for d in a.dem:
+            r = bench_dem(a, d, batch)
+            res["dems"][d] = r
+            print_table(d, r["meta"], r["metrics"])
+        os.makedirs(a.out, exist_ok=True)
+        out_json = os.path.join(a.out, "bench.json")
+        with open(out_json, "w") as f:
+            json.dump(finite(res), f, indent=1)
+        print(f"\nresults: {out_json}")
+        if not a.no_plot:
+            import plot_real
+            for pth in plot_real.all_figures(res, a.out):
+                print(f"figure: {pth}")
+        return 0
+    except (Fail, casemod.InputError) as e:
+        print(f"bench_real: {e}", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

@@ -1,0 +1,237 @@
+"""tools/real/cases.py - seeded localization cases cut from a real global DEM.
+
+For a global DEM G (north-up, square cell c metres) a case is:
+
+* truth: a random map position (continuous, so off the cell centres), at least
+  `margin_cells` = R + window + prior offset + 3 cells from the map edge, whose local
+  footprint is mostly valid (>= min_valid of its (2R+1)^2 global cells finite);
+* local DEM: (2R+1) x (2R+1) cells of size c centred on the rover (the rover is at the
+  centre of the centre cell), cell (i, j) sampled from G at truth + ((j-R)c, (R-i)c)
+  by bilinear interpolation (or `cubic`: Keys' cubic convolution, a = -0.5, to avoid
+  the inverse crime of bilinear-on-bilinear); in the ROVER FRAME (geotransform
+  (-(R+0.5)c, c, 0, (R+0.5)c, 0, -c), no CRS: the rover at map-frame (0, 0));
+  plus one constant height offset drawn in +-offset_m, plus Gaussian noise of sigma
+  0.01 m + 0.0004 r^2 / c (r the range in metres); seen only inside a 120 deg wedge
+  of random azimuth, at ranges 1.5 c <= r <= R c (unseen: NaN, also no-data);
+* prior: truth + a uniform offset in +-prior_cells cells per axis; search window
+  +-window_cells cells (half-width, metres in the list file).
+
+Map coordinates of global cell (row, col)'s centre: x = x0 + (col + 0.5) c,
+y = y0 - (row + 0.5) c, with (x0, c, 0, y0, 0, -c) the DEM's geotransform.
+"""
+import math
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+from osgeo import gdal
+
+gdal.UseExceptions()
+
+
+class InputError(Exception):
+    """Bad input: the benchmark exits 1 with this one-line reason."""
+
+
+@dataclass
+class Dem:
+    z: np.ndarray  # float64, NaN = missing, row 0 north
+    x0: float
+    y0: float
+    c: float
+    path: str = ""
+
+    def frac_index(self, x, y):
+        """Fractional (row, col) of map point (x, y): integers at cell centres."""
+        return (self.y0 - y) / self.c - 0.5, (x - self.x0) / self.c - 0.5
+
+    def xy(self, row, col):
+        """Map point of fractional (row, col)."""
+        return self.x0 + (col + 0.5) * self.c, self.y0 - (row + 0.5) * self.c
+
+
+def read_dem(path):
+    """Band 1 of a north-up, square-cell raster as a Dem (no-data -> NaN)."""
+    try:
+        ds = gdal.Open(path)
+    except RuntimeError as e:
+        raise InputError(f"cannot open {path}: {str(e).strip()}")
+    gt = ds.GetGeoTransform()
+    if gt[2] != 0 or gt[4] != 0 or gt[5] >= 0:
+        raise InputError(f"{path}: not north-up")
+    if abs(gt[1] + gt[5]) > 1e-9 * gt[1]:
+        raise InputError(f"{path}: cells not square ({gt[1]:g} x {-gt[5]:g})")
+    b = ds.GetRasterBand(1)
+    z = b.ReadAsArray().astype(np.float64)
+    nd = b.GetNoDataValue()
+    if nd is not None and not math.isnan(nd):
+        z[z == nd] = np.nan
+    mask = b.GetMaskBand().ReadAsArray()
+    z[mask == 0] = np.nan
+    return Dem(z, gt[0], gt[3], gt[1], path)
+
+
+def write_local(path, z, c):
+    """A rover-frame local DEM GeoTIFF: float32, no CRS, no-data NaN."""
+    n = z.shape[0]
+    r = (n - 1) // 2
+    ds = gdal.GetDriverByName("GTiff").Create(path, z.shape[1], n, 1, gdal.GDT_Float32)
+    ds.SetGeoTransform((-(r + 0.5) * c, c, 0.0, (r + 0.5) * c, 0.0, -c))
+    b = ds.GetRasterBand(1)
+    b.SetNoDataValue(float("nan"))
+    b.WriteArray(z.astype(np.float32))
+    ds = None
+
+
+# --- interpolation ----------------------------------------------------------------
+def _keys(t, a=-0.5):
+    """Keys' cubic convolution kernel at |t|."""
+    t = np.abs(t)
+    return np.where(t <= 1, (a + 2) * t**3 - (a + 3) * t**2 + 1,
+                    np.where(t < 2, a * t**3 - 5 * a * t**2 + 8 * a * t - 4 * a, 0.0))
+
+
+def sample(z, rows, cols, method="bilinear"):
+    """z at fractional (rows, cols) (arrays of one shape; all inside the grid with
+    a 2-cell margin for cubic). NaN neighbours give NaN."""
+    r0 = np.floor(rows).astype(int)
+    c0 = np.floor(cols).astype(int)
+    lo, hi = (0, 1) if method == "bilinear" else (1, 2)
+    if r0.min() < lo or c0.min() < lo or r0.max() + hi >= z.shape[0] or c0.max() + hi >= z.shape[1]:
+        raise ValueError("sample: position too close to the grid's edge")
+    fr = rows - r0
+    fc = cols - c0
+    if method == "bilinear":
+        return ((1 - fr) * (1 - fc) * z[r0, c0] + (1 - fr) * fc * z[r0, c0 + 1]
+                + fr * (1 - fc) * z[r0 + 1, c0] + fr * fc * z[r0 + 1, c0 + 1])
+    if method == "cubic":
+        out = np.zeros(rows.shape)
+        for di in range(-1, 3):
+            wr = _keys(fr - di)
+            for dj in range(-1, 3):
+                out += wr * _keys(fc - dj) * z[r0 + di, c0 + dj]
+        return out
+    raise InputError(f"unknown resampling '{method}' (bilinear | cubic)")
+
+
+# --- cases ------------------------------------------------------------------------
+@dataclass
+class CaseParams:
+    radius: int = 20  # R, cells
+    window_cells: float = 6.0  # search half-width, cells
+    prior_cells: float = 4.0  # prior offset bound per axis, cells
+    offset_m: float = 50.0  # constant height offset bound, metres
+    fov_deg: float = 120.0  # seen wedge
+    min_range_cells: float = 1.5  # the rover's own cells: unseen
+    noise0_m: float = 0.01  # sigma = noise0 + noise_k * r^2 / c
+    noise_k: float = 0.0004
+    noise: bool = True
+    full_view: bool = False  # tests: every cell within R seen
+    resample: str = "bilinear"
+    min_valid: float = 0.95
+
+    @property
+    def margin_cells(self):
+        return self.radius + self.window_cells + self.prior_cells + 3
+
+
+@dataclass
+class Case:
+    index: int
+    truth: tuple  # map metres
+    prior: tuple
+    window_m: float
+    local: np.ndarray  # (2R+1)^2, NaN unseen
+    seen: np.ndarray  # bool
+    azimuth_deg: float
+    offset_m: float
+    path: str = ""
+    extra: dict = field(default_factory=dict)
+
+
+def rover_frame_offsets(radius, c):
+    """(east, north) metres of each local cell centre from the rover (the centre cell)."""
+    k = np.arange(-radius, radius + 1)
+    e = np.broadcast_to(k[None, :] * c, (k.size, k.size))
+    n = np.broadcast_to(-k[:, None] * c, (k.size, k.size))
+    return e, n
+
+
+def visibility(radius, c, azimuth_deg, p):
+    """Seen mask: range within [min_range, R] cells and (unless full view) inside
+    the fov wedge centred on azimuth_deg (counter-clockwise from east)."""
+    e, n = rover_frame_offsets(radius, c)
+    r = np.hypot(e, n)
+    seen = (r <= radius * c + 1e-9) & (r >= p.min_range_cells * c - 1e-9)
+    if not p.full_view:
+        az = np.degrees(np.arctan2(n, e))
+        d = (az - azimuth_deg + 180.0) % 360.0 - 180.0
+        seen &= np.abs(d) <= p.fov_deg / 2
+    return seen
+
+
+def make_local(dem, truth, p, rng=None, azimuth_deg=0.0, offset_m=0.0):
+    """The local DEM (heights + offset + noise, NaN unseen) of a rover at truth."""
+    R = p.radius
+    fr, fc = dem.frac_index(*truth)
+    k = np.arange(-R, R + 1)
+    rows = fr + k[:, None] + 0 * k[None, :]
+    cols = fc + k[None, :] + 0 * k[:, None]
+    h = sample(dem.z, rows, cols, p.resample) + offset_m
+    seen = visibility(R, dem.c, azimuth_deg, p)
+    if p.noise and rng is not None:
+        e, n = rover_frame_offsets(R, dem.c)
+        sigma = p.noise0_m + p.noise_k * (e**2 + n**2) / dem.c
+        h = h + rng.standard_normal(h.shape) * sigma
+    seen &= np.isfinite(h)
+    return np.where(seen, h, np.nan), seen
+
+
+def draw_truth(dem, rng, p, tries=10000):
+    m = p.margin_cells
+    R = p.radius
+    nr, nc = dem.z.shape
+    if nr - 1 - 2 * m < 1 or nc - 1 - 2 * m < 1:
+        raise InputError(f"{dem.path}: {nc} x {nr} cells is too small for a margin of {m:g} cells")
+    valid = np.isfinite(dem.z)
+    for _ in range(tries):
+        r = rng.uniform(m, nr - 1 - m)
+        cc = rng.uniform(m, nc - 1 - m)
+        ir, ic = int(round(r)), int(round(cc))
+        foot = valid[ir - R - 1:ir + R + 2, ic - R - 1:ic + R + 2]
+        if foot.mean() < p.min_valid:
+            continue
+        return dem.xy(r, cc)
+    raise InputError(f"{dem.path}: no position with a mostly valid local map")
+
+
+def generate(dem, n, seed, p, folder=None):
+    """n seeded cases; with `folder`, each local DEM is written there as a GeoTIFF
+    and a batch list (LOCAL.tif PRIOR_X PRIOR_Y WINDOW_M per line) as cases.txt."""
+    rng = np.random.default_rng(seed)
+    c = dem.c
+    cases = []
+    for i in range(n):
+        truth = draw_truth(dem, rng, p)
+        az = float(rng.uniform(-180.0, 180.0))
+        off = float(rng.uniform(-p.offset_m, p.offset_m))
+        local, seen = make_local(dem, truth, p, rng, az, off)
+        d = rng.uniform(-p.prior_cells, p.prior_cells, 2) * c
+        prior = (truth[0] + float(d[0]), truth[1] + float(d[1]))
+        cases.append(Case(i, truth, prior, p.window_cells * c, local, seen, az, off))
+    if folder is not None:
+        write_cases(cases, c, folder)
+    return cases
+
+
+def write_cases(cases, c, folder):
+    os.makedirs(folder, exist_ok=True)
+    lines = []
+    for cs in cases:
+        cs.path = os.path.join(folder, f"local_{cs.index:05d}.tif")
+        write_local(cs.path, cs.local, c)
+        lines.append(f"{cs.path} {cs.prior[0]!r} {cs.prior[1]!r} {cs.window_m!r}\n")
+    lst = os.path.join(folder, "cases.txt")
+    with open(lst, "w") as f:
+        f.writelines(lines)
+    return lst

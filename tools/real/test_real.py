@@ -1,0 +1,283 @@
+#!/usr/bin/python3
+"""tools/real/test_real.py - quick self-test of the real-terrain benchmark's pieces.
+
+    /usr/bin/python3 tools/real/test_real.py      # exit 0: all checks passed
+
+On small synthetic DEMs with analytic surfaces (no download, ~10 s):
+* the local DEM's frame: on a plane (which bilinear and cubic sampling reproduce
+  exactly) every local cell equals the plane at truth + ((j-R)c, (R-i)c) + offset;
+* the written local GeoTIFF: rover-frame geotransform, no CRS, NaN no-data, the
+  rover at map-frame (0, 0) (centre of the centre cell);
+* visibility (range annulus, 120 deg wedge) and the noise model's sigma;
+* generate(): priors within +-4 cells, window 6 cells, truths inside the margin, the
+  batch list file;
+* peers: with no noise and full view the SSD peer recovers a sub-cell truth within
+  0.1 cell (bilinear and cubic): with its per-axis parabola on terrain of many wave
+  directions, with the 2-D quadratic fit on ridged terrain (where the per-axis fit
+  is biased, printed for information); an integer-offset case is recovered exactly by both
+  peers (integer pose = the truth's cell; the per-axis parabola then moves it by less
+  than 0.02 cell: s(-1) and s(+1) differ by the window's edge terms);
+* bench_real.py exits 1 with one line on bad input;
+* if build/host-release/trn exists: trn localize recovers the noiseless integer case
+  (frame agreement of the local file with trn; reported, not required).
+"""
+import math
+import os
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+from osgeo import gdal
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+import cases as cm  # noqa: E402
+import peers  # noqa: E402
+
+gdal.UseExceptions()
+FAILS = []
+
+
+def check(cond, what):
+    print(f"{'ok  ' if cond else 'FAIL'} {what}")
+    if not cond:
+        FAILS.append(what)
+
+
+def synth_dem(f, n=160, c=10.0, x0=1000.0, y0=4000.0):
+    """A Dem whose cell (row, col) centre holds f(x, y)."""
+    col = np.arange(n)
+    x = x0 + (col + 0.5) * c
+    y = y0 - (col + 0.5) * c
+    z = f(x[None, :], y[:, None])
+    return cm.Dem(z.astype(np.float64), x0, y0, c, "synthetic")
+
+
+def plane(x, y):
+    return 0.3 * x - 0.7 * y + 12.0 + 0 * x * y
+
+
+def hills(x, y):
+    return (40 * np.sin(x / 97.0) * np.cos(y / 131.0) + 25 * np.sin((x + 2 * y) / 71.0)
+            + 15 * np.cos((3 * x - y) / 53.0))
+
+
+def test_frame():
+    dem = synth_dem(plane)
+    R = 8
+    for method in ("bilinear", "cubic"):
+        p = cm.CaseParams(radius=R, noise=False, full_view=True, resample=method, min_range_cells=0)
+        truth = (1000 + 763.37, 4000 - 671.81)
+        local, seen = cm.make_local(dem, truth, p, None, 0.0, 17.5)
+        k = np.arange(-R, R + 1)
+        want = plane(truth[0] + k[None, :] * dem.c, truth[1] - k[:, None] * dem.c) + 17.5
+        err = np.nanmax(np.abs(local - want))
+        k2 = np.hypot(k[None, :], k[:, None])
+        check(err < 1e-9, f"{method}: local cell (i, j) = G(truth + ((j-R)c, (R-i)c)) + offset "
+                          f"on a plane (max err {err:.2e} m)")
+        check(np.array_equal(seen, k2 <= R), f"{method}: full view sees every cell within R")
+
+
+def test_file():
+    with tempfile.TemporaryDirectory() as tmp:
+        dem = synth_dem(hills)
+        p = cm.CaseParams(radius=6)
+        cs = cm.generate(dem, 5, 3, p, tmp)
+        ds = gdal.Open(cs[0].path)
+        gt = ds.GetGeoTransform()
+        c, R = dem.c, 6
+        check(gt == (-(R + 0.5) * c, c, 0.0, (R + 0.5) * c, 0.0, -c), f"local geotransform {gt}")
+        check(ds.GetProjection() == "", "local GeoTIFF has no CRS")
+        b = ds.GetRasterBand(1)
+        check(b.DataType == gdal.GDT_Float32 and math.isnan(b.GetNoDataValue()), "float32, no-data NaN")
+        a = b.ReadAsArray()
+        check((ds.RasterXSize, ds.RasterYSize) == (2 * R + 1, 2 * R + 1), "size (2R+1)^2")
+        check(np.array_equal(np.isnan(a), ~cs[0].seen), "NaN exactly where unseen")
+        cx = gt[0] + (R + 0.5) * gt[1]
+        cy = gt[3] + (R + 0.5) * gt[5]
+        check(cx == 0.0 and cy == 0.0, "the centre cell's centre is map-frame (0, 0)")
+        with open(os.path.join(tmp, "cases.txt")) as f:
+            lines = f.read().splitlines()
+        ok = len(lines) == 5
+        for ln, cs_ in zip(lines, cs):
+            w = ln.split()
+            ok &= (w[0] == cs_.path and float(w[1]) == cs_.prior[0] and float(w[2]) == cs_.prior[1]
+                   and float(w[3]) == 6 * c)
+        check(ok, "batch list: LOCAL.tif PRIOR_X PRIOR_Y WINDOW_M per case")
+
+
+def test_generate():
+    dem = synth_dem(hills, n=200)
+    p = cm.CaseParams(radius=10)
+    cs = cm.generate(dem, 300, 7, p)
+    c = dem.c
+    d = np.array([[cs_.prior[0] - cs_.truth[0], cs_.prior[1] - cs_.truth[1]] for cs_ in cs]) / c
+    check(np.abs(d).max() <= 4.0 and np.abs(d).max() > 3.5, f"prior offsets within +-4 cells (max {np.abs(d).max():.2f})")
+    check(all(cs_.window_m == 6 * c for cs_ in cs), "window 6 cells")
+    m = p.margin_cells
+    rc = np.array([dem.frac_index(*cs_.truth) for cs_ in cs])
+    check(rc.min() >= m - 1e-9 and rc.max() <= dem.z.shape[0] - 1 - m + 1e-9,
+          f"truths at least {m:g} cells from the edge")
+    frac = np.abs(rc - np.round(rc))
+    check((frac.max(axis=1) > 1e-6).all(), "truths off the cell centres")
+    offs = np.array([cs_.offset_m for cs_ in cs])
+    check(np.abs(offs).max() <= 50 and np.abs(offs).max() > 45, "height offsets within +-50 m")
+    cs2 = cm.generate(dem, 300, 7, p)
+    check(all(np.array_equal(a.local, b.local, equal_nan=True) and a.truth == b.truth for a, b in zip(cs, cs2)),
+          "same seed, same cases")
+    # visibility: annulus and wedge
+    e, n = cm.rover_frame_offsets(10, c)
+    r = np.hypot(e, n)
+    cs_ = cs[0]
+    s = cs_.seen
+    check(not s[r < 1.5 * c].any() and not s[r > 10 * c].any(), "unseen: r < 1.5 cells and r > R cells")
+    az = np.degrees(np.arctan2(n, e))
+    dd = np.abs((az - cs_.azimuth_deg + 180) % 360 - 180)
+    check(not s[dd > 60 + 1e-9].any(), "unseen outside the 120 deg wedge")
+    ann = (r >= 1.5 * c) & (r <= 10 * c)
+    fr = np.mean([x.seen.sum() / ann.sum() for x in cs])
+    check(abs(fr - 1 / 3) < 0.03, f"seen fraction of the annulus {fr:.3f} ~ 1/3")
+
+
+def test_noise():
+    dem = synth_dem(plane, n=120)
+    R = 10
+    p = cm.CaseParams(radius=R, full_view=True)
+    rng = np.random.default_rng(5)
+    truth = (1000 + 600.3, 4000 - 590.8)
+    p0 = cm.CaseParams(radius=R, full_view=True, noise=False)
+    clean, _ = cm.make_local(dem, truth, p0, None, 0.0, 0.0)
+    res = []
+    for _ in range(400):
+        loc, _ = cm.make_local(dem, truth, p, rng, 0.0, 0.0)
+        res.append(loc - clean)
+    res = np.array(res)
+    e, n = cm.rover_frame_offsets(R, dem.c)
+    sigma = 0.01 + 0.0004 * (e**2 + n**2) / dem.c
+    seen = np.isfinite(clean)
+    z = np.std(res[:, seen] / sigma[seen][None], axis=0)
+    check(abs(np.nanmean(z) - 1) < 0.02, f"noise sigma 0.01 + 0.0004 r^2 / c (ratio {np.nanmean(z):.3f})")
+
+
+def waves(n, lmin_m, lmax_m, seed):
+    """A sum of n plane waves of random direction, wavelength and phase."""
+    g = np.random.default_rng(seed)
+    th = g.uniform(0, np.pi, n)
+    lam = g.uniform(lmin_m, lmax_m, n)
+    ph = g.uniform(0, 2 * np.pi, n)
+    amp = g.uniform(5, 15, n)
+
+    def f(x, y):
+        z = 0 * x * y
+        for k in range(n):
+            z = z + amp[k] * np.sin(2 * np.pi * (x * np.cos(th[k]) + y * np.sin(th[k])) / lam[k] + ph[k])
+        return z
+    return f
+
+
+RICH = waves(16, 60.0, 200.0, 2)  # many directions: a round SSD bowl
+RIDGED = waves(8, 150.0, 400.0, 2)  # few long waves: elongated, oblique bowls
+
+
+def subcell_worst(dem, R, method, fit, rng, n=20):
+    p = cm.CaseParams(radius=R, noise=False, full_view=True, resample=method)
+    worst = [0.0, 0.0]
+    m = p.margin_cells
+    last = dem.z.shape[0] - 1 - m
+    for _ in range(n):
+        truth = dem.xy(rng.uniform(m, last), rng.uniform(m, last))
+        local, seen = cm.make_local(dem, truth, p, None, 0.0, 0.0)
+        prior = (truth[0] + rng.uniform(-40, 40), truth[1] + rng.uniform(-40, 40))
+        for k, fn in enumerate((peers.ssd, peers.ncc)):
+            x, y, _ = fn(dem, local, seen, prior, 60.0, fit)
+            worst[k] = max(worst[k], math.hypot(x - truth[0], y - truth[1]) / dem.c)
+    return worst
+
+
+def test_peers():
+    R = 20
+    for name, f, fit in (("rich", RICH, "axis"), ("ridged", RIDGED, "quad2d")):
+        dem = synth_dem(f, n=200)
+        for method in ("bilinear", "cubic"):
+            w = subcell_worst(dem, R, method, fit, np.random.default_rng(11))
+            check(w[0] < 0.1, f"{name} terrain, {method}, {fit} fit: SSD peer within 0.1 cell of a sub-cell "
+                              f"truth, no noise, full view (worst of 20: {w[0]:.3f}; NCC {w[1]:.3f})")
+    dem = synth_dem(RIDGED, n=200)
+    w = subcell_worst(dem, R, "bilinear", "axis", np.random.default_rng(11))
+    print(f"info ridged terrain, per-axis parabola: worst of 20 SSD {w[0]:.3f}, NCC {w[1]:.3f} cells "
+          f"(the per-axis fit's bias on oblique bowls)")
+    dem = synth_dem(RICH, n=200)
+    # integer offset: truth on a cell centre
+    p = cm.CaseParams(radius=R, noise=False, full_view=True)
+    row, col = 97, 104
+    truth = dem.xy(row, col)
+    local, seen = cm.make_local(dem, truth, p, None, 0.0, 0.0)
+    check(np.array_equal(local[seen], dem.z[row - R:row + R + 1, col - R:col + R + 1][seen]),
+          "integer case: the local map is the global crop")
+    prior = (truth[0] + 31.0, truth[1] - 22.0)
+    for name, fn in peers.PEERS.items():
+        x, y, pose = fn(dem, local, seen, prior, 60.0)
+        e = math.hypot(x - truth[0], y - truth[1]) / dem.c
+        check(pose == (row, col) and e < 0.02, f"integer case: {name} pose {pose} exact, error after the "
+                                               f"sub-cell fit {e:.2e} cells (< 0.02)")
+    # ... and with an unseen wedge (masked NCC)
+    p = cm.CaseParams(radius=R, noise=False)
+    local, seen = cm.make_local(dem, truth, p, None, 40.0, 10.0)
+    for name, fn in peers.PEERS.items():
+        x, y, pose = fn(dem, local, seen, prior, 60.0)
+        check(pose == (row, col), f"integer case, 120 deg wedge, offset 10 m: {name} pose {pose}")
+    return dem, local, seen, truth, prior
+
+
+def test_trn(dem, local, seen, truth, prior):
+    trn = os.path.join(os.path.dirname(os.path.dirname(HERE)), "build", "host-release", "trn")
+    if not os.path.exists(trn):
+        print("skip trn frame check (no build/host-release/trn)")
+        return
+    with tempfile.TemporaryDirectory() as tmp:
+        g = os.path.join(tmp, "g.tif")
+        ds = gdal.GetDriverByName("GTiff").Create(g, dem.z.shape[1], dem.z.shape[0], 1, gdal.GDT_Float32)
+        ds.SetGeoTransform((dem.x0, dem.c, 0, dem.y0, 0, -dem.c))
+        ds.GetRasterBand(1).WriteArray(dem.z.astype(np.float32))
+        ds = None
+        lp = os.path.join(tmp, "l.tif")
+        cm.write_local(lp, local, dem.c)
+        r = subprocess.run([trn, "localize", "--dem", g, "--local", lp, "--prior", f"{prior[0]},{prior[1]}",
+                            "--window-m", "60", "--json"], capture_output=True, text=True)
+        if r.returncode != 0:
+            print(f"note: trn localize failed: {r.stderr.strip()}")
+            return
+        import json
+        j = json.loads(r.stdout)
+        e = math.hypot(j["x_m"] - truth[0], j["y_m"] - truth[1]) / dem.c
+        print(f"{'note' if e > 0.5 else 'ok  '} trn localize on the integer case: error {e:.3f} cells "
+              f"(status {j['status']}; reported only)")
+
+
+def test_cli():
+    b = os.path.join(HERE, "bench_real.py")
+    for args, what in ((["--dem", "no_such_dem"], "unknown DEM"), (["--cases", "0"], "--cases 0"),
+                       (["--trn", "/nonexistent/trn"], "missing trn"), (["--bogus"], "unknown option")):
+        r = subprocess.run([sys.executable, b] + args, capture_output=True, text=True)
+        check(r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1 and r.stdout == "",
+              f"bench_real {what}: exit 1, one line ({r.stderr.strip()})")
+
+
+def main():
+    test_frame()
+    test_file()
+    test_generate()
+    test_noise()
+    case = test_peers()
+    test_trn(*case)
+    test_cli()
+    if FAILS:
+        print(f"test_real: {len(FAILS)} check(s) failed", file=sys.stderr)
+        return 1
+    print("test_real: all checks passed")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,121 @@
+/* tools/trn/mapopt.c - the map configuration as options (mapopt.h). */
+#include "mapopt.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+void mapopt_init(mapopt_t *m) {
+  m->config = "auto";
+  m->zbin_m = 0.0;
+  m->nz = 0;
+  m->highpass_m = 0.0;
+  m->sigma_m = 0.0;
+  m->inlier_prob = 0.0;
+  m->noise_m = 0.0;
+  m->noise_k = -1.0;
+  m->local_hp = NULL;
+  m->refine = -1;
+}
+
+void mapopt_cli(mapopt_t *m, cli_opt_t *o) {
+  const cli_opt_t t[MAPOPT_N] = {
+      {"--map-config", CLI_STRING, &m->config, 0, 0, 0, "auto|paper",
+       "map configuration: auto (from the DEM, docs/method.md 9; default) or paper (as in the paper, scaled to the cell)", 0},
+      {"--zbin-m", CLI_DOUBLE, &m->zbin_m, 1e-6, 1000.0, 0, "M", "height bin, metres (default: from --map-config)", 0},
+      {"--nz", CLI_LONG, &m->nz, 1, TRN_MAX_ZBINS, 0, "N", "number of height bins (default: from --map-config)", 0},
+      {"--highpass-m", CLI_DOUBLE, &m->highpass_m, 1e-6, 1000.0, 0, "M", "high-pass half-width, metres (default 10 cells)", 0},
+      {"--sigma-m", CLI_DOUBLE, &m->sigma_m, 1e-6, 1000.0, 0, "M", "inlier standard deviation s, metres (default one cell)", 0},
+      {"--inlier-prob", CLI_DOUBLE, &m->inlier_prob, 0.01, 0.99, 0, "A", "inlier probability a (default 0.95)", 0},
+      {"--noise-m", CLI_DOUBLE, &m->noise_m, 1e-6, 1000.0, 0, "M", "local map height noise, constant part, metres (default 0.01)", 0},
+      {"--noise-k", CLI_DOUBLE, &m->noise_k, 0.0, 1000.0, 0, "K", "local map height noise, range-squared part, 1/m (default 0.0004/cell)", 0},
+      {"--local-highpass", CLI_STRING, &m->local_hp, 0, 0, 0, "box|map", "local DEM filter: box (its own, the paper) or map (the map's low-pass; auto)", 0},
+      {"--refine", CLI_LONG, &m->refine, 0, 1, 0, "0|1", "refine the pose over heights (1 with auto, 0 with paper)", 0},
+  };
+  memcpy(o, t, sizeof t);
+}
+
+static void *alloc16(size_t n, void **raw) {
+  uint8_t *p = malloc(n + 16u);
+  *raw = p;
+  if (p == NULL) {
+    return NULL;
+  }
+  return p + ((16u - ((uintptr_t)p & 15u)) & 15u);
+}
+
+int mapopt_config(const mapopt_t *m, const float *data, int width, int height, double cell_m,
+                  trn_map_cfg_t *cfg, double *sigma_h, char *err, size_t err_len) {
+  trn_status_t st;
+  trn_grid_f32_t g;
+  double sh = NAN;
+  if (strcmp(m->config, "auto") != 0 && strcmp(m->config, "paper") != 0) {
+    snprintf(err, err_len, "--map-config must be auto or paper, not '%s'", m->config);
+    return -1;
+  }
+  if (m->local_hp != NULL && strcmp(m->local_hp, "box") != 0 && strcmp(m->local_hp, "map") != 0) {
+    snprintf(err, err_len, "--local-highpass must be box or map, not '%s'", m->local_hp);
+    return -1;
+  }
+  if (!(cell_m > 0.0 && cell_m <= 100.0)) {
+    snprintf(err, err_len, "cell size %g m is outside the (0, 100] m the map configuration accepts", cell_m);
+    return -1;
+  }
+  trn_map_cfg_default(cfg);
+  cfg->noise_m = (float)(m->noise_m > 0.0 ? m->noise_m : 0.01);
+  cfg->noise_k_per_m = (float)(m->noise_k >= 0.0 ? m->noise_k : 0.0004 / cell_m);
+  if (strcmp(m->config, "auto") == 0) {
+    size_t wb = trn_map_cfg_auto_workspace_bytes(width, height);
+    void *raw = NULL, *ws = wb > 0 ? alloc16(wb, &raw) : NULL;
+    if (ws == NULL || trn_grid_f32_init(&g, (float *)data, (size_t)width * (size_t)height, width, height) != TRN_OK) {
+      free(raw);
+      snprintf(err, err_len, "cannot prepare the automatic map configuration for %d x %d cells", width, height);
+      return -1;
+    }
+    st = trn_map_cfg_auto(cfg, &g, (float)cell_m, ws, wb, &sh);
+    free(raw);
+    if (st != TRN_OK) {
+      snprintf(err, err_len, "automatic map configuration: %s", trn_strerror(st));
+      return -1;
+    }
+  } else {
+    cfg->terrain.cell_m = (float)cell_m;
+    cfg->terrain.zbin_m = (float)cell_m;
+    cfg->terrain.highpass_half_m = (float)(10.0 * cell_m);
+    cfg->sigma_m = (float)cell_m;
+  }
+  if (m->zbin_m > 0.0) cfg->terrain.zbin_m = (float)m->zbin_m;
+  if (m->nz > 0) cfg->terrain.nz = (int32_t)m->nz;
+  if (m->highpass_m > 0.0) cfg->terrain.highpass_half_m = (float)m->highpass_m;
+  if (m->sigma_m > 0.0) cfg->sigma_m = (float)m->sigma_m;
+  if (m->inlier_prob > 0.0) cfg->inlier_prob = (float)m->inlier_prob;
+  if (m->local_hp != NULL) cfg->local_highpass = strcmp(m->local_hp, "map") == 0 ? TRN_LOCAL_HP_MAP : TRN_LOCAL_HP_BOX;
+  if (m->refine >= 0) cfg->refine = (int32_t)m->refine;
+  if ((st = trn_map_cfg_check(cfg)) != TRN_OK) {
+    snprintf(err, err_len,
+             "map configuration rejected (%s): cell %g m, bin %g m, %d bins, high-pass %g m (at least one cell), s %g m",
+             trn_strerror(st), cell_m, (double)cfg->terrain.zbin_m, (int)cfg->terrain.nz,
+             (double)cfg->terrain.highpass_half_m, (double)cfg->sigma_m);
+    return -1;
+  }
+  if (sigma_h != NULL) {
+    *sigma_h = sh;
+  }
+  return 0;
+}
+
+void mapopt_json(json_t *j, const trn_map_cfg_t *cfg) {
+  json_obj(j, "map_config");
+  json_num(j, "zbin_m", cfg->terrain.zbin_m);
+  json_int(j, "nz", cfg->terrain.nz);
+  json_num(j, "highpass_m", cfg->terrain.highpass_half_m);
+  json_num(j, "sigma_m", cfg->sigma_m);
+  json_num(j, "inlier_prob", cfg->inlier_prob);
+  json_num(j, "noise_m", cfg->noise_m);
+  json_num(j, "noise_k_per_m", cfg->noise_k_per_m);
+  json_str(j, "local_highpass", cfg->local_highpass == TRN_LOCAL_HP_MAP ? "map" : "box");
+  json_int(j, "refine", cfg->refine);
+  json_obj_end(j);
+}

@@ -1,0 +1,51 @@
+/* tools/trn/mapopt.h - the map configuration as command-line options, shared
+ * by the commands that prepare a map (docs/method.md section 9).
+ *
+ * Default (--map-config auto): trn_map_cfg_auto chooses the height bin and
+ * the number of bins from the DEM (its cell, the spread of its high-passed
+ * heights, the local map's height noise), the local DEM is high-passed
+ * against the map (TRN_LOCAL_HP_MAP) and the pose is refined over heights.
+ * --map-config paper: the paper's configuration scaled to the cell (bins and
+ * inlier sigma one cell, high-pass half-width ten cells, the local DEM
+ * filtered on its own, no refinement), as trn did before. Any option given
+ * explicitly overrides either. */
+#ifndef TRN_MAPOPT_H
+#define TRN_MAPOPT_H
+
+#include <stddef.h>
+
+#include "cli.h"
+#include "trn/trn.h"
+
+#define MAPOPT_N 10 /* cli_opt_t entries mapopt_cli writes */
+
+typedef struct {
+  const char *config;   /* "auto" | "paper" */
+  double zbin_m;        /* height bin, metres; 0 = from the configuration */
+  long nz;              /* height bins; 0 = from the configuration */
+  double highpass_m;    /* high-pass half-width, metres; 0 = 10 cells */
+  double sigma_m;       /* inlier sigma s, metres; 0 = one cell */
+  double inlier_prob;   /* a; 0 = 0.95 */
+  double noise_m;       /* local height noise, constant part, metres; 0 = 0.01 */
+  double noise_k;       /* local height noise, r^2 part, 1/m; < 0 = 0.0004 / cell */
+  const char *local_hp; /* NULL = from the configuration; "box" | "map" */
+  long refine;          /* -1 = from the configuration; 0 | 1 */
+} mapopt_t;
+
+/* Defaults (everything from the configuration, --map-config auto). */
+void mapopt_init(mapopt_t *m);
+
+/* Write MAPOPT_N option entries for m into out. */
+void mapopt_cli(mapopt_t *m, cli_opt_t *out);
+
+/* The map configuration for a DEM of width x height cells of cell_m metres
+ * (data: its heights, NaN = unknown). Returns 0, or -1 with a one-line
+ * reason in err. sigma_h (may be NULL) gets the DEM's high-passed height
+ * spread when the auto configuration ran (else NaN). */
+int mapopt_config(const mapopt_t *m, const float *data, int width, int height, double cell_m,
+                  trn_map_cfg_t *cfg, double *sigma_h, char *err, size_t err_len);
+
+/* Write the configuration as the JSON object "map_config". */
+void mapopt_json(json_t *j, const trn_map_cfg_t *cfg);
+
+#endif /* TRN_MAPOPT_H */
