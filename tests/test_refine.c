@@ -17,6 +17,7 @@
 #include <stdio.h>
 
 #include "trn/refine.h"
+#include "trn/localize.h"
 #include "rng.h"
 
 #define GW 64
@@ -216,6 +217,41 @@ static void test_errors(void **state)
     assert_true(isinf(out.cov_cells[1]));
 }
 
+/* trn_map_cfg_auto: the documented rule on the analytic DEM, and every status. */
+static double ws_auto[(GW + 1) * (GW + 1) * 2 + GW * GW];
+
+static void test_cfg_auto(void **state)
+{
+    trn_grid_f32_t g;
+    trn_map_cfg_t c;
+    double sh = 0.0;
+    size_t wb = trn_map_cfg_auto_workspace_bytes(GW, GW);
+    int i;
+    (void)state;
+    make_global(&g);
+    assert_true(wb > 0u && wb <= sizeof ws_auto);
+    trn_map_cfg_default(&c);
+    c.noise_m = 0.01f;
+    c.noise_k_per_m = 0.0004f;
+    assert_int_equal(trn_map_cfg_auto(&c, &g, 1.0f, ws_auto, wb, &sh), TRN_OK);
+    /* zbin = min(cell, max(sigma_H / 2, 2 s(10 cells))), s(10 m) = 0.05 m */
+    assert_true(fabs((double)c.terrain.zbin_m - fmin(1.0, fmax(sh / 2.0, 0.1))) < 1e-6);
+    assert_true(c.terrain.nz >= 16 && c.terrain.nz <= 64 && c.refine == 1 && c.local_highpass == TRN_LOCAL_HP_MAP);
+    assert_true(sh > 0.5); /* the surface's sinusoids survive a 10-cell high-pass */
+    assert_int_equal(trn_map_cfg_auto(NULL, &g, 1.0f, ws_auto, wb, &sh), TRN_E_NULL);
+    assert_int_equal(trn_map_cfg_auto(&c, NULL, 1.0f, ws_auto, wb, &sh), TRN_E_NULL);
+    assert_int_equal(trn_map_cfg_auto(&c, &g, 1.0f, NULL, wb, &sh), TRN_E_NULL);
+    assert_int_equal(trn_map_cfg_auto(&c, &g, 0.0f, ws_auto, wb, &sh), TRN_E_ARG);
+    assert_int_equal(trn_map_cfg_auto(&c, &g, 1.0f, ws_auto, wb - 1u, &sh), TRN_E_WORKSPACE);
+    g.width = 0;
+    assert_int_equal(trn_map_cfg_auto(&c, &g, 1.0f, ws_auto, wb, &sh), TRN_E_SIZE);
+    make_global(&g);
+    for (i = 0; i < GW * GW; ++i) {
+        g_data[i] = NAN;
+    }
+    assert_int_equal(trn_map_cfg_auto(&c, &g, 1.0f, ws_auto, wb, &sh), TRN_E_NODATA);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -223,6 +259,7 @@ int main(void)
         cmocka_unit_test(test_noise_coverage),
         cmocka_unit_test(test_outliers),
         cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_cfg_auto),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
