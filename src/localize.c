@@ -22,6 +22,7 @@ void trn_map_cfg_default(trn_map_cfg_t *cfg)
     cfg->refine = 0;
     cfg->noise_m = 0.01f;
     cfg->noise_k_per_m = 0.004f;
+    cfg->match = TRN_MATCH_VOXEL;
 }
 
 static trn_lik_cfg_t lik_of(const trn_map_cfg_t *cfg)
@@ -51,7 +52,7 @@ trn_status_t trn_map_cfg_check(const trn_map_cfg_t *cfg)
     if (cfg->levels < 1 || cfg->levels > TRN_MAX_LEVELS || cfg->min_exclusion_cells < 1 ||
         cfg->min_exclusion_cells > TRN_MAX_DIM ||
         (cfg->local_highpass != TRN_LOCAL_HP_BOX && cfg->local_highpass != TRN_LOCAL_HP_MAP) ||
-        (cfg->refine != 0 && cfg->refine != 1) || !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
+        (cfg->refine != 0 && cfg->refine != 1) || (cfg->match != TRN_MATCH_VOXEL && cfg->match != TRN_MATCH_HEIGHTS) || !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
         !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f)) {
         return TRN_E_ARG;
     }
@@ -61,7 +62,7 @@ trn_status_t trn_map_cfg_check(const trn_map_cfg_t *cfg)
 /* The configuration keeps the DEM's heights and low-pass in the map. */
 static int needs_heights(const trn_map_cfg_t *cfg)
 {
-    return cfg->refine != 0 || cfg->local_highpass == TRN_LOCAL_HP_MAP;
+    return cfg->refine != 0 || cfg->local_highpass == TRN_LOCAL_HP_MAP || cfg->match == TRN_MATCH_HEIGHTS;
 }
 
 /* Layout of the map buffer: [dist | pyramid | heights | lowpass | hp grid |
@@ -199,7 +200,8 @@ trn_status_t trn_map_cfg_auto(trn_map_cfg_t *cfg, const trn_grid_f32_t *dem, flo
     c.sigma_m = cell_m;
     c.local_highpass = TRN_LOCAL_HP_MAP;
     c.refine = 1;
-    if (!(cell_m > 0.0f && cell_m <= 100.0f) || trn_map_cfg_check(&c) != TRN_OK) {
+    c.match = TRN_MATCH_HEIGHTS;
+    if (!(cell_m > 0.0f && cell_m <= 1000.0f) || trn_map_cfg_check(&c) != TRN_OK) {
         return TRN_E_ARG;
     }
     need = trn_map_cfg_auto_workspace_bytes(dem->width, dem->height);
@@ -469,6 +471,72 @@ static void refine_result(const trn_map_t *map, const trn_grid_f32_t *local, int
     out->rho = out->cov_m2[2] / (out->sigma_x_m * out->sigma_y_m);
 }
 
+/* TRN_MATCH_HEIGHTS: height search, refinement, competing hypothesis. */
+static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
+                                     const trn_window_t *win, trn_loc_result_t *out)
+{
+    trn_status_t st;
+    trn_height_best_t best, second;
+    trn_refine_cfg_t rc;
+    trn_exclusion_t ex;
+    double smax;
+    int32_t radius = map->cfg.min_exclusion_cells;
+
+    rc.cell_m = map->cfg.terrain.cell_m;
+    rc.noise_m = map->cfg.noise_m;
+    rc.noise_k_per_m = map->cfg.noise_k_per_m;
+    if ((st = trn_height_search(&map->heights, local, rx, ry, win, NULL, &rc, map->cfg.inlier_prob, &best)) !=
+        TRN_OK) {
+        return st;
+    }
+    out->ix = best.x;
+    out->iy = best.y;
+    out->ll_best = best.ll;
+    out->n_points = 0u;
+    out->stats.poses_scored = best.poses;
+    out->stats.blocks_bounded = 0u;
+    out->on_window_edge = (best.x == win->x0 || best.x == win->x1 || best.y == win->y0 || best.y == win->y1) ? 1 : 0;
+    out->x = (double)best.x;
+    out->y = (double)best.y;
+    out->sigma_x_m = out->sigma_y_m = (double)INFINITY;
+    out->rho = 0.0;
+    out->cov_m2[0] = out->cov_m2[1] = (double)INFINITY;
+    out->cov_m2[2] = 0.0;
+    refine_result(map, local, rx, ry, out);
+    out->n_points = (size_t)(out->refinement.n_seen > 0 ? out->refinement.n_seen : 0);
+    if (out->refined) {
+        smax = out->refinement.cov_cells[0] > out->refinement.cov_cells[1] ? out->refinement.cov_cells[0]
+                                                                          : out->refinement.cov_cells[1];
+        smax = sqrt(smax);
+        if (4.0 * smax > (double)radius) {
+            radius = 4.0 * smax < (double)TRN_MAX_DIM ? (int32_t)ceil(4.0 * smax) : TRN_MAX_DIM;
+        }
+    }
+    ex.cx = best.x;
+    ex.cy = best.y;
+    ex.radius = radius;
+    out->exclusion_cells = radius;
+    st = trn_height_search(&map->heights, local, rx, ry, win, &ex, &rc, map->cfg.inlier_prob, &second);
+    if (st == TRN_OK) {
+        out->has_second = 1;
+        out->second_x = second.x;
+        out->second_y = second.y;
+        out->ll_second = second.ll;
+        if ((st = trn_failure_probability(out->ll_best, out->ll_second, &out->failure_probability)) != TRN_OK) {
+            return st;
+        }
+    } else if (st == TRN_E_NODATA) {
+        out->has_second = 0;
+        out->second_x = best.x;
+        out->second_y = best.y;
+        out->ll_second = out->ll_best;
+        out->failure_probability = 0.0;
+    } else {
+        return st;
+    }
+    return out->refined ? TRN_OK : TRN_E_ILLCOND;
+}
+
 trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_dem,
                               int32_t rover_x, int32_t rover_y, size_t max_points,
                               const trn_window_t *win, void *ws, size_t ws_bytes,
@@ -499,6 +567,9 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
     }
     if (ws_bytes < lay.total) {
         return TRN_E_WORKSPACE;
+    }
+    if (map->cfg.match == TRN_MATCH_HEIGHTS) {
+        return localize_heights(map, local_dem, rover_x, rover_y, win, out);
     }
     pts = (trn_point_t *)(void *)(b + lay.pts);
     if ((st = trn_grid_f32_init(&hp, (float *)(void *)(b + lay.hp),

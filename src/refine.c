@@ -2,6 +2,7 @@
 #include "trn/refine.h"
 
 #include <math.h>
+#include <stdlib.h>
 
 /* Bilinear height at fractional cell (x, y) (centres at integers) and its
  * exact gradient (per cell) inside the containing cell; 0 when a corner is
@@ -226,4 +227,189 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
     out->cov_cells[2] = inv[1] * chi2;
     out->n_used = acc.n_in;
     return TRN_OK;
+}
+
+/* Spread of the seen local heights (standard deviation about their mean), and
+ * their count. */
+static double local_spread(const trn_grid_f32_t *local, int32_t *n_seen)
+{
+    int32_t x, y, n = 0;
+    double ref = 0.0, s1 = 0.0, s2 = 0.0, v;
+    for (y = 0; y < local->height; ++y) {
+        for (x = 0; x < local->width; ++x) {
+            double h = (double)TRN_GRID_AT(local, x, y);
+            if (isfinite(h)) {
+                if (n == 0) {
+                    ref = h;
+                }
+                s1 += h - ref;
+                s2 += (h - ref) * (h - ref);
+                ++n;
+            }
+        }
+    }
+    *n_seen = n;
+    if (n == 0) {
+        return 0.0;
+    }
+    v = s2 / (double)n - (s1 / (double)n) * (s1 / (double)n);
+    return v > 0.0 ? sqrt(v) : 0.0;
+}
+
+/* Height noise of the local cell (x, y), variance. */
+static double noise_var(const trn_refine_cfg_t *cfg, int32_t x, int32_t y, int32_t rx, int32_t ry)
+{
+    double px = (double)(x - rx), py = (double)(y - ry);
+    double r_m = (double)cfg->cell_m * sqrt(px * px + py * py);
+    double sd = (double)cfg->noise_m + (double)cfg->noise_k_per_m * r_m * r_m;
+    return sd * sd;
+}
+
+/* Global height under local cell (x, y) at pose (px, py), or NaN. */
+static double global_at(const trn_grid_f32_t *g, int32_t px, int32_t py, int32_t x, int32_t y, int32_t rx,
+                        int32_t ry)
+{
+    int64_t gx = (int64_t)px + x - rx, gy = (int64_t)py + y - ry;
+    if (gx < 0 || gy < 0 || gx >= g->width || gy >= g->height) {
+        return (double)NAN;
+    }
+    return (double)TRN_GRID_AT(g, (int32_t)gx, (int32_t)gy);
+}
+
+/* Weighted offset and model variance of the residuals at pose (px, py),
+ * over the points within clip standard deviations of (dz, m2) (clip < 0:
+ * every point). Returns the number of points used. */
+static int32_t pose_fit(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_t rx, int32_t ry, int32_t px,
+                        int32_t py, const trn_refine_cfg_t *cfg, double clip, double *dz, double *m2)
+{
+    int32_t x, y, n = 0;
+    double sw = 0.0, swr = 0.0, sr = 0.0, srr = 0.0, ss = 0.0, ref = 0.0, d, m;
+    int have_ref = 0;
+    for (y = 0; y < l->height; ++y) {
+        for (x = 0; x < l->width; ++x) {
+            double h = (double)TRN_GRID_AT(l, x, y), gv, r, v;
+            if (!isfinite(h)) {
+                continue;
+            }
+            gv = global_at(g, px, py, x, y, rx, ry);
+            if (!isfinite(gv)) {
+                continue;
+            }
+            r = h - gv;
+            v = noise_var(cfg, x, y, rx, ry);
+            if (clip >= 0.0 && fabs(r - *dz) > clip * sqrt(v + *m2)) {
+                continue;
+            }
+            if (!have_ref) {
+                ref = r;
+                have_ref = 1;
+            }
+            r -= ref;
+            sw += 1.0 / v;
+            swr += r / v;
+            sr += r;
+            srr += r * r;
+            ss += v;
+            ++n;
+        }
+    }
+    if (n == 0) {
+        return 0;
+    }
+    d = swr / sw;
+    /* mean squared residual about d, minus the mean noise variance */
+    m = (srr - 2.0 * d * sr + (double)n * d * d) / (double)n - ss / (double)n;
+    *dz = d + ref;
+    *m2 = m > 0.0 ? m : 0.0;
+    return n;
+}
+
+/* Log-likelihood of pose (px, py), nats. */
+static double pose_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_t rx, int32_t ry, int32_t px,
+                      int32_t py, const trn_refine_cfg_t *cfg, double a, double k, double *dz_out, double *m_out)
+{
+    const double two_pi = 6.283185307179586;
+    int32_t x, y;
+    double dz = 0.0, m2 = 0.0, ll = 0.0, lout = log((1.0 - a) * k);
+    if (pose_fit(g, l, rx, ry, px, py, cfg, -1.0, &dz, &m2) > 0) {
+        double dz1 = dz, m21 = m2;
+        if (pose_fit(g, l, rx, ry, px, py, cfg, TRN_REFINE_CLIP, &dz1, &m21) > 0) {
+            dz = dz1;
+            m2 = m21;
+        }
+    }
+    for (y = 0; y < l->height; ++y) {
+        for (x = 0; x < l->width; ++x) {
+            double h = (double)TRN_GRID_AT(l, x, y), gv, v, u;
+            if (!isfinite(h)) {
+                continue;
+            }
+            gv = global_at(g, px, py, x, y, rx, ry);
+            if (!isfinite(gv)) {
+                ll += lout;
+                continue;
+            }
+            v = noise_var(cfg, x, y, rx, ry) + m2;
+            u = h - dz - gv;
+            ll += log(a * exp(-0.5 * u * u / v) / sqrt(two_pi * v) + (1.0 - a) * k);
+        }
+    }
+    *dz_out = dz;
+    *m_out = sqrt(m2);
+    return ll;
+}
+
+trn_status_t trn_height_search(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
+                               int32_t rover_x, int32_t rover_y, const trn_window_t *win,
+                               const trn_exclusion_t *ex, const trn_refine_cfg_t *cfg,
+                               float inlier_prob, trn_height_best_t *best)
+{
+    trn_status_t st;
+    int32_t x, y, n_seen = 0;
+    double spread, k, floor_m;
+    int found = 0;
+
+    if (global == NULL || local == NULL || win == NULL || cfg == NULL || best == NULL) {
+        return TRN_E_NULL;
+    }
+    if ((st = trn_grid_f32_check(global)) != TRN_OK || (st = trn_grid_f32_check(local)) != TRN_OK) {
+        return st;
+    }
+    if (!(cfg->cell_m > 0.0f && cfg->cell_m <= 1000.0f) || !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
+        !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f) || !(inlier_prob > 0.0f && inlier_prob < 1.0f) ||
+        rover_x < -TRN_MAX_DIM || rover_y < -TRN_MAX_DIM || rover_x > local->width - 1 + TRN_MAX_DIM ||
+        rover_y > local->height - 1 + TRN_MAX_DIM || (ex != NULL && ex->radius < 0)) {
+        return TRN_E_ARG;
+    }
+    if (win->x0 > win->x1 || win->y0 > win->y1 || win->x0 < 0 || win->y0 < 0 || win->x1 >= global->width ||
+        win->y1 >= global->height) {
+        return TRN_E_RANGE;
+    }
+    spread = local_spread(local, &n_seen);
+    if (n_seen < 8) {
+        return TRN_E_NODATA;
+    }
+    floor_m = (double)cfg->noise_m;
+    k = 1.0 / (10.0 * (spread > floor_m ? spread : floor_m));
+    best->poses = 0u;
+    for (y = win->y0; y <= win->y1; ++y) {
+        for (x = win->x0; x <= win->x1; ++x) {
+            double ll, dz, m;
+            if (ex != NULL && abs(x - ex->cx) <= ex->radius && abs(y - ex->cy) <= ex->radius) {
+                continue;
+            }
+            ll = pose_ll(global, local, rover_x, rover_y, x, y, cfg, (double)inlier_prob, k, &dz, &m);
+            best->poses += 1u;
+            /* highest ln L; ties to the smallest y, then x (scan order) */
+            if (!found || ll > best->ll) {
+                best->x = x;
+                best->y = y;
+                best->ll = ll;
+                best->dz_m = dz;
+                best->model_m = m;
+                found = 1;
+            }
+        }
+    }
+    return found ? TRN_OK : TRN_E_NODATA;
 }

@@ -15,6 +15,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 
 #include "trn/refine.h"
 #include "trn/localize.h"
@@ -217,6 +218,130 @@ static void test_errors(void **state)
     assert_true(isinf(out.cov_cells[1]));
 }
 
+/* trn_height_search: the best integer pose against a brute-force evaluation
+ * of the documented likelihood (here in the test, in double), the
+ * exclusion zone, and every status. */
+static double brute_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int px, int py, const trn_refine_cfg_t *c,
+                       double a)
+{
+    /* K from the local spread, dz and m^2 as documented (all points, then clipped) */
+    int x, y, cx = LW / 2, n = 0, pass;
+    double s1 = 0, s2 = 0, ref = 0, k, dz = 0, m2 = 0, ll = 0;
+    for (y = 0; y < LW; ++y)
+        for (x = 0; x < LW; ++x) {
+            double h = TRN_GRID_AT(l, x, y);
+            if (isfinite(h)) {
+                if (n == 0) ref = h;
+                s1 += h - ref;
+                s2 += (h - ref) * (h - ref);
+                ++n;
+            }
+        }
+    k = 1.0 / (10.0 * fmax(sqrt(fmax(s2 / n - (s1 / n) * (s1 / n), 0.0)), c->noise_m));
+    for (pass = 0; pass < 2; ++pass) {
+        double sw = 0, swr = 0, sr = 0, srr = 0, ss = 0;
+        int m = 0;
+        for (y = 0; y < LW; ++y)
+            for (x = 0; x < LW; ++x) {
+                double h = TRN_GRID_AT(l, x, y), rm, v, r;
+                int gx = px + x - cx, gy = py + y - cx;
+                if (!isfinite(h) || gx < 0 || gy < 0 || gx >= GW || gy >= GW) continue;
+                rm = c->cell_m * sqrt((double)((x - cx) * (x - cx) + (y - cx) * (y - cx)));
+                v = pow(c->noise_m + c->noise_k_per_m * rm * rm, 2);
+                r = h - TRN_GRID_AT(g, gx, gy);
+                if (pass == 1 && fabs(r - dz) > 3.0 * sqrt(v + m2)) continue;
+                sw += 1 / v;
+                swr += r / v;
+                sr += r;
+                srr += r * r;
+                ss += v;
+                ++m;
+            }
+        if (m == 0) break;
+        dz = swr / sw;
+        m2 = fmax(0.0, (srr - 2 * dz * sr + m * dz * dz) / m - ss / m);
+    }
+    for (y = 0; y < LW; ++y)
+        for (x = 0; x < LW; ++x) {
+            double h = TRN_GRID_AT(l, x, y), rm, v, u;
+            int gx = px + x - cx, gy = py + y - cx;
+            if (!isfinite(h)) continue;
+            if (gx < 0 || gy < 0 || gx >= GW || gy >= GW) {
+                ll += log((1 - a) * k);
+                continue;
+            }
+            rm = c->cell_m * sqrt((double)((x - cx) * (x - cx) + (y - cx) * (y - cx)));
+            v = pow(c->noise_m + c->noise_k_per_m * rm * rm, 2) + m2;
+            u = h - dz - TRN_GRID_AT(g, gx, gy);
+            ll += log(a * exp(-0.5 * u * u / v) / sqrt(6.283185307179586 * v) + (1 - a) * k);
+        }
+    return ll;
+}
+
+static void test_height_search(void **state)
+{
+    trn_grid_f32_t g, l;
+    trn_refine_cfg_t c = cfg_of(), bad;
+    trn_height_best_t b, b2;
+    trn_window_t win = {24, 25, 36, 35};
+    trn_exclusion_t ex;
+    trn_rng_t r;
+    int x, y, bx = -1, by = -1;
+    double bll = -INFINITY;
+    (void)state;
+    trn_rng_seed(&r, 9);
+    make_global(&g);
+    make_local(&l, 30.4, 29.7, 12.0, 1.0, &c, &r);
+    assert_int_equal(trn_height_search(&g, &l, LW / 2, LW / 2, &win, NULL, &c, 0.95f, &b), TRN_OK);
+    for (y = win.y0; y <= win.y1; ++y)
+        for (x = win.x0; x <= win.x1; ++x) {
+            double ll = brute_ll(&g, &l, x, y, &c, 0.95);
+            if (ll > bll) {
+                bll = ll;
+                bx = x;
+                by = y;
+            }
+        }
+    assert_int_equal(b.x, bx);
+    assert_int_equal(b.y, by);
+    assert_true(fabs(b.ll - bll) < 1e-6 * fabs(bll));
+    assert_true(abs(b.x - 30) <= 1 && abs(b.y - 30) <= 1);
+    assert_true(b.poses == 13u * 11u);
+    assert_true(fabs(b.dz_m - 12.0) < 1.0);
+    ex.cx = b.x;
+    ex.cy = b.y;
+    ex.radius = 2;
+    assert_int_equal(trn_height_search(&g, &l, LW / 2, LW / 2, &win, &ex, &c, 0.95f, &b2), TRN_OK);
+    assert_true(abs(b2.x - b.x) > 2 || abs(b2.y - b.y) > 2);
+    assert_true(b2.ll < b.ll);
+    assert_true(b2.poses == 13u * 11u - 25u);
+    /* statuses */
+    assert_int_equal(trn_height_search(NULL, &l, 15, 15, &win, NULL, &c, 0.95f, &b), TRN_E_NULL);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, NULL, NULL, &c, 0.95f, &b), TRN_E_NULL);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, NULL), TRN_E_NULL);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 1.0f, &b), TRN_E_ARG);
+    bad = c;
+    bad.noise_m = -1.0f;
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &bad, 0.95f, &b), TRN_E_ARG);
+    ex.radius = -1;
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, &ex, &c, 0.95f, &b), TRN_E_ARG);
+    assert_int_equal(trn_height_search(&g, &l, TRN_MAX_DIM + LW, 15, &win, NULL, &c, 0.95f, &b), TRN_E_ARG);
+    win.x1 = GW;
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, &b), TRN_E_RANGE);
+    win.x1 = 20;
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, &b), TRN_E_RANGE);
+    win.x1 = 36;
+    ex.radius = 100;
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, &ex, &c, 0.95f, &b), TRN_E_NODATA);
+    l.width = 0;
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, &b), TRN_E_SIZE);
+    make_local(&l, 30.0, 30.0, 0.0, 0.0, &c, &r);
+    for (x = 0; x < LW * LW; ++x) {
+        l_data[x] = x < 5 ? 1.0f : NAN;
+    }
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, &b), TRN_E_NODATA);
+}
+
 /* trn_map_cfg_auto: the documented rule on the analytic DEM, and every status. */
 static double ws_auto[(GW + 1) * (GW + 1) * 2 + GW * GW];
 
@@ -236,7 +361,8 @@ static void test_cfg_auto(void **state)
     assert_int_equal(trn_map_cfg_auto(&c, &g, 1.0f, ws_auto, wb, &sh), TRN_OK);
     /* zbin = min(cell, max(sigma_H / 2, 2 s(10 cells))), s(10 m) = 0.05 m */
     assert_true(fabs((double)c.terrain.zbin_m - fmin(1.0, fmax(sh / 2.0, 0.1))) < 1e-6);
-    assert_true(c.terrain.nz >= 16 && c.terrain.nz <= 64 && c.refine == 1 && c.local_highpass == TRN_LOCAL_HP_MAP);
+    assert_true(c.terrain.nz >= 16 && c.terrain.nz <= 64 && c.refine == 1 && c.local_highpass == TRN_LOCAL_HP_MAP &&
+                c.match == TRN_MATCH_HEIGHTS);
     assert_true(sh > 0.5); /* the surface's sinusoids survive a 10-cell high-pass */
     assert_int_equal(trn_map_cfg_auto(NULL, &g, 1.0f, ws_auto, wb, &sh), TRN_E_NULL);
     assert_int_equal(trn_map_cfg_auto(&c, NULL, 1.0f, ws_auto, wb, &sh), TRN_E_NULL);
@@ -260,6 +386,7 @@ int main(void)
         cmocka_unit_test(test_outliers),
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_cfg_auto),
+        cmocka_unit_test(test_height_search),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

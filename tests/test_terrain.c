@@ -218,7 +218,7 @@ static void test_cfg_check(void **state)
     assert_int_equal(trn_terrain_cfg_check(&c), TRN_E_ARG);
     c = make_cfg(1.0f, 1000.0f, 2.0f, 16);
     assert_int_equal(trn_terrain_cfg_check(&c), TRN_OK);
-    /* highpass_half_m: [cell_m, 1000] */
+    /* highpass_half_m: [cell_m, 1e6] */
     c = make_cfg(1.0f, 1.0f, 0.99f, 16);
     assert_int_equal(trn_terrain_cfg_check(&c), TRN_E_ARG);
     c = make_cfg(0.5f, 1.0f, 0.25f, 16);
@@ -229,7 +229,9 @@ static void test_cfg_check(void **state)
     assert_int_equal(trn_terrain_cfg_check(&c), TRN_E_ARG);
     c = make_cfg(1.0f, 1.0f, INFINITY, 16);
     assert_int_equal(trn_terrain_cfg_check(&c), TRN_E_ARG);
-    c = make_cfg(1.0f, 1.0f, 1000.5f, 16);
+    c = make_cfg(1.0f, 1.0f, 1.0e6f, 16);
+    assert_int_equal(trn_terrain_cfg_check(&c), TRN_OK);
+    c = make_cfg(1.0f, 1.0f, 1.01e6f, 16);
     assert_int_equal(trn_terrain_cfg_check(&c), TRN_E_ARG);
     c = make_cfg(1.0f, 1.0f, -2.0f, 16);
     assert_int_equal(trn_terrain_cfg_check(&c), TRN_E_ARG);
@@ -656,7 +658,7 @@ static void test_highpass_missing(void **state)
 }
 
 /* A configuration trn_terrain_cfg_check accepts (cell_m in (0, 1000],
- * highpass_half_m in [cell_m, 1000]) whose box is wider than any grid: the
+ * highpass_half_m in [cell_m, 1e6]) whose box is wider than any grid: the
  * box is then the whole grid and H' = H - mean(H). */
 static void test_highpass_box_wider_than_grid(void **state)
 {

@@ -37,6 +37,18 @@ typedef enum {
     TRN_LOCAL_HP_MAP = 1
 } trn_local_hp_t;
 
+/** What trn_localize_dem matches. */
+typedef enum {
+    /** The paper: the local DEM's 3-D occupancy against the map's chamfer
+     *  distances (trn_search_bb), eq. 6 or the height refinement after it. */
+    TRN_MATCH_VOXEL = 0,
+    /** Natural terrain: the local heights against the map's heights,
+     *  exhaustively over the window (trn_height_search), then
+     *  trn_refine_pose; the failure probability from the same likelihood.
+     *  Needs the map's stored heights. docs/method.md section 9. */
+    TRN_MATCH_HEIGHTS = 1
+} trn_match_t;
+
 /** Everything that shapes a prepared map. */
 typedef struct {
     trn_terrain_cfg_t terrain;   /**< filter and occupancy (cell_m is the map's cell) */
@@ -53,6 +65,8 @@ typedef struct {
     float noise_m;               /**< local map height noise, constant part, metres (0, 1000] */
     float noise_k_per_m;         /**< local map height noise, range-squared part, 1/m [0, 1000]:
                                       s(r) = noise_m + noise_k_per_m r^2 */
+    int32_t match;               /**< trn_match_t (trn_localize_dem only; trn_localize_points
+                                      always matches voxels) */
 } trn_map_cfg_t;
 
 /** A prepared global map. All pointers point into the caller's buffer. */
@@ -63,7 +77,8 @@ typedef struct {
     trn_lnp_table_t lnp;   /**< ln p(d), with K of this map */
     uint32_t n_occupied;   /**< occupied voxels of the global map */
     trn_grid_f32_t heights; /**< the DEM (NaN = unknown); data NULL unless the
-                                 configuration needs it (TRN_LOCAL_HP_MAP or refine) */
+                                 configuration needs it (TRN_LOCAL_HP_MAP, refine or
+                                 TRN_MATCH_HEIGHTS) */
     trn_grid_f32_t lowpass; /**< heights minus their high-pass (same condition) */
 } trn_map_t;
 

@@ -22,6 +22,7 @@
 #define TRN_REFINE_H
 
 #include "trn/grid.h"
+#include "trn/likelihood.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -42,6 +43,15 @@ typedef struct {
     float noise_m;       /**< constant part, metres, (0, 1000] */
     float noise_k_per_m; /**< range-squared part, 1/m, [0, 1000] */
 } trn_refine_cfg_t;
+
+/** Best integer pose of trn_height_search. */
+typedef struct {
+    int32_t x, y;       /**< global cell of the local rover cell */
+    double ll;          /**< its log-likelihood, nats (see trn_height_search) */
+    double dz_m;        /**< its vertical offset local - global, metres */
+    double model_m;     /**< its model error m, metres */
+    uint64_t poses;     /**< poses evaluated */
+} trn_height_best_t;
 
 /** Result of trn_refine_pose. Pose in global cells (x = column, y = row). */
 typedef struct {
@@ -74,6 +84,28 @@ typedef struct {
 trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
                              int32_t rover_x, int32_t rover_y, int32_t ix, int32_t iy,
                              const trn_refine_cfg_t *cfg, trn_refine_t *out);
+
+/**
+ * @brief Exhaustive maximum-likelihood search of integer poses over heights
+ * (the natural-terrain matcher, docs/method.md section 9). Every seen local
+ * point i contributes ln(a N(r_i - dz; 0, s_i^2 + m^2) + (1 - a) K), with
+ * r_i = h_i - G(pose + p_i) at integer cells; a point with no global height
+ * under it (off the map, NaN) contributes ln((1 - a) K). Per pose, dz and m^2
+ * are estimated (weighted mean; moments), then again without the points
+ * beyond TRN_REFINE_CLIP (a profile likelihood). K = 1 / (10 sd of the local
+ * heights), one value per call, so scores compare across poses.
+ * @param[in] inlier_prob a, in (0, 1)
+ * @param[in] ex          poses to skip (NULL: none)
+ * @retval TRN_OK
+ * @retval TRN_E_NULL, TRN_E_SIZE (bad grids), TRN_E_ARG (cfg, a, rover cell
+ *         farther than TRN_MAX_DIM, negative exclusion radius)
+ * @retval TRN_E_RANGE  window empty or not inside the global grid
+ * @retval TRN_E_NODATA fewer than 8 seen local points, or every pose excluded
+ */
+trn_status_t trn_height_search(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
+                               int32_t rover_x, int32_t rover_y, const trn_window_t *win,
+                               const trn_exclusion_t *ex, const trn_refine_cfg_t *cfg,
+                               float inlier_prob, trn_height_best_t *best);
 
 #ifdef __cplusplus
 }

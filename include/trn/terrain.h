@@ -31,7 +31,7 @@ extern "C" {
 typedef struct {
     float cell_m;           /**< grid cell side, metres, (0, 1000] */
     float zbin_m;           /**< height bin, metres, (0, 1000]; = cell_m for cubic voxels */
-    float highpass_half_m;  /**< half-width of the smoothing box, metres, [cell_m, 1000] */
+    float highpass_half_m;  /**< half-width of the smoothing box, metres, [cell_m, 1e6] (ten 1 km cells and more) */
     int32_t nz;             /**< height bins, 1..TRN_MAX_ZBINS */
 } trn_terrain_cfg_t;
 

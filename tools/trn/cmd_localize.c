@@ -342,12 +342,13 @@ int trn_cmd_localize(int argc, char **argv) {
            o.rho_en, o.res.refined ? "   (height refinement)" : "   (eq. 6)");
     printf("failure      probability %.3g%s\n", o.res.failure_probability,
            o.res.on_window_edge ? "   (best pose on the window edge: widen --window-m)" : "");
-    printf("matched      %zu local voxels, %llu poses scored exactly, %.1f ms\n", o.res.n_points,
+    printf("matched      %zu local %s, %llu poses scored exactly, %.1f ms\n", o.res.n_points,
+           c.cfg.match == TRN_MATCH_HEIGHTS ? "heights" : "voxels",
            (unsigned long long)o.res.stats.poses_scored, o.time_ms);
-    printf("map          bin %.4g m x %d, high-pass %.4g m, s %.4g m, local filter %s, refine %s\n",
-           (double)c.cfg.terrain.zbin_m, (int)c.cfg.terrain.nz, (double)c.cfg.terrain.highpass_half_m,
-           (double)c.cfg.sigma_m, c.cfg.local_highpass == TRN_LOCAL_HP_MAP ? "map" : "box",
-           c.cfg.refine ? "on" : "off");
+    printf("map          match %s, bin %.4g m x %d, high-pass %.4g m, s %.4g m, local filter %s, refine %s\n",
+           c.cfg.match == TRN_MATCH_HEIGHTS ? "heights" : "voxel", (double)c.cfg.terrain.zbin_m,
+           (int)c.cfg.terrain.nz, (double)c.cfg.terrain.highpass_half_m, (double)c.cfg.sigma_m,
+           c.cfg.local_highpass == TRN_LOCAL_HP_MAP ? "map" : "box", c.cfg.refine ? "on" : "off");
   }
   rc = 0;
 

@@ -18,6 +18,7 @@ void mapopt_init(mapopt_t *m) {
   m->noise_k = -1.0;
   m->local_hp = NULL;
   m->refine = -1;
+  m->match = NULL;
 }
 
 void mapopt_cli(mapopt_t *m, cli_opt_t *o) {
@@ -26,13 +27,14 @@ void mapopt_cli(mapopt_t *m, cli_opt_t *o) {
        "map configuration: auto (from the DEM, docs/method.md 9; default) or paper (as in the paper, scaled to the cell)", 0},
       {"--zbin-m", CLI_DOUBLE, &m->zbin_m, 1e-6, 1000.0, 0, "M", "height bin, metres (default: from --map-config)", 0},
       {"--nz", CLI_LONG, &m->nz, 1, TRN_MAX_ZBINS, 0, "N", "number of height bins (default: from --map-config)", 0},
-      {"--highpass-m", CLI_DOUBLE, &m->highpass_m, 1e-6, 1000.0, 0, "M", "high-pass half-width, metres (default 10 cells)", 0},
+      {"--highpass-m", CLI_DOUBLE, &m->highpass_m, 1e-6, 1e6, 0, "M", "high-pass half-width, metres (default 10 cells)", 0},
       {"--sigma-m", CLI_DOUBLE, &m->sigma_m, 1e-6, 1000.0, 0, "M", "inlier standard deviation s, metres (default one cell)", 0},
       {"--inlier-prob", CLI_DOUBLE, &m->inlier_prob, 0.01, 0.99, 0, "A", "inlier probability a (default 0.95)", 0},
       {"--noise-m", CLI_DOUBLE, &m->noise_m, 1e-6, 1000.0, 0, "M", "local map height noise, constant part, metres (default 0.01)", 0},
       {"--noise-k", CLI_DOUBLE, &m->noise_k, 0.0, 1000.0, 0, "K", "local map height noise, range-squared part, 1/m (default 0.0004/cell)", 0},
       {"--local-highpass", CLI_STRING, &m->local_hp, 0, 0, 0, "box|map", "local DEM filter: box (its own, the paper) or map (the map's low-pass; auto)", 0},
       {"--refine", CLI_LONG, &m->refine, 0, 1, 0, "0|1", "refine the pose over heights (1 with auto, 0 with paper)", 0},
+      {"--match", CLI_STRING, &m->match, 0, 0, 0, "voxel|heights", "what localize matches: voxel occupancy (paper) or heights (auto)", 0},
   };
   memcpy(o, t, sizeof t);
 }
@@ -59,8 +61,12 @@ int mapopt_config(const mapopt_t *m, const float *data, int width, int height, d
     snprintf(err, err_len, "--local-highpass must be box or map, not '%s'", m->local_hp);
     return -1;
   }
-  if (!(cell_m > 0.0 && cell_m <= 100.0)) {
-    snprintf(err, err_len, "cell size %g m is outside the (0, 100] m the map configuration accepts", cell_m);
+  if (m->match != NULL && strcmp(m->match, "voxel") != 0 && strcmp(m->match, "heights") != 0) {
+    snprintf(err, err_len, "--match must be voxel or heights, not '%s'", m->match);
+    return -1;
+  }
+  if (!(cell_m > 0.0 && cell_m <= 1000.0)) {
+    snprintf(err, err_len, "cell size %g m is outside the (0, 1000] m the core accepts", cell_m);
     return -1;
   }
   trn_map_cfg_default(cfg);
@@ -93,6 +99,7 @@ int mapopt_config(const mapopt_t *m, const float *data, int width, int height, d
   if (m->inlier_prob > 0.0) cfg->inlier_prob = (float)m->inlier_prob;
   if (m->local_hp != NULL) cfg->local_highpass = strcmp(m->local_hp, "map") == 0 ? TRN_LOCAL_HP_MAP : TRN_LOCAL_HP_BOX;
   if (m->refine >= 0) cfg->refine = (int32_t)m->refine;
+  if (m->match != NULL) cfg->match = strcmp(m->match, "heights") == 0 ? TRN_MATCH_HEIGHTS : TRN_MATCH_VOXEL;
   if ((st = trn_map_cfg_check(cfg)) != TRN_OK) {
     snprintf(err, err_len,
              "map configuration rejected (%s): cell %g m, bin %g m, %d bins, high-pass %g m (at least one cell), s %g m",
@@ -117,5 +124,6 @@ void mapopt_json(json_t *j, const trn_map_cfg_t *cfg) {
   json_num(j, "noise_k_per_m", cfg->noise_k_per_m);
   json_str(j, "local_highpass", cfg->local_highpass == TRN_LOCAL_HP_MAP ? "map" : "box");
   json_int(j, "refine", cfg->refine);
+  json_str(j, "match", cfg->match == TRN_MATCH_HEIGHTS ? "heights" : "voxel");
   json_obj_end(j);
 }

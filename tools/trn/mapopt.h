@@ -4,10 +4,11 @@
  * Default (--map-config auto): trn_map_cfg_auto chooses the height bin and
  * the number of bins from the DEM (its cell, the spread of its high-passed
  * heights, the local map's height noise), the local DEM is high-passed
- * against the map (TRN_LOCAL_HP_MAP) and the pose is refined over heights.
+ * against the map (TRN_LOCAL_HP_MAP), the local heights are matched against
+ * the map's heights (TRN_MATCH_HEIGHTS) and the pose is refined over heights.
  * --map-config paper: the paper's configuration scaled to the cell (bins and
  * inlier sigma one cell, high-pass half-width ten cells, the local DEM
- * filtered on its own, no refinement), as trn did before. Any option given
+ * filtered on its own, voxel matching, no refinement), as trn did before. Any option given
  * explicitly overrides either. */
 #ifndef TRN_MAPOPT_H
 #define TRN_MAPOPT_H
@@ -17,7 +18,7 @@
 #include "cli.h"
 #include "trn/trn.h"
 
-#define MAPOPT_N 10 /* cli_opt_t entries mapopt_cli writes */
+#define MAPOPT_N 11 /* cli_opt_t entries mapopt_cli writes */
 
 typedef struct {
   const char *config;   /* "auto" | "paper" */
@@ -30,6 +31,7 @@ typedef struct {
   double noise_k;       /* local height noise, r^2 part, 1/m; < 0 = 0.0004 / cell */
   const char *local_hp; /* NULL = from the configuration; "box" | "map" */
   long refine;          /* -1 = from the configuration; 0 | 1 */
+  const char *match;    /* NULL = from the configuration; "voxel" | "heights" */
 } mapopt_t;
 
 /* Defaults (everything from the configuration, --map-config auto). */
