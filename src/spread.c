@@ -1,6 +1,7 @@
 /* spread.c - eqs. 8 and 9, separable position-variant scatter (see trn/spread.h). */
 #include "trn/spread.h"
 
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -62,10 +63,12 @@ static trn_status_t check_common(const trn_kernels_t *k, const trn_sigma_model_t
     return TRN_OK;
 }
 
-/* The kernel map without argument checks. */
+/* The kernel map without argument checks. sg (may be NULL): per-cell sigma
+ * in metres over the window's cells (row y at sg->data + y * sg->stride);
+ * a NaN cell takes the model. */
 static void kernel_map(const trn_kernels_t *k, const trn_sigma_model_t *m, float cell_m,
                        const trn_xy_t *sensors, size_t n_sensors, const trn_window_t *win,
-                       int32_t width, int32_t height, uint8_t *idx)
+                       int32_t width, int32_t height, const trn_grid_f32_t *sg, uint8_t *idx)
 {
     const double c2 = (double)cell_m * (double)cell_m;
     int32_t x, y;
@@ -74,6 +77,15 @@ static void kernel_map(const trn_kernels_t *k, const trn_sigma_model_t *m, float
             const double gx = (double)(win->x0 + x), gy = (double)(win->y0 + y);
             double best = HUGE_VAL, sig;
             size_t s;
+            if (sg != NULL) {
+                const float v = sg->data[(size_t)y * (size_t)sg->stride + (size_t)x];
+                if (!isnan(v)) {
+                    sig = (double)v / (double)cell_m;
+                    idx[(size_t)y * (size_t)width + (size_t)x] =
+                        (uint8_t)trn_kernel_pick(k, sig < 1e30 ? (float)sig : 1e30f);
+                    continue;
+                }
+            }
             for (s = 0; s < n_sensors; ++s) {
                 const double ex = gx - (double)sensors[s].x_cells;
                 const double ey = gy - (double)sensors[s].y_cells;
@@ -113,7 +125,7 @@ trn_status_t trn_spread_kernel_map(const trn_kernels_t *k, const trn_sigma_model
     if (idx_len < (size_t)w * (size_t)h) {
         return TRN_E_WORKSPACE;
     }
-    kernel_map(k, m, cell_m, sensors, n_sensors, win, w, h, idx);
+    kernel_map(k, m, cell_m, sensors, n_sensors, win, w, h, NULL, idx);
     return TRN_OK;
 }
 
@@ -232,7 +244,8 @@ size_t trn_prob_global_workspace_bytes(int32_t nx, int32_t ny)
 
 static trn_status_t prob_global(const trn_kernels_t *k, const trn_sigma_model_t *m, float cell_m,
                                 const trn_xy_t *sensors, size_t n_sensors,
-                                const trn_vol_u8_t *occ, int zero_occupied, trn_vol_f32_t *pg,
+                                const trn_vol_u8_t *occ, int zero_occupied,
+                                const trn_grid_f32_t *sg, trn_vol_f32_t *pg,
                                 void *ws, size_t ws_bytes)
 {
     trn_status_t st;
@@ -273,7 +286,7 @@ static trn_status_t prob_global(const trn_kernels_t *k, const trn_sigma_model_t 
     p.swh = p.dwh = occ->ny;
     p.tmp = (float *)ws;
     p.idx = (const uint8_t *)ws + TRN_ALIGN_UP(plane * sizeof(float));
-    kernel_map(k, m, cell_m, sensors, n_sensors, &p.sw, p.sww, p.swh, (uint8_t *)ws +
+    kernel_map(k, m, cell_m, sensors, n_sensors, &p.sw, p.sww, p.swh, sg, (uint8_t *)ws +
                TRN_ALIGN_UP(plane * sizeof(float)));
     for (z = 0; z < occ->nz; ++z) {
         xpass_u8(&p, occ->data + (size_t)z * plane, occ->nx, zero_occupied);
@@ -286,7 +299,7 @@ trn_status_t trn_prob_global(const trn_kernels_t *k, const trn_sigma_model_t *m,
                              const trn_xy_t *sensors, size_t n_sensors, const trn_vol_u8_t *occ,
                              trn_vol_f32_t *pg, void *ws, size_t ws_bytes)
 {
-    return prob_global(k, m, cell_m, sensors, n_sensors, occ, 0, pg, ws, ws_bytes);
+    return prob_global(k, m, cell_m, sensors, n_sensors, occ, 0, NULL, pg, ws, ws_bytes);
 }
 
 trn_status_t trn_prob_global_map(const trn_kernels_t *k, const trn_sigma_model_t *m,
@@ -296,8 +309,37 @@ trn_status_t trn_prob_global_map(const trn_kernels_t *k, const trn_sigma_model_t
     if (map == NULL) {
         return TRN_E_NULL;
     }
-    return prob_global(k, m, map->cfg.terrain.cell_m, sensors, n_sensors, &map->dist, 1, pg, ws,
-                       ws_bytes);
+    return prob_global(k, m, map->cfg.terrain.cell_m, sensors, n_sensors, &map->dist, 1, NULL, pg,
+                       ws, ws_bytes);
+}
+
+trn_status_t trn_prob_global_raster(const trn_kernels_t *k, const trn_sigma_model_t *m,
+                                    const trn_xy_t *sensors, size_t n_sensors,
+                                    const trn_grid_f32_t *sigma_m, const trn_map_t *map,
+                                    trn_vol_f32_t *pg, void *ws, size_t ws_bytes)
+{
+    trn_status_t st;
+    int32_t x, y;
+    if (map == NULL || sigma_m == NULL) {
+        return TRN_E_NULL;
+    }
+    if ((st = trn_grid_f32_check(sigma_m)) != TRN_OK) {
+        return st;
+    }
+    if (sigma_m->width != map->dist.nx || sigma_m->height != map->dist.ny) {
+        return TRN_E_SIZE;
+    }
+    for (y = 0; y < sigma_m->height; ++y) {
+        const float *row = sigma_m->data + (size_t)y * (size_t)sigma_m->stride;
+        for (x = 0; x < sigma_m->width; ++x) {
+            /* NaN: the model; otherwise a finite error >= 0 m */
+            if (!isnan(row[x]) && !(row[x] >= 0.0f && row[x] <= FLT_MAX)) {
+                return TRN_E_ARG;
+            }
+        }
+    }
+    return prob_global(k, m, map->cfg.terrain.cell_m, sensors, n_sensors, &map->dist, 1, sigma_m,
+                       pg, ws, ws_bytes);
 }
 
 /* Source window of roi: roi grown by the largest radius any source that
@@ -381,7 +423,7 @@ trn_status_t trn_prob_local(const trn_kernels_t *k, const trn_sigma_model_t *m, 
     ps.idx = (const uint8_t *)ws +
              TRN_ALIGN_UP((size_t)ps.swh * (size_t)w * sizeof(float));
     kernel_map(k, m, cell_m, &rover, 1u, &ps.sw, ps.sww, ps.swh,
-               (uint8_t *)ws + TRN_ALIGN_UP((size_t)ps.swh * (size_t)w * sizeof(float)));
+               NULL, (uint8_t *)ws + TRN_ALIGN_UP((size_t)ps.swh * (size_t)w * sizeof(float)));
     gplane = (size_t)pg->nx * (size_t)pg->ny;
     lplane = (size_t)w * (size_t)h;
     for (z = 0; z < pg->nz; ++z) {

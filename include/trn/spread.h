@@ -126,6 +126,34 @@ trn_status_t trn_prob_global_map(const trn_kernels_t *k, const trn_sigma_model_t
                                  const trn_xy_t *sensors, size_t n_sensors, const trn_map_t *map,
                                  trn_vol_f32_t *pg, void *ws, size_t ws_bytes);
 
+/**
+ * @brief Eq. 8 for a prepared global map with a per-cell error raster (a DTM's
+ * error map, e.g. HiRISE's): as trn_prob_global_map, but each source cell
+ * whose sigma_m value is not NaN spreads with that error (metres, converted to
+ * cells and mapped to the nearest kernel in log-sigma exactly as the model's
+ * sigma is); NaN cells take the model's sigma from the nearest sensing
+ * position. The x pass uses the source cell's kernel, the y pass the
+ * intermediate cell's, as for the model.
+ * @param[in]  k, m, sensors, n_sensors, ws, ws_bytes  as trn_prob_global.
+ * @param[in]  sigma_m  error raster, metres, map->dist.nx x map->dist.ny
+ *                      (any stride); each cell NaN or finite >= 0.
+ * @param[in]  map      prepared global map.
+ * @param[out] pg       map->dist sized.
+ * @retval TRN_OK
+ * @retval TRN_E_NULL  k, m, sensors, sigma_m (or its data), map, pg, pg->data or ws NULL
+ * @retval TRN_E_ARG   model, cell or sensor as trn_prob_global; a raster cell
+ *                     negative or infinite
+ * @retval TRN_E_SIZE  raster not the map's size or a bad view (stride < width);
+ *                     pg not map->dist sized; sensor count 0 or above
+ *                     TRN_SPREAD_MAX_SENSORS
+ * @retval TRN_E_WORKSPACE ws_bytes below trn_prob_global_workspace_bytes or ws
+ *                     not 16-byte aligned
+ */
+trn_status_t trn_prob_global_raster(const trn_kernels_t *k, const trn_sigma_model_t *m,
+                                    const trn_xy_t *sensors, size_t n_sensors,
+                                    const trn_grid_f32_t *sigma_m, const trn_map_t *map,
+                                    trn_vol_f32_t *pg, void *ws, size_t ws_bytes);
+
 /** @brief Workspace bytes of trn_prob_local for roi (0 if invalid): kernel
  * map and one intermediate slice over roi plus the largest kernel radius.
  * @param[in] k built kernels; @param[in] roi the region (any position). */

@@ -293,6 +293,76 @@ expect_error(1, "at least 3 cells", "field", "--dem", g_tif, *O, "--patch-m", "0
 expect_error(1, "--out: cannot create", "field", "--dem", g_tif, "--out", p("no/dir/f.tif"), *FCFG)
 expect_error(2, "missing required option '--out'", "field", "--dem", g_tif)
 
+
+# ---- the map configuration and the global map's error (issue 12, items 2 and 6) --------
+R2 = ["--rover", f"{rover[0]},{rover[1]}", *SMALL, "--json"]
+base = run_json("select", "--dem", g_tif, *R2)
+check(base.get("map_config_name") == "paper" and abs(base.get("map_config", {}).get("zbin_m", 0) - CELL) < 1e-6
+      and base["map_config"].get("nz") == 16, f"select defaults to the paper's map configuration: {base.get('map_config')}")
+ge = base.get("global_error", {})
+check(abs(ge.get("sigma_m", 0) - 0.02) < 1e-7 and abs(ge.get("k_per_m", 0) - 0.001) < 1e-7 and ge.get("raster", 1) is None,
+      f"select: the default global error model 0.02 m + 0.001/m r^2, no raster: {ge}")
+au = run_json("select", "--dem", g_tif, *R2, "--map-config", "auto")
+check(au.get("map_config_name") == "auto" and au.get("map_config", {}).get("zbin_m", 1) < CELL and
+      au.get("sigma_h_m") is not None and au.get("uncertainty_m", 0) > 0, f"--map-config auto: {au.get('map_config')}")
+zb = run_json("select", "--dem", g_tif, *R2, "--zbin-m", "0.05", "--nz", "24")
+check(abs(zb.get("map_config", {}).get("zbin_m", 0) - 0.05) < 1e-7 and zb["map_config"].get("nz") == 24,
+      "--zbin-m / --nz override the configuration")
+# the error model: a larger global error predicts a larger uncertainty
+big = run_json("select", "--dem", g_tif, *R2, "--global-sigma-m", "0.3", "--global-sigma-k", "0")
+check(big.get("uncertainty_m", 0) > base.get("uncertainty_m", 1) and
+      abs(big["global_error"]["sigma_m"] - 0.3) < 1e-7 and big["global_error"]["k_per_m"] == 0,
+      f"--global-sigma-m 0.3: uncertainty {big.get('uncertainty_m')} > {base.get('uncertainty_m')}")
+# the raster: all no-data = the model; a constant 0.3 m = the constant model; on the DEM's grid only
+write_raster(p("err_nan.tif"), np.full((N, N), np.nan), GT)
+write_raster(p("err_nodata.tif"), np.full((N, N), -9999.0), GT, nodata=-9999.0)
+write_raster(p("err_03.tif"), np.full((N, N), 0.3), GT)
+for f in ("err_nan.tif", "err_nodata.tif"):
+    r = run_json("select", "--dem", g_tif, *R2, "--global-error", p(f))
+    check(r.get("uncertainty_m") == base.get("uncertainty_m") and r.get("target") == base.get("target") and
+          r.get("global_error", {}).get("raster") == p(f), f"--global-error {f} (no data anywhere) = the model")
+r = run_json("select", "--dem", g_tif, *R2, "--global-error", p("err_03.tif"))
+check(r.get("uncertainty_m") == big.get("uncertainty_m") and r.get("target") == big.get("target"),
+      f"--global-error 0.3 m everywhere = --global-sigma-m 0.3 --global-sigma-k 0 ({r.get('uncertainty_m')}, "
+      f"{big.get('uncertainty_m')})")
+half = np.full((N, N), np.nan)
+half[:, : N // 2] = 0.3
+write_raster(p("err_half.tif"), half, GT)
+r = run_json("select", "--dem", g_tif, *R2, "--global-error", p("err_half.tif"))
+check(r.get("uncertainty_m") is not None, "--global-error partly no-data runs")
+rc, out, err = run("select", "--dem", g_tif, "--rover", f"{rover[0]},{rover[1]}", *SMALL, "--map-config", "auto",
+                   "--global-sigma-m", "0.05")
+check(rc == 0 and "map          auto: bin" in out and "global error 0.05 m + 0.001/m r^2" in out,
+      f"the summary names the map configuration and the global error: {out!r}")
+write_raster(p("err_small.tif"), np.full((N - 1, N), 0.1), GT)
+write_raster(p("err_shift.tif"), np.full((N, N), 0.1), (X0 + 1.0, CELL, 0.0, Y0 + N * CELL, 0.0, -CELL))
+neg = np.full((N, N), 0.1)
+neg[3, 7] = -0.5
+write_raster(p("err_neg.tif"), neg, GT)
+huge = np.full((N, N), 0.1)
+huge[4, 2] = 2e6  # (non-finite cells are no-data to dem_read: the model)
+write_raster(p("err_huge.tif"), huge, GT)
+R = ["--rover", f"{rover[0]},{rover[1]}"]
+expect_error(1, "--global-error: cannot read", "select", "--dem", g_tif, *R, "--global-error", p("missing.tif"))
+expect_error(1, "must be on the DEM's grid", "select", "--dem", g_tif, *R, "--global-error", p("err_small.tif"))
+expect_error(1, "geotransform differs", "select", "--dem", g_tif, *R, "--global-error", p("err_shift.tif"))
+expect_error(1, "cell (column 7, row 3) is -0.5 m", "select", "--dem", g_tif, *R, "--global-error", p("err_neg.tif"))
+expect_error(1, "cell (column 2, row 4) is 2e+06 m", "select", "--dem", g_tif, *R, "--global-error", p("err_huge.tif"))
+expect_error(1, "--global-sigma-m: -1 is out of range", "select", "--dem", g_tif, *R, "--global-sigma-m", "-1")
+expect_error(1, "--global-sigma-k: 'x' is not a finite number", "select", "--dem", g_tif, *R, "--global-sigma-k", "x")
+expect_error(1, "--map-config must be auto or paper, not 'best'", "select", "--dem", g_tif, *R, "--map-config", "best")
+expect_error(1, "--nz: 0 is out of range", "select", "--dem", g_tif, *R, "--nz", "0")
+expect_error(1, "--map-config must be auto or paper", "field", "--dem", g_tif, "--out", p("x.tif"), "--map-config", "x")
+expect_error(1, "must be on the DEM's grid", "field", "--dem", g_tif, "--out", p("x.tif"), "--global-error",
+             p("err_small.tif"))
+FA = ["--area-m", f"{X0 + 4.0},{Y0 + 4.0},{X0 + 5.0},{Y0 + 5.0}", *SMALL, "--coarse-step-cells", "4", "--json"]
+f1 = run_json("field", "--dem", g_tif, "--out", p("fa.tif"), *FA)
+f2 = run_json("field", "--dem", g_tif, "--out", p("fb.tif"), *FA, "--global-error", p("err_nan.tif"))
+f3 = run_json("field", "--dem", g_tif, "--out", p("fc.tif"), *FA, "--map-config", "auto", "--global-sigma-m", "0.1")
+check(f1.get("map_config_name") == "paper" and f1.get("best") == f2.get("best") and
+      f3.get("map_config_name") == "auto" and abs(f3.get("global_error", {}).get("sigma_m", 0) - 0.1) < 1e-7,
+      f"field: map configuration and global error options ({f1.get('best')}, {f2.get('best')}, {f3.get('map_config')})")
+
 # ---- figures (tools/plot/trn_plot.py) ----------------------------------------------------
 try:
     import matplotlib  # noqa: F401

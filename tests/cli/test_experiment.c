@@ -19,6 +19,7 @@
 #include <cmocka.h>
 
 #include "experiment.h"
+#include "terrain_gen.h"
 
 #define PI 3.14159265358979323846
 #define Z EXP_Z95
@@ -310,7 +311,123 @@ static void test_params_check(void **state) {
   assert_null(exp_params_check(&p));
   p.height_noise_m = -0.01;
   assert_non_null(exp_params_check(&p));
+  /* a given DEM: its own size and cell limits; an error raster needs one */
+  {
+    static float d[16 * 16];
+    exp_params_default(&p);
+    p.global_error = d;
+    assert_non_null(exp_params_check(&p)); /* raster without a DEM */
+    p.dem = d;
+    p.dem_width = 16;
+    p.dem_height = 16;
+    assert_null(exp_params_check(&p));
+    p.dem_height = 15;
+    assert_non_null(exp_params_check(&p));
+    p.dem_height = 1025;
+    assert_non_null(exp_params_check(&p));
+    p.dem_height = 16;
+    p.cell_m = 50.0; /* 83 m DEMs exist; lengths then in cells */
+    p.window_m = 100.0;
+    p.prior_error_m = 50.0;
+    p.grid_spacing_m = 100.0;
+    assert_null(exp_params_check(&p));
+    p.window_m = 200.0 * 50.0 + 1.0;
+    assert_non_null(exp_params_check(&p));
+    p.window_m = 100.0;
+    p.cell_m = 101.0;
+    assert_non_null(exp_params_check(&p));
+    p.cell_m = 50.0;
+    p.patch_m = NAN;
+    assert_non_null(exp_params_check(&p));
+    p.dem = NULL;
+    p.global_error = NULL;
+    p.patch_m = 0.0;
+    assert_non_null(exp_params_check(&p)); /* 50 m cells: generated terrain only to 10 m */
+  }
 #undef BAD
+}
+
+/* ---- a given DEM ----------------------------------------------------------- */
+/* The generated terrain handed over as a DEM gives the same experiment
+ * (the same trials, the same numbers); the same terrain at 10x the cell and
+ * 10x the heights (the paper's map configuration, every length scaled) gives
+ * the same successes and errors x 10. */
+static void test_run_dem(void **state) {
+  const int n = 128;
+  exp_params_t p;
+  exp_result_t a, b;
+  tg_params_t tp;
+  tg_rock_t *rocks;
+  float *dem = malloc(sizeof(float) * n * n), *big = malloc(sizeof(float) * n * n);
+  size_t nr, i;
+  char err[256];
+  (void)state;
+  exp_params_default(&p);
+  p.size_cells = n;
+  p.trials = 6;
+  assert_int_equal(exp_run(&p, &a, NULL, NULL, err, sizeof err), 0);
+  tg_default(&tp, n, n, 0.1);
+  tp.coverage_k = p.coverage_k;
+  tp.d_max_m = tg_auto_d_max(p.coverage_k);
+  tp.seed = p.terrain_seed;
+  tp.relief_m = p.relief_m;
+  nr = tg_draw_rocks(&tp, NULL, 0);
+  rocks = malloc((nr + 1) * sizeof *rocks);
+  tg_draw_rocks(&tp, rocks, nr);
+  tg_render(&tp, rocks, nr, dem, NULL, NULL);
+  free(rocks);
+  p.dem = dem;
+  p.dem_width = n;
+  p.dem_height = n;
+  assert_int_equal(exp_run(&p, &b, NULL, NULL, err, sizeof err), 0);
+  assert_int_equal(a.draws, b.draws);
+  assert_int_equal(a.with.successes, b.with.successes);
+  assert_int_equal(a.without.successes, b.without.successes);
+  assert_true(a.with.st.mean == b.with.st.mean);
+  assert_true(a.without.st.mean == b.without.st.mean);
+  /* x 10 */
+  for (i = 0; i < (size_t)n * n; ++i) {
+    big[i] = 10.0f * dem[i];
+  }
+  p.dem = big;
+  p.cell_m = 1.0;
+  p.window_m = 20.0;
+  p.prior_error_m = 10.0;
+  p.grid_spacing_m = 20.0;
+  assert_int_equal(exp_run(&p, &b, NULL, NULL, err, sizeof err), 0);
+  assert_int_equal(a.draws, b.draws);
+  assert_int_equal(a.with.successes, b.with.successes);
+  assert_int_equal(a.without.successes, b.without.successes);
+  assert_true(fabs(b.with.st.mean - 10.0 * a.with.st.mean) <= 1e-4 * b.with.st.mean);
+  assert_true(fabs(b.without.st.mean - 10.0 * a.without.st.mean) <= 1e-4 * b.without.st.mean);
+  assert_true(fabs((double)b.scfg.max_range_m - 100.0) < 1e-3);
+  /* no data: a NaN block; the run still works, and a DEM all no-data but
+   * for too small an island has no trial (a reason, not a hang) */
+  for (i = 0; i < (size_t)n * n; ++i) {
+    if (i / n >= 10 && i / n < 30 && i % n >= 90 && i % n < 110) {
+      big[i] = NAN;
+    }
+  }
+  if (exp_run(&p, &b, NULL, NULL, err, sizeof err) != 0) {
+    fail_msg("NaN block: %s", err);
+  }
+  for (i = 0; i < (size_t)n * n; ++i) {
+    if (i / n >= 60 && i / n < 68) {
+      big[i] = NAN; /* a band: no room for the nine patches above or below it */
+    }
+  }
+  assert_int_equal(exp_run(&p, &b, NULL, NULL, err, sizeof err), -1);
+  assert_non_null(strstr(err, "nine fixed targets"));
+  for (i = 0; i < (size_t)n * n; ++i) {
+    big[i] = 10.0f * dem[i];
+  }
+  /* too small for nine patches 20 cells apart */
+  p.dem_width = 60;
+  p.dem_height = 60;
+  assert_int_equal(exp_run(&p, &b, NULL, NULL, err, sizeof err), -1);
+  assert_non_null(strstr(err, "too small"));
+  free(dem);
+  free(big);
 }
 
 /* ---- end to end (tiny) ----------------------------------------------------- */
@@ -369,6 +486,7 @@ int main(void) {
       cmocka_unit_test(test_rng_streams_differ),
       cmocka_unit_test(test_params_check),
       cmocka_unit_test(test_run_small),
+      cmocka_unit_test(test_run_dem),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -121,6 +121,82 @@ expect_error(1, "--height-noise-m", "--sensor", "dem", "--height-noise-m", 2)
 expect_error(2, "unknown option", "--bogus")
 expect_error(2, "--trials", "--trials")
 
+
+# ---- --dem: the experiment on a given DEM (issue 12, item 7) ----------------------------
+# The generated terrain written by `trn terrain` and handed back as --dem with the
+# paper's configuration gives the same trials and numbers as the generated run.
+dem128 = os.path.join(WORK, "t128.tif")
+p_ = subprocess.run([TRN, "terrain", "--out", dem128, "--size-cells", "128", "--seed", "5", "--crs", "EPSG:32615"],
+                    capture_output=True, text=True, timeout=120)
+rc, err = p_.returncode, p_.stderr
+check(rc == 0, f"trn terrain for --dem: {err}")
+rc, outd, errd = run("--dem", dem128, "--trials", 6, "--seed", 5, "--map-config", "paper", "--json")
+check(rc == 0, f"--dem run: {rc} {errd.strip()}")
+if rc == 0:
+    d = json.loads(outd)
+    check(d["terrain"].get("dem") == dem128 and d["terrain"].get("width") == 128 and d["terrain"].get("scale") == 1,
+          f"--dem: terrain block {d['terrain']}")
+    for arm in ("with_selection", "without_selection"):
+        check(d[arm] == r[arm], f"--dem of the generated terrain, paper configuration: {arm} differs from the generated run")
+    check(d.get("map_config_name") == "paper" and d["parameters"].get("max_range_m") == 10, "paper config, 10 m reach")
+rc, outa, erra = run("--dem", dem128, "--trials", 6, "--seed", 5, "--json")
+check(rc == 0 and json.loads(outa).get("map_config_name") == "auto", f"--dem defaults to --map-config auto: {erra.strip()}")
+# 10x the cell: every length scales by 10 (the same experiment in cells)
+try:
+    from osgeo import gdal
+    gdal.UseExceptions()
+    ds = gdal.Open(dem128)
+    arr = ds.GetRasterBand(1).ReadAsArray()
+    srs = ds.GetProjection()
+    ds = None
+    big = os.path.join(WORK, "t128x10.tif")
+    clitest.write_raster(big, arr * 10.0, (0.0, 1.0, 0.0, 128.0, 0.0, -1.0), srs=srs)
+    rc, outb, errb = run("--dem", big, "--trials", 6, "--seed", 5, "--map-config", "paper", "--json")
+    check(rc == 0, f"--dem at 1 m: {errb.strip()}")
+    if rc == 0:
+        b = json.loads(outb)
+        pb = b["parameters"]
+        check(b["terrain"]["scale"] == 10 and pb["window_m"] == 20 and pb["prior_error_m"] == 10 and
+              pb["grid_spacing_m"] == 20 and abs(pb["max_range_m"] - 100) < 1e-4 and abs(pb["patch_m"] - 20) < 1e-4 and
+              pb["patch_cells"] == 21, f"--dem at 1 m cells: lengths x 10: {pb}")
+        for arm in ("with_selection", "without_selection"):
+            check(b[arm]["successes"] == r[arm]["successes"] and
+                  abs(b[arm]["mean_error_m"] - 10 * r[arm]["mean_error_m"]) <= 1e-4 * b[arm]["mean_error_m"],
+                  f"{arm}: the same experiment in cells at 10x the cell")
+    # bad DEMs: geographic, too small, too large, all no-data
+    geo = os.path.join(WORK, "geo.tif")
+    clitest.write_raster(geo, arr, (10.0, 1e-5, 0.0, 50.0, 0.0, -1e-5), srs="EPSG:4326")
+    expect_error(1, "--dem:", "--dem", geo, "--trials", 1)
+    small = os.path.join(WORK, "small.tif")
+    clitest.write_raster(small, arr[:50, :50], (0.0, 0.1, 0.0, 5.0, 0.0, -0.1), srs=srs)
+    expect_error(1, "too small for the experiment", "--dem", small, "--trials", 1, "--map-config", "paper")
+    wide = os.path.join(WORK, "wide.tif")
+    import numpy as np
+    clitest.write_raster(wide, np.zeros((20, 1100), dtype=np.float32), (0.0, 0.1, 0.0, 2.0, 0.0, -0.1), srs=srs)
+    expect_error(1, "--dem:", "--dem", wide, "--trials", 1)
+    nod = os.path.join(WORK, "nodata.tif")
+    clitest.write_raster(nod, np.full((128, 128), -9999.0, dtype=np.float32), (0.0, 0.1, 0.0, 12.8, 0.0, -0.1),
+                         nodata=-9999.0, srs=srs)
+    expect_error(1, "--dem:", "--dem", nod, "--trials", 1)
+    errr = os.path.join(WORK, "err_small.tif")
+    clitest.write_raster(errr, np.full((64, 64), 0.1, dtype=np.float32), (0.0, 0.1, 0.0, 6.4, 0.0, -0.1), srs=srs)
+    expect_error(1, "must be on the DEM's grid", "--dem", dem128, "--trials", 1, "--global-error", errr)
+    errok = os.path.join(WORK, "err_nan.tif")
+    clitest.write_raster(errok, np.full((128, 128), np.nan, dtype=np.float32), (0.0, 0.1, 0.0, 12.8, 0.0, -0.1),
+                         srs=srs)
+    rc, oute, erre = run("--dem", dem128, "--trials", 6, "--seed", 5, "--map-config", "paper", "--global-error", errok,
+                         "--json")
+    check(rc == 0 and json.loads(oute)["with_selection"] == r["with_selection"],
+          f"--global-error all no-data = the model: {erre.strip()}")
+    rc, outg, errg = run("--dem", dem128, "--trials", 6, "--seed", 5, "--map-config", "paper", "--global-sigma-m", 0.2,
+                         "--global-sigma-k", 0, "--json")
+    check(rc == 0 and abs(json.loads(outg)["global_error"]["sigma_m"] - 0.2) < 1e-7, "--global-sigma-m in experiment")
+except ImportError:
+    print("note: GDAL's Python bindings missing, the scaled and bad --dem cases are not checked")
+expect_error(1, "--dem: cannot read", "--dem", os.path.join(WORK, "missing.tif"), "--trials", 1)
+expect_error(2, "--coverage shapes the generated terrain", "--dem", dem128, "--coverage", 0.2)
+expect_error(2, "--global-error needs --dem", "--global-error", dem128)
+expect_error(1, "--map-config must be auto or paper", "--trials", 1, "--size-cells", 128, "--map-config", "x")
 # ---- the figure -------------------------------------------------------------------------
 try:
     import matplotlib  # noqa: F401

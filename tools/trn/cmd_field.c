@@ -110,7 +110,8 @@ int trn_cmd_field(int argc, char **argv) {
                    "the whole area); positions between evaluated ones are interpolated bilinearly (the number\n"
                    "of evaluations is reported). Output: float32 GeoTIFF on the DEM's grid, metres; +inf where\n"
                    "no target is informative, no-data (NaN) outside --area-m. --evaluated-out writes 1 where\n"
-                   "the value was computed, 0 where interpolated.",
+                   "the value was computed, 0 where interpolated. Map configuration and the global map's error\n"
+                   "as `trn select` (default --map-config " SELMAP_MAP_CONFIG_DEFAULT ").",
                    opts, 0};
   selmap_t w;
   int rc, i;
@@ -317,6 +318,7 @@ int trn_cmd_field(int argc, char **argv) {
     json_int(&j, "coarse_step_cells", coarse);
     json_int(&j, "stride_cells", so.stride_cells);
     json_num(&j, "seconds", secs);
+    selmap_json_config(&j, &so, &w.cfg, w.sigma_h);
     json_end(&j);
   } else {
     printf("wrote %s: field over %zu x %zu rover positions of %g m\n", out, aw, ah, w.dem.cell_m);
@@ -328,6 +330,7 @@ int trn_cmd_field(int argc, char **argv) {
     } else {
       printf("best         none: no position has an informative target\n");
     }
+    selmap_print_config(&so, &w.cfg);
   }
   rc = 0;
 

@@ -52,7 +52,10 @@ int trn_cmd_select(int argc, char **argv) {
                    "(east), sigma_y_m (north), rho (east-north), uncertainty_m = sqrt(sx^2 + sy^2), and the next\n"
                    "best targets. --out-map: float32 GeoTIFF on the DEM's grid, each candidate's uncertainty (m)\n"
                    "at its centre cell, +inf where its fit is ill-conditioned, no-data (NaN) elsewhere.\n"
-                   "Exit 3 (\"no informative target\") when no candidate is informative or none is in reach.",
+                   "Exit 3 (\"no informative target\") when no candidate is informative or none is in reach.\n"
+                   "The map configuration defaults to --map-config " SELMAP_MAP_CONFIG_DEFAULT "; the global map's\n"
+                   "error is eq. 8's S0 + K r^2 (--global-sigma-m, --global-sigma-k) or a per-cell raster\n"
+                   "(--global-error, the model where it has no data).",
                    opts, 0};
   selmap_t w;
   int rc, rcol, rrow;
@@ -197,6 +200,7 @@ int trn_cmd_select(int argc, char **argv) {
       if (out_map != NULL) {
         json_str(&j, "out_map", out_map);
       }
+      selmap_json_config(&j, &so, &w.cfg, w.sigma_h);
       json_end(&j);
     } else {
       printf("rover        x = %.3f m   y = %.3f m   heading %g deg\n", rover_m[0], rover_m[1], so.heading_deg);
@@ -213,6 +217,7 @@ int trn_cmd_select(int argc, char **argv) {
       }
       printf("candidates   %zu, %zu informative, patch %d x %d cells (%.2f m)\n", res.n_candidates,
              res.n_informative, res.patch_cells, res.patch_cells, res.patch_cells * w.dem.cell_m);
+      selmap_print_config(&so, &w.cfg);
       if (out_map != NULL) {
         printf("wrote %s\n", out_map);
       }

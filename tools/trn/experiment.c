@@ -228,18 +228,29 @@ void exp_params_default(exp_params_t *p) {
   p->prior_error_m = 1.0;
   p->grid_spacing_m = 2.0;
   p->success_cells = 2.0;
+  p->footprint_m = -1.0;
+  p->global_sigma_m = -1.0;
+  p->global_sigma_k = -1.0;
 }
 
 const char *exp_params_check(const exp_params_t *p) {
+  double c;
   if (p->trials < 1 || p->trials > 1000000) {
     return "trials must be in 1..1000000";
   }
-  if (p->size_cells < 64 || p->size_cells > 1024) { /* 1024: the eq. 8 map is 64 MiB */
+  if (p->dem == NULL && (p->size_cells < 64 || p->size_cells > 1024)) { /* 1024: the eq. 8 map is 64 MiB */
     return "map side must be 64..1024 cells";
   }
-  if (!(p->cell_m > 0.0 && p->cell_m <= 10.0)) {
-    return "cell size must be in (0, 10] m";
+  if (p->dem != NULL && (p->dem_width < 16 || p->dem_height < 16 || p->dem_width > 1024 || p->dem_height > 1024)) {
+    return "the DEM must be 16..1024 cells a side (cut a larger one, e.g. gdal_translate -srcwin)";
   }
+  if (!(p->cell_m > 0.0 && p->cell_m <= (p->dem != NULL ? 100.0 : 10.0))) {
+    return p->dem != NULL ? "cell size must be in (0, 100] m" : "cell size must be in (0, 10] m";
+  }
+  if (p->global_error != NULL && p->dem == NULL) {
+    return "an error raster needs a given DEM";
+  }
+  c = p->cell_m;
   if (!(p->coverage_k >= 0.01 && p->coverage_k <= 0.5)) {
     return "rock coverage k must be in [0.01, 0.5]";
   }
@@ -249,17 +260,22 @@ const char *exp_params_check(const exp_params_t *p) {
   if (!(p->relief_m >= 0.0 && p->relief_m <= 10.0)) {
     return "background relief must be in [0, 10] m";
   }
-  if (!(p->prior_error_m >= 0.0 && p->prior_error_m <= 10.0)) {
-    return "prior error must be in [0, 10] m";
+  /* Window, prior and grid in cells (at 0.1 m: 20, 10, 10 m as before). */
+  if (!(p->prior_error_m >= 0.0 && p->prior_error_m <= 100.0 * c + 1e-9)) {
+    return "prior error must be in [0, 100 cells]";
   }
-  if (!(p->window_m >= p->cell_m && p->window_m <= 20.0)) {
-    return "window half-width must be in [one cell, 20 m]";
+  if (!(p->window_m >= c - 1e-9 && p->window_m <= 200.0 * c + 1e-9)) {
+    return "window half-width must be in [one cell, 200 cells]";
   }
   if (p->window_m < p->prior_error_m) {
     return "window half-width is below the prior error: the truth could lie outside the window";
   }
-  if (!(p->grid_spacing_m >= 0.0 && p->grid_spacing_m <= 10.0)) {
-    return "grid spacing must be in [0, 10] m";
+  if (!(p->grid_spacing_m >= 0.0 && p->grid_spacing_m <= 100.0 * c + 1e-9)) {
+    return "grid spacing must be in [0, 100 cells]";
+  }
+  if (!(p->min_range_m >= 0.0 && p->max_range_m >= 0.0 && p->patch_m >= 0.0 && p->footprint_m >= -1.0 &&
+        isfinite(p->min_range_m + p->max_range_m + p->patch_m + p->footprint_m))) {
+    return "ranges, patch and footprint must be finite and >= 0";
   }
   if (p->sensor != EXP_SENSOR_PROB && p->sensor != EXP_SENSOR_DEM) {
     return "sensor must be prob or dem";
@@ -288,7 +304,8 @@ static void *alloc16(size_t n, void **raw) {
 
 typedef struct {
   const exp_params_t *p;
-  int n;            /* map side */
+  int nx, ny;       /* map size, cells */
+  int has_nodata;   /* a given DEM with NaN cells */
   float cellf;
   trn_map_t map;
   trn_kernels_t k;
@@ -304,7 +321,7 @@ typedef struct {
   trn_point_t *pts;
   size_t pts_cap;
   /* EXP_SENSOR_DEM */
-  float *dem;       /* the true terrain, n x n */
+  float *dem;       /* the true terrain, nx x ny (a copy; NaN = no data) */
   float *ldem, *lhp; /* local DEM and its high-pass, (patch + 2 hp) squared */
   void *hws;
   size_t hws_b;
@@ -316,7 +333,7 @@ typedef struct {
  * The same rules as select.c's candidate_ok with full pan. */
 static int target_ok(const world_t *w, int tx, int ty, int px, int py) {
   double dx = tx - px, dy = ty - py, r = sqrt(dx * dx + dy * dy) * w->cellf, hx = w->half + 0.5, ex, ey;
-  if (tx - w->half - 1 < 0 || ty - w->half - 1 < 0 || tx + w->half + 1 > w->n - 1 || ty + w->half + 1 > w->n - 1) {
+  if (tx - w->half - 1 < 0 || ty - w->half - 1 < 0 || tx + w->half + 1 > w->nx - 1 || ty + w->half + 1 > w->ny - 1) {
     return 0;
   }
   if (r < (double)w->scfg.min_range_m || r > (double)w->scfg.max_range_m) {
@@ -330,7 +347,22 @@ static int target_ok(const world_t *w, int tx, int ty, int px, int py) {
 }
 
 static int patch_inside(const world_t *w, int cx, int cy) {
-  return cx - w->half >= 0 && cy - w->half >= 0 && cx + w->half <= w->n - 1 && cy + w->half <= w->n - 1;
+  int x, y;
+  if (!(cx - w->half >= 0 && cy - w->half >= 0 && cx + w->half <= w->nx - 1 && cy + w->half <= w->ny - 1)) {
+    return 0;
+  }
+  if (!w->has_nodata) {
+    return 1;
+  }
+  /* A given DEM with no-data: the sensed patch must be terrain the map knows. */
+  for (y = cy - w->half; y <= cy + w->half; ++y) {
+    for (x = cx - w->half; x <= cx + w->half; ++x) {
+      if (!isfinite(w->dem[(size_t)y * (size_t)w->nx + (size_t)x])) {
+        return 0;
+      }
+    }
+  }
+  return 1;
 }
 
 typedef struct {
@@ -358,13 +390,13 @@ static int dem_sensor(world_t *w, const trn_window_t *roi, int fx, int fy, exp_r
   size_t i, m = 0, np = 0;
   x0 = x0 < 0 ? 0 : x0;
   y0 = y0 < 0 ? 0 : y0;
-  x1 = x1 > w->n - 1 ? w->n - 1 : x1;
-  y1 = y1 > w->n - 1 ? w->n - 1 : y1;
+  x1 = x1 > w->nx - 1 ? w->nx - 1 : x1;
+  y1 = y1 > w->ny - 1 ? w->ny - 1 : y1;
   lw = x1 - x0 + 1;
   lh = y1 - y0 + 1;
   for (y = 0; y < lh; ++y) {
     for (x = 0; x < lw; ++x) {
-      double hgt = (double)w->dem[(size_t)(y0 + y) * (size_t)w->n + (size_t)(x0 + x)];
+      double hgt = (double)w->dem[(size_t)(y0 + y) * (size_t)w->nx + (size_t)(x0 + x)];
       if (w->p->height_noise_m > 0.0) {
         hgt += w->p->height_noise_m * rng_normal(r);
       }
@@ -410,8 +442,8 @@ static int sense_and_localize(world_t *w, int cx, int cy, int fx, int fy, int px
   memset(s, 0, sizeof *s);
   roi.x0 = cx - w->half < 0 ? 0 : cx - w->half;
   roi.y0 = cy - w->half < 0 ? 0 : cy - w->half;
-  roi.x1 = cx + w->half > w->n - 1 ? w->n - 1 : cx + w->half;
-  roi.y1 = cy + w->half > w->n - 1 ? w->n - 1 : cy + w->half;
+  roi.x1 = cx + w->half > w->nx - 1 ? w->nx - 1 : cx + w->half;
+  roi.y1 = cy + w->half > w->ny - 1 ? w->ny - 1 : cy + w->half;
   if (roi.x0 > roi.x1 || roi.y0 > roi.y1) {
     s->no_points = 1;
     return 0;
@@ -452,8 +484,8 @@ sensed:
   }
   win.x0 = px - w->win_cells < 0 ? 0 : px - w->win_cells;
   win.y0 = py - w->win_cells < 0 ? 0 : py - w->win_cells;
-  win.x1 = px + w->win_cells > w->n - 1 ? w->n - 1 : px + w->win_cells;
-  win.y1 = py + w->win_cells > w->n - 1 ? w->n - 1 : py + w->win_cells;
+  win.x1 = px + w->win_cells > w->nx - 1 ? w->nx - 1 : px + w->win_cells;
+  win.y1 = py + w->win_cells > w->ny - 1 ? w->ny - 1 : py + w->win_cells;
   need = trn_localize_workspace_bytes(&w->map, &win);
   if (need == 0) {
     snprintf(err, err_len, "internal error: window rejected by trn_localize_workspace_bytes");
@@ -504,11 +536,8 @@ static void tally(exp_arm_t *a, const sense_t *s, double success_m, double cell,
 
 static int build_world(world_t *w, const exp_params_t *p, exp_result_t *out, void **raw, char *err,
                        size_t err_len) {
-  tg_params_t tp;
-  const char *why;
-  tg_rock_t *rocks;
   float *dem;
-  size_t nr, nvox, mb, wb;
+  size_t nvox, mb, wb, i;
   trn_map_cfg_t cfg;
   trn_grid_f32_t g;
   trn_sigma_model_t gm;
@@ -516,56 +545,87 @@ static int build_world(world_t *w, const exp_params_t *p, exp_result_t *out, voi
   trn_window_t pr, lw;
   trn_status_t st;
   void *gws, *graw = NULL, *mbuf;
-  int n = p->size_cells;
+  const double f = p->cell_m / 0.1; /* the paper's 0.1 m cells: ranges scale with the cell */
+  int nx, ny;
 
-  w->n = n;
-  w->cellf = (float)p->cell_m;
-  tg_default(&tp, n, n, p->cell_m);
-  tp.coverage_k = p->coverage_k;
-  tp.d_max_m = tg_auto_d_max(p->coverage_k);
-  tp.seed = p->terrain_seed;
-  tp.relief_m = p->relief_m;
-  if (p->d_min_m > 0.0) {
-    tp.d_min_m = p->d_min_m;
-  }
-  if (tp.d_max_m < tp.d_min_m) {
-    snprintf(err, err_len, "smallest rock diameter %g m is above the largest %g m", tp.d_min_m, tp.d_max_m);
-    return -1;
-  }
-  if ((why = tg_check(&tp)) != NULL) {
-    snprintf(err, err_len, "terrain: %s", why);
-    return -1;
-  }
-  nr = tg_draw_rocks(&tp, NULL, 0);
-  rocks = malloc((nr + 1) * sizeof *rocks);
-  dem = malloc((size_t)n * (size_t)n * sizeof *dem);
-  if (rocks == NULL || dem == NULL) {
+  if (p->dem != NULL) {
+    nx = p->dem_width;
+    ny = p->dem_height;
+    dem = malloc((size_t)nx * (size_t)ny * sizeof *dem);
+    if (dem == NULL) {
+      snprintf(err, err_len, "out of memory for the DEM");
+      return -1;
+    }
+    memcpy(dem, p->dem, (size_t)nx * (size_t)ny * sizeof *dem);
+    for (i = 0; i < (size_t)nx * (size_t)ny; ++i) {
+      w->has_nodata |= !isfinite(dem[i]);
+    }
+  } else {
+    tg_params_t tp;
+    const char *why;
+    tg_rock_t *rocks;
+    size_t nr;
+    nx = ny = p->size_cells;
+    tg_default(&tp, nx, ny, p->cell_m);
+    tp.coverage_k = p->coverage_k;
+    tp.d_max_m = tg_auto_d_max(p->coverage_k);
+    tp.seed = p->terrain_seed;
+    tp.relief_m = p->relief_m;
+    if (p->d_min_m > 0.0) {
+      tp.d_min_m = p->d_min_m;
+    }
+    if (tp.d_max_m < tp.d_min_m) {
+      snprintf(err, err_len, "smallest rock diameter %g m is above the largest %g m", tp.d_min_m, tp.d_max_m);
+      return -1;
+    }
+    if ((why = tg_check(&tp)) != NULL) {
+      snprintf(err, err_len, "terrain: %s", why);
+      return -1;
+    }
+    nr = tg_draw_rocks(&tp, NULL, 0);
+    rocks = malloc((nr + 1) * sizeof *rocks);
+    dem = malloc((size_t)nx * (size_t)ny * sizeof *dem);
+    if (rocks == NULL || dem == NULL) {
+      free(rocks);
+      free(dem);
+      snprintf(err, err_len, "out of memory for the terrain");
+      return -1;
+    }
+    tg_draw_rocks(&tp, rocks, nr);
+    tg_render(&tp, rocks, nr, dem, NULL, NULL);
     free(rocks);
-    free(dem);
-    snprintf(err, err_len, "out of memory for the terrain");
+    out->rocks = nr;
+    out->d_min_m = tp.d_min_m;
+  }
+  w->nx = nx;
+  w->ny = ny;
+  w->dem = dem; /* kept for the DEM sensor and the no-data test; freed by exp_run */
+  w->cellf = (float)p->cell_m;
+
+  /* The map configuration: the caller's, or the paper's scaled to the cell. */
+  if (p->map_cfg != NULL) {
+    if (p->map_cfg(p->map_cfg_ctx, dem, nx, ny, p->cell_m, &cfg, err, err_len) != 0) {
+      return -1;
+    }
+  } else {
+    trn_map_cfg_default(&cfg);
+    cfg.terrain.cell_m = w->cellf;
+    cfg.terrain.zbin_m = w->cellf;
+    cfg.terrain.highpass_half_m = (float)(10.0 * p->cell_m);
+    cfg.sigma_m = w->cellf;
+  }
+  out->map_cfg = cfg;
+  if (trn_grid_f32_init(&g, dem, (size_t)nx * (size_t)ny, nx, ny) != TRN_OK) {
+    snprintf(err, err_len, "map of %d x %d cells rejected by the core", nx, ny);
     return -1;
   }
-  tg_draw_rocks(&tp, rocks, nr);
-  tg_render(&tp, rocks, nr, dem, NULL, NULL);
-  free(rocks);
-  out->rocks = nr;
-  out->d_min_m = tp.d_min_m;
-
-  trn_map_cfg_default(&cfg);
-  cfg.terrain.cell_m = w->cellf;
-  cfg.terrain.zbin_m = w->cellf;
-  cfg.terrain.highpass_half_m = (float)(10.0 * p->cell_m);
-  cfg.sigma_m = w->cellf;
-  trn_grid_f32_init(&g, dem, (size_t)n * (size_t)n, n, n);
-  mb = trn_map_bytes(&cfg, n, n);
+  mb = trn_map_bytes(&cfg, nx, ny);
   mbuf = mb > 0 ? alloc16(mb, &raw[0]) : NULL;
   if (mbuf == NULL) {
-    free(dem);
     snprintf(err, err_len, "cannot allocate %zu bytes for the prepared map", mb);
     return -1;
   }
   st = trn_map_build(&w->map, &cfg, &g, mbuf, mb);
-  w->dem = dem; /* kept for the DEM sensor; freed by exp_run */
   w->tcfg = cfg.terrain;
   if (st != TRN_OK) {
     snprintf(err, err_len, "trn_map_build: %s", trn_strerror(st));
@@ -575,13 +635,15 @@ static int build_world(world_t *w, const exp_params_t *p, exp_result_t *out, voi
     snprintf(err, err_len, "trn_kernels_build: %s", trn_strerror(st));
     return -1;
   }
-  /* Eq. 8: one sensing position of the global map, at the map's centre. */
-  nvox = (size_t)n * (size_t)n * (size_t)w->map.dist.nz;
+  /* Eq. 8: one sensing position of the global map, at the map's centre;
+   * the error model's constant scales with the cell, its r^2 term inversely
+   * (the same sigma in cells at the same range in cells as at 0.1 m). */
+  nvox = (size_t)nx * (size_t)ny * (size_t)w->map.dist.nz;
   w->pg.data = alloc16(nvox * sizeof(float), &raw[1]);
-  w->pg.nx = n;
-  w->pg.ny = n;
+  w->pg.nx = nx;
+  w->pg.ny = ny;
   w->pg.nz = w->map.dist.nz;
-  wb = trn_prob_global_workspace_bytes(n, n);
+  wb = trn_prob_global_workspace_bytes(nx, ny);
   gws = alloc16(wb, &graw);
   if (w->pg.data == NULL || gws == NULL) {
     free(graw);
@@ -589,16 +651,44 @@ static int build_world(world_t *w, const exp_params_t *p, exp_result_t *out, voi
     return -1;
   }
   trn_sigma_global_default(&gm);
-  centre.x_cells = (float)(n / 2);
-  centre.y_cells = (float)(n / 2);
-  st = trn_prob_global_map(&w->k, &gm, &centre, 1, &w->map, &w->pg, gws, wb);
+  gm.sigma_min_m = (float)(p->global_sigma_m >= 0.0 ? p->global_sigma_m : (double)gm.sigma_min_m * f);
+  gm.k_per_m = (float)(p->global_sigma_k >= 0.0 ? p->global_sigma_k : (double)gm.k_per_m / f);
+  out->global_sigma = gm;
+  centre.x_cells = (float)(nx / 2);
+  centre.y_cells = (float)(ny / 2);
+  if (p->global_error != NULL) {
+    trn_grid_f32_t eg;
+    st = trn_grid_f32_init(&eg, (float *)p->global_error, (size_t)nx * (size_t)ny, nx, ny);
+    if (st == TRN_OK) {
+      st = trn_prob_global_raster(&w->k, &gm, &centre, 1, &eg, &w->map, &w->pg, gws, wb);
+    }
+  } else {
+    st = trn_prob_global_map(&w->k, &gm, &centre, 1, &w->map, &w->pg, gws, wb);
+  }
   free(graw);
   if (st != TRN_OK) {
-    snprintf(err, err_len, "trn_prob_global_map: %s", trn_strerror(st));
+    snprintf(err, err_len, "probability map (eq. 8): %s", trn_strerror(st));
     return -1;
   }
 
   trn_select_cfg_default(&w->scfg);
+  w->scfg.min_range_m = (float)(p->min_range_m > 0.0 ? p->min_range_m : (double)w->scfg.min_range_m * f);
+  w->scfg.max_range_m = (float)(p->max_range_m > 0.0 ? p->max_range_m : (double)w->scfg.max_range_m * f);
+  w->scfg.patch_m = (float)(p->patch_m > 0.0 ? p->patch_m : (double)w->scfg.patch_m * f);
+  w->scfg.footprint_radius_m =
+      (float)(p->footprint_m >= 0.0 ? p->footprint_m : (double)w->scfg.footprint_radius_m * f);
+  w->scfg.min_separation_m = (float)((double)w->scfg.min_separation_m * f);
+  w->scfg.local_sigma.sigma_min_m = (float)((double)w->scfg.local_sigma.sigma_min_m * f);
+  w->scfg.local_sigma.k_per_m = (float)((double)w->scfg.local_sigma.k_per_m / f);
+  out->scfg = w->scfg;
+  if ((st = trn_select_cfg_check(&w->scfg, w->cellf)) != TRN_OK) {
+    snprintf(err, err_len, "selection rules rejected for %g m cells (range %g..%g m, patch %g m, footprint %g m): %s "
+             "(trn_select takes ranges and patches up to 1000 m, footprints up to 100 m, patches of 3+ cells: "
+             "give --max-range-m, --patch-m, --footprint-m)",
+             p->cell_m, (double)w->scfg.min_range_m, (double)w->scfg.max_range_m, (double)w->scfg.patch_m,
+             (double)w->scfg.footprint_radius_m, trn_strerror(st));
+    return -1;
+  }
   {
     int pc = (int)floor((double)w->scfg.patch_m / (double)w->cellf + 0.5);
     pc = pc % 2 == 0 ? pc + 1 : pc;
@@ -617,7 +707,8 @@ static int build_world(world_t *w, const exp_params_t *p, exp_result_t *out, voi
   w->pws = alloc16(w->pws_b, &raw[3]);
   /* Sized for the largest window; grown per call if a window needs more. */
   lw.x0 = lw.y0 = 0;
-  lw.x1 = lw.y1 = 2 * w->win_cells < n - 1 ? 2 * w->win_cells : n - 1;
+  lw.x1 = 2 * w->win_cells < nx - 1 ? 2 * w->win_cells : nx - 1;
+  lw.y1 = 2 * w->win_cells < ny - 1 ? 2 * w->win_cells : ny - 1;
   w->lws_b = trn_localize_workspace_bytes(&w->map, &lw);
   w->lws = alloc16(w->lws_b, &w->lws_raw);
   w->pvol = alloc16((size_t)(2 * w->half + 1) * (size_t)(2 * w->half + 1) * (size_t)w->pg.nz * sizeof(float),
@@ -642,6 +733,15 @@ static int build_world(world_t *w, const exp_params_t *p, exp_result_t *out, voi
     w->pts = malloc(w->pts_cap * sizeof *w->pts);
     if (w->ldem == NULL || w->lhp == NULL || w->hws == NULL || w->pts == NULL) {
       snprintf(err, err_len, "out of memory for the DEM sensor");
+      return -1;
+    }
+  }
+  {
+    const int need = 2 * w->grid_cells + 2 * w->half + 3;
+    if (nx < need || ny < need) {
+      snprintf(err, err_len, "the map (%d x %d cells) is too small for the experiment: nine %d-cell patches %d cells "
+               "apart need at least %d x %d cells (a larger DEM, or smaller --grid-spacing-m / --patch-m)",
+               nx, ny, 2 * w->half + 1, w->grid_cells, need, need);
       return -1;
     }
   }
@@ -702,15 +802,16 @@ int exp_run(const exp_params_t *p, exp_result_t *out, exp_progress_fn progress, 
     for (d = 0; d < EXP_MAX_DRAWS && !accepted; ++d) {
       int gx, gy;
       out->draws++;
-      sx = (int)exp_rng_range(&r, 0, w.n - 1);
-      sy = (int)exp_rng_range(&r, 0, w.n - 1);
-      fx = (int)exp_rng_range(&r, 0, w.n - 1);
-      fy = (int)exp_rng_range(&r, 0, w.n - 1);
+      sx = (int)exp_rng_range(&r, 0, w.nx - 1);
+      sy = (int)exp_rng_range(&r, 0, w.ny - 1);
+      fx = (int)exp_rng_range(&r, 0, w.nx - 1);
+      fy = (int)exp_rng_range(&r, 0, w.ny - 1);
       ox = (int)exp_rng_range(&r, -w.prior_cells, w.prior_cells);
       oy = (int)exp_rng_range(&r, -w.prior_cells, w.prior_cells);
       px = fx + ox;
       py = fy + oy;
-      if (px < 0 || py < 0 || px > w.n - 1 || py > w.n - 1) {
+      if (px < 0 || py < 0 || px > w.nx - 1 || py > w.ny - 1 ||
+          (w.has_nodata && !isfinite(w.dem[(size_t)fy * (size_t)w.nx + (size_t)fx]))) {
         continue;
       }
       mx = (sx + px) / 2;
@@ -725,7 +826,8 @@ int exp_run(const exp_params_t *p, exp_result_t *out, exp_progress_fn progress, 
     }
     if (!accepted) {
       snprintf(err, err_len, "trial %ld: no start/finish pair with all nine fixed targets in reach after %ld draws "
-                             "(map too small for the sensor's reach?)", t, (long)EXP_MAX_DRAWS);
+                             "(map too small for the sensor's reach%s?)", t, (long)EXP_MAX_DRAWS,
+               w.has_nodata ? ", or too much of it no-data" : "");
       goto done;
     }
     sum_trav += sqrt((double)(sx - fx) * (sx - fx) + (double)(sy - fy) * (sy - fy)) * p->cell_m;

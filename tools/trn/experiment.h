@@ -104,6 +104,24 @@ typedef struct {
   double success_cells;  /* success radius, cells (2.0) */
   int sensor;            /* EXP_SENSOR_PROB (the paper's) or EXP_SENSOR_DEM (diagnostic) */
   double height_noise_m; /* EXP_SENSOR_DEM: per-cell Gaussian height noise, m (0) */
+  /* A given DEM instead of the generated terrain (NULL: generate). Not
+   * copied into the result; read during exp_run only. width x height cells of
+   * cell_m, north-up rows, NaN = no data (a sensed patch or the finish never
+   * lies on one). */
+  const float *dem;
+  int dem_width, dem_height;
+  /* The map configuration: NULL = the paper's scaled to the cell (bins and s
+   * one cell, high-pass 10 cells); else called once with the DEM. */
+  int (*map_cfg)(void *ctx, const float *dem, int width, int height, double cell_m, trn_map_cfg_t *cfg,
+                 char *err, size_t err_len);
+  void *map_cfg_ctx;
+  /* Ranges in metres; 0 (footprint: < 0) = trn_select_cfg_default's, scaled
+   * by cell_m / 0.1 (the same cells as the paper's 0.1 m: 10-100 cells, a
+   * 21-cell patch, a 5-cell footprint). The local error model (eq. 9) and the
+   * default global one (eq. 8) scale likewise: constant x f, r^2 term / f. */
+  double min_range_m, max_range_m, patch_m, footprint_m;
+  double global_sigma_m, global_sigma_k; /* eq. 8 model; < 0: default (scaled) */
+  const float *global_error; /* per-cell eq. 8 sigma, m, the DEM's grid (NaN: model) or NULL */
 } exp_params_t;
 
 /* Sensor models. PROB: the paper's, voxels sampled from the probability map
@@ -140,6 +158,9 @@ typedef struct {
   double mean_traverse_m;/* |S - F| of the accepted trials */
   int patch_cells, grid_cells, window_cells, prior_cells;
   double success_radius_m;
+  trn_map_cfg_t map_cfg;        /* the map configuration used */
+  trn_sigma_model_t global_sigma; /* eq. 8's model used (raster aside) */
+  trn_select_cfg_t scfg;        /* the selection rules used (ranges in metres) */
 } exp_result_t;
 
 /* Progress callback: trials done of total. */

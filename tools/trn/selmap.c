@@ -42,10 +42,137 @@ void selmap_opts_default(selmap_opts_t *o, long stride_cells) {
   o->separation_m = c.min_separation_m;
   o->stride_cells = stride_cells;
   o->sensors = NULL;
+  mapopt_init(&o->mo);
+  o->mo.config = SELMAP_MAP_CONFIG_DEFAULT;
+  o->gsig_m = -1.0;
+  o->gsig_k = -1.0;
+  o->gerr = NULL;
+}
+
+void selmap_gerr_opts(selmap_opts_t *o, cli_opt_t *d) {
+  const cli_opt_t t[SELMAP_N_GERR_OPTS] = {
+      {"--global-sigma-m", CLI_DOUBLE, &o->gsig_m, 0.0, 100.0, 0, "S0",
+       "global map's error at its sensing position, m (eq. 8: S0 + K r^2; default 0.02)", 0},
+      {"--global-sigma-k", CLI_DOUBLE, &o->gsig_k, 0.0, 100.0, 0, "K",
+       "global map's error growth with squared range from the nearest sensing position, 1/m (default 0.001)", 0},
+      {"--global-error", CLI_STRING, &o->gerr, 0, 0, 0, "FILE",
+       "per-cell error raster of the global map, m (e.g. a HiRISE DTM's), the --dem's grid; no-data = the model", 0},
+  };
+  memcpy(d, t, sizeof t);
+}
+
+void selmap_gerr_model(const selmap_opts_t *o, trn_sigma_model_t *m) {
+  trn_sigma_global_default(m);
+  if (o->gsig_m >= 0.0) {
+    m->sigma_min_m = (float)o->gsig_m;
+  }
+  if (o->gsig_k >= 0.0) {
+    m->k_per_m = (float)o->gsig_k;
+  }
+}
+
+int selmap_read_error(const char *path, const dem_t *dem, dem_t *e, char *err, size_t err_len) {
+  char why[640];
+  size_t i;
+  if (dem_read(path, 1, TRN_MAX_DIM, e, why, sizeof why) != 0) {
+    snprintf(err, err_len, "--global-error: %s", why);
+    return -1;
+  }
+  if (e->width != dem->width || e->height != dem->height) {
+    snprintf(err, err_len, "--global-error is %d x %d cells, --dem %d x %d: the error raster must be on the DEM's grid",
+             e->width, e->height, dem->width, dem->height);
+    goto fail;
+  }
+  for (i = 0; i < 6; ++i) {
+    if (fabs(e->gt[i] - dem->gt[i]) > 1e-6 * dem->cell_m) {
+      snprintf(err, err_len, "--global-error's geotransform differs from --dem's (origin %.3f,%.3f cell %g m against "
+               "%.3f,%.3f cell %g m): the error raster must be on the DEM's grid",
+               e->gt[0], e->gt[3], e->cell_m, dem->gt[0], dem->gt[3], dem->cell_m);
+      goto fail;
+    }
+  }
+  for (i = 0; i < (size_t)e->width * (size_t)e->height; ++i) {
+    if (!isnan(e->data[i]) && !(e->data[i] >= 0.0f && e->data[i] <= 1e6f)) {
+      snprintf(err, err_len, "--global-error: cell (column %zu, row %zu) is %g m; errors must be 0..1e6 m or no-data",
+               i % (size_t)e->width, i / (size_t)e->width, (double)e->data[i]);
+      goto fail;
+    }
+  }
+  return 0;
+fail:
+  dem_free(e);
+  return -1;
+}
+
+int selmap_prob_global(const selmap_opts_t *o, const dem_t *dem, const trn_kernels_t *k,
+                       const trn_xy_t *sensors, size_t n_sensors, const trn_map_t *map,
+                       trn_vol_f32_t *pg, void **pgraw, char *err, size_t err_len) {
+  size_t nvox = (size_t)dem->width * (size_t)dem->height * (size_t)map->dist.nz, wb;
+  void *wraw = NULL, *ws;
+  trn_sigma_model_t gm;
+  trn_status_t st;
+  dem_t e;
+  int rc = -1;
+  memset(&e, 0, sizeof e);
+  selmap_gerr_model(o, &gm);
+  *pgraw = NULL;
+  if (o->gerr != NULL && selmap_read_error(o->gerr, dem, &e, err, err_len) != 0) {
+    return -1;
+  }
+  pg->data = selmap_alloc16(nvox * sizeof(float), pgraw);
+  wb = trn_prob_global_workspace_bytes(dem->width, dem->height);
+  ws = wb > 0 ? selmap_alloc16(wb, &wraw) : NULL;
+  if (pg->data == NULL || ws == NULL) {
+    snprintf(err, err_len, "cannot allocate %zu bytes for the probability map", nvox * sizeof(float) + wb);
+    goto done;
+  }
+  pg->nx = dem->width;
+  pg->ny = dem->height;
+  pg->nz = map->dist.nz;
+  if (o->gerr != NULL) {
+    trn_grid_f32_t g;
+    st = trn_grid_f32_init(&g, e.data, (size_t)e.width * (size_t)e.height, e.width, e.height);
+    if (st == TRN_OK) {
+      st = trn_prob_global_raster(k, &gm, sensors, n_sensors, &g, map, pg, ws, wb);
+    }
+  } else {
+    st = trn_prob_global_map(k, &gm, sensors, n_sensors, map, pg, ws, wb);
+  }
+  if (st != TRN_OK) {
+    snprintf(err, err_len, "probability map (eq. 8): %s", trn_strerror(st));
+    goto done;
+  }
+  rc = 0;
+done:
+  free(wraw);
+  dem_free(&e);
+  if (rc != 0) {
+    free(*pgraw);
+    *pgraw = NULL;
+    pg->data = NULL;
+  }
+  return rc;
+}
+
+void selmap_json_config(json_t *j, const selmap_opts_t *o, const trn_map_cfg_t *cfg, double sigma_h) {
+  trn_sigma_model_t gm;
+  selmap_gerr_model(o, &gm);
+  json_obj(j, "global_error");
+  json_num(j, "sigma_m", gm.sigma_min_m);
+  json_num(j, "k_per_m", gm.k_per_m);
+  if (o->gerr != NULL) {
+    json_str(j, "raster", o->gerr);
+  } else {
+    json_num(j, "raster", NAN); /* null */
+  }
+  json_obj_end(j);
+  json_str(j, "map_config_name", o->mo.config);
+  json_num(j, "sigma_h_m", sigma_h);
+  mapopt_json(j, cfg);
 }
 
 void selmap_opts(selmap_opts_t *o, cli_opt_t *d) {
-  const cli_opt_t t[SELMAP_N_OPTS] = {
+  const cli_opt_t t[SELMAP_N_SEL_OPTS] = {
       {"--band", CLI_LONG, &o->band, 1, 65535, 0, "N", "band of --dem (default 1)", 0},
       {"--heading-deg", CLI_DOUBLE, &o->heading_deg, -360.0, 360.0, 0, "A",
        "rover heading, degrees counter-clockwise from east (default 0)", 0},
@@ -63,7 +190,16 @@ void selmap_opts(selmap_opts_t *o, cli_opt_t *d) {
       {"--sensors", CLI_STRING, &o->sensors, 0, 0, 0, "X,Y[;X,Y..]",
        "where the global map was sensed from, map m, up to 64 (default: the DEM's centre)", 0},
   };
+  size_t i;
   memcpy(d, t, sizeof t);
+  selmap_gerr_opts(o, d + SELMAP_N_SEL_OPTS);
+  mapopt_cli(&o->mo, d + SELMAP_N_SEL_OPTS + SELMAP_N_GERR_OPTS);
+  for (i = SELMAP_N_SEL_OPTS + SELMAP_N_GERR_OPTS; i < SELMAP_N_OPTS; ++i) {
+    if (strcmp(d[i].name, "--map-config") == 0) {
+      d[i].help = "map configuration: paper (as in the paper, scaled to the cell; default) or auto (from the DEM, "
+                  "docs/method.md 9)";
+    }
+  }
 }
 
 void selmap_free(selmap_t *w) {
@@ -108,11 +244,10 @@ static int parse_sensors(const char *text, double out[][2], size_t cap, size_t *
 int selmap_prepare(selmap_t *w, const char *cmd, const char *dem_path, const selmap_opts_t *o) {
   char err[768];
   double cell, col, row;
-  size_t i, mb, nvox, wb;
+  size_t i, mb;
   trn_grid_f32_t gg;
   trn_status_t st;
-  void *wraw = NULL, *ws, *mbuf;
-  trn_sigma_model_t gm;
+  void *mbuf;
   trn_select_cfg_t *c = &w->scfg;
 
   memset(w, 0, sizeof *w);
@@ -158,14 +293,10 @@ int selmap_prepare(selmap_t *w, const char *cmd, const char *dem_path, const sel
   }
   w->heading_grid_rad = (float)(-o->heading_deg * PI / 180.0);
 
-  /* Map configuration scaled to the cell (docs/method.md section 7). */
-  trn_map_cfg_default(&w->cfg);
-  w->cfg.terrain.cell_m = (float)cell;
-  w->cfg.terrain.zbin_m = (float)cell;
-  w->cfg.terrain.highpass_half_m = (float)(10.0 * cell);
-  w->cfg.sigma_m = (float)cell;
-  if ((st = trn_map_cfg_check(&w->cfg)) != TRN_OK) {
-    cli_fail(cmd, "map configuration for %g m cells rejected: %s", cell, trn_strerror(st));
+  /* Map configuration (mapopt.h; default SELMAP_MAP_CONFIG_DEFAULT). */
+  if (mapopt_config(&o->mo, w->dem.data, w->dem.width, w->dem.height, cell, &w->cfg, &w->sigma_h, err,
+                    sizeof err) != 0) {
+    cli_fail(cmd, "--dem: %s", err);
     goto fail;
   }
   if (trn_grid_f32_init(&gg, w->dem.data, (size_t)w->dem.width * (size_t)w->dem.height, w->dem.width,
@@ -205,24 +336,10 @@ int selmap_prepare(selmap_t *w, const char *cmd, const char *dem_path, const sel
     w->sensors[i].y_cells = (float)row;
   }
 
-  /* Eq. 8. */
-  nvox = (size_t)w->dem.width * (size_t)w->dem.height * (size_t)w->map.dist.nz;
-  w->pg.data = selmap_alloc16(nvox * sizeof(float), &w->pgraw);
-  wb = trn_prob_global_workspace_bytes(w->dem.width, w->dem.height);
-  ws = wb > 0 ? selmap_alloc16(wb, &wraw) : NULL;
-  if (w->pg.data == NULL || ws == NULL) {
-    free(wraw);
-    cli_fail(cmd, "cannot allocate %zu bytes for the probability map", nvox * sizeof(float) + wb);
-    goto fail;
-  }
-  w->pg.nx = w->dem.width;
-  w->pg.ny = w->dem.height;
-  w->pg.nz = w->map.dist.nz;
-  trn_sigma_global_default(&gm);
-  st = trn_prob_global_map(&w->k, &gm, w->sensors, w->n_sensors, &w->map, &w->pg, ws, wb);
-  free(wraw);
-  if (st != TRN_OK) {
-    cli_fail(cmd, "probability map (eq. 8): %s", trn_strerror(st));
+  /* Eq. 8: the model, or the error raster with the model where it has no data. */
+  if (selmap_prob_global(o, &w->dem, &w->k, w->sensors, w->n_sensors, &w->map, &w->pg, &w->pgraw, err,
+                         sizeof err) != 0) {
+    cli_fail(cmd, "%s", err);
     goto fail;
   }
   return 0;
@@ -230,4 +347,14 @@ int selmap_prepare(selmap_t *w, const char *cmd, const char *dem_path, const sel
 fail:
   selmap_free(w);
   return CLI_BAD_INPUT;
+}
+
+void selmap_print_config(const selmap_opts_t *o, const trn_map_cfg_t *cfg) {
+  trn_sigma_model_t gm;
+  selmap_gerr_model(o, &gm);
+  printf("map          %s: bin %.4g m x %d, high-pass %.4g m, s %.4g m\n", o->mo.config,
+         (double)cfg->terrain.zbin_m, (int)cfg->terrain.nz, (double)cfg->terrain.highpass_half_m,
+         (double)cfg->sigma_m);
+  printf("global error %.4g m + %.4g/m r^2%s%s\n", (double)gm.sigma_min_m, (double)gm.k_per_m,
+         o->gerr != NULL ? ", per-cell raster " : "", o->gerr != NULL ? o->gerr : "");
 }
