@@ -236,7 +236,13 @@ trn_status_t trn_map_cfg_auto(trn_map_cfg_t *cfg, const trn_grid_f32_t *dem, flo
     noise10 = (double)c.noise_m + (double)c.noise_k_per_m * r10 * r10;
     zb = 0.5 * sig > 2.0 * noise10 ? 0.5 * sig : 2.0 * noise10;
     zb = zb < (double)cell_m ? zb : (double)cell_m;
-    nz = 2L * (long)ceil(4.0 * sig / zb) + 1L;
+    /* half-bins over +-4 spreads, clamped in double before the conversion
+     * (a spread of 1e30 m must not overflow a long) */
+    {
+        double half = ceil(4.0 * sig / zb);
+        half = half > 64.0 ? 64.0 : half;
+        nz = 2L * (long)half + 1L;
+    }
     nz = nz < 16L ? 16L : nz;
     nz = nz > 64L ? 64L : nz;
     nz = nz > (long)TRN_MAX_ZBINS ? (long)TRN_MAX_ZBINS : nz;
@@ -479,13 +485,13 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
     trn_height_best_t best, second;
     trn_refine_cfg_t rc;
     trn_exclusion_t ex;
-    double smax;
+    double smax, infl = 1.0;
     int32_t radius = map->cfg.min_exclusion_cells;
 
     rc.cell_m = map->cfg.terrain.cell_m;
     rc.noise_m = map->cfg.noise_m;
     rc.noise_k_per_m = map->cfg.noise_k_per_m;
-    if ((st = trn_height_search(&map->heights, local, rx, ry, win, NULL, &rc, map->cfg.inlier_prob, &best)) !=
+    if ((st = trn_height_search(&map->heights, local, rx, ry, win, NULL, &rc, map->cfg.inlier_prob, 1.0, &best)) !=
         TRN_OK) {
         return st;
     }
@@ -508,6 +514,7 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
         smax = out->refinement.cov_cells[0] > out->refinement.cov_cells[1] ? out->refinement.cov_cells[0]
                                                                           : out->refinement.cov_cells[1];
         smax = sqrt(smax);
+        infl = out->refinement.inflation;
         if (4.0 * smax > (double)radius) {
             radius = 4.0 * smax < (double)TRN_MAX_DIM ? (int32_t)ceil(4.0 * smax) : TRN_MAX_DIM;
         }
@@ -516,15 +523,19 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
     ex.cy = best.y;
     ex.radius = radius;
     out->exclusion_cells = radius;
-    st = trn_height_search(&map->heights, local, rx, ry, win, &ex, &rc, map->cfg.inlier_prob, &second);
+    st = trn_height_search(&map->heights, local, rx, ry, win, &ex, &rc, map->cfg.inlier_prob, infl, &second);
     if (st == TRN_OK) {
+        /* The posterior mass outside the zone around the peak (uniform prior
+         * over the window), not only the best competitor: many near-ties far
+         * away add up. ln L is divided by the covariance's inflation first:
+         * correlated residuals make ln L differences too large by about that
+         * factor (a composite likelihood's adjustment). */
+        double pf = exp(second.lse_out - second.lse_all);
         out->has_second = 1;
         out->second_x = second.x;
         out->second_y = second.y;
         out->ll_second = second.ll;
-        if ((st = trn_failure_probability(out->ll_best, out->ll_second, &out->failure_probability)) != TRN_OK) {
-            return st;
-        }
+        out->failure_probability = pf < 0.0 ? 0.0 : pf > 1.0 ? 1.0 : pf;
     } else if (st == TRN_E_NODATA) {
         out->has_second = 0;
         out->second_x = best.x;

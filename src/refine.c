@@ -7,7 +7,7 @@
 /* Bilinear height at fractional cell (x, y) (centres at integers) and its
  * exact gradient (per cell) inside the containing cell; 0 when a corner is
  * off the grid or missing. */
-static int sample(const trn_grid_f32_t *g, double x, double y, double out[3])
+static int sample_bilinear(const trn_grid_f32_t *g, double x, double y, double out[3])
 {
     double fx, fy, a, b, c, d;
     int32_t x0, y0;
@@ -31,6 +31,53 @@ static int sample(const trn_grid_f32_t *g, double x, double y, double out[3])
     out[0] = (a * (1.0 - fx) + b * fx) * (1.0 - fy) + (c * (1.0 - fx) + d * fx) * fy;
     out[1] = (b - a) * (1.0 - fy) + (d - c) * fy;
     out[2] = (c - a) * (1.0 - fx) + (d - b) * fx;
+    return 1;
+}
+
+/* Keys' cubic convolution kernel (a = -1/2) at t and its derivative. */
+static void keys(double t, double *w, double *dw)
+{
+    double u = fabs(t), sg = t < 0.0 ? -1.0 : 1.0;
+    if (u < 1.0) {
+        *w = 1.5 * u * u * u - 2.5 * u * u + 1.0;
+        *dw = sg * (4.5 * u * u - 5.0 * u);
+    } else if (u < 2.0) {
+        *w = -0.5 * u * u * u + 2.5 * u * u - 4.0 * u + 2.0;
+        *dw = sg * (-1.5 * u * u + 5.0 * u - 4.0);
+    } else {
+        *w = 0.0;
+        *dw = 0.0;
+    }
+}
+
+/* Height and gradient at (x, y) by bicubic convolution over the 4 x 4 cells
+ * around it (exact for quadratics, error O(h^3) on smooth terrain against
+ * bilinear's O(h^2)); bilinear where the 4 x 4 support is incomplete. */
+static int sample(const trn_grid_f32_t *g, double x, double y, double out[3])
+{
+    double wx[4], dwx[4], wy[4], dwy[4];
+    int32_t x0, y0, i, j;
+    if (!(x >= 1.0 && y >= 1.0 && x < (double)(g->width - 2) && y < (double)(g->height - 2))) {
+        return sample_bilinear(g, x, y, out);
+    }
+    x0 = (int32_t)floor(x);
+    y0 = (int32_t)floor(y);
+    for (i = 0; i < 4; ++i) {
+        keys(x - (double)(x0 - 1 + i), &wx[i], &dwx[i]);
+        keys(y - (double)(y0 - 1 + i), &wy[i], &dwy[i]);
+    }
+    out[0] = out[1] = out[2] = 0.0;
+    for (j = 0; j < 4; ++j) {
+        for (i = 0; i < 4; ++i) {
+            double v = (double)TRN_GRID_AT(g, x0 - 1 + i, y0 - 1 + j);
+            if (!isfinite(v)) {
+                return sample_bilinear(g, x, y, out);
+            }
+            out[0] += wx[i] * wy[j] * v;
+            out[1] += dwx[i] * wy[j] * v;
+            out[2] += wx[i] * dwy[j] * v;
+        }
+    }
     return 1;
 }
 
@@ -65,11 +112,13 @@ typedef struct {
     int32_t n_in, n_all; /* inliers, points with a global height */
 } accum_t;
 
-/* One pass over the seen local points at pose (x, y) and offset dz: normal
- * equations of the points within clip (in normalized residual units). */
-static void accumulate(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
-                       int32_t ry, double x, double y, double dz, double clip, double model2,
-                       const trn_refine_cfg_t *cfg, accum_t *acc)
+/* One pass over the seen local points of local cells [i0, i1) x [j0, j1) at
+ * pose (x, y) and offset dz: normal equations of the points within clip (in
+ * normalized residual units). */
+static void accumulate_rect(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
+                            int32_t ry, double x, double y, double dz, double clip, double model2,
+                            const trn_refine_cfg_t *cfg, int32_t i0, int32_t j0, int32_t i1, int32_t j1,
+                            accum_t *acc)
 {
     int32_t i, j;
     for (i = 0; i < 9; ++i) {
@@ -78,8 +127,8 @@ static void accumulate(const trn_grid_f32_t *global, const trn_grid_f32_t *local
     acc->b[0] = acc->b[1] = acc->b[2] = 0.0;
     acc->ss = acc->rr = acc->noise2 = 0.0;
     acc->n_in = acc->n_all = 0;
-    for (j = 0; j < local->height; ++j) {
-        for (i = 0; i < local->width; ++i) {
+    for (j = j0; j < j1; ++j) {
+        for (i = i0; i < i1; ++i) {
             double h = (double)TRN_GRID_AT(local, i, j), s3[3], px, py, r_m, sd, w, res, u, jv[3];
             int32_t p, q;
             if (!isfinite(h)) {
@@ -118,6 +167,78 @@ static void accumulate(const trn_grid_f32_t *global, const trn_grid_f32_t *local
     }
 }
 
+static void accumulate(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
+                       int32_t ry, double x, double y, double dz, double clip, double model2,
+                       const trn_refine_cfg_t *cfg, accum_t *acc)
+{
+    accumulate_rect(global, local, rx, ry, x, y, dz, clip, model2, cfg, 0, 0, local->width, local->height, acc);
+}
+
+/* The "meat" of the cluster-robust (sandwich) covariance: the sum over
+ * TRN_REFINE_BLOCK x TRN_REFINE_BLOCK blocks of local cells of the outer
+ * product of each block's score (sum of w r J over its inliers). Residuals
+ * correlated within a block (the global DEM's interpolation error is smooth
+ * over about a cell) add up there instead of averaging out. */
+/* Shift of the estimate (x, y, dz) if the global heights were bilinear
+ * instead of bicubic between cell centres: A^-1 sum w J (G_cubic - G_bilinear)
+ * over the inliers. The two interpolants bracket how the DEM's surface may
+ * run between its samples; their disagreement is a systematic error of the
+ * model, common to all points, that no residual statistic sees. */
+static void interp_shift(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
+                         double x, double y, double dz, double model2, const trn_refine_cfg_t *cfg,
+                         const double inv[9], double shift[3])
+{
+    int32_t i, j, p;
+    double g[3] = {0.0, 0.0, 0.0};
+    for (j = 0; j < local->height; ++j) {
+        for (i = 0; i < local->width; ++i) {
+            double h = (double)TRN_GRID_AT(local, i, j), s3[3], b3[3], px, py, r_m, sd, v;
+            if (!isfinite(h)) {
+                continue;
+            }
+            px = (double)(i - rx);
+            py = (double)(j - ry);
+            if (!sample(global, x + px, y + py, s3) || !sample_bilinear(global, x + px, y + py, b3)) {
+                continue;
+            }
+            r_m = (double)cfg->cell_m * sqrt(px * px + py * py);
+            sd = (double)cfg->noise_m + (double)cfg->noise_k_per_m * r_m * r_m;
+            v = sd * sd + model2;
+            if (fabs(h - dz - s3[0]) > TRN_REFINE_CLIP * sqrt(v)) {
+                continue;
+            }
+            g[0] += s3[1] * (s3[0] - b3[0]) / v;
+            g[1] += s3[2] * (s3[0] - b3[0]) / v;
+            g[2] += (s3[0] - b3[0]) / v;
+        }
+    }
+    for (p = 0; p < 3; ++p) {
+        shift[p] = inv[p * 3] * g[0] + inv[p * 3 + 1] * g[1] + inv[p * 3 + 2] * g[2];
+    }
+}
+
+static void block_meat(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
+                       double x, double y, double dz, double model2, const trn_refine_cfg_t *cfg, double meat[9])
+{
+    int32_t bi, bj, p, q;
+    accum_t acc;
+    for (p = 0; p < 9; ++p) {
+        meat[p] = 0.0;
+    }
+    for (bj = 0; bj < local->height; bj += TRN_REFINE_BLOCK) {
+        for (bi = 0; bi < local->width; bi += TRN_REFINE_BLOCK) {
+            int32_t i1 = bi + TRN_REFINE_BLOCK < local->width ? bi + TRN_REFINE_BLOCK : local->width;
+            int32_t j1 = bj + TRN_REFINE_BLOCK < local->height ? bj + TRN_REFINE_BLOCK : local->height;
+            accumulate_rect(global, local, rx, ry, x, y, dz, TRN_REFINE_CLIP, model2, cfg, bi, bj, i1, j1, &acc);
+            for (p = 0; p < 3; ++p) {
+                for (q = 0; q < 3; ++q) {
+                    meat[p * 3 + q] += acc.b[p] * acc.b[q];
+                }
+            }
+        }
+    }
+}
+
 /* Model variance that makes the inliers' mean squared residual equal their
  * mean total variance (noise + model), never negative. */
 static double next_model2(const accum_t *acc)
@@ -132,6 +253,8 @@ static void set_fail(trn_refine_t *out, int32_t ix, int32_t iy)
     out->y = (double)iy;
     out->cov_cells[0] = out->cov_cells[1] = INFINITY;
     out->cov_cells[2] = 0.0;
+    out->inflation = 1.0;
+    out->interp_shift[0] = out->interp_shift[1] = 0.0;
 }
 
 trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
@@ -222,9 +345,50 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
     out->y = y;
     out->dz_m = dz;
     out->model_m = sqrt(model2);
-    out->cov_cells[0] = inv[0] * chi2;
-    out->cov_cells[1] = inv[4] * chi2;
-    out->cov_cells[2] = inv[1] * chi2;
+    /* Sandwich A^-1 B A^-1 (B from blocks); the model-based A^-1 (times the
+     * chi-square floor) is a lower bound on each variance: the block
+     * estimate is noisy, and independent errors must not shrink it. */
+    {
+        double meat[9], t[9], sw[9];
+        int32_t p, q, r;
+        block_meat(global, local, rover_x, rover_y, x, y, dz, model2, cfg, meat);
+        for (p = 0; p < 3; ++p) {
+            for (q = 0; q < 3; ++q) {
+                t[p * 3 + q] = 0.0;
+                for (r = 0; r < 3; ++r) {
+                    t[p * 3 + q] += inv[p * 3 + r] * meat[r * 3 + q];
+                }
+            }
+        }
+        for (p = 0; p < 3; ++p) {
+            for (q = 0; q < 3; ++q) {
+                sw[p * 3 + q] = 0.0;
+                for (r = 0; r < 3; ++r) {
+                    sw[p * 3 + q] += t[p * 3 + r] * inv[r * 3 + q];
+                }
+            }
+        }
+        {
+            double fx = sw[0] / (inv[0] * chi2), fy = sw[4] / (inv[4] * chi2), f;
+            /* one inflation factor for the position block, so the ellipse keeps
+             * the model's shape: the larger of the two variance ratios */
+            f = fx > fy ? fx : fy;
+            f = f > 1.0 ? f : 1.0;
+            out->inflation = f;
+            out->cov_cells[0] = inv[0] * chi2 * f;
+            out->cov_cells[1] = inv[4] * chi2 * f;
+            out->cov_cells[2] = inv[1] * chi2 * f;
+        }
+        {
+            double sh[3];
+            interp_shift(global, local, rover_x, rover_y, x, y, dz, model2, cfg, inv, sh);
+            out->interp_shift[0] = sh[0];
+            out->interp_shift[1] = sh[1];
+            out->cov_cells[0] += TRN_REFINE_SYS * sh[0] * sh[0];
+            out->cov_cells[1] += TRN_REFINE_SYS * sh[1] * sh[1];
+            out->cov_cells[2] += TRN_REFINE_SYS * sh[0] * sh[1];
+        }
+    }
     out->n_used = acc.n_in;
     return TRN_OK;
 }
@@ -359,10 +523,24 @@ static double pose_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_t 
     return ll;
 }
 
+/* ln(exp(a) + exp(b)) without overflow; a may be -inf. */
+static double log_add(double a, double b)
+{
+    if (a < b) {
+        double t = a;
+        a = b;
+        b = t;
+    }
+    if (isinf(a) && a < 0.0) {
+        return a;
+    }
+    return a + log1p(exp(b - a));
+}
+
 trn_status_t trn_height_search(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
                                int32_t rover_x, int32_t rover_y, const trn_window_t *win,
                                const trn_exclusion_t *ex, const trn_refine_cfg_t *cfg,
-                               float inlier_prob, trn_height_best_t *best)
+                               float inlier_prob, double ll_scale, trn_height_best_t *best)
 {
     trn_status_t st;
     int32_t x, y, n_seen = 0;
@@ -378,7 +556,8 @@ trn_status_t trn_height_search(const trn_grid_f32_t *global, const trn_grid_f32_
     if (!(cfg->cell_m > 0.0f && cfg->cell_m <= 1000.0f) || !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
         !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f) || !(inlier_prob > 0.0f && inlier_prob < 1.0f) ||
         rover_x < -TRN_MAX_DIM || rover_y < -TRN_MAX_DIM || rover_x > local->width - 1 + TRN_MAX_DIM ||
-        rover_y > local->height - 1 + TRN_MAX_DIM || (ex != NULL && ex->radius < 0)) {
+        rover_y > local->height - 1 + TRN_MAX_DIM || (ex != NULL && ex->radius < 0) ||
+        !(ll_scale >= 1.0 && ll_scale <= 1e6)) {
         return TRN_E_ARG;
     }
     if (win->x0 > win->x1 || win->y0 > win->y1 || win->x0 < 0 || win->y0 < 0 || win->x1 >= global->width ||
@@ -392,14 +571,19 @@ trn_status_t trn_height_search(const trn_grid_f32_t *global, const trn_grid_f32_
     floor_m = (double)cfg->noise_m;
     k = 1.0 / (10.0 * (spread > floor_m ? spread : floor_m));
     best->poses = 0u;
+    best->lse_all = best->lse_out = -(double)INFINITY;
     for (y = win->y0; y <= win->y1; ++y) {
         for (x = win->x0; x <= win->x1; ++x) {
-            double ll, dz, m;
-            if (ex != NULL && abs(x - ex->cx) <= ex->radius && abs(y - ex->cy) <= ex->radius) {
-                continue;
-            }
+            double ll, dz, m, q;
+            int inside = ex != NULL && abs(x - ex->cx) <= ex->radius && abs(y - ex->cy) <= ex->radius;
             ll = pose_ll(global, local, rover_x, rover_y, x, y, cfg, (double)inlier_prob, k, &dz, &m);
             best->poses += 1u;
+            q = ll / ll_scale;
+            best->lse_all = log_add(best->lse_all, q);
+            if (inside) {
+                continue;
+            }
+            best->lse_out = log_add(best->lse_out, q);
             /* highest ln L; ties to the smallest y, then x (scan order) */
             if (!found || ll > best->ll) {
                 best->x = x;

@@ -1,10 +1,12 @@
 /* test_refine.c - continuous pose refinement over heights (refine.h).
  *
  * Oracles: a global DEM of an analytic smooth surface and a local DEM that is
- * exactly that DEM's bilinear interpolation at a known sub-cell pose plus a
+ * exactly that DEM's bicubic (Keys) interpolation at a known sub-cell pose plus a
  * vertical offset (the refinement's own model, so the pose must come back to
  * rounding); the same with Gaussian noise of the documented model, where the
- * reported covariance must cover the errors as a 2-D normal does; outliers;
+ * statistical part of the reported covariance must cover the errors as a 2-D
+ * normal does; outliers; the exhaustive height search against a brute-force
+ * evaluation of its likelihood; trn_map_cfg_auto's rule;
  * and one assertion per documented @retval.
  */
 #include <stdarg.h>
@@ -50,13 +52,25 @@ static void make_global(trn_grid_f32_t *g)
     assert_int_equal(trn_grid_f32_init(g, g_data, GW * GW, GW, GW), TRN_OK);
 }
 
+/* Keys' cubic convolution (a = -1/2) of the global DEM at (x, y): the
+ * refinement's own model of the surface between cell centres. */
+static double keysw(double t)
+{
+    double u = fabs(t);
+    return u < 1.0 ? 1.5 * u * u * u - 2.5 * u * u + 1.0
+                   : u < 2.0 ? -0.5 * u * u * u + 2.5 * u * u - 4.0 * u + 2.0 : 0.0;
+}
+
 static double bilin(double x, double y)
 {
-    int x0 = (int)floor(x), y0 = (int)floor(y);
-    double fx = x - x0, fy = y - y0;
-    double a = g_data[y0 * GW + x0], b = g_data[y0 * GW + x0 + 1], c = g_data[(y0 + 1) * GW + x0],
-           d = g_data[(y0 + 1) * GW + x0 + 1];
-    return (a * (1 - fx) + b * fx) * (1 - fy) + (c * (1 - fx) + d * fx) * fy;
+    int x0 = (int)floor(x), y0 = (int)floor(y), i, j;
+    double v = 0.0;
+    for (j = -1; j <= 2; ++j) {
+        for (i = -1; i <= 2; ++i) {
+            v += keysw(x - (x0 + i)) * keysw(y - (y0 + j)) * g_data[(y0 + j) * GW + x0 + i];
+        }
+    }
+    return v;
 }
 
 /* Local DEM seen from pose (tx, ty): offset dz, noise of cfg times `noise`. */
@@ -109,7 +123,8 @@ static void test_exact_model(void **state)
 }
 
 /* With the documented noise the errors fall inside the 1/2/3-sigma ellipses
- * as a 2-D normal's do (39.3 / 86.5 / 98.9 %); 400 trials. */
+ * of the statistical part of the covariance as a 2-D normal's do (39.3 /
+ * 86.5 / 98.9 %); 400 trials. */
 static void test_noise_coverage(void **state)
 {
     trn_grid_f32_t g, l;
@@ -128,8 +143,16 @@ static void test_noise_coverage(void **state)
                          TRN_OK);
         ex = out.x - tx;
         ey = out.y - ty;
-        det = out.cov_cells[0] * out.cov_cells[1] - out.cov_cells[2] * out.cov_cells[2];
-        m2 = (out.cov_cells[1] * ex * ex - 2.0 * out.cov_cells[2] * ex * ey + out.cov_cells[0] * ey * ey) / det;
+        /* the statistical part: the covariance less the interpolants'
+         * systematic term (which the exact cubic model here does not need) */
+        {
+            double c0 = out.cov_cells[0] - TRN_REFINE_SYS * out.interp_shift[0] * out.interp_shift[0];
+            double c1 = out.cov_cells[1] - TRN_REFINE_SYS * out.interp_shift[1] * out.interp_shift[1];
+            double c2 = out.cov_cells[2] - TRN_REFINE_SYS * out.interp_shift[0] * out.interp_shift[1];
+            det = c0 * c1 - c2 * c2;
+            m2 = (c1 * ex * ex - 2.0 * c2 * ex * ey + c0 * ey * ey) / det;
+            assert_true(out.cov_cells[0] >= c0 && out.cov_cells[1] >= c1);
+        }
         in[0] += m2 <= 1.0;
         in[1] += m2 <= 4.0;
         in[2] += m2 <= 9.0;
@@ -292,7 +315,7 @@ static void test_height_search(void **state)
     trn_rng_seed(&r, 9);
     make_global(&g);
     make_local(&l, 30.4, 29.7, 12.0, 1.0, &c, &r);
-    assert_int_equal(trn_height_search(&g, &l, LW / 2, LW / 2, &win, NULL, &c, 0.95f, &b), TRN_OK);
+    assert_int_equal(trn_height_search(&g, &l, LW / 2, LW / 2, &win, NULL, &c, 0.95f, 1.0, &b), TRN_OK);
     for (y = win.y0; y <= win.y1; ++y)
         for (x = win.x0; x <= win.x1; ++x) {
             double ll = brute_ll(&g, &l, x, y, &c, 0.95);
@@ -311,35 +334,38 @@ static void test_height_search(void **state)
     ex.cx = b.x;
     ex.cy = b.y;
     ex.radius = 2;
-    assert_int_equal(trn_height_search(&g, &l, LW / 2, LW / 2, &win, &ex, &c, 0.95f, &b2), TRN_OK);
+    assert_int_equal(trn_height_search(&g, &l, LW / 2, LW / 2, &win, &ex, &c, 0.95f, 1.0, &b2), TRN_OK);
     assert_true(abs(b2.x - b.x) > 2 || abs(b2.y - b.y) > 2);
     assert_true(b2.ll < b.ll);
-    assert_true(b2.poses == 13u * 11u - 25u);
+    assert_true(b2.poses == 13u * 11u);
+    assert_true(b2.lse_out < b2.lse_all && fabs(b2.lse_all - b.lse_all) < 1e-9 * fabs(b.lse_all));
+    assert_true(b.lse_all >= b.ll && b.lse_all <= b.ll + log(143.0));
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 0.5, &b), TRN_E_ARG);
     /* statuses */
-    assert_int_equal(trn_height_search(NULL, &l, 15, 15, &win, NULL, &c, 0.95f, &b), TRN_E_NULL);
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, NULL, NULL, &c, 0.95f, &b), TRN_E_NULL);
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, NULL), TRN_E_NULL);
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 1.0f, &b), TRN_E_ARG);
+    assert_int_equal(trn_height_search(NULL, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, &b), TRN_E_NULL);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, NULL, NULL, &c, 0.95f, 1.0, &b), TRN_E_NULL);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, NULL), TRN_E_NULL);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 1.0f, 1.0, &b), TRN_E_ARG);
     bad = c;
     bad.noise_m = -1.0f;
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &bad, 0.95f, &b), TRN_E_ARG);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &bad, 0.95f, 1.0, &b), TRN_E_ARG);
     ex.radius = -1;
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, &ex, &c, 0.95f, &b), TRN_E_ARG);
-    assert_int_equal(trn_height_search(&g, &l, TRN_MAX_DIM + LW, 15, &win, NULL, &c, 0.95f, &b), TRN_E_ARG);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, &ex, &c, 0.95f, 1.0, &b), TRN_E_ARG);
+    assert_int_equal(trn_height_search(&g, &l, TRN_MAX_DIM + LW, 15, &win, NULL, &c, 0.95f, 1.0, &b), TRN_E_ARG);
     win.x1 = GW;
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, &b), TRN_E_RANGE);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, &b), TRN_E_RANGE);
     win.x1 = 20;
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, &b), TRN_E_RANGE);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, &b), TRN_E_RANGE);
     win.x1 = 36;
     ex.radius = 100;
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, &ex, &c, 0.95f, &b), TRN_E_NODATA);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, &ex, &c, 0.95f, 1.0, &b), TRN_E_NODATA);
     l.width = 0;
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, &b), TRN_E_SIZE);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, &b), TRN_E_SIZE);
     make_local(&l, 30.0, 30.0, 0.0, 0.0, &c, &r);
     for (x = 0; x < LW * LW; ++x) {
         l_data[x] = x < 5 ? 1.0f : NAN;
     }
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, &b), TRN_E_NODATA);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, &b), TRN_E_NODATA);
 }
 
 /* trn_map_cfg_auto: the documented rule on the analytic DEM, and every status. */

@@ -34,6 +34,13 @@ extern "C" {
  *  axis: the voxel search can land one cell off on a smooth slope (its
  *  height bins are coarse there); beyond this the start was not this peak. */
 #define TRN_REFINE_MAX_SHIFT 2.0
+/** Side of the blocks of local cells whose residuals are taken as
+ *  correlated by the covariance (cluster-robust sandwich). */
+#define TRN_REFINE_BLOCK 4
+#ifndef TRN_REFINE_SYS
+/** Weight of the interpolants' disagreement in the covariance. */
+#define TRN_REFINE_SYS 1.0
+#endif
 /** Largest Gauss-Newton iterations. */
 #define TRN_REFINE_MAX_ITER 12
 
@@ -51,6 +58,9 @@ typedef struct {
     double dz_m;        /**< its vertical offset local - global, metres */
     double model_m;     /**< its model error m, metres */
     uint64_t poses;     /**< poses evaluated */
+    double lse_all;     /**< ln sum over every pose of the window of exp(ll / ll_scale) */
+    double lse_out;     /**< the same over the poses outside the exclusion zone
+                             (= lse_all without one) */
 } trn_height_best_t;
 
 /** Result of trn_refine_pose. Pose in global cells (x = column, y = row). */
@@ -60,6 +70,9 @@ typedef struct {
     double model_m;     /**< model error estimated beside the noise, metres */
     double cov_cells[3];/**< var_x, var_y, cov_xy in cells^2 */
     double chi2_dof;    /**< reduced chi-square of the inliers (before the >= 1 floor) */
+    double inflation;   /**< factor (>= 1) the block sandwich put on the model covariance */
+    double interp_shift[2]; /**< shift of (x, y) had the DEM been bilinear, cells;
+                                 TRN_REFINE_SYS times its outer product is in the covariance */
     int32_t n_used;     /**< inlier points of the last iteration */
     int32_t n_seen;     /**< seen local points with a global height under them */
     int32_t iterations; /**< Gauss-Newton steps taken */
@@ -94,8 +107,14 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
  * are estimated (weighted mean; moments), then again without the points
  * beyond TRN_REFINE_CLIP (a profile likelihood). K = 1 / (10 sd of the local
  * heights), one value per call, so scores compare across poses.
+ * With an exclusion zone every pose is still scored (it counts in lse_all)
+ * but the best is taken outside the zone; exp(lse_out - lse_all) is then the
+ * posterior mass outside the zone (uniform prior over the window), the
+ * failure probability trn_localize_dem reports.
  * @param[in] inlier_prob a, in (0, 1)
- * @param[in] ex          poses to skip (NULL: none)
+ * @param[in] ex          poses that cannot be the best (NULL: none)
+ * @param[in] ll_scale    ln L is divided by it in lse_all and lse_out, [1, 1e6]
+ *                        (correlated residuals: trn_refine_t.inflation)
  * @retval TRN_OK
  * @retval TRN_E_NULL, TRN_E_SIZE (bad grids), TRN_E_ARG (cfg, a, rover cell
  *         farther than TRN_MAX_DIM, negative exclusion radius)
@@ -105,7 +124,7 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
 trn_status_t trn_height_search(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
                                int32_t rover_x, int32_t rover_y, const trn_window_t *win,
                                const trn_exclusion_t *ex, const trn_refine_cfg_t *cfg,
-                               float inlier_prob, trn_height_best_t *best);
+                               float inlier_prob, double ll_scale, trn_height_best_t *best);
 
 #ifdef __cplusplus
 }
