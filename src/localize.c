@@ -100,6 +100,27 @@ size_t trn_map_bytes(const trn_map_cfg_t *cfg, int32_t width, int32_t height)
     return map_layout(cfg, width, height, &lay) ? lay.total : 0u;
 }
 
+/* RMS of (height - mean of its 4 neighbours) over the cells whose four
+ * neighbours are known. */
+static double roughness(const trn_grid_f32_t *g)
+{
+    int32_t x, y;
+    double s = 0.0;
+    size_t n = 0;
+    for (y = 1; y + 1 < g->height; ++y) {
+        for (x = 1; x + 1 < g->width; ++x) {
+            double c = (double)TRN_GRID_AT(g, x, y);
+            double m = 0.25 * ((double)TRN_GRID_AT(g, x - 1, y) + (double)TRN_GRID_AT(g, x + 1, y) +
+                               (double)TRN_GRID_AT(g, x, y - 1) + (double)TRN_GRID_AT(g, x, y + 1));
+            if (isfinite(c) && isfinite(m)) {
+                s += (c - m) * (c - m);
+                ++n;
+            }
+        }
+    }
+    return n > 0u ? sqrt(s / (double)n) : 0.0;
+}
+
 trn_status_t trn_map_build(trn_map_t *map, const trn_map_cfg_t *cfg, const trn_grid_f32_t *dem,
                            void *buf, size_t len)
 {
@@ -134,6 +155,7 @@ trn_status_t trn_map_build(trn_map_t *map, const trn_map_cfg_t *cfg, const trn_g
     }
     map->heights.data = NULL;
     map->lowpass.data = NULL;
+    map->roughness_m = 0.0;
     map->heights.width = map->heights.height = map->heights.stride = 0;
     map->lowpass = map->heights;
     if (needs_heights(cfg)) {
@@ -154,6 +176,7 @@ trn_status_t trn_map_build(trn_map_t *map, const trn_map_cfg_t *cfg, const trn_g
                 TRN_GRID_AT(&map->lowpass, x, y) = ok ? (float)((double)v - (double)f) : NAN;
             }
         }
+        map->roughness_m = roughness(&map->heights);
     }
     lik = lik_of(cfg);
     if ((st = trn_outlier_density(&map->dist, &lik, &k)) != TRN_OK ||
@@ -201,6 +224,7 @@ trn_status_t trn_map_cfg_auto(trn_map_cfg_t *cfg, const trn_grid_f32_t *dem, flo
     c.local_highpass = TRN_LOCAL_HP_MAP;
     c.refine = 1;
     c.match = TRN_MATCH_HEIGHTS;
+    c.min_exclusion_cells = 1; /* failure: the answer 2 or more cells off (1.5 radial) */
     if (!(cell_m > 0.0f && cell_m <= 1000.0f) || trn_map_cfg_check(&c) != TRN_OK) {
         return TRN_E_ARG;
     }
@@ -310,6 +334,7 @@ trn_status_t trn_localize_points(const trn_map_t *map, const trn_point_t *pts, s
         return st;
     }
     out->refined = 0;
+    out->misfit = 0;
     out->ix = best.x;
     out->iy = best.y;
     out->ll_best = nats(best.score);
@@ -463,10 +488,15 @@ static void refine_result(const trn_map_t *map, const trn_grid_f32_t *local, int
     rc.noise_m = map->cfg.noise_m;
     rc.noise_k_per_m = map->cfg.noise_k_per_m;
     out->refined = 0;
+    out->misfit = 0;
     if (trn_refine_pose(&map->heights, local, rx, ry, out->ix, out->iy, &rc, &out->refinement) != TRN_OK) {
         return;
     }
     out->refined = 1;
+    {
+        double lim = map->roughness_m > (double)rc.noise_m ? map->roughness_m : (double)rc.noise_m;
+        out->misfit = out->refinement.model_m > TRN_MISFIT_ROUGHNESS * lim ? 1 : 0;
+    }
     out->x = out->refinement.x;
     out->y = out->refinement.y;
     out->cov_m2[0] = out->refinement.cov_cells[0] * cell * cell;
@@ -485,7 +515,7 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
     trn_height_best_t best, second;
     trn_refine_cfg_t rc;
     trn_exclusion_t ex;
-    double smax, infl = 1.0;
+    double infl = 1.0;
     int32_t radius = map->cfg.min_exclusion_cells;
 
     rc.cell_m = map->cfg.terrain.cell_m;
@@ -510,14 +540,12 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
     out->cov_m2[2] = 0.0;
     refine_result(map, local, rx, ry, out);
     out->n_points = (size_t)(out->refinement.n_seen > 0 ? out->refinement.n_seen : 0);
+    /* The zone is min_exclusion_cells, not 4 sigma as for eq. 6: the failure
+     * probability is the posterior mass of poses that far from the answer,
+     * so a broad peak (large sigma) shows as a large probability instead of
+     * hiding its competitors inside a wide zone. */
     if (out->refined) {
-        smax = out->refinement.cov_cells[0] > out->refinement.cov_cells[1] ? out->refinement.cov_cells[0]
-                                                                          : out->refinement.cov_cells[1];
-        smax = sqrt(smax);
         infl = out->refinement.inflation;
-        if (4.0 * smax > (double)radius) {
-            radius = 4.0 * smax < (double)TRN_MAX_DIM ? (int32_t)ceil(4.0 * smax) : TRN_MAX_DIM;
-        }
     }
     ex.cx = best.x;
     ex.cy = best.y;
@@ -545,7 +573,7 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
     } else {
         return st;
     }
-    return out->refined ? TRN_OK : TRN_E_ILLCOND;
+    return out->refined && !out->misfit ? TRN_OK : TRN_E_ILLCOND;
 }
 
 trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_dem,
@@ -619,7 +647,7 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
     if ((st == TRN_OK || st == TRN_E_ILLCOND) && map->cfg.refine != 0) {
         refine_result(map, local_dem, rover_x, rover_y, out);
         /* No consistent height match around the voxel optimum: flag it. */
-        st = out->refined ? TRN_OK : TRN_E_ILLCOND;
+        st = out->refined && !out->misfit ? TRN_OK : TRN_E_ILLCOND;
     }
     return st;
 }

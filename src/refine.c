@@ -108,7 +108,8 @@ static int inv3(const double a[9], double r[9])
 typedef struct {
     double a[9], b[3];   /* normal matrix and right-hand side */
     double ss;           /* sum of squared normalized residuals of the inliers */
-    double rr, noise2;   /* sums of squared residuals and of noise variances (inliers) */
+    double rr, noise2;   /* sums of q r^2 and of q s^2 over the inliers, q = 1 / (s^2 + m^2)^2 */
+    double q;            /* sum of q */
     int32_t n_in, n_all; /* inliers, points with a global height */
 } accum_t;
 
@@ -125,7 +126,7 @@ static void accumulate_rect(const trn_grid_f32_t *global, const trn_grid_f32_t *
         acc->a[i] = 0.0;
     }
     acc->b[0] = acc->b[1] = acc->b[2] = 0.0;
-    acc->ss = acc->rr = acc->noise2 = 0.0;
+    acc->ss = acc->rr = acc->noise2 = acc->q = 0.0;
     acc->n_in = acc->n_all = 0;
     for (j = j0; j < j1; ++j) {
         for (i = i0; i < i1; ++i) {
@@ -149,8 +150,15 @@ static void accumulate_rect(const trn_grid_f32_t *global, const trn_grid_f32_t *
             if (fabs(u) > clip) {
                 continue;
             }
-            acc->noise2 += w;
-            acc->rr += res * res;
+            {
+                /* precision-squared weights: the model variance is estimated
+                 * mostly where the noise is small (near the rover), not
+                 * swamped by the far points' large noise */
+                double qw = 1.0 / ((sd * sd) * (sd * sd));
+                acc->noise2 += qw * w;
+                acc->rr += qw * res * res;
+                acc->q += qw;
+            }
             w = 1.0 / (sd * sd);
             jv[0] = s3[1];
             jv[1] = s3[2];
@@ -213,7 +221,7 @@ static void interp_shift(const trn_grid_f32_t *global, const trn_grid_f32_t *loc
         }
     }
     for (p = 0; p < 3; ++p) {
-        shift[p] = inv[p * 3] * g[0] + inv[p * 3 + 1] * g[1] + inv[p * 3 + 2] * g[2];
+        shift[p] = inv[p * 3 + 0] * g[0] + inv[p * 3 + 1] * g[1] + inv[p * 3 + 2] * g[2];
     }
 }
 
@@ -239,11 +247,13 @@ static void block_meat(const trn_grid_f32_t *global, const trn_grid_f32_t *local
     }
 }
 
-/* Model variance that makes the inliers' mean squared residual equal their
- * mean total variance (noise + model), never negative. */
+/* Model variance that makes the inliers' squared residuals equal their
+ * total variance (noise + model) on average, weighted by the squared
+ * precision at the previous estimate (a fixed point of the weighted moment
+ * equation), never negative. */
 static double next_model2(const accum_t *acc)
 {
-    double m = (acc->rr - acc->noise2) / (double)acc->n_in;
+    double m = (acc->rr - acc->noise2) / acc->q;
     return m > 0.0 ? m : 0.0;
 }
 
@@ -447,11 +457,11 @@ static int32_t pose_fit(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_
                         int32_t py, const trn_refine_cfg_t *cfg, double clip, double *dz, double *m2)
 {
     int32_t x, y, n = 0;
-    double sw = 0.0, swr = 0.0, sr = 0.0, srr = 0.0, ss = 0.0, ref = 0.0, d, m;
+    double sw = 0.0, swr = 0.0, sq = 0.0, sqr = 0.0, sqrr = 0.0, sqv = 0.0, ref = 0.0, d, m;
     int have_ref = 0;
     for (y = 0; y < l->height; ++y) {
         for (x = 0; x < l->width; ++x) {
-            double h = (double)TRN_GRID_AT(l, x, y), gv, r, v;
+            double h = (double)TRN_GRID_AT(l, x, y), gv, r, v, q;
             if (!isfinite(h)) {
                 continue;
             }
@@ -469,11 +479,13 @@ static int32_t pose_fit(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_
                 have_ref = 1;
             }
             r -= ref;
-            sw += 1.0 / v;
-            swr += r / v;
-            sr += r;
-            srr += r * r;
-            ss += v;
+            sw += 1.0 / (v + *m2);
+            swr += r / (v + *m2);
+            q = 1.0 / ((v + *m2) * (v + *m2));
+            sq += q;
+            sqr += q * r;
+            sqrr += q * r * r;
+            sqv += q * v;
             ++n;
         }
     }
@@ -481,8 +493,9 @@ static int32_t pose_fit(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_
         return 0;
     }
     d = swr / sw;
-    /* mean squared residual about d, minus the mean noise variance */
-    m = (srr - 2.0 * d * sr + (double)n * d * d) / (double)n - ss / (double)n;
+    /* weighted mean squared residual about d, minus the weighted mean noise
+     * variance (weights: squared precision at the previous m2) */
+    m = (sqrr - 2.0 * d * sqr + d * d * sq - sqv) / sq;
     *dz = d + ref;
     *m2 = m > 0.0 ? m : 0.0;
     return n;
@@ -495,7 +508,10 @@ static double pose_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_t 
     const double two_pi = 6.283185307179586;
     int32_t x, y;
     double dz = 0.0, m2 = 0.0, ll = 0.0, lout = log((1.0 - a) * k);
-    if (pose_fit(g, l, rx, ry, px, py, cfg, -1.0, &dz, &m2) > 0) {
+    /* dz and m2: over every point (m2 = 0 weights, then those of the first
+     * m2), then over the points within the clip of that fit */
+    if (pose_fit(g, l, rx, ry, px, py, cfg, -1.0, &dz, &m2) > 0 &&
+        pose_fit(g, l, rx, ry, px, py, cfg, -1.0, &dz, &m2) > 0) {
         double dz1 = dz, m21 = m2;
         if (pose_fit(g, l, rx, ry, px, py, cfg, TRN_REFINE_CLIP, &dz1, &m21) > 0) {
             dz = dz1;
@@ -526,15 +542,11 @@ static double pose_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_t 
 /* ln(exp(a) + exp(b)) without overflow; a may be -inf. */
 static double log_add(double a, double b)
 {
-    if (a < b) {
-        double t = a;
-        a = b;
-        b = t;
+    double hi = a > b ? a : b, lo = a > b ? b : a;
+    if (isinf(hi) && hi < 0.0) {
+        return hi;
     }
-    if (isinf(a) && a < 0.0) {
-        return a;
-    }
-    return a + log1p(exp(b - a));
+    return hi + log1p(exp(lo - hi));
 }
 
 trn_status_t trn_height_search(const trn_grid_f32_t *global, const trn_grid_f32_t *local,

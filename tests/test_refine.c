@@ -261,28 +261,33 @@ static double brute_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int px,
             }
         }
     k = 1.0 / (10.0 * fmax(sqrt(fmax(s2 / n - (s1 / n) * (s1 / n), 0.0)), c->noise_m));
-    for (pass = 0; pass < 2; ++pass) {
-        double sw = 0, swr = 0, sr = 0, srr = 0, ss = 0;
+    /* dz: precision-weighted mean; m2: weighted moments (weights the squared
+     * precision at the previous m2); twice over every point, then over those
+     * within 3 standard deviations of that fit */
+    for (pass = 0; pass < 3; ++pass) {
+        double sw = 0, swr = 0, sq = 0, sqr = 0, sqrr = 0, sqv = 0, d0 = dz, m0 = m2;
         int m = 0;
         for (y = 0; y < LW; ++y)
             for (x = 0; x < LW; ++x) {
-                double h = TRN_GRID_AT(l, x, y), rm, v, r;
+                double h = TRN_GRID_AT(l, x, y), rm, v, r, q;
                 int gx = px + x - cx, gy = py + y - cx;
                 if (!isfinite(h) || gx < 0 || gy < 0 || gx >= GW || gy >= GW) continue;
                 rm = c->cell_m * sqrt((double)((x - cx) * (x - cx) + (y - cx) * (y - cx)));
                 v = pow(c->noise_m + c->noise_k_per_m * rm * rm, 2);
                 r = h - TRN_GRID_AT(g, gx, gy);
-                if (pass == 1 && fabs(r - dz) > 3.0 * sqrt(v + m2)) continue;
-                sw += 1 / v;
-                swr += r / v;
-                sr += r;
-                srr += r * r;
-                ss += v;
+                if (pass == 2 && fabs(r - d0) > 3.0 * sqrt(v + m0)) continue;
+                sw += 1 / (v + m0);
+                swr += r / (v + m0);
+                q = 1 / ((v + m0) * (v + m0));
+                sq += q;
+                sqr += q * r;
+                sqrr += q * r * r;
+                sqv += q * v;
                 ++m;
             }
         if (m == 0) break;
         dz = swr / sw;
-        m2 = fmax(0.0, (srr - 2 * dz * sr + m * dz * dz) / m - ss / m);
+        m2 = fmax(0.0, (sqrr - 2 * dz * sqr + dz * dz * sq - sqv) / sq);
     }
     for (y = 0; y < LW; ++y)
         for (x = 0; x < LW; ++x) {
