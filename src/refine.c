@@ -196,7 +196,7 @@ static void interp_shift(const trn_grid_f32_t *global, const trn_grid_f32_t *loc
                          double x, double y, double dz, double model2, const trn_refine_cfg_t *cfg,
                          const double inv[9], double shift[3])
 {
-    int32_t i, j, p;
+    int32_t i, j;
     double g[3] = {0.0, 0.0, 0.0};
     for (j = 0; j < local->height; ++j) {
         for (i = 0; i < local->width; ++i) {
@@ -220,9 +220,9 @@ static void interp_shift(const trn_grid_f32_t *global, const trn_grid_f32_t *loc
             g[2] += (s3[0] - b3[0]) / v;
         }
     }
-    for (p = 0; p < 3; ++p) {
-        shift[p] = inv[p * 3 + 0] * g[0] + inv[p * 3 + 1] * g[1] + inv[p * 3 + 2] * g[2];
-    }
+    shift[0] = inv[0] * g[0] + inv[1] * g[1] + inv[2] * g[2];
+    shift[1] = inv[3] * g[0] + inv[4] * g[1] + inv[5] * g[2];
+    shift[2] = inv[6] * g[0] + inv[7] * g[1] + inv[8] * g[2];
 }
 
 static void block_meat(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
