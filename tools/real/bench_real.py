@@ -2,7 +2,8 @@
 """tools/real/bench_real.py - seeded real-terrain benchmark: trn against two peers.
 
     /usr/bin/python3 tools/real/bench_real.py [--dem ID ...] [--cases N] [--seed S]
-        [--radius R] [--resample bilinear|cubic] [--subcell axis|quad2d] [--trn PATH] [--trn-mode auto|batch|single]
+        [--radius R] [--resample bilinear|cubic] [--truth-fine K] [--subcell axis|quad2d]
+        [--trn PATH] [--trn-mode auto|batch|single]
         [--out DIR] [--keep-cases] [--no-plot] [-- TRN_ARGS...]
 
 For each DEM of tools/real/dems.py (default: all; made or found under build/real/),
@@ -19,6 +20,13 @@ localized by
 * ncc: OpenCV matchTemplate TM_CCOEFF_NORMED + per-axis parabola;
 
 each peer timed with time.perf_counter per localization in the same run.
+
+--truth-fine K (model error): the global map given to trn and the peers is the DEM
+block-averaged over K x K cells (cell K c, written as OUT/ID_meanK.tif), while each
+local DEM is sampled from the ORIGINAL DEM (bilinear on the fine grid at the coarse
+cell spacing, centred on the rover): the rover sees the true terrain, the map is a
+smoothed coarser product. Radius, prior, window, noise and errors are then in coarse
+cells (tools/real/cases.py).
 
 Metrics per DEM and method: success (radial error <= 1.5 cells) rate, median error
 (cells) over all cases and over the successes, median time per localization (ms);
@@ -79,6 +87,8 @@ def parse_args(argv):
     ap.add_argument("--radius", type=int, default=20, help="local map radius R, cells (default 20)")
     ap.add_argument("--resample", default="bilinear", choices=("bilinear", "cubic"),
                     help="local DEM sampling (default bilinear)")
+    ap.add_argument("--truth-fine", type=int, default=None, metavar="K",
+                    help="model error: global map = DEM block-averaged K x K (K >= 2), local maps from the DEM")
     ap.add_argument("--subcell", default="axis", choices=("axis", "quad2d"),
                     help="peers' sub-cell fit: a parabola per axis (default) or the 3x3 2-D quadratic")
     ap.add_argument("--trn", default=os.path.join(dems.ROOT, "build", "host-release", "trn"),
@@ -98,6 +108,8 @@ def parse_args(argv):
             raise Fail(f"unknown DEM '{d}' (known: {', '.join(dems.BY_ID)})")
     if a.cases < 1:
         raise Fail(f"--cases {a.cases}: must be >= 1")
+    if a.truth_fine is not None and a.truth_fine < 2:
+        raise Fail(f"--truth-fine {a.truth_fine}: must be >= 2")
     if not 2 <= a.radius <= 500:
         raise Fail(f"--radius {a.radius}: must be in 2..500")
     if not (os.path.isfile(a.trn) and os.access(a.trn, os.X_OK)):
@@ -242,9 +254,11 @@ def fmt(v, spec):
 
 
 def print_table(dem_id, meta, ms):
+    fine = (f", map = {meta['truth_fine']} x {meta['truth_fine']} block mean of the {meta['fine_cell_m']:g} m "
+            f"DEM the local maps are sampled from") if meta.get("truth_fine") else ""
     print(f"\n{dem_id} ({meta['character']}, held_out={meta['held_out']}): {meta['cols']} x {meta['rows']} "
           f"cells of {meta['cell_m']:g} m, {ms['trn']['n']} cases, R = {meta['radius']} cells, "
-          f"{meta['resample']}, trn {meta['trn_mode']}")
+          f"{meta['resample']}, trn {meta['trn_mode']}{fine}")
     print(f"  {'method':6s} {'success':>12s} {'med err':>8s} {'med err ok':>10s} {'med ms':>8s}  (errors in cells)")
     for k in METHODS:
         m = ms[k]
@@ -270,11 +284,18 @@ def bench_dem(a, dem_id, batch):
     except Exception as e:  # a recipe failed: name it
         raise Fail(f"DEM {dem_id}: {e}")
     dem = casemod.read_dem(path)
+    fine = None
+    if a.truth_fine:
+        fine = dem
+        dem = casemod.block_average(fine, a.truth_fine)
+        os.makedirs(a.out, exist_ok=True)
+        path = casemod.write_global(os.path.join(a.out, f"{dem_id}_mean{a.truth_fine}.tif"), dem, like=fine.path)
+        dem.path = path
     p = casemod.CaseParams(radius=a.radius, resample=a.resample)
     tmp = tempfile.mkdtemp(prefix=f"bench_real_{dem_id}_")
     try:
         t0 = time.perf_counter()
-        cs = casemod.generate(dem, a.cases, a.seed, p, tmp)
+        cs = casemod.generate(dem, a.cases, a.seed, p, tmp, fine)
         gen_s = time.perf_counter() - t0
         lst = os.path.join(tmp, "cases.txt")
         print(f"bench_real: {dem_id}: {a.cases} cases in {gen_s:.1f} s; trn ({'batch' if batch else 'single'})",
@@ -309,7 +330,9 @@ def bench_dem(a, dem_id, batch):
                 "cell_m": dem.c, "rows": dem.z.shape[0], "cols": dem.z.shape[1], "radius": a.radius,
                 "window_m": p.window_cells * dem.c, "prior_cells": p.prior_cells, "resample": a.resample,
                 "trn_mode": "batch" if batch else "single", "trn_wall_ms": trn_wall,
-                "opencv_mask": peers.mask_supported()}
+                "opencv_mask": peers.mask_supported(), "truth_fine": a.truth_fine,
+                "fine_cell_m": fine.c if fine is not None else None,
+                "fine_path": fine.path if fine is not None else None}
         # the figure's case: the first trn success (else case 0); keep its local DEM
         pick = next((r["index"] for r in records if r["trn"]["err_cells"] <= SUCCESS_CELLS), 0)
         os.makedirs(a.out, exist_ok=True)
@@ -349,7 +372,7 @@ def main(argv):
         mode = a.trn_mode
         batch = trn_has_batch(a.trn) if mode == "auto" else mode == "batch"
         res = {"config": {"cases": a.cases, "seed": a.seed, "radius": a.radius, "resample": a.resample,
-                          "subcell": a.subcell, "trn": a.trn, "trn_args": a.trn_extra, "success_cells": SUCCESS_CELLS},
+                          "subcell": a.subcell, "truth_fine": a.truth_fine, "trn": a.trn, "trn_args": a.trn_extra, "success_cells": SUCCESS_CELLS},
                "dems": {}}
         for d in a.dem:
             r = bench_dem(a, d, batch)

@@ -16,6 +16,14 @@ For a global DEM G (north-up, square cell c metres) a case is:
 * prior: truth + a uniform offset in +-prior_cells cells per axis; search window
   +-window_cells cells (half-width, metres in the list file).
 
+Model error (`fine`, bench_real.py --truth-fine K): the global map G is then the fine
+DEM F block-averaged over K x K cells (block_average: cell c = K c_F, the same
+corner, so coarse cell (I, J)'s centre is the centroid of F's cells (KI..KI+K-1,
+KJ..KJ+K-1)), and the local DEM is sampled from F instead (bilinear on F's grid at
+truth + ((j-R)c, (R-i)c), c the COARSE cell): the rover sees the true surface, the
+map is a smoothed coarser product. Truth, prior, window, radius, visibility and
+noise are all in coarse cells, as without `fine`.
+
 Map coordinates of global cell (row, col)'s centre: x = x0 + (col + 0.5) c,
 y = y0 - (row + 0.5) c, with (x0, c, 0, y0, 0, -c) the DEM's geotransform.
 """
@@ -69,6 +77,40 @@ def read_dem(path):
     mask = b.GetMaskBand().ReadAsArray()
     z[mask == 0] = np.nan
     return Dem(z, gt[0], gt[3], gt[1], path)
+
+
+def block_average(dem, k):
+    """`dem` averaged over k x k blocks of cells: cell k c, the same north-west corner
+    (x0, y0); trailing rows / columns that do not fill a block are dropped; a block
+    with any missing cell is missing."""
+    k = int(k)
+    if k < 1:
+        raise InputError(f"block size {k}: must be >= 1")
+    nr, nc = dem.z.shape[0] // k, dem.z.shape[1] // k
+    if nr < 1 or nc < 1:
+        raise InputError(f"{dem.path}: smaller than one {k} x {k} block")
+    z = dem.z[:nr * k, :nc * k].reshape(nr, k, nc, k).mean(axis=(1, 3))
+    return Dem(z, dem.x0, dem.y0, dem.c * k, dem.path)
+
+
+def write_global(path, dem, like=None):
+    """`dem` as a north-up float32 GeoTIFF (no-data NaN), with the CRS of the raster
+    `like` (none without it)."""
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    tmp = path + ".part.tif"
+    ds = gdal.GetDriverByName("GTiff").Create(tmp, dem.z.shape[1], dem.z.shape[0], 1, gdal.GDT_Float32,
+                                              options=["COMPRESS=DEFLATE", "TILED=YES"])
+    ds.SetGeoTransform((dem.x0, dem.c, 0.0, dem.y0, 0.0, -dem.c))
+    if like is not None:
+        wkt = gdal.Open(like).GetProjection()
+        if wkt:
+            ds.SetProjection(wkt)
+    b = ds.GetRasterBand(1)
+    b.SetNoDataValue(float("nan"))
+    b.WriteArray(dem.z.astype(np.float32))
+    ds = None
+    os.replace(tmp, path)
+    return path
 
 
 def write_local(path, z, c):
@@ -170,14 +212,18 @@ def visibility(radius, c, azimuth_deg, p):
     return seen
 
 
-def make_local(dem, truth, p, rng=None, azimuth_deg=0.0, offset_m=0.0):
-    """The local DEM (heights + offset + noise, NaN unseen) of a rover at truth."""
+def make_local(dem, truth, p, rng=None, azimuth_deg=0.0, offset_m=0.0, fine=None):
+    """The local DEM (heights + offset + noise, NaN unseen) of a rover at truth: cells
+    of dem's cell size, heights sampled from `fine` (the true surface) if given, else
+    from dem itself."""
     R = p.radius
-    fr, fc = dem.frac_index(*truth)
+    src = dem if fine is None else fine
+    scale = 1.0 if fine is None else dem.c / fine.c  # source cells per local cell
+    fr, fc = src.frac_index(*truth)
     k = np.arange(-R, R + 1)
-    rows = fr + k[:, None] + 0 * k[None, :]
-    cols = fc + k[None, :] + 0 * k[:, None]
-    h = sample(dem.z, rows, cols, p.resample) + offset_m
+    rows = fr + k[:, None] * scale + 0 * k[None, :]
+    cols = fc + k[None, :] * scale + 0 * k[:, None]
+    h = sample(src.z, rows, cols, p.resample) + offset_m
     seen = visibility(R, dem.c, azimuth_deg, p)
     if p.noise and rng is not None:
         e, n = rover_frame_offsets(R, dem.c)
@@ -205,9 +251,11 @@ def draw_truth(dem, rng, p, tries=10000):
     raise InputError(f"{dem.path}: no position with a mostly valid local map")
 
 
-def generate(dem, n, seed, p, folder=None):
+def generate(dem, n, seed, p, folder=None, fine=None):
     """n seeded cases; with `folder`, each local DEM is written there as a GeoTIFF
-    and a batch list (LOCAL.tif PRIOR_X PRIOR_Y WINDOW_M per line) as cases.txt."""
+    and a batch list (LOCAL.tif PRIOR_X PRIOR_Y WINDOW_M per line) as cases.txt.
+    With `fine` (the surface dem was block-averaged from) the local DEMs are sampled
+    from it (model error); everything else is in dem's cells."""
     rng = np.random.default_rng(seed)
     c = dem.c
     cases = []
@@ -215,7 +263,7 @@ def generate(dem, n, seed, p, folder=None):
         truth = draw_truth(dem, rng, p)
         az = float(rng.uniform(-180.0, 180.0))
         off = float(rng.uniform(-p.offset_m, p.offset_m))
-        local, seen = make_local(dem, truth, p, rng, az, off)
+        local, seen = make_local(dem, truth, p, rng, az, off, fine)
         d = rng.uniform(-p.prior_cells, p.prior_cells, 2) * c
         prior = (truth[0] + float(d[0]), truth[1] + float(d[1]))
         cases.append(Case(i, truth, prior, p.window_cells * c, local, seen, az, off))

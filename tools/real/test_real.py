@@ -17,6 +17,13 @@ On small synthetic DEMs with analytic surfaces (no download, ~10 s):
   is biased, printed for information); an integer-offset case is recovered exactly by both
   peers (integer pose = the truth's cell; the per-axis parabola then moves it by less
   than 0.02 cell: s(-1) and s(+1) differ by the window's edge terms);
+* model error (--truth-fine K): the block average's frame (a plane's block means are
+  the plane at the coarse cell centres; a sinusoid's are attenuated by the known
+  factor sin(pi K c / L) / (K sin(pi c / L)), phase kept, along rows and columns);
+  the written coarse GeoTIFF; local maps from the fine DEM at the coarse spacing equal
+  the coarse map's bilinear interpolation exactly on a plane; on smooth terrain
+  (wavelengths of 10-20 coarse cells) the SSD peer on the coarse map recovers sub-cell
+  truths without bias (a half-fine-cell frame slip would be (K-1)/2K coarse cells);
 * bench_real.py exits 1 with one line on bad input;
 * if build/host-release/trn exists: trn localize recovers the noiseless integer case
   (frame agreement of the local file with trn; reported, not required).
@@ -255,10 +262,93 @@ def test_trn(dem, local, seen, truth, prior):
               f"(status {j['status']}; reported only)")
 
 
+def test_truth_fine():
+    K, cf = 3, 10.0
+    cc = K * cf
+    # plane: block means = the plane at the coarse centres; local = coarse bilinear
+    fine = synth_dem(plane, n=240, c=cf)
+    g = cm.block_average(fine, K)
+    rows = np.arange(g.z.shape[0])
+    X, Y = g.xy(rows[:, None] + 0.0, rows[None, :] + 0.0)
+    X, Y = np.broadcast_arrays(X, Y)
+    check(g.c == cc and g.z.shape == (80, 80) and np.abs(g.z - plane(Y * 0 + X, Y)).max() < 1e-9,
+          f"block mean of a plane ({K} x {K}) = the plane at the coarse cell centres")
+    R = 10
+    p = cm.CaseParams(radius=R, noise=False, full_view=True, min_range_cells=0)
+    truth = (1000 + 1217.3, 4000 - 1093.9)
+    local, seen = cm.make_local(g, truth, p, None, 0.0, 4.5, fine)
+    k = np.arange(-R, R + 1)
+    fr, fc = g.frac_index(*truth)
+    kr, kc = np.broadcast_arrays(k[:, None] + 0.0, k[None, :] + 0.0)
+    want = cm.sample(g.z, fr + kr, fc + kc) + 4.5
+    exact = plane(truth[0] + kc * cc, truth[1] - kr * cc) + 4.5
+    d1 = np.abs(local - want)[seen].max()
+    d2 = np.abs(local - exact)[seen].max()
+    check(seen.sum() > 300 and d1 < 1e-9 and d2 < 1e-9,
+          f"plane: local map from the fine DEM at the coarse spacing = the coarse map's bilinear "
+          f"interpolation = the plane at truth + ((j-R)c', (R-i)c') (max diffs {d1:.1e}, {d2:.1e} m)")
+    # sinusoids along x and along y: the known attenuation, no phase shift
+    L1, L2 = 7.3 * cf, 11.9 * cf
+
+    def sines(x, y):
+        return 20 * np.sin(2 * np.pi * x / L1 + 0.4) + 12 * np.cos(2 * np.pi * y / L2 - 1.1)
+    fine = synth_dem(sines, n=240, c=cf)
+    g = cm.block_average(fine, K)
+    a1 = math.sin(math.pi * K * cf / L1) / (K * math.sin(math.pi * cf / L1))
+    a2 = math.sin(math.pi * K * cf / L2) / (K * math.sin(math.pi * cf / L2))
+    want = 20 * a1 * np.sin(2 * np.pi * X / L1 + 0.4) + 12 * a2 * np.cos(2 * np.pi * Y / L2 - 1.1)
+    err = np.abs(g.z - want).max()
+    check(err < 1e-9, f"block mean of sinusoids: amplitude x {a1:.4f} (x) and {a2:.4f} (y), phase kept "
+                      f"(max err {err:.1e} m)")
+    fine.z[5, 7] = np.nan
+    check(np.isnan(cm.block_average(fine, K).z[1, 2]) and np.isfinite(cm.block_average(fine, K).z[1, 1]),
+          "a block with a missing cell is missing")
+    # the written coarse map
+    with tempfile.TemporaryDirectory() as tmp:
+        src = os.path.join(tmp, "fine.tif")
+        ds = gdal.GetDriverByName("GTiff").Create(src, 30, 20, 1, gdal.GDT_Float32)
+        ds.SetGeoTransform((500.0, 2.0, 0, 9000.0, 0, -2.0))
+        from osgeo import osr
+        sr = osr.SpatialReference()
+        sr.ImportFromEPSG(32615)
+        ds.SetProjection(sr.ExportToWkt())
+        ds.GetRasterBand(1).WriteArray(np.arange(600, dtype=np.float32).reshape(20, 30))
+        ds = None
+        f = cm.read_dem(src)
+        out = cm.write_global(os.path.join(tmp, "g.tif"), cm.block_average(f, 4), like=src)
+        ds = gdal.Open(out)
+        srs = osr.SpatialReference(wkt=ds.GetProjection())
+        zz = ds.GetRasterBand(1).ReadAsArray()
+        check(ds.GetGeoTransform() == (500.0, 8.0, 0, 9000.0, 0, -8.0) and zz.shape == (5, 7)
+              and srs.GetAuthorityCode(None) == "32615" and zz[0, 0] == np.arange(600).reshape(20, 30)[:4, :4].mean(),
+              f"coarse GeoTIFF: corner kept, cell 4 c, trailing cells dropped, CRS copied ({zz.shape})")
+    # smooth terrain: SSD on the coarse map, local maps from the fine DEM, no noise
+    smooth = waves(12, 10 * cc, 20 * cc, 4)
+    fine = synth_dem(smooth, n=330, c=cf)
+    g = cm.block_average(fine, K)
+    rng = np.random.default_rng(3)
+    p = cm.CaseParams(radius=20, noise=False, full_view=True)
+    m = p.margin_cells
+    errs = []
+    for _ in range(20):
+        tr = g.xy(rng.uniform(m, g.z.shape[0] - 1 - m), rng.uniform(m, g.z.shape[1] - 1 - m))
+        loc, seen = cm.make_local(g, tr, p, None, 0.0, 0.0, fine)
+        prior = (tr[0] + rng.uniform(-3, 3) * cc, tr[1] + rng.uniform(-3, 3) * cc)
+        x, y, _ = peers.ssd(g, loc, seen, prior, 6 * cc, "quad2d")
+        errs.append(((x - tr[0]) / cc, (y - tr[1]) / cc))
+    errs = np.array(errs)
+    worst = np.hypot(errs[:, 0], errs[:, 1]).max()
+    bias = np.hypot(*errs.mean(axis=0))
+    check(worst < 0.05 and bias < 0.02, f"K = {K}, smooth terrain, no noise: SSD (2-D fit) on the coarse map "
+                                        f"within 0.05 coarse cell (worst of 20 {worst:.3f}, mean error "
+                                        f"{bias:.3f}; a frame slip would be {(K - 1) / (2 * K):.2f})")
+
+
 def test_cli():
     b = os.path.join(HERE, "bench_real.py")
     for args, what in ((["--dem", "no_such_dem"], "unknown DEM"), (["--cases", "0"], "--cases 0"),
-                       (["--trn", "/nonexistent/trn"], "missing trn"), (["--bogus"], "unknown option")):
+                       (["--trn", "/nonexistent/trn"], "missing trn"), (["--bogus"], "unknown option"),
+                      (["--truth-fine", "1"], "--truth-fine 1")):
         r = subprocess.run([sys.executable, b] + args, capture_output=True, text=True)
         check(r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1 and r.stdout == "",
               f"bench_real {what}: exit 1, one line ({r.stderr.strip()})")
@@ -269,6 +359,7 @@ def main():
     test_file()
     test_generate()
     test_noise()
+    test_truth_fine()
     case = test_peers()
     test_trn(*case)
     test_cli()
