@@ -48,13 +48,13 @@ trn_status_t trn_select_cfg_check(const trn_select_cfg_t *cfg, float cell_m)
         return st;
     }
     if (!(cell_m > 0.0f && cell_m <= 1000.0f) ||
-        !(cfg->max_range_m > 0.0f && cfg->max_range_m <= 1000.0f) ||
+        !(cfg->max_range_m > 0.0f && cfg->max_range_m <= 1.0e6f) ||
         !(cfg->min_range_m >= 0.0f && cfg->min_range_m <= cfg->max_range_m) ||
         !(cfg->pan_min_rad >= (float)-SEL_PI && cfg->pan_max_rad <= (float)SEL_PI &&
           cfg->pan_min_rad <= cfg->pan_max_rad) ||
-        !(cfg->footprint_radius_m >= 0.0f && cfg->footprint_radius_m <= 100.0f) ||
-        !(cfg->patch_m > 0.0f && cfg->patch_m <= 1000.0f) ||
-        !(cfg->min_separation_m >= 0.0f && cfg->min_separation_m <= 1000.0f) ||
+        !(cfg->footprint_radius_m >= 0.0f && cfg->footprint_radius_m <= 1.0e5f) ||
+        !(cfg->patch_m > 0.0f && cfg->patch_m <= 1.0e6f) ||
+        !(cfg->min_separation_m >= 0.0f && cfg->min_separation_m <= 1.0e6f) ||
         cfg->stride_cells < 1 || cfg->stride_cells > 64) {
         return TRN_E_ARG;
     }

@@ -26,7 +26,7 @@ trn_status_t trn_sigma_model_check(const trn_sigma_model_t *m)
     if (m == NULL) {
         return TRN_E_NULL;
     }
-    if (!(m->sigma_min_m >= 0.0f && m->sigma_min_m <= 100.0f) ||
+    if (!(m->sigma_min_m >= 0.0f && m->sigma_min_m <= 1.0e5f) ||
         !(m->k_per_m >= 0.0f && m->k_per_m <= 100.0f)) {
         return TRN_E_ARG;
     }

@@ -68,7 +68,9 @@ static void test_sigma_model_clauses(void **state)
     b.sigma_min_m = -0.1f;
     assert_int_equal(trn_sigma_model_check(&b), TRN_E_ARG);
     b = m;
-    b.sigma_min_m = 100.5f;
+    b.sigma_min_m = 1.0e5f;
+    assert_int_equal(trn_sigma_model_check(&b), TRN_OK);
+    b.sigma_min_m = 1.01e5f;
     assert_int_equal(trn_sigma_model_check(&b), TRN_E_ARG);
     b = m;
     b.k_per_m = -0.1f;
@@ -340,8 +342,11 @@ static void test_select_cfg_clauses(void **state)
     b = c;
     b.max_range_m = 0.0f;
     assert_int_equal(trn_select_cfg_check(&b, CELL), TRN_E_ARG);
-    b.max_range_m = 1000.5f;
-    assert_int_equal(trn_select_cfg_check(&b, CELL), TRN_E_ARG);
+    b.max_range_m = 1.01e6f;
+    assert_int_equal(trn_select_cfg_check(&b, 1000.0f), TRN_E_ARG);
+    b.max_range_m = 1.0e6f; /* 1000 cells of 1 km, a 5-cell patch: accepted */
+    b.patch_m = 5000.0f;
+    assert_int_equal(trn_select_cfg_check(&b, 1000.0f), TRN_OK);
     b = c;
     b.min_range_m = -0.1f;
     assert_int_equal(trn_select_cfg_check(&b, CELL), TRN_E_ARG);
@@ -354,17 +359,17 @@ static void test_select_cfg_clauses(void **state)
     b = c;
     b.footprint_radius_m = -0.1f;
     assert_int_equal(trn_select_cfg_check(&b, CELL), TRN_E_ARG);
-    b.footprint_radius_m = 100.5f;
+    b.footprint_radius_m = 1.01e5f;
     assert_int_equal(trn_select_cfg_check(&b, CELL), TRN_E_ARG);
     b = c;
     b.patch_m = 0.0f;
     assert_int_equal(trn_select_cfg_check(&b, CELL), TRN_E_ARG);
-    b.patch_m = 1000.5f;
-    assert_int_equal(trn_select_cfg_check(&b, CELL), TRN_E_ARG);
+    b.patch_m = 1.01e6f;
+    assert_int_equal(trn_select_cfg_check(&b, 1000.0f), TRN_E_ARG);
     b = c;
     b.min_separation_m = -0.1f;
     assert_int_equal(trn_select_cfg_check(&b, CELL), TRN_E_ARG);
-    b.min_separation_m = 1000.5f;
+    b.min_separation_m = 1.01e6f;
     assert_int_equal(trn_select_cfg_check(&b, CELL), TRN_E_ARG);
     b = c;
     b.stride_cells = 65;

@@ -46,13 +46,13 @@ extern "C" {
 /** Candidate rules (see the file comment). */
 typedef struct {
     float min_range_m;        /**< nearest target, m, [0, max_range_m] */
-    float max_range_m;        /**< farthest target, m, (0, 1000] */
+    float max_range_m;        /**< farthest target, m, (0, 1e6], at most TRN_MAX_DIM cells */
     float pan_min_rad;        /**< bearing limits relative to the heading, */
     float pan_max_rad;        /**< [-pi, pi], min <= max */
-    float footprint_radius_m; /**< rover disc no patch may touch, m, [0, 100] */
+    float footprint_radius_m; /**< rover disc no patch may touch, m, [0, 1e5] */
     float patch_m;            /**< patch side, m; >= 3 cells after rounding (file comment) */
     int32_t stride_cells;     /**< candidate lattice step, 1..64 */
-    float min_separation_m;   /**< least distance between ranked targets, m, [0, 1000] */
+    float min_separation_m;   /**< least distance between ranked targets, m, [0, 1e6] */
     trn_sigma_model_t local_sigma; /**< eq. 9 error model of the new local map */
 } trn_select_cfg_t;
 

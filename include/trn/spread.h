@@ -58,7 +58,7 @@ typedef struct {
 
 /** Range-error model: sigma_m(r) = sigma_min_m + k_per_m * r_m^2. */
 typedef struct {
-    float sigma_min_m; /**< error at the sensor, metres, [0, 100] */
+    float sigma_min_m; /**< error at the sensor, metres, [0, 1e5] (km-cell maps scale it) */
     float k_per_m;     /**< growth with squared range, 1/m, [0, 100] */
 } trn_sigma_model_t;
 

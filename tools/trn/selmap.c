@@ -51,7 +51,7 @@ void selmap_opts_default(selmap_opts_t *o, long stride_cells) {
 
 void selmap_gerr_opts(selmap_opts_t *o, cli_opt_t *d) {
   const cli_opt_t t[SELMAP_N_GERR_OPTS] = {
-      {"--global-sigma-m", CLI_DOUBLE, &o->gsig_m, 0.0, 100.0, 0, "S0",
+      {"--global-sigma-m", CLI_DOUBLE, &o->gsig_m, 0.0, 1e5, 0, "S0",
        "global map's error at its sensing position, m (eq. 8: S0 + K r^2; default 0.02)", 0},
       {"--global-sigma-k", CLI_DOUBLE, &o->gsig_k, 0.0, 100.0, 0, "K",
        "global map's error growth with squared range from the nearest sensing position, 1/m (default 0.001)", 0},
@@ -178,14 +178,14 @@ void selmap_opts(selmap_opts_t *o, cli_opt_t *d) {
        "rover heading, degrees counter-clockwise from east (default 0)", 0},
       {"--pan-deg", CLI_XY, o->pan_deg, 0, 0, 0, "MIN,MAX",
        "bearings the mast can look at, degrees from the heading, CCW positive (default -180,180)", 0},
-      {"--min-range-m", CLI_DOUBLE, &o->min_range_m, 0.0, 1000.0, 0, "R", "nearest target, m (default 1)", 0},
-      {"--max-range-m", CLI_DOUBLE, &o->max_range_m, 1e-3, 1000.0, 0, "R", "farthest target, m (default 10)", 0},
-      {"--footprint-m", CLI_DOUBLE, &o->footprint_m, 0.0, 100.0, 0, "R",
+      {"--min-range-m", CLI_DOUBLE, &o->min_range_m, 0.0, 1e6, 0, "R", "nearest target, m (default 1)", 0},
+      {"--max-range-m", CLI_DOUBLE, &o->max_range_m, 1e-3, 1e6, 0, "R", "farthest target, m (default 10)", 0},
+      {"--footprint-m", CLI_DOUBLE, &o->footprint_m, 0.0, 1e5, 0, "R",
        "rover footprint radius no patch may touch, m (default 0.5)", 0},
-      {"--patch-m", CLI_DOUBLE, &o->patch_m, 1e-3, 1000.0, 0, "S",
+      {"--patch-m", CLI_DOUBLE, &o->patch_m, 1e-3, 1e6, 0, "S",
        "side of the sensed patch, m (default 2; at least 3 cells)", 0},
       {"--stride-cells", CLI_LONG, &o->stride_cells, 1, 64, 0, "N", NULL, 0},
-      {"--separation-m", CLI_DOUBLE, &o->separation_m, 0.0, 1000.0, 0, "D",
+      {"--separation-m", CLI_DOUBLE, &o->separation_m, 0.0, 1e6, 0, "D",
        "least distance between ranked targets, m (default 1)", 0},
       {"--sensors", CLI_STRING, &o->sensors, 0, 0, 0, "X,Y[;X,Y..]",
        "where the global map was sensed from, map m, up to 64 (default: the DEM's centre)", 0},
