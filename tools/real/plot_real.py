@@ -35,6 +35,7 @@ gdal.UseExceptions()
 
 def fig_reliability(res):
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11, 4.8))
+    bw = 0.8 / max(1, len(res["dems"]))  # one group of bars per sigma level, all DEMs inside it
     ax.plot([0, 1], [0, 1], color="0.6", lw=1, ls="--", label="perfect")
     for k, (dem_id, r) in enumerate(res["dems"].items()):
         bins = [b for b in r["metrics"]["trn"]["reliability"] if b["n"]]
@@ -49,8 +50,8 @@ def fig_reliability(res):
             ax.annotate(f"{int(ni)}", (xi, yi), textcoords="offset points", xytext=(4, -10), fontsize=7)
         cal = r["metrics"]["trn"]["calibration"]
         if cal["n"]:
-            xs = np.arange(3) + 0.25 * k
-            ax2.bar(xs, [v or 0 for v in cal["inside_pct"]], width=0.25, color=line.get_color(),
+            xs = np.arange(3) - 0.4 + bw * (k + 0.5)
+            ax2.bar(xs, [v or 0 for v in cal["inside_pct"]], width=bw, color=line.get_color(),
                     label=f"{dem_id} (n = {cal['n']})")
     ax.set_xlim(-0.02, 1.02)
     ax.set_ylim(-0.02, 1.02)
@@ -59,7 +60,7 @@ def fig_reliability(res):
     ax.set_title("trn reliability (marker size: cases in bin)")
     ax.legend(fontsize=8, loc="upper left")
     for i, t in enumerate((39.3, 86.5, 98.9)):
-        ax2.hlines(t, i - 0.2, i + 0.2 + 0.25 * (len(res["dems"]) - 1), color="k", lw=2)
+        ax2.hlines(t, i - 0.42, i + 0.42, color="k", lw=2)
     ax2.set_xticks(range(3), ["1 sigma", "2 sigma", "3 sigma"])
     ax2.set_ylabel("successes inside the ellipse (%)")
     ax2.set_title("trn covariance calibration (black: target)")
