@@ -158,12 +158,10 @@ trn_status_t trn_rigid_apply(const trn_rigid_t *T, const trn_vec3f_t *in, size_t
     return TRN_OK;
 }
 
-trn_status_t trn_mast_local_dem(const trn_vec3f_t *pts, size_t n, const trn_rover_pose_t *pose,
-                                const trn_local_dem_cfg_t *cfg, trn_grid_f32_t *dem, size_t *n_used)
+/* Argument checks shared by the two local DEM builders. */
+static trn_status_t local_dem_args(const trn_vec3f_t *pts, size_t n, const trn_rover_pose_t *pose,
+                                   const trn_local_dem_cfg_t *cfg, const trn_grid_f32_t *dem)
 {
-    int32_t x, y;
-    size_t i, used = 0u;
-    float inv;
     if (dem == NULL || pose == NULL || cfg == NULL || (pts == NULL && n > 0u)) {
         return TRN_E_NULL;
     }
@@ -177,33 +175,105 @@ trn_status_t trn_mast_local_dem(const trn_vec3f_t *pts, size_t n, const trn_rove
         !isfinite(pose->x_m) || !isfinite(pose->y_m)) {
         return TRN_E_ARG;
     }
+    return TRN_OK;
+}
+
+/* The cell (c, r) of point p; 0 when p is not finite or off the grid. */
+static int local_cell(const trn_vec3f_t *p, const trn_rover_pose_t *pose, const trn_local_dem_cfg_t *cfg,
+                      const trn_grid_f32_t *dem, float inv, int32_t *c, int32_t *r)
+{
+    float fc, fr;
+    if (!finite3(p->x, p->y, p->z)) {
+        return 0;
+    }
+    fc = floorf((p->x - pose->x_m) * inv + 0.5f);
+    fr = floorf((p->y - pose->y_m) * inv + 0.5f);
+    /* outside +-2*TRN_MAX_DIM cells cannot be on the grid; keeps the
+     * conversion to int32 defined (written so that NaN is skipped too) */
+    if (!(fabsf(fc) <= (float)(2 * TRN_MAX_DIM)) || !(fabsf(fr) <= (float)(2 * TRN_MAX_DIM))) {
+        return 0;
+    }
+    *c = cfg->rover_col + (int32_t)fc;
+    *r = cfg->rover_row + cfg->row_north * (int32_t)fr;
+    return *c >= 0 && *c < dem->width && *r >= 0 && *r < dem->height;
+}
+
+static void fill_nan(trn_grid_f32_t *dem)
+{
+    int32_t x, y;
     for (y = 0; y < dem->height; ++y) {
         for (x = 0; x < dem->width; ++x) {
             TRN_GRID_AT(dem, x, y) = NAN;
         }
     }
+}
+
+trn_status_t trn_mast_local_dem(const trn_vec3f_t *pts, size_t n, const trn_rover_pose_t *pose,
+                                const trn_local_dem_cfg_t *cfg, trn_grid_f32_t *dem, size_t *n_used)
+{
+    size_t i, used = 0u;
+    float inv;
+    trn_status_t st = local_dem_args(pts, n, pose, cfg, dem);
+    if (st != TRN_OK) {
+        return st;
+    }
+    fill_nan(dem);
     inv = 1.0f / cfg->cell_m;
     for (i = 0u; i < n; ++i) {
-        float fc, fr, *cell;
+        float *cell;
         int32_t c, r;
-        if (!finite3(pts[i].x, pts[i].y, pts[i].z)) {
-            continue;
-        }
-        fc = floorf((pts[i].x - pose->x_m) * inv + 0.5f);
-        fr = floorf((pts[i].y - pose->y_m) * inv + 0.5f);
-        /* outside +-2*TRN_MAX_DIM cells cannot be on the grid; keeps the
-         * conversion to int32 defined (written so that NaN is skipped too) */
-        if (!(fabsf(fc) <= (float)(2 * TRN_MAX_DIM)) || !(fabsf(fr) <= (float)(2 * TRN_MAX_DIM))) {
-            continue;
-        }
-        c = cfg->rover_col + (int32_t)fc;
-        r = cfg->rover_row + cfg->row_north * (int32_t)fr;
-        if (c < 0 || c >= dem->width || r < 0 || r >= dem->height) {
+        if (!local_cell(&pts[i], pose, cfg, dem, inv, &c, &r)) {
             continue;
         }
         cell = &TRN_GRID_AT(dem, c, r);
         if (!(*cell >= pts[i].z)) { /* NaN or lower */
             *cell = pts[i].z;
+        }
+        ++used;
+    }
+    if (n_used != NULL) {
+        *n_used = used;
+    }
+    return (used == 0u) ? TRN_E_NODATA : TRN_OK;
+}
+
+trn_status_t trn_mast_local_dem_mean(const trn_vec3f_t *pts, size_t n, const trn_rover_pose_t *pose,
+                                     const trn_local_dem_cfg_t *cfg, trn_grid_f32_t *dem, uint32_t *counts,
+                                     size_t counts_len, size_t *n_used)
+{
+    size_t i, used = 0u, k;
+    float inv;
+    trn_status_t st = local_dem_args(pts, n, pose, cfg, dem);
+    if (st != TRN_OK) {
+        return st;
+    }
+    if (counts == NULL) {
+        return TRN_E_NULL;
+    }
+    if (counts_len < (size_t)dem->width * (size_t)dem->height) {
+        return TRN_E_WORKSPACE;
+    }
+    fill_nan(dem);
+    for (k = 0u; k < (size_t)dem->width * (size_t)dem->height; ++k) {
+        counts[k] = 0u;
+    }
+    inv = 1.0f / cfg->cell_m;
+    for (i = 0u; i < n; ++i) {
+        float *cell;
+        uint32_t *cnt;
+        int32_t c, r;
+        if (!local_cell(&pts[i], pose, cfg, dem, inv, &c, &r)) {
+            continue;
+        }
+        cell = &TRN_GRID_AT(dem, c, r);
+        cnt = &counts[(size_t)r * (size_t)dem->width + (size_t)c];
+        /* running mean (Welford): no large sums, absolute heights keep
+         * their precision */
+        *cnt += 1u;
+        if (*cnt == 1u) {
+            *cell = pts[i].z;
+        } else {
+            *cell += (pts[i].z - *cell) / (float)*cnt;
         }
         ++used;
     }

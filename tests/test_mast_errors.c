@@ -291,6 +291,59 @@ static void test_local_dem_checks_and_skips(void **state)
     assert_int_equal(trn_mast_local_dem(pts, 1u, &pb, &c, &dem, &used), TRN_E_ARG);
 }
 
+/* trn_mast_local_dem_mean: the mean of each cell's points (against the
+ * obvious sum / count), the same skips and argument checks as the highest-
+ * point builder, and its own two statuses. */
+static void test_local_dem_mean(void **state)
+{
+    const trn_rover_pose_t p = {10.0f, 20.0f, 0.0f, 0.0f};
+    trn_local_dem_cfg_t c = {0.5f, 2, 2, 1}, cb;
+    trn_vec3f_t pts[8];
+    float cells[25];
+    uint32_t cnt[25];
+    trn_grid_f32_t dem;
+    size_t used = 0u;
+    int i;
+    (void)state;
+    assert_int_equal(trn_grid_f32_init(&dem, cells, 25u, 5, 5), TRN_OK);
+    /* rover cell: 1, 2, 6 (mean 3); one cell north-east: 4000.25, 4000.75
+     * (mean 4000.5: absolute heights keep their precision); off the grid;
+     * not finite */
+    pts[0].x = 10.0f; pts[0].y = 20.0f; pts[0].z = 1.0f;
+    pts[1].x = 10.1f; pts[1].y = 19.9f; pts[1].z = 2.0f;
+    pts[2].x = 9.9f; pts[2].y = 20.2f; pts[2].z = 6.0f;
+    pts[3].x = 10.5f; pts[3].y = 20.5f; pts[3].z = 4000.25f;
+    pts[4].x = 10.6f; pts[4].y = 20.4f; pts[4].z = 4000.75f;
+    pts[5].x = 8.5f; pts[5].y = 20.0f; pts[5].z = 9.0f;
+    pts[6].x = 10.0f; pts[6].y = 20.0f; pts[6].z = NAN;
+    pts[7].x = 1.0e9f; pts[7].y = 20.0f; pts[7].z = 9.0f;
+    assert_int_equal(trn_mast_local_dem_mean(pts, 8u, &p, &c, &dem, cnt, 25u, &used), TRN_OK);
+    assert_int_equal((int)used, 5);
+    assert_true(fabsf(TRN_GRID_AT(&dem, 2, 2) - 3.0f) < 1e-6f);
+    assert_true(fabsf(TRN_GRID_AT(&dem, 3, 3) - 4000.5f) < 1e-3f);
+    assert_int_equal((int)cnt[2 * 5 + 2], 3);
+    assert_int_equal((int)cnt[3 * 5 + 3], 2);
+    for (i = 0; i < 25; ++i) {
+        if (i != 12 && i != 18) {
+            assert_true(isnan(cells[i]) && cnt[i] == 0u);
+        }
+    }
+    /* the highest point of the same cells, for contrast */
+    assert_int_equal(trn_mast_local_dem(pts, 8u, &p, &c, &dem, &used), TRN_OK);
+    assert_true(TRN_GRID_AT(&dem, 2, 2) == 6.0f);
+    /* statuses */
+    assert_int_equal(trn_mast_local_dem_mean(&pts[5], 3u, &p, &c, &dem, cnt, 25u, NULL), TRN_E_NODATA);
+    assert_int_equal(trn_mast_local_dem_mean(pts, 1u, &p, &c, &dem, NULL, 25u, &used), TRN_E_NULL);
+    assert_int_equal(trn_mast_local_dem_mean(pts, 1u, &p, &c, &dem, cnt, 24u, &used), TRN_E_WORKSPACE);
+    assert_int_equal(trn_mast_local_dem_mean(pts, 1u, NULL, &c, &dem, cnt, 25u, &used), TRN_E_NULL);
+    assert_int_equal(trn_mast_local_dem_mean(NULL, 1u, &p, &c, &dem, cnt, 25u, &used), TRN_E_NULL);
+    cb = c;
+    cb.row_north = 0;
+    assert_int_equal(trn_mast_local_dem_mean(pts, 1u, &p, &cb, &dem, cnt, 25u, &used), TRN_E_ARG);
+    dem.width = 0;
+    assert_int_equal(trn_mast_local_dem_mean(pts, 1u, &p, &c, &dem, cnt, 25u, &used), TRN_E_SIZE);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -300,6 +353,7 @@ int main(void)
         cmocka_unit_test(test_point_at_target_behind_the_tilt_axis),
         cmocka_unit_test(test_camera_to_map_each_argument),
         cmocka_unit_test(test_local_dem_checks_and_skips),
+        cmocka_unit_test(test_local_dem_mean),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

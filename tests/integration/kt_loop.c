@@ -10,7 +10,7 @@
  * says in position -> trigger pulse on the GPIO line (the simulator samples
  * the gpio-sim side and exposes at the rising edge) -> CAPTURE_CMD ->
  * capture over the kernel's ISO-TP socket into trn_capture_rx_segment ->
- * trn_mast_camera_to_map with the angles at exposure -> trn_mast_local_dem
+ * trn_mast_camera_to_map with the angles at exposure -> trn_mast_local_dem_mean
  * -> trn_localize_dem in a +-1.5 m window around the believed position ->
  * error against the true position and the predicted sigma.
  *
@@ -44,6 +44,7 @@ static const char *ifname;
 static float g_gdem[N * N];
 static float g_simdem[SIM_N * SIM_N];
 static float g_ldem[L * L];
+static uint32_t g_lcnt[L * L];
 static synth_rock_t g_rocks[2000];
 static synth_terrain_t g_terr;
 static selworld_t g_w;
@@ -288,7 +289,9 @@ static loop_result_t one_run(int run, int record)
     dcfg.rover_row = L / 2;
     dcfg.row_north = 1;
     KT_ST(trn_grid_f32_init(&lg, g_ldem, (size_t)L * L, L, L), TRN_OK);
-    KT_ST(trn_mast_local_dem(g_pts, npts, &known, &dcfg, &lg, &used), TRN_OK);
+    /* each cell the mean of its points (the highest point biases the map
+     * toward the rover: tests/test_sim_loop.c) */
+    KT_ST(trn_mast_local_dem_mean(g_pts, npts, &known, &dcfg, &lg, g_lcnt, (size_t)L * L, &used), TRN_OK);
     out.used = (unsigned)used;
     win.x0 = bx - 15;
     win.x1 = bx + 15;
