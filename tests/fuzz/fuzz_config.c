@@ -109,7 +109,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         st = trn_sigma_model_check(&sm);
         FZ_CHECK(st == TRN_OK || st == TRN_E_ARG);
         if (st == TRN_OK) {
-            FZ_CHECK(sm.sigma_min_m >= 0.0f && sm.sigma_min_m <= 100.0f && sm.k_per_m >= 0.0f &&
+            FZ_CHECK(sm.sigma_min_m >= 0.0f && sm.sigma_min_m <= 1.0e5f && sm.k_per_m >= 0.0f &&
                      sm.k_per_m <= 100.0f);
         }
         st = trn_kernels_build(&k, fz_f32(&f));

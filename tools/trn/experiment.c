@@ -244,8 +244,8 @@ const char *exp_params_check(const exp_params_t *p) {
   if (p->dem != NULL && (p->dem_width < 16 || p->dem_height < 16 || p->dem_width > 1024 || p->dem_height > 1024)) {
     return "the DEM must be 16..1024 cells a side (cut a larger one, e.g. gdal_translate -srcwin)";
   }
-  if (!(p->cell_m > 0.0 && p->cell_m <= (p->dem != NULL ? 100.0 : 10.0))) {
-    return p->dem != NULL ? "cell size must be in (0, 100] m" : "cell size must be in (0, 10] m";
+  if (!(p->cell_m > 0.0 && p->cell_m <= (p->dem != NULL ? 1000.0 : 10.0))) {
+    return p->dem != NULL ? "cell size must be in (0, 1000] m" : "cell size must be in (0, 10] m";
   }
   if (p->global_error != NULL && p->dem == NULL) {
     return "an error raster needs a given DEM";
