@@ -5,18 +5,21 @@
  *
  * Model: a seen local height h_i at rover-relative cell (x_i, y_i) is the
  * global DEM's height at the pose plus one unknown vertical offset plus
- * Gaussian noise: h_i = dz + G(px + x_i, py + y_i) + e_i, with G bilinear
- * between global cell centres and e_i ~ N(0, s_i^2),
+ * Gaussian noise: h_i = dz + G(px + x_i, py + y_i) + e_i, with G bicubic
+ * (Keys' cubic convolution; bilinear where the 4 x 4 support is incomplete)
+ * between global cell centres and e_i ~ N(0, s_i^2 + m^2),
  * s_i = noise_m + noise_k_per_m * r_i^2 (r_i the cell's range from the
- * rover, metres). Maximum likelihood over (px, py, dz) by Gauss-Newton from
- * the integer pose of the voxel search. Beside the noise model, one model
- * variance m^2 common to all points (the global DEM's own interpolation
- * error, a map older than the terrain) is estimated from the residuals at
- * every step, s_i^2 -> s_i^2 + m^2, so that the inliers' mean squared
- * residual equals their mean variance; points whose residual exceeds
- * TRN_REFINE_CLIP of their s_i are outliers (a mixture model's hard
- * limit), re-decided every step. Covariance = (J^T W J)^-1, scaled by the
- * reduced chi-square when it exceeds 1.
+ * rover, metres) and m^2 one model variance common to all points (the DEM's
+ * own interpolation error, a map older than the terrain), estimated from
+ * the residuals by precision-squared weighted moments at every step.
+ * trn_height_search finds the best integer pose exhaustively under that
+ * model (plus a uniform outlier density); trn_refine_pose refines it by
+ * Gauss-Newton over (px, py, dz), residuals beyond TRN_REFINE_CLIP standard
+ * deviations being outliers (re-decided every step). Covariance:
+ * (J^T W J)^-1 x max(1, reduced chi-square) x the block-sandwich inflation
+ * (TRN_REFINE_BLOCK), plus TRN_REFINE_SYS x the outer product of the shift
+ * bilinear heights would cause (the interpolants' disagreement, a systematic
+ * error). docs/modules/refine.md.
  */
 #ifndef TRN_REFINE_H
 #define TRN_REFINE_H
