@@ -396,9 +396,10 @@ trn_status_t trn_localize_points(const trn_map_t *map, const trn_point_t *pts, s
     return fit_st == TRN_OK ? TRN_OK : TRN_E_ILLCOND;
 }
 
-/* Layout of trn_localize_dem's workspace: [hp grid | highpass ws | points | search ws]. */
+/* Layout of trn_localize_dem's workspace: [hp grid | highpass ws | points | search ws | ln L grid
+ * (TRN_MATCH_HEIGHTS only)]. */
 typedef struct {
-    size_t hp, hpws, pts, search, total;
+    size_t hp, hpws, pts, search, llgrid, total;
 } loc_layout_t;
 
 static int loc_layout(const trn_map_t *map, int32_t w, int32_t h, size_t max_points,
@@ -414,7 +415,11 @@ static int loc_layout(const trn_map_t *map, int32_t w, int32_t h, size_t max_poi
     lay->hpws = TRN_ALIGN_UP((size_t)w * (size_t)h * sizeof(float));
     lay->pts = lay->hpws + hpws;
     lay->search = lay->pts + TRN_ALIGN_UP(max_points * sizeof(trn_point_t));
-    lay->total = lay->search + sw;
+    lay->llgrid = lay->search + sw;
+    lay->total = lay->llgrid;
+    if (map->cfg.match == TRN_MATCH_HEIGHTS) { /* every pose's ln L (trn_height_search) */
+        lay->total += TRN_ALIGN_UP((size_t)(win->x1 - win->x0 + 1) * (size_t)(win->y1 - win->y0 + 1) * sizeof(double));
+    }
     return 1;
 }
 
@@ -509,7 +514,7 @@ static void refine_result(const trn_map_t *map, const trn_grid_f32_t *local, int
 
 /* TRN_MATCH_HEIGHTS: height search, refinement, competing hypothesis. */
 static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
-                                     const trn_window_t *win, trn_loc_result_t *out)
+                                     const trn_window_t *win, double *ll_grid, trn_loc_result_t *out)
 {
     trn_status_t st;
     trn_height_best_t best, second;
@@ -521,8 +526,8 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
     rc.cell_m = map->cfg.terrain.cell_m;
     rc.noise_m = map->cfg.noise_m;
     rc.noise_k_per_m = map->cfg.noise_k_per_m;
-    if ((st = trn_height_search(&map->heights, local, rx, ry, win, NULL, &rc, map->cfg.inlier_prob, 1.0, &best)) !=
-        TRN_OK) {
+    if ((st = trn_height_search(&map->heights, local, rx, ry, win, NULL, &rc, map->cfg.inlier_prob, 1.0, ll_grid,
+                                &best)) != TRN_OK) {
         return st;
     }
     out->ix = best.x;
@@ -551,7 +556,9 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
     ex.cy = best.y;
     ex.radius = radius;
     out->exclusion_cells = radius;
-    st = trn_height_search(&map->heights, local, rx, ry, win, &ex, &rc, map->cfg.inlier_prob, infl, &second);
+    /* every pose was scored once: the competitor and the masses come from
+     * the stored grid */
+    st = trn_height_mass(ll_grid, win, &ex, infl, &second);
     if (st == TRN_OK) {
         /* The posterior mass outside the zone around the peak (uniform prior
          * over the window), not only the best competitor: many near-ties far
@@ -608,7 +615,7 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
         return TRN_E_WORKSPACE;
     }
     if (map->cfg.match == TRN_MATCH_HEIGHTS) {
-        return localize_heights(map, local_dem, rover_x, rover_y, win, out);
+        return localize_heights(map, local_dem, rover_x, rover_y, win, (double *)(void *)(b + lay.llgrid), out);
     }
     pts = (trn_point_t *)(void *)(b + lay.pts);
     if ((st = trn_grid_f32_init(&hp, (float *)(void *)(b + lay.hp),

@@ -552,7 +552,8 @@ static double log_add(double a, double b)
 trn_status_t trn_height_search(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
                                int32_t rover_x, int32_t rover_y, const trn_window_t *win,
                                const trn_exclusion_t *ex, const trn_refine_cfg_t *cfg,
-                               float inlier_prob, double ll_scale, trn_height_best_t *best)
+                               float inlier_prob, double ll_scale, double *ll_grid,
+                               trn_height_best_t *best)
 {
     trn_status_t st;
     int32_t x, y, n_seen = 0;
@@ -589,6 +590,9 @@ trn_status_t trn_height_search(const trn_grid_f32_t *global, const trn_grid_f32_
             double ll, dz, m, q;
             int inside = ex != NULL && abs(x - ex->cx) <= ex->radius && abs(y - ex->cy) <= ex->radius;
             ll = pose_ll(global, local, rover_x, rover_y, x, y, cfg, (double)inlier_prob, k, &dz, &m);
+            if (ll_grid != NULL) {
+                ll_grid[(size_t)(y - win->y0) * (size_t)(win->x1 - win->x0 + 1) + (size_t)(x - win->x0)] = ll;
+            }
             best->poses += 1u;
             q = ll / ll_scale;
             best->lse_all = log_add(best->lse_all, q);
@@ -603,6 +607,46 @@ trn_status_t trn_height_search(const trn_grid_f32_t *global, const trn_grid_f32_
                 best->ll = ll;
                 best->dz_m = dz;
                 best->model_m = m;
+                found = 1;
+            }
+        }
+    }
+    return found ? TRN_OK : TRN_E_NODATA;
+}
+
+trn_status_t trn_height_mass(const double *ll_grid, const trn_window_t *win, const trn_exclusion_t *ex,
+                             double ll_scale, trn_height_best_t *best)
+{
+    int32_t x, y;
+    int found = 0;
+    if (ll_grid == NULL || win == NULL || best == NULL) {
+        return TRN_E_NULL;
+    }
+    if ((ex != NULL && ex->radius < 0) || !(ll_scale >= 1.0 && ll_scale <= 1e6)) {
+        return TRN_E_ARG;
+    }
+    if (win->x0 > win->x1 || win->y0 > win->y1 || win->x0 < 0 || win->y0 < 0 || win->x1 >= TRN_MAX_DIM ||
+        win->y1 >= TRN_MAX_DIM) {
+        return TRN_E_RANGE;
+    }
+    best->poses = 0u;
+    best->dz_m = (double)NAN;
+    best->model_m = (double)NAN;
+    best->lse_all = best->lse_out = -(double)INFINITY;
+    for (y = win->y0; y <= win->y1; ++y) {
+        for (x = win->x0; x <= win->x1; ++x) {
+            double ll = ll_grid[(size_t)(y - win->y0) * (size_t)(win->x1 - win->x0 + 1) + (size_t)(x - win->x0)];
+            double q = ll / ll_scale;
+            best->poses += 1u;
+            best->lse_all = log_add(best->lse_all, q);
+            if (ex != NULL && abs(x - ex->cx) <= ex->radius && abs(y - ex->cy) <= ex->radius) {
+                continue;
+            }
+            best->lse_out = log_add(best->lse_out, q);
+            if (!found || ll > best->ll) {
+                best->x = x;
+                best->y = y;
+                best->ll = ll;
                 found = 1;
             }
         }

@@ -310,7 +310,8 @@ static void test_height_search(void **state)
 {
     trn_grid_f32_t g, l;
     trn_refine_cfg_t c = cfg_of(), bad;
-    trn_height_best_t b, b2;
+    trn_height_best_t b, b2, b3;
+    static double grid[13 * 11];
     trn_window_t win = {24, 25, 36, 35};
     trn_exclusion_t ex;
     trn_rng_t r;
@@ -320,7 +321,7 @@ static void test_height_search(void **state)
     trn_rng_seed(&r, 9);
     make_global(&g);
     make_local(&l, 30.4, 29.7, 12.0, 1.0, &c, &r);
-    assert_int_equal(trn_height_search(&g, &l, LW / 2, LW / 2, &win, NULL, &c, 0.95f, 1.0, &b), TRN_OK);
+    assert_int_equal(trn_height_search(&g, &l, LW / 2, LW / 2, &win, NULL, &c, 0.95f, 1.0, grid, &b), TRN_OK);
     for (y = win.y0; y <= win.y1; ++y)
         for (x = win.x0; x <= win.x1; ++x) {
             double ll = brute_ll(&g, &l, x, y, &c, 0.95);
@@ -339,38 +340,68 @@ static void test_height_search(void **state)
     ex.cx = b.x;
     ex.cy = b.y;
     ex.radius = 2;
-    assert_int_equal(trn_height_search(&g, &l, LW / 2, LW / 2, &win, &ex, &c, 0.95f, 1.0, &b2), TRN_OK);
+    assert_int_equal(trn_height_search(&g, &l, LW / 2, LW / 2, &win, &ex, &c, 0.95f, 1.0, NULL, &b2), TRN_OK);
     assert_true(abs(b2.x - b.x) > 2 || abs(b2.y - b.y) > 2);
     assert_true(b2.ll < b.ll);
     assert_true(b2.poses == 13u * 11u);
     assert_true(b2.lse_out < b2.lse_all && fabs(b2.lse_all - b.lse_all) < 1e-9 * fabs(b.lse_all));
+    /* the stored grid gives the same competitor and masses without rescoring,
+     * also with a scale */
+    assert_int_equal(trn_height_mass(grid, &win, &ex, 1.0, &b3), TRN_OK);
+    assert_true(b3.x == b2.x && b3.y == b2.y && b3.ll == b2.ll && b3.poses == b2.poses);
+    assert_true(fabs(b3.lse_all - b2.lse_all) < 1e-12 * fabs(b2.lse_all) &&
+                fabs(b3.lse_out - b2.lse_out) < 1e-12 * fabs(b2.lse_out));
+    assert_int_equal(trn_height_search(&g, &l, LW / 2, LW / 2, &win, &ex, &c, 0.95f, 2.5, NULL, &b2), TRN_OK);
+    assert_int_equal(trn_height_mass(grid, &win, &ex, 2.5, &b3), TRN_OK);
+    assert_true(b3.x == b2.x && b3.y == b2.y && fabs(b3.lse_out - b2.lse_out) < 1e-12 * fabs(b2.lse_out));
+    assert_true(isnan(b3.dz_m) && isnan(b3.model_m));
+    assert_int_equal(trn_height_mass(NULL, &win, &ex, 1.0, &b3), TRN_E_NULL);
+    assert_int_equal(trn_height_mass(grid, NULL, &ex, 1.0, &b3), TRN_E_NULL);
+    assert_int_equal(trn_height_mass(grid, &win, &ex, 1.0, NULL), TRN_E_NULL);
+    assert_int_equal(trn_height_mass(grid, &win, &ex, 0.9, &b3), TRN_E_ARG);
+    {
+        trn_exclusion_t neg = ex, all = ex;
+        trn_window_t bw = win;
+        neg.radius = -1;
+        assert_int_equal(trn_height_mass(grid, &win, &neg, 1.0, &b3), TRN_E_ARG);
+        all.radius = 100;
+        assert_int_equal(trn_height_mass(grid, &win, &all, 1.0, &b3), TRN_E_NODATA);
+        bw.x1 = bw.x0 - 1;
+        assert_int_equal(trn_height_mass(grid, &bw, &ex, 1.0, &b3), TRN_E_RANGE);
+        bw = win;
+        bw.y0 = -1;
+        assert_int_equal(trn_height_mass(grid, &bw, &ex, 1.0, &b3), TRN_E_RANGE);
+        bw = win;
+        bw.y1 = TRN_MAX_DIM;
+        assert_int_equal(trn_height_mass(grid, &bw, &ex, 1.0, &b3), TRN_E_RANGE);
+    }
     assert_true(b.lse_all >= b.ll && b.lse_all <= b.ll + log(143.0));
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 0.5, &b), TRN_E_ARG);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 0.5, NULL, &b), TRN_E_ARG);
     /* statuses */
-    assert_int_equal(trn_height_search(NULL, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, &b), TRN_E_NULL);
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, NULL, NULL, &c, 0.95f, 1.0, &b), TRN_E_NULL);
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, NULL), TRN_E_NULL);
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 1.0f, 1.0, &b), TRN_E_ARG);
+    assert_int_equal(trn_height_search(NULL, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, NULL, &b), TRN_E_NULL);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, NULL, NULL, &c, 0.95f, 1.0, NULL, &b), TRN_E_NULL);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, NULL, NULL), TRN_E_NULL);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 1.0f, 1.0, NULL, &b), TRN_E_ARG);
     bad = c;
     bad.noise_m = -1.0f;
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &bad, 0.95f, 1.0, &b), TRN_E_ARG);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &bad, 0.95f, 1.0, NULL, &b), TRN_E_ARG);
     ex.radius = -1;
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, &ex, &c, 0.95f, 1.0, &b), TRN_E_ARG);
-    assert_int_equal(trn_height_search(&g, &l, TRN_MAX_DIM + LW, 15, &win, NULL, &c, 0.95f, 1.0, &b), TRN_E_ARG);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, &ex, &c, 0.95f, 1.0, NULL, &b), TRN_E_ARG);
+    assert_int_equal(trn_height_search(&g, &l, TRN_MAX_DIM + LW, 15, &win, NULL, &c, 0.95f, 1.0, NULL, &b), TRN_E_ARG);
     win.x1 = GW;
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, &b), TRN_E_RANGE);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, NULL, &b), TRN_E_RANGE);
     win.x1 = 20;
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, &b), TRN_E_RANGE);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, NULL, &b), TRN_E_RANGE);
     win.x1 = 36;
     ex.radius = 100;
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, &ex, &c, 0.95f, 1.0, &b), TRN_E_NODATA);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, &ex, &c, 0.95f, 1.0, NULL, &b), TRN_E_NODATA);
     l.width = 0;
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, &b), TRN_E_SIZE);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, NULL, &b), TRN_E_SIZE);
     make_local(&l, 30.0, 30.0, 0.0, 0.0, &c, &r);
     for (x = 0; x < LW * LW; ++x) {
         l_data[x] = x < 5 ? 1.0f : NAN;
     }
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, &b), TRN_E_NODATA);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, NULL, &b), TRN_E_NODATA);
 }
 
 /* trn_map_cfg_auto: the documented rule on the analytic DEM, and every status. */

@@ -118,6 +118,8 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
  * @param[in] ex          poses that cannot be the best (NULL: none)
  * @param[in] ll_scale    ln L is divided by it in lse_all and lse_out, [1, 1e6]
  *                        (correlated residuals: trn_refine_t.inflation)
+ * @param[out] ll_grid    NULL, or (x1-x0+1)*(y1-y0+1) doubles: every pose's
+ *                        ln L, row-major over the window (trn_height_mass)
  * @retval TRN_OK
  * @retval TRN_E_NULL, TRN_E_SIZE (bad grids), TRN_E_ARG (cfg, a, rover cell
  *         farther than TRN_MAX_DIM, negative exclusion radius)
@@ -127,7 +129,20 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
 trn_status_t trn_height_search(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
                                int32_t rover_x, int32_t rover_y, const trn_window_t *win,
                                const trn_exclusion_t *ex, const trn_refine_cfg_t *cfg,
-                               float inlier_prob, double ll_scale, trn_height_best_t *best);
+                               float inlier_prob, double ll_scale, double *ll_grid,
+                               trn_height_best_t *best);
+
+/**
+ * @brief trn_height_search's best pose outside a zone, lse_all and lse_out,
+ * from the ln L grid of an earlier search over the same window (no pose is
+ * scored again; dz_m and model_m are NaN).
+ * @retval TRN_OK
+ * @retval TRN_E_NULL, TRN_E_ARG (negative radius, ll_scale outside [1, 1e6])
+ * @retval TRN_E_RANGE  window empty, negative or beyond TRN_MAX_DIM
+ * @retval TRN_E_NODATA every pose excluded
+ */
+trn_status_t trn_height_mass(const double *ll_grid, const trn_window_t *win, const trn_exclusion_t *ex,
+                             double ll_scale, trn_height_best_t *best);
 
 #ifdef __cplusplus
 }
