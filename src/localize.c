@@ -14,7 +14,7 @@ void trn_map_cfg_default(trn_map_cfg_t *cfg)
     cfg->terrain.highpass_half_m = 1.0f;
     cfg->terrain.nz = 16;
     cfg->sigma_m = 0.1f;
-    cfg->inlier_prob = 0.95f;
+    cfg->inlier_prob = (float)TRN_MAP_INLIER_PROB_DEFAULT;
     cfg->cap = 60u;
     cfg->levels = 4;
     cfg->min_exclusion_cells = 2;
@@ -219,7 +219,7 @@ trn_status_t trn_map_cfg_auto(trn_map_cfg_t *cfg, const trn_grid_f32_t *dem, flo
     c.noise_k_per_m = cfg->noise_k_per_m;
     c.terrain.cell_m = cell_m;
     c.terrain.zbin_m = cell_m;
-    c.terrain.highpass_half_m = 10.0f * cell_m;
+    c.terrain.highpass_half_m = (float)TRN_MAP_HIGHPASS_CELLS * cell_m;
     c.sigma_m = cell_m;
     c.local_highpass = TRN_LOCAL_HP_MAP;
     c.refine = 1;
@@ -309,6 +309,17 @@ static int window_ok(const trn_map_t *map, const trn_window_t *win)
 
 static double nats(int64_t score) { return (double)score / (double)TRN_LNP_SCALE; }
 
+/* The window holds no pose outside the zone around the answer: no competing
+ * hypothesis, failure probability 0 (documented in trn_loc_result_t). */
+static void no_competitor(trn_loc_result_t *out)
+{
+    out->has_second = 0;
+    out->second_x = out->ix;
+    out->second_y = out->iy;
+    out->ll_second = out->ll_best;
+    out->failure_probability = 0.0;
+}
+
 trn_status_t trn_localize_points(const trn_map_t *map, const trn_point_t *pts, size_t n,
                                  const trn_window_t *win, void *ws, size_t ws_bytes,
                                  trn_loc_result_t *out)
@@ -385,11 +396,7 @@ trn_status_t trn_localize_points(const trn_map_t *map, const trn_point_t *pts, s
             return st;
         }
     } else if (st == TRN_E_NODATA) {
-        out->has_second = 0;
-        out->second_x = best.x;
-        out->second_y = best.y;
-        out->ll_second = out->ll_best;
-        out->failure_probability = 0.0;
+        no_competitor(out);
     } else {
         return st;
     }
@@ -572,11 +579,7 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
         out->ll_second = second.ll;
         out->failure_probability = pf < 0.0 ? 0.0 : pf > 1.0 ? 1.0 : pf;
     } else if (st == TRN_E_NODATA) {
-        out->has_second = 0;
-        out->second_x = best.x;
-        out->second_y = best.y;
-        out->ll_second = out->ll_best;
-        out->failure_probability = 0.0;
+        no_competitor(out);
     } else {
         return st;
     }

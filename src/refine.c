@@ -113,6 +113,15 @@ typedef struct {
     int32_t n_in, n_all; /* inliers, points with a global height */
 } accum_t;
 
+/* Height noise of the local cell (x, y), variance. */
+static double noise_var(const trn_refine_cfg_t *cfg, int32_t x, int32_t y, int32_t rx, int32_t ry)
+{
+    double px = (double)(x - rx), py = (double)(y - ry);
+    double r_m = (double)cfg->cell_m * sqrt(px * px + py * py);
+    double sd = (double)cfg->noise_m + (double)cfg->noise_k_per_m * r_m * r_m;
+    return sd * sd;
+}
+
 /* One pass over the seen local points of local cells [i0, i1) x [j0, j1) at
  * pose (x, y) and offset dz: normal equations of the points within clip (in
  * normalized residual units). */
@@ -130,7 +139,7 @@ static void accumulate_rect(const trn_grid_f32_t *global, const trn_grid_f32_t *
     acc->n_in = acc->n_all = 0;
     for (j = j0; j < j1; ++j) {
         for (i = i0; i < i1; ++i) {
-            double h = (double)TRN_GRID_AT(local, i, j), s3[3], px, py, r_m, sd, w, res, u, jv[3];
+            double h = (double)TRN_GRID_AT(local, i, j), s3[3], px, py, sd, w, res, u, jv[3];
             int32_t p, q;
             if (!isfinite(h)) {
                 continue;
@@ -141,9 +150,7 @@ static void accumulate_rect(const trn_grid_f32_t *global, const trn_grid_f32_t *
                 continue;
             }
             acc->n_all += 1;
-            r_m = (double)cfg->cell_m * sqrt(px * px + py * py);
-            sd = (double)cfg->noise_m + (double)cfg->noise_k_per_m * r_m * r_m;
-            w = sd * sd;
+            w = noise_var(cfg, i, j, rx, ry);
             sd = sqrt(w + model2);
             res = h - dz - s3[0];
             u = res / sd;
@@ -200,7 +207,7 @@ static void interp_shift(const trn_grid_f32_t *global, const trn_grid_f32_t *loc
     double g[3] = {0.0, 0.0, 0.0};
     for (j = 0; j < local->height; ++j) {
         for (i = 0; i < local->width; ++i) {
-            double h = (double)TRN_GRID_AT(local, i, j), s3[3], b3[3], px, py, r_m, sd, v;
+            double h = (double)TRN_GRID_AT(local, i, j), s3[3], b3[3], px, py, v;
             if (!isfinite(h)) {
                 continue;
             }
@@ -209,9 +216,7 @@ static void interp_shift(const trn_grid_f32_t *global, const trn_grid_f32_t *loc
             if (!sample(global, x + px, y + py, s3) || !sample_bilinear(global, x + px, y + py, b3)) {
                 continue;
             }
-            r_m = (double)cfg->cell_m * sqrt(px * px + py * py);
-            sd = (double)cfg->noise_m + (double)cfg->noise_k_per_m * r_m * r_m;
-            v = sd * sd + model2;
+            v = noise_var(cfg, i, j, rx, ry) + model2;
             if (fabs(h - dz - s3[0]) > TRN_REFINE_CLIP * sqrt(v)) {
                 continue;
             }
@@ -428,15 +433,6 @@ static double local_spread(const trn_grid_f32_t *local, int32_t *n_seen)
     }
     v = s2 / (double)n - (s1 / (double)n) * (s1 / (double)n);
     return v > 0.0 ? sqrt(v) : 0.0;
-}
-
-/* Height noise of the local cell (x, y), variance. */
-static double noise_var(const trn_refine_cfg_t *cfg, int32_t x, int32_t y, int32_t rx, int32_t ry)
-{
-    double px = (double)(x - rx), py = (double)(y - ry);
-    double r_m = (double)cfg->cell_m * sqrt(px * px + py * py);
-    double sd = (double)cfg->noise_m + (double)cfg->noise_k_per_m * r_m * r_m;
-    return sd * sd;
 }
 
 /* Global height under local cell (x, y) at pose (px, py), or NaN. */

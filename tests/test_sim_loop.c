@@ -59,29 +59,6 @@ static double unit(void) /* splitmix64, [0, 1) */
     return (double)((z ^ (z >> 31)) >> 11) / 9007199254740992.0;
 }
 
-static void geom_cam(trn_mast_geom_t *g, sim_camera_t *c)
-{
-    /* tools/sim's defaults (sim_cfg_default) */
-    memset(g, 0, sizeof *g);
-    g->pan_x_m = 0.2f;
-    g->pan_z_m = 1.4f;
-    g->tilt_fwd_m = 0.05f;
-    g->cam_fwd_m = 0.05f;
-    g->cam_left_m = 0.1f;
-    g->cam_up_m = 0.03f;
-    g->pan_min_rad = -3.0f;
-    g->pan_max_rad = 3.0f;
-    g->tilt_min_rad = -1.2f;
-    g->tilt_max_rad = 0.8f;
-    c->hfov_rad = 1.0471976f;
-    c->vfov_rad = 0.7853982f;
-    c->cols = 64;
-    c->rows = 48;
-    c->min_range_m = 0.5f;
-    c->max_range_m = 12.0f;
-    c->noise_k_per_m = 0.002f;
-}
-
 /* Mahalanobis^2 of the error (ex, ey) under cov (var_x, var_y, cov_xy). */
 static double maha2(double ex, double ey, const double c[3])
 {
@@ -133,7 +110,8 @@ static void test_loop_calibration(void **state)
     (void)state;
 
     memset(t, 0, sizeof t);
-    geom_cam(&geom, &cam);
+    sim_geom_default(&geom);
+    sim_camera_default(&cam);
     synth_make(&g_terr, g_rocks, nrocks, N * CELL, 0.05, 0.3, 0.5, 0.2, 12u);
     synth_render(&g_terr, g_gdem, N, N, 0.0, 0.0, CELL);
     synth_render(&g_terr, g_simdem, SIM_N, SIM_N, 0.0, 0.0, CELL / 2.0);

@@ -110,6 +110,11 @@ typedef struct {
                                            TRN_E_ILLCOND) */
 } trn_loc_result_t;
 
+/** Inlier probability a of trn_map_cfg_default (the paper's). */
+#define TRN_MAP_INLIER_PROB_DEFAULT 0.95
+/** High-pass half-width of the tools' and trn_map_cfg_auto's maps, cells. */
+#define TRN_MAP_HIGHPASS_CELLS 10
+
 /** A refined match whose model error m exceeds this many times the map's
  *  roughness (and the constant noise) is flagged: correct matches measured
  *  m / roughness <= 1.8 on three real DEMs; a local map from outside the

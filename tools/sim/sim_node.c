@@ -80,24 +80,8 @@ void sim_cfg_default(sim_cfg_t *cfg)
     }
     memset(cfg, 0, sizeof *cfg);
     cfg->ifname = "vcan0";
-    cfg->cam.hfov_rad = 1.0471976f; /* 60 deg */
-    cfg->cam.vfov_rad = 0.7853982f; /* 45 deg */
-    cfg->cam.cols = 64;
-    cfg->cam.rows = 48;
-    cfg->cam.min_range_m = 0.5f;
-    cfg->cam.max_range_m = 12.0f;
-    cfg->cam.noise_k_per_m = 0.002f;
-    cfg->geom.pan_x_m = 0.2f;
-    cfg->geom.pan_z_m = 1.4f;
-    cfg->geom.tilt_fwd_m = 0.05f;
-    cfg->geom.tilt_up_m = 0.0f;
-    cfg->geom.cam_fwd_m = 0.05f;
-    cfg->geom.cam_left_m = 0.1f;
-    cfg->geom.cam_up_m = 0.03f;
-    cfg->geom.pan_min_rad = -3.0f;
-    cfg->geom.pan_max_rad = 3.0f;
-    cfg->geom.tilt_min_rad = -1.2f;
-    cfg->geom.tilt_max_rad = 0.8f;
+    sim_camera_default(&cfg->cam);
+    sim_geom_default(&cfg->geom);
     cfg->rate_rad_s = 0.5f;
     cfg->tol_rad = 2e-3f;
     cfg->seed = 1u;

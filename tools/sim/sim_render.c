@@ -2,6 +2,7 @@
 #include "sim_render.h"
 
 #include <math.h>
+#include <string.h>
 
 #define SIM_BISECTIONS 30
 
@@ -192,4 +193,37 @@ trn_status_t sim_render(const sim_dem_t *dem, const sim_camera_t *cam, const trn
     }
     *n = 0u;
     return sim_render_rows(dem, cam, cam_to_map, rng, 0, cam->rows, out, capacity, n);
+}
+
+void sim_camera_default(sim_camera_t *cam)
+{
+    if (cam == NULL) {
+        return;
+    }
+    cam->hfov_rad = 1.0471976f; /* 60 deg */
+    cam->vfov_rad = 0.7853982f; /* 45 deg */
+    cam->cols = 64;
+    cam->rows = 48;
+    cam->min_range_m = 0.5f;
+    cam->max_range_m = 12.0f;
+    cam->noise_k_per_m = 0.002f;
+}
+
+void sim_geom_default(trn_mast_geom_t *geom)
+{
+    if (geom == NULL) {
+        return;
+    }
+    memset(geom, 0, sizeof *geom);
+    geom->pan_x_m = 0.2f;
+    geom->pan_z_m = 1.4f;
+    geom->tilt_fwd_m = 0.05f;
+    geom->tilt_up_m = 0.0f;
+    geom->cam_fwd_m = 0.05f;
+    geom->cam_left_m = 0.1f;
+    geom->cam_up_m = 0.03f;
+    geom->pan_min_rad = -3.0f;
+    geom->pan_max_rad = 3.0f;
+    geom->tilt_min_rad = -1.2f;
+    geom->tilt_max_rad = 0.8f;
 }

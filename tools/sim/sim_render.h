@@ -57,6 +57,13 @@ typedef struct {
     uint64_t s;
 } sim_rng_t;
 
+/** @brief The simulated stereo head: 60 x 45 deg, 64 x 48 rays, 0.5-12 m,
+ * range noise 0.002/m r^2 (sim_cfg_default's camera). */
+void sim_camera_default(sim_camera_t *cam);
+
+/** @brief The simulated mast's geometry and limits (sim_cfg_default's). */
+void sim_geom_default(trn_mast_geom_t *geom);
+
 /**
  * @brief Height of the DEM at a map position (bilinear).
  * @param[in]  dem the DEM.

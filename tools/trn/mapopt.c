@@ -21,17 +21,24 @@ void mapopt_init(mapopt_t *m) {
   m->match = NULL;
 }
 
+/* The tools' local height noise: 1 cm plus 0.04 % of r^2 / cell (issue 12's
+ * sensor model); the help texts print these same macros. */
+#define MAPOPT_NOISE_M 0.01
+#define MAPOPT_NOISE_K_PER_CELL 0.0004
+#define MAPOPT_STR_(x) #x
+#define MAPOPT_STR(x) MAPOPT_STR_(x)
+
 void mapopt_cli(mapopt_t *m, cli_opt_t *o) {
   const cli_opt_t t[MAPOPT_N] = {
       {"--map-config", CLI_STRING, &m->config, 0, 0, 0, "auto|paper",
        "map configuration: auto (from the DEM, docs/method.md 9; default) or paper (as in the paper, scaled to the cell)", 0},
       {"--zbin-m", CLI_DOUBLE, &m->zbin_m, 1e-6, 1000.0, 0, "M", "height bin, metres (default: from --map-config)", 0},
       {"--nz", CLI_LONG, &m->nz, 1, TRN_MAX_ZBINS, 0, "N", "number of height bins (default: from --map-config)", 0},
-      {"--highpass-m", CLI_DOUBLE, &m->highpass_m, 1e-6, 1e6, 0, "M", "high-pass half-width, metres (default 10 cells)", 0},
+      {"--highpass-m", CLI_DOUBLE, &m->highpass_m, 1e-6, 1e6, 0, "M", "high-pass half-width, metres (default " MAPOPT_STR(TRN_MAP_HIGHPASS_CELLS) " cells)", 0},
       {"--sigma-m", CLI_DOUBLE, &m->sigma_m, 1e-6, 1000.0, 0, "M", "inlier standard deviation s, metres (default one cell)", 0},
-      {"--inlier-prob", CLI_DOUBLE, &m->inlier_prob, 0.01, 0.99, 0, "A", "inlier probability a (default 0.95)", 0},
-      {"--noise-m", CLI_DOUBLE, &m->noise_m, 1e-6, 1000.0, 0, "M", "local map height noise, constant part, metres (default 0.01)", 0},
-      {"--noise-k", CLI_DOUBLE, &m->noise_k, 0.0, 1000.0, 0, "K", "local map height noise, range-squared part, 1/m (default 0.0004/cell)", 0},
+      {"--inlier-prob", CLI_DOUBLE, &m->inlier_prob, 0.01, 0.99, 0, "A", "inlier probability a (default " MAPOPT_STR(TRN_MAP_INLIER_PROB_DEFAULT) ")", 0},
+      {"--noise-m", CLI_DOUBLE, &m->noise_m, 1e-6, 1000.0, 0, "M", "local map height noise, constant part, metres (default " MAPOPT_STR(MAPOPT_NOISE_M) ")", 0},
+      {"--noise-k", CLI_DOUBLE, &m->noise_k, 0.0, 1000.0, 0, "K", "local map height noise, range-squared part, 1/m (default " MAPOPT_STR(MAPOPT_NOISE_K_PER_CELL) "/cell)", 0},
       {"--local-highpass", CLI_STRING, &m->local_hp, 0, 0, 0, "box|map", "local DEM filter: box (its own, the paper) or map (the map's low-pass; auto)", 0},
       {"--refine", CLI_LONG, &m->refine, 0, 1, 0, "0|1", "refine the pose over heights (1 with auto, 0 with paper)", 0},
       {"--match", CLI_STRING, &m->match, 0, 0, 0, "voxel|heights", "what localize matches: voxel occupancy (paper) or heights (auto)", 0},
@@ -70,8 +77,8 @@ int mapopt_config(const mapopt_t *m, const float *data, int width, int height, d
     return -1;
   }
   trn_map_cfg_default(cfg);
-  cfg->noise_m = (float)(m->noise_m > 0.0 ? m->noise_m : 0.01);
-  cfg->noise_k_per_m = (float)(m->noise_k >= 0.0 ? m->noise_k : 0.0004 / cell_m);
+  cfg->noise_m = (float)(m->noise_m > 0.0 ? m->noise_m : MAPOPT_NOISE_M);
+  cfg->noise_k_per_m = (float)(m->noise_k >= 0.0 ? m->noise_k : MAPOPT_NOISE_K_PER_CELL / cell_m);
   if (strcmp(m->config, "auto") == 0) {
     size_t wb = trn_map_cfg_auto_workspace_bytes(width, height);
     void *raw = NULL, *ws = wb > 0 ? alloc16(wb, &raw) : NULL;
@@ -89,7 +96,7 @@ int mapopt_config(const mapopt_t *m, const float *data, int width, int height, d
   } else {
     cfg->terrain.cell_m = (float)cell_m;
     cfg->terrain.zbin_m = (float)cell_m;
-    cfg->terrain.highpass_half_m = (float)(10.0 * cell_m);
+    cfg->terrain.highpass_half_m = (float)((double)TRN_MAP_HIGHPASS_CELLS * cell_m);
     cfg->sigma_m = (float)cell_m;
   }
   if (m->zbin_m > 0.0) cfg->terrain.zbin_m = (float)m->zbin_m;
