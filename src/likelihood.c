@@ -4,6 +4,8 @@
 
 #include <math.h>
 
+#include "ws.h"
+
 #define TRN_SQRT_2PI 2.5066282746310002
 
 /* One level of distances as the scorer sees it: voxel (x, y, z) of the map
@@ -409,16 +411,33 @@ trn_status_t trn_search_exhaustive(const trn_vol_u8_t *dist, const trn_lnp_table
 
 /* ------------------------------------------------------------------ pyramid */
 
-size_t trn_pyramid_bytes(int32_t nx, int32_t ny, int32_t nz, int32_t nlevels)
+/* The pyramid's carve: one slice a level (level[] NULL when sizing only).
+ * Returns the bytes, 0 if the arguments are out of range. */
+static size_t pyramid_carve(int32_t nx, int32_t ny, int32_t nz, int32_t nlevels, void *buf,
+                            uint8_t *level[TRN_MAX_LEVELS])
 {
     size_t pad, per;
+    int32_t lv;
+    trn_ws_t w;
     if (nx < 1 || ny < 1 || nz < 1 || nx > TRN_MAX_DIM || ny > TRN_MAX_DIM ||
         nz > TRN_MAX_ZBINS || nlevels < 1 || nlevels > TRN_MAX_LEVELS) {
         return 0u;
     }
     pad = ((size_t)1u << (unsigned)nlevels) - 1u;
     per = ((size_t)nx + pad) * ((size_t)ny + pad) * (size_t)nz;
-    return (size_t)nlevels * TRN_ALIGN_UP(per);
+    trn_ws_begin(&w, buf);
+    for (lv = 0; lv < TRN_MAX_LEVELS; ++lv) {
+        void *slice = lv < nlevels ? trn_ws_take(&w, per) : NULL;
+        if (level != NULL) {
+            level[lv] = (uint8_t *)slice;
+        }
+    }
+    return w.total;
+}
+
+size_t trn_pyramid_bytes(int32_t nx, int32_t ny, int32_t nz, int32_t nlevels)
+{
+    return pyramid_carve(nx, ny, nz, nlevels, NULL, NULL);
 }
 
 static uint8_t min_u8(uint8_t a, uint8_t b) { return a < b ? a : b; }
@@ -489,7 +508,7 @@ trn_status_t trn_pyramid_build(trn_pyramid_t *p, const trn_vol_u8_t *dist, uint8
                                int32_t nlevels, void *buf, size_t len)
 {
     trn_status_t st;
-    size_t need, per;
+    size_t need;
     int32_t lv, y, z;
 
     if (p == NULL || buf == NULL) {
@@ -502,8 +521,8 @@ trn_status_t trn_pyramid_build(trn_pyramid_t *p, const trn_vol_u8_t *dist, uint8
         return TRN_E_ARG;
     }
     need = trn_pyramid_bytes(dist->nx, dist->ny, dist->nz, nlevels);
-    if (len < need) {
-        return TRN_E_WORKSPACE;
+    if ((st = trn_ws_check(buf, len, need)) != TRN_OK) {
+        return st;
     }
     p->base = *dist;
     p->nlevels = nlevels;
@@ -511,10 +530,7 @@ trn_status_t trn_pyramid_build(trn_pyramid_t *p, const trn_vol_u8_t *dist, uint8
     p->pnx = dist->nx + p->pad;
     p->pny = dist->ny + p->pad;
     p->cap = cap;
-    per = TRN_ALIGN_UP((size_t)p->pnx * (size_t)p->pny * (size_t)dist->nz);
-    for (lv = 0; lv < TRN_MAX_LEVELS; ++lv) {
-        p->level[lv] = lv < nlevels ? (uint8_t *)buf + (size_t)lv * per : NULL;
-    }
+    (void)pyramid_carve(dist->nx, dist->ny, dist->nz, nlevels, buf, p->level);
     /* Level 1 = min of the base over 2x2 blocks; level l = min of level l-1
      * at (x, y), (x+h, y), (x, y+h), (x+h, y+h), h = 2^(l-1): the minimum over
      * a 2^l x 2^l block. Stored with `pad` cells on the low side in x and y;
@@ -578,20 +594,39 @@ static int32_t ceil_div(int32_t a, int32_t b) { return (a + b - 1) / b; }
 
 #define TRN_BB_STACK (4u * TRN_MAX_LEVELS + 4u)
 
-size_t trn_search_bb_workspace_bytes(const trn_pyramid_t *p, const trn_window_t *win)
+/* The branch-and-bound workspace: top-level blocks, their suffix bounds,
+ * the stack's suffix bounds (and four children's), the block stack. */
+typedef struct {
+    block_t *tops, *stack;
+    suffix_t *tops_suf, *stack_suf;
+    size_t ntop_max;
+} bb_layout_t;
+
+/* The carve of trn_search_bb's workspace (base NULL: sizing only); returns
+ * the bytes, 0 if the arguments are out of range. */
+static size_t bb_carve(const trn_pyramid_t *p, const trn_window_t *win, void *base, bb_layout_t *lay)
 {
     int32_t bs;
-    size_t ntop;
+    trn_ws_t w;
     if (p == NULL || win == NULL || p->nlevels < 1 || p->nlevels > TRN_MAX_LEVELS ||
         win->x1 < win->x0 || win->y1 < win->y0 || win->x1 - win->x0 >= TRN_MAX_DIM ||
         win->y1 - win->y0 >= TRN_MAX_DIM) {
         return 0u;
     }
     bs = (int32_t)(1u << (unsigned)p->nlevels);
-    ntop = (size_t)ceil_div(win->x1 - win->x0 + 1, bs) * (size_t)ceil_div(win->y1 - win->y0 + 1, bs);
-    return TRN_ALIGN_UP(ntop * sizeof(block_t)) + TRN_ALIGN_UP(ntop * sizeof(suffix_t)) +
-           TRN_ALIGN_UP((TRN_BB_STACK + 4u) * sizeof(suffix_t)) +
-           TRN_ALIGN_UP(TRN_BB_STACK * sizeof(block_t));
+    lay->ntop_max = (size_t)ceil_div(win->x1 - win->x0 + 1, bs) * (size_t)ceil_div(win->y1 - win->y0 + 1, bs);
+    trn_ws_begin(&w, base);
+    lay->tops = (block_t *)trn_ws_take(&w, lay->ntop_max * sizeof(block_t));
+    lay->tops_suf = (suffix_t *)trn_ws_take(&w, lay->ntop_max * sizeof(suffix_t));
+    lay->stack_suf = (suffix_t *)trn_ws_take(&w, (TRN_BB_STACK + 4u) * sizeof(suffix_t));
+    lay->stack = (block_t *)trn_ws_take(&w, TRN_BB_STACK * sizeof(block_t));
+    return w.total;
+}
+
+size_t trn_search_bb_workspace_bytes(const trn_pyramid_t *p, const trn_window_t *win)
+{
+    bb_layout_t lay;
+    return bb_carve(p, win, NULL, &lay);
 }
 
 /* Is every pose of block (x, y, size s) that lies in the window excluded? */
@@ -665,8 +700,9 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
     block_t *tops;
     suffix_t *tops_suf, *stack_suf, *kid_suf;
     block_t *stack; /* in the workspace: keeps the frame under TRN_STACK_LIMIT_BYTES */
+    bb_layout_t lay;
     level_view_t L0;
-    size_t ntop = 0, ntop_max, i;
+    size_t ntop = 0, i;
     int32_t top_lv, bs, x, y;
     bbox_t bb;
     int found = 0;
@@ -684,19 +720,17 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
     if ((st = check_window(win, ex, p->base.nx, p->base.ny)) != TRN_OK) {
         return st;
     }
-    if (ws_bytes < trn_search_bb_workspace_bytes(p, win)) {
-        return TRN_E_WORKSPACE;
+    if ((st = trn_ws_check(ws, ws_bytes, trn_search_bb_workspace_bytes(p, win))) != TRN_OK) {
+        return st;
     }
     top_lv = p->nlevels;
     bs = (int32_t)(1u << (unsigned)top_lv);
-    ntop_max = (size_t)ceil_div(win->x1 - win->x0 + 1, bs) * (size_t)ceil_div(win->y1 - win->y0 + 1, bs);
-    tops = (block_t *)ws;
-    tops_suf = (suffix_t *)(void *)((uint8_t *)ws + TRN_ALIGN_UP(ntop_max * sizeof(block_t)));
-    stack_suf = tops_suf + ntop_max;
+    (void)bb_carve(p, win, ws, &lay);
+    tops = lay.tops;
+    tops_suf = lay.tops_suf;
+    stack_suf = lay.stack_suf;
     kid_suf = stack_suf + TRN_BB_STACK;
-    stack = (block_t *)(void *)((uint8_t *)ws + TRN_ALIGN_UP(ntop_max * sizeof(block_t)) +
-                                TRN_ALIGN_UP(ntop_max * sizeof(suffix_t)) +
-                                TRN_ALIGN_UP((TRN_BB_STACK + 4u) * sizeof(suffix_t)));
+    stack = lay.stack;
     bb = points_bbox(pts, n);
     L0 = pyr_view(p, 0);
     {

@@ -4,6 +4,8 @@
 #include <float.h>
 #include <math.h>
 
+#include "ws.h"
+
 void trn_map_cfg_default(trn_map_cfg_t *cfg)
 {
     if (cfg == NULL) {
@@ -74,23 +76,23 @@ typedef struct {
 
 static int map_layout(const trn_map_cfg_t *cfg, int32_t w, int32_t h, map_layout_t *lay)
 {
-    size_t pyr, hpws;
+    size_t cells;
+    trn_ws_t ws;
     if (trn_map_cfg_check(cfg) != TRN_OK || w < 1 || h < 1 || w > TRN_MAX_DIM || h > TRN_MAX_DIM) {
         return 0;
     }
-    pyr = trn_pyramid_bytes(w, h, cfg->terrain.nz, cfg->levels);
-    hpws = trn_highpass_workspace_bytes(w, h);
-    lay->dist = 0u;
-    lay->pyr = TRN_ALIGN_UP((size_t)w * (size_t)h * (size_t)cfg->terrain.nz);
-    lay->heights = lay->pyr + pyr;
-    lay->lowpass = lay->heights;
-    lay->hp = lay->heights;
+    cells = (size_t)w * (size_t)h;
+    trn_ws_begin(&ws, NULL);
+    lay->dist = trn_ws_offset(&ws, cells * (size_t)cfg->terrain.nz);
+    lay->pyr = trn_ws_offset(&ws, trn_pyramid_bytes(w, h, cfg->terrain.nz, cfg->levels));
+    lay->heights = lay->lowpass = lay->hp = ws.total;
     if (needs_heights(cfg)) {
-        lay->lowpass = lay->heights + TRN_ALIGN_UP((size_t)w * (size_t)h * sizeof(float));
-        lay->hp = lay->lowpass + TRN_ALIGN_UP((size_t)w * (size_t)h * sizeof(float));
+        lay->heights = trn_ws_offset(&ws, cells * sizeof(float));
+        lay->lowpass = trn_ws_offset(&ws, cells * sizeof(float));
     }
-    lay->hpws = lay->hp + TRN_ALIGN_UP((size_t)w * (size_t)h * sizeof(float));
-    lay->total = lay->hpws + hpws;
+    lay->hp = trn_ws_offset(&ws, cells * sizeof(float));
+    lay->hpws = trn_ws_offset(&ws, trn_highpass_workspace_bytes(w, h));
+    lay->total = ws.total;
     return 1;
 }
 
@@ -140,8 +142,8 @@ trn_status_t trn_map_build(trn_map_t *map, const trn_map_cfg_t *cfg, const trn_g
     if (!map_layout(cfg, dem->width, dem->height, &lay)) {
         return TRN_E_ARG;
     }
-    if (len < lay.total) {
-        return TRN_E_WORKSPACE;
+    if ((st = trn_ws_check(buf, len, lay.total)) != TRN_OK) {
+        return st;
     }
     map->cfg = *cfg;
     if ((st = trn_grid_f32_init(&hp, (float *)(void *)(b + lay.hp), (size_t)dem->width * (size_t)dem->height,
@@ -188,13 +190,26 @@ trn_status_t trn_map_build(trn_map_t *map, const trn_map_cfg_t *cfg, const trn_g
     return TRN_OK;
 }
 
-size_t trn_map_cfg_auto_workspace_bytes(int32_t width, int32_t height)
+/* trn_map_cfg_auto's carve: the high-passed grid, then trn_highpass's
+ * scratch (offsets in *hp_at, *hpws_at). Returns the bytes, 0 if the size
+ * is out of range. */
+static size_t cfg_auto_carve(int32_t width, int32_t height, size_t *hp_at, size_t *hpws_at)
 {
     size_t hpws = trn_highpass_workspace_bytes(width, height);
+    trn_ws_t w;
     if (hpws == 0u) {
         return 0u;
     }
-    return TRN_ALIGN_UP((size_t)width * (size_t)height * sizeof(float)) + hpws;
+    trn_ws_begin(&w, NULL);
+    *hp_at = trn_ws_offset(&w, (size_t)width * (size_t)height * sizeof(float));
+    *hpws_at = trn_ws_offset(&w, hpws);
+    return w.total;
+}
+
+size_t trn_map_cfg_auto_workspace_bytes(int32_t width, int32_t height)
+{
+    size_t hp_at, hpws_at;
+    return cfg_auto_carve(width, height, &hp_at, &hpws_at);
 }
 
 trn_status_t trn_map_cfg_auto(trn_map_cfg_t *cfg, const trn_grid_f32_t *dem, float cell_m,
@@ -203,7 +218,7 @@ trn_status_t trn_map_cfg_auto(trn_map_cfg_t *cfg, const trn_grid_f32_t *dem, flo
     trn_status_t st;
     trn_map_cfg_t c;
     trn_grid_f32_t hp;
-    size_t need, cells, n = 0;
+    size_t need, cells, hp_at, hpws_at, n = 0;
     double s1 = 0.0, s2 = 0.0, sig, zb, noise10, r10;
     int32_t x, y;
     long nz;
@@ -228,17 +243,17 @@ trn_status_t trn_map_cfg_auto(trn_map_cfg_t *cfg, const trn_grid_f32_t *dem, flo
     if (!(cell_m > 0.0f && cell_m <= 1000.0f) || trn_map_cfg_check(&c) != TRN_OK) {
         return TRN_E_ARG;
     }
-    need = trn_map_cfg_auto_workspace_bytes(dem->width, dem->height);
+    need = cfg_auto_carve(dem->width, dem->height, &hp_at, &hpws_at);
     if (need == 0u) {
         return TRN_E_SIZE;
     }
-    if (ws_bytes < need) {
-        return TRN_E_WORKSPACE;
+    if ((st = trn_ws_check(ws, ws_bytes, need)) != TRN_OK) {
+        return st;
     }
     cells = (size_t)dem->width * (size_t)dem->height;
-    if ((st = trn_grid_f32_init(&hp, (float *)ws, cells, dem->width, dem->height)) != TRN_OK ||
-        (st = trn_highpass(dem, &c.terrain, &hp, (uint8_t *)ws + TRN_ALIGN_UP(cells * sizeof(float)),
-                           ws_bytes - TRN_ALIGN_UP(cells * sizeof(float)))) != TRN_OK) {
+    if ((st = trn_grid_f32_init(&hp, (float *)(void *)((uint8_t *)ws + hp_at), cells, dem->width,
+                                dem->height)) != TRN_OK ||
+        (st = trn_highpass(dem, &c.terrain, &hp, (uint8_t *)ws + hpws_at, ws_bytes - hpws_at)) != TRN_OK) {
         return st;
     }
     for (y = 0; y < dem->height; ++y) {
@@ -340,6 +355,9 @@ trn_status_t trn_localize_points(const trn_map_t *map, const trn_point_t *pts, s
     if (!window_ok(map, win)) {
         return TRN_E_RANGE;
     }
+    if ((st = trn_ws_check(ws, ws_bytes, trn_localize_workspace_bytes(map, win))) != TRN_OK) {
+        return st;
+    }
     st = trn_search_bb(&map->pyr, &map->lnp, pts, n, win, NULL, ws, ws_bytes, &best, &out->stats);
     if (st != TRN_OK) {
         return st;
@@ -414,19 +432,21 @@ static int loc_layout(const trn_map_t *map, int32_t w, int32_t h, size_t max_poi
 {
     size_t hpws = trn_highpass_workspace_bytes(w, h);
     size_t sw = trn_localize_workspace_bytes(map, win);
+    trn_ws_t ws;
     if (hpws == 0u || sw == 0u || max_points == 0u ||
         max_points > (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM) {
         return 0;
     }
-    lay->hp = 0u;
-    lay->hpws = TRN_ALIGN_UP((size_t)w * (size_t)h * sizeof(float));
-    lay->pts = lay->hpws + hpws;
-    lay->search = lay->pts + TRN_ALIGN_UP(max_points * sizeof(trn_point_t));
-    lay->llgrid = lay->search + sw;
-    lay->total = lay->llgrid;
+    trn_ws_begin(&ws, NULL);
+    lay->hp = trn_ws_offset(&ws, (size_t)w * (size_t)h * sizeof(float));
+    lay->hpws = trn_ws_offset(&ws, hpws);
+    lay->pts = trn_ws_offset(&ws, max_points * sizeof(trn_point_t));
+    lay->search = trn_ws_offset(&ws, sw);
+    lay->llgrid = ws.total;
     if (map->cfg.match == TRN_MATCH_HEIGHTS) { /* every pose's ln L (trn_height_search) */
-        lay->total += TRN_ALIGN_UP((size_t)(win->x1 - win->x0 + 1) * (size_t)(win->y1 - win->y0 + 1) * sizeof(double));
+        (void)trn_ws_offset(&ws, (size_t)(win->x1 - win->x0 + 1) * (size_t)(win->y1 - win->y0 + 1) * sizeof(double));
     }
+    lay->total = ws.total;
     return 1;
 }
 
@@ -614,8 +634,8 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
         !loc_layout(map, local_dem->width, local_dem->height, max_points, win, &lay)) {
         return TRN_E_RANGE;
     }
-    if (ws_bytes < lay.total) {
-        return TRN_E_WORKSPACE;
+    if ((st = trn_ws_check(ws, ws_bytes, lay.total)) != TRN_OK) {
+        return st;
     }
     if (map->cfg.match == TRN_MATCH_HEIGHTS) {
         return localize_heights(map, local_dem, rover_x, rover_y, win, (double *)(void *)(b + lay.llgrid), out);

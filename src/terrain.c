@@ -4,6 +4,8 @@
 #include <float.h>
 #include <math.h>
 
+#include "ws.h"
+
 static int pos_finite_le(float v, float max) { return v > 0.0f && v <= max; }
 
 trn_status_t trn_terrain_cfg_check(const trn_terrain_cfg_t *cfg)
@@ -21,14 +23,28 @@ trn_status_t trn_terrain_cfg_check(const trn_terrain_cfg_t *cfg)
     return TRN_OK;
 }
 
-size_t trn_highpass_workspace_bytes(int32_t width, int32_t height)
+/* The high-pass filter's carve: the summed-area tables of heights and of
+ * the valid count, (width + 1) x (height + 1) each (base NULL: sizing
+ * only). Returns the bytes, 0 if the size is out of range. */
+static size_t highpass_carve(int32_t width, int32_t height, void *base, double **sum, int32_t **cnt)
 {
     size_t cells;
+    trn_ws_t w;
     if (width < 1 || height < 1 || width > TRN_MAX_DIM || height > TRN_MAX_DIM) {
         return 0u;
     }
     cells = (size_t)(width + 1) * (size_t)(height + 1);
-    return TRN_ALIGN_UP(cells * sizeof(double)) + TRN_ALIGN_UP(cells * sizeof(int32_t));
+    trn_ws_begin(&w, base);
+    *sum = (double *)trn_ws_take(&w, cells * sizeof(double));
+    *cnt = (int32_t *)trn_ws_take(&w, cells * sizeof(int32_t));
+    return w.total;
+}
+
+size_t trn_highpass_workspace_bytes(int32_t width, int32_t height)
+{
+    double *sum;
+    int32_t *cnt;
+    return highpass_carve(width, height, NULL, &sum, &cnt);
 }
 
 static int valid_h(float h) { return isfinite(h) ? 1 : 0; }
@@ -38,7 +54,7 @@ trn_status_t trn_highpass(const trn_grid_f32_t *dem, const trn_terrain_cfg_t *cf
 {
     trn_status_t st;
     int32_t w, h, x, y, r;
-    size_t sw, cells;
+    size_t sw;
     double *sum;
     int32_t *cnt;
     double ref = 0.0;
@@ -58,13 +74,11 @@ trn_status_t trn_highpass(const trn_grid_f32_t *dem, const trn_terrain_cfg_t *cf
     if (out->width != w || out->height != h) {
         return TRN_E_SIZE;
     }
-    if (ws_bytes < trn_highpass_workspace_bytes(w, h)) {
-        return TRN_E_WORKSPACE;
+    if ((st = trn_ws_check(ws, ws_bytes, trn_highpass_workspace_bytes(w, h))) != TRN_OK) {
+        return st;
     }
     sw = (size_t)w + 1u;
-    cells = sw * ((size_t)h + 1u);
-    sum = (double *)ws;
-    cnt = (int32_t *)(void *)((uint8_t *)ws + TRN_ALIGN_UP(cells * sizeof(double)));
+    (void)highpass_carve(w, h, ws, &sum, &cnt);
 
     /* Summed-area tables of (height - ref) and of the valid count; ref (the
      * first valid height) keeps the double sums small for absolute DTMs. */

@@ -95,7 +95,7 @@ static void test_highpass_extreme_heights_stay_finite(void **state)
      * mirror image (h' about +5.9e38); one corner is missing. */
     enum { W = 6, H = 3 };
     static float dem_buf[W * H], out_buf[W * H];
-    static double ws[1024];
+    TRN_WORKSPACE_DECLARE(ws, 1024 * sizeof(double));
     const trn_terrain_cfg_t cfg = { 0.1f, 0.1f, 0.1f, 9 };
     trn_grid_f32_t dem, out;
     int x, y, i;

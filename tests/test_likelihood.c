@@ -573,12 +573,12 @@ static void test_bad_inputs(void **state)
     trn_lnp_table_t t;
     trn_lik_cfg_t c = cfg_of(0.1f, 0.1f, 0.95f, 20);
     trn_pyramid_t p;
-    static uint8_t pbuf[200000];
+    TRN_WORKSPACE_DECLARE(pbuf, 200000);
     trn_point_t pts[2] = {{0, 0, 1}, {1, 1, 2}}, badz[1] = {{0, 0, 3}};
     trn_window_t w = {1, 1, 8, 7}, off = {5, 5, NX, 6}, inv = {5, 5, 4, 6};
     trn_exclusion_t negr = {3, 3, -1}, all = {4, 4, 100};
     trn_best_t b;
-    static uint8_t ws[16384];
+    TRN_WORKSPACE_DECLARE(ws, 16384);
     double k;
     int64_t s;
     trn_lik_cfg_t bc;
@@ -658,6 +658,8 @@ static void test_bad_inputs(void **state)
     assert_int_equal(trn_pyramid_build(&p, &v, 2, 2, pbuf, sizeof pbuf), TRN_E_ARG);
     bad = v; bad.ny = 0; assert_int_equal(trn_pyramid_build(&p, &bad, 20, 2, pbuf, sizeof pbuf), TRN_E_SIZE);
     assert_int_equal(trn_pyramid_build(&p, &v, 20, 2, pbuf, 10), TRN_E_WORKSPACE);
+    assert_true(trn_pyramid_bytes(NX, NY, NZ, 2) + 8u <= sizeof pbuf); /* misaligned, large enough */
+    assert_int_equal(trn_pyramid_build(&p, &v, 20, 2, pbuf + 8, sizeof pbuf - 8u), TRN_E_WORKSPACE);
     assert_int_equal(trn_pyramid_build(&p, &v, 20, 2, pbuf, sizeof pbuf), TRN_OK);
 
     /* branch and bound */
@@ -676,6 +678,8 @@ static void test_bad_inputs(void **state)
     assert_int_equal(trn_search_bb(&p, &t, pts, 0, &w, NULL, ws, sizeof ws, &b, NULL), TRN_E_NODATA);
     assert_int_equal(trn_search_bb(&p, &t, badz, 1, &w, NULL, ws, sizeof ws, &b, NULL), TRN_E_ARG);
     assert_int_equal(trn_search_bb(&p, &t, pts, 2, &w, NULL, ws, 1, &b, NULL), TRN_E_WORKSPACE);
+    assert_true(trn_search_bb_workspace_bytes(&p, &w) + 8u <= sizeof ws);
+    assert_int_equal(trn_search_bb(&p, &t, pts, 2, &w, NULL, ws + 8, sizeof ws - 8u, &b, NULL), TRN_E_WORKSPACE);
     bc = c; bc.cap = 30;
     {
         trn_lnp_table_t t2;

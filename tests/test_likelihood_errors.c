@@ -20,8 +20,8 @@
 #define CAP 9u
 
 static uint8_t dist_buf[NX * NY * NZ];
-static uint8_t pyr_buf[1 << 16];
-static double ws_buf[4096];
+TRN_WORKSPACE_DECLARE(pyr_buf, 1 << 16);
+TRN_WORKSPACE_DECLARE(ws_buf, 4096 * sizeof(double));
 
 typedef struct {
     trn_vol_u8_t dist;

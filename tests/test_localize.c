@@ -249,7 +249,7 @@ static void test_subpixel_fit_choice(void **state)
     trn_rng_t r;
     static float loc[L * L], hpb[L * L];
     static trn_point_t pts[MAXPTS];
-    static unsigned char hws[1u << 16];
+    TRN_WORKSPACE_DECLARE(hws, 1u << 16);
     double se3 = 0.0, se5 = 0.0, stt = 0.0, ste = 0.0, see = 0.0, slope, resid;
     int k, trials = 40;
     (void)state;
@@ -417,7 +417,7 @@ static void test_localize_matches_exhaustive(void **state)
     for (k = 0; k < 10; ++k) {
         trn_grid_f32_t local, hp;
         static float hpbuf[32 * 32];
-        static uint8_t hws[32 * 1024];
+        TRN_WORKSPACE_DECLARE(hws, 32 * 1024);
         trn_loc_result_t res;
         trn_best_t best;
         size_t n, wb;
@@ -446,7 +446,8 @@ static void test_bad_inputs(void **state)
 {
     enum { N = 40 };
     static float dem[N * N], nan_dem[N * N];
-    static uint8_t buf[1 << 20], ws[1 << 16];
+    TRN_WORKSPACE_DECLARE(buf, 1 << 20);
+    TRN_WORKSPACE_DECLARE(ws, 1 << 16);
     trn_grid_f32_t g, gn, local, big;
     trn_map_cfg_t cfg, bc;
     trn_map_t map, zero;
@@ -488,6 +489,8 @@ static void test_bad_inputs(void **state)
     assert_int_equal(trn_map_build(&map, &cfg, NULL, buf, mb), TRN_E_NULL);
     assert_int_equal(trn_map_build(&map, &cfg, &g, NULL, mb), TRN_E_NULL);
     assert_int_equal(trn_map_build(&map, &cfg, &g, buf, mb - 1), TRN_E_WORKSPACE);
+    assert_true(mb + 8u <= sizeof buf); /* misaligned (8 past a 16-byte boundary), large enough */
+    assert_int_equal(trn_map_build(&map, &cfg, &g, buf + 8, sizeof buf - 8u), TRN_E_WORKSPACE);
     bc = cfg; bc.sigma_m = 0.0f; assert_int_equal(trn_map_build(&map, &bc, &g, buf, mb), TRN_E_ARG);
     big = g; big.width = 0; assert_int_equal(trn_map_build(&map, &cfg, &big, buf, mb), TRN_E_SIZE);
     assert_int_equal(trn_map_build(&map, &cfg, &gn, buf, mb), TRN_E_NODATA);
@@ -504,6 +507,8 @@ static void test_bad_inputs(void **state)
     assert_int_equal(trn_localize_points(&map, pts, 0, &win, ws, sizeof ws, &res), TRN_E_NODATA);
     assert_int_equal(trn_localize_points(&map, pts, 2, &off, ws, sizeof ws, &res), TRN_E_RANGE);
     assert_int_equal(trn_localize_points(&map, pts, 2, &win, ws, 1, &res), TRN_E_WORKSPACE);
+    assert_true(trn_localize_workspace_bytes(&map, &win) + 8u <= sizeof ws);
+    assert_int_equal(trn_localize_points(&map, pts, 2, &win, ws + 8, sizeof ws - 8u, &res), TRN_E_WORKSPACE);
     memset(&zero, 0, sizeof zero);
     assert_int_equal(trn_localize_points(&zero, pts, 2, &win, ws, sizeof ws, &res), TRN_E_ARG);
 
@@ -523,6 +528,9 @@ static void test_bad_inputs(void **state)
     assert_int_equal(trn_localize_dem(&zero, &local, 10, 10, 100, &win, ws, sizeof ws, &res), TRN_E_ARG);
     assert_int_equal(trn_localize_dem(&map, &local, 10, 10, 100, &off, ws, sizeof ws, &res), TRN_E_RANGE);
     assert_int_equal(trn_localize_dem(&map, &local, 10, 10, 100, &win, ws, 16, &res), TRN_E_WORKSPACE);
+    assert_true(trn_localize_dem_workspace_bytes(&map, 20, 20, 100, &win) + 8u <= sizeof ws);
+    assert_int_equal(trn_localize_dem(&map, &local, 10, 10, 100, &win, ws + 8, sizeof ws - 8u, &res),
+                     TRN_E_WORKSPACE);
     assert_int_equal(trn_localize_dem(&map, &local, 10, 10, 3, &win, ws, sizeof ws, &res), TRN_E_CAPACITY);
     assert_int_equal(trn_grid_f32_sub(&gn, 5, 5, 20, 20, &local), TRN_OK);
     assert_int_equal(trn_localize_dem(&map, &local, 10, 10, 100, &win, ws, sizeof ws, &res), TRN_E_NODATA);

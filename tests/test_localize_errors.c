@@ -16,8 +16,8 @@
 
 enum { N = 24 };
 static float dem[N * N];
-static double map_buf[(1 << 20) / sizeof(double)];
-static double ws[(1 << 16) / sizeof(double)];
+TRN_WORKSPACE_DECLARE(map_buf, 1 << 20);
+TRN_WORKSPACE_DECLARE(ws, 1 << 16);
 
 static void build(trn_map_t *map, trn_map_cfg_t *cfg, trn_grid_f32_t *g)
 {

@@ -166,7 +166,7 @@ static trn_window_t window_at(int cx, int cy, int half)
     return win;
 }
 
-static double auto_ws[(GW + 1) * (GW + 1) * 2 + GW * GW];
+TRN_WORKSPACE_DECLARE(auto_ws, ((GW + 1) * (GW + 1) * 2 + GW * GW) * sizeof(double));
 
 /* trn_map_cfg_auto with the noise model (1 cm + 0.0004 r^2 / cell). */
 static void auto_cfg(trn_map_cfg_t *cfg, const trn_grid_f32_t *g, double *sh)
@@ -700,7 +700,7 @@ static void test_cfg_check_new_fields(void **state)
 static double sigma_h_of(const trn_grid_f32_t *g, float cell)
 {
     static float hpd[GW * GW];
-    static double hws[(GW + 1) * (GW + 1) * 2];
+    TRN_WORKSPACE_DECLARE(hws, ((GW + 1) * (GW + 1) * 2) * sizeof(double));
     trn_terrain_cfg_t t;
     trn_grid_f32_t hp;
     double s1 = 0.0, s2 = 0.0;
@@ -834,6 +834,8 @@ static void test_cfg_auto_regimes(void **state)
     c.noise_k_per_m = 0.0f; /* boundary: accepted */
     assert_int_equal(trn_map_cfg_auto(&c, &g, 1.0f, auto_ws, wb, &sh), TRN_OK);
     assert_int_equal(trn_map_cfg_auto(&c, &g, 1.0f, auto_ws, wb - 1u, &sh), TRN_E_WORKSPACE);
+    assert_true(wb + 8u <= sizeof auto_ws); /* misaligned, large enough */
+    assert_int_equal(trn_map_cfg_auto(&c, &g, 1.0f, auto_ws + 8, sizeof auto_ws - 8u, &sh), TRN_E_WORKSPACE);
     g.width = 0;
     assert_int_equal(trn_map_cfg_auto(&c, &g, 1.0f, auto_ws, wb, &sh), TRN_E_SIZE);
     g.width = GW;
@@ -856,7 +858,7 @@ static void test_map_build_heights(void **state)
 {
     enum { N = 40 };
     static float dem[N * N];
-    static double buf[(1 << 21) / sizeof(double)];
+    TRN_WORKSPACE_DECLARE(buf, 1 << 21);
     trn_grid_f32_t g;
     trn_map_cfg_t paper, c;
     trn_map_t map;
@@ -947,7 +949,7 @@ static void test_corrupt_heights(void **state)
     trn_point_t pts[2] = {{0, 0, 8}, {1, 0, 8}};
     trn_window_t win = window_at(48, 48, 3);
     double sh;
-    static double ws[(1 << 20) / sizeof(double)];
+    TRN_WORKSPACE_DECLARE(ws, 1 << 20);
     int i;
     (void)state;
     make_global(&g);
@@ -994,7 +996,7 @@ static void test_localize_dem_statuses(void **state)
     nat_t w;
     trn_loc_result_t res;
     trn_window_t win = window_at(48, 48, 3), off = {90, 40, GW, 44};
-    static double ws[(1 << 21) / sizeof(double)];
+    TRN_WORKSPACE_DECLARE(ws, 1 << 21);
     size_t wb;
     double sh;
     int i;

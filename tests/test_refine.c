@@ -405,7 +405,7 @@ static void test_height_search(void **state)
 }
 
 /* trn_map_cfg_auto: the documented rule on the analytic DEM, and every status. */
-static double ws_auto[(GW + 1) * (GW + 1) * 2 + GW * GW];
+TRN_WORKSPACE_DECLARE(ws_auto, ((GW + 1) * (GW + 1) * 2 + GW * GW) * sizeof(double));
 
 static void test_cfg_auto(void **state)
 {

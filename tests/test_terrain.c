@@ -272,7 +272,7 @@ static void test_highpass_errors(void **state)
 {
     enum { W = 6, H = 5 };
     static float din[W * H], dout[W * H], dbig[(W + 1) * H];
-    static double ws[1024];
+    TRN_WORKSPACE_DECLARE(ws, 1024 * sizeof(double));
     trn_grid_f32_t dem, out, bad, big;
     trn_terrain_cfg_t cfg = make_cfg(1.0f, 1.0f, 1.0f, 8), badcfg;
     const size_t wb = trn_highpass_workspace_bytes(W, H);
@@ -345,6 +345,10 @@ static void test_highpass_errors(void **state)
     assert_int_equal(trn_highpass(&dem, &cfg, &out, ws, wb), TRN_OK);
     assert_int_equal(trn_highpass(&dem, &cfg, &out, ws, wb - 1u), TRN_E_WORKSPACE);
     assert_int_equal(trn_highpass(&dem, &cfg, &out, ws, 0u), TRN_E_WORKSPACE);
+    /* TRN_E_WORKSPACE: large enough but not TRN_WS_ALIGN-aligned */
+    assert_true(wb + 8u <= sizeof ws);
+    assert_int_equal(trn_highpass(&dem, &cfg, &out, ws + 8, sizeof ws - 8u), TRN_E_WORKSPACE);
+    assert_int_equal(trn_highpass(&dem, &cfg, &out, ws + 16, sizeof ws - 16u), TRN_OK);
 }
 
 /* The workspace is used within its size: an exactly-sized heap block (ASan
@@ -603,7 +607,7 @@ static void test_highpass_missing(void **state)
 {
     enum { W = 7, H = 5 };
     static float din[W * H], dout[W * H];
-    static double ws[512];
+    TRN_WORKSPACE_DECLARE(ws, 512 * sizeof(double));
     const trn_terrain_cfg_t cfg = make_cfg(1.0f, 1.0f, 1.0f, 8);
     const size_t wb = trn_highpass_workspace_bytes(W, H);
     const float kinds[3] = {NAN, INFINITY, -INFINITY};
@@ -664,7 +668,7 @@ static void test_highpass_box_wider_than_grid(void **state)
 {
     enum { W = 6, H = 5 };
     static float din[W * H], dout[W * H];
-    static double ws[512];
+    TRN_WORKSPACE_DECLARE(ws, 512 * sizeof(double));
     static const float cells[] = {1.0f, 1e-3f, 1e-30f};
     const size_t wb = trn_highpass_workspace_bytes(W, H);
     trn_grid_f32_t dem, out;

@@ -83,10 +83,41 @@ trn_status_t trn_vol_u8_check(const trn_vol_u8_t *v);
     ((((size_t)(z) * (size_t)(v)->ny) + (size_t)(y)) * (size_t)(v)->nx + (size_t)(x))
 
 /**
- * @brief Round a byte count up to the alignment every trn workspace slice
- * uses (16 bytes), so sizing functions and carvers agree.
+ * Alignment, in bytes, of every workspace and map buffer a caller passes to
+ * the core, and of every slice the core carves from one (a doubleword load
+ * on a Cortex-R faults when misaligned; 16 also suits vector loads). A
+ * function given a misaligned buffer returns TRN_E_WORKSPACE.
  */
-#define TRN_ALIGN_UP(n) (((size_t)(n) + (size_t)15u) & ~(size_t)15u)
+#define TRN_WS_ALIGN 16u
+
+/**
+ * @brief Round a byte count up to TRN_WS_ALIGN, so sizing functions and
+ * carvers agree.
+ */
+#define TRN_ALIGN_UP(n) (((size_t)(n) + ((size_t)TRN_WS_ALIGN - 1u)) & ~((size_t)TRN_WS_ALIGN - 1u))
+
+/* The alignment specifier for TRN_WORKSPACE_DECLARE (C99 has none). */
+#if defined(TRN_WS_ALIGNAS)
+/* given by the integrator */
+#elif defined(__GNUC__) || defined(__clang__)
+#define TRN_WS_ALIGNAS __attribute__((aligned(16)))
+#elif defined(__STDC_VERSION__) && (__STDC_VERSION__ >= 201112L)
+#define TRN_WS_ALIGNAS _Alignas(16)
+#elif defined(_MSC_VER)
+#define TRN_WS_ALIGNAS __declspec(align(16))
+#else
+/* Unknown compiler: define TRN_WS_ALIGNAS to its 16-byte alignment specifier.
+ * Without one a declared buffer is only byte-aligned, and every entry given
+ * it when misaligned returns TRN_E_WORKSPACE (never a fault). */
+#define TRN_WS_ALIGNAS
+#endif
+
+/**
+ * @brief Declare a static, TRN_WS_ALIGN-aligned byte buffer for a workspace
+ * or map: `TRN_WORKSPACE_DECLARE(map_mem, MAP_BYTES);` (bytes: a constant
+ * expression, rounded up to TRN_WS_ALIGN). Use it at file or block scope.
+ */
+#define TRN_WORKSPACE_DECLARE(name, bytes) static TRN_WS_ALIGNAS uint8_t name[TRN_ALIGN_UP(bytes)]
 
 #ifdef __cplusplus
 }

@@ -30,13 +30,7 @@ extern "C" {
 /** Truncation radius in sigmas: R_j = ceil(3 sigma_j) (0.27 % of the mass cut, then renormalized). */
 #define TRN_KERNEL_TRUNC_SIGMAS 3
 
-/** Largest kernel radius, taps each side; storage is 10 x (2 R + 1) floats. */
-#ifndef TRN_KERNEL_MAX_RADIUS
-#define TRN_KERNEL_MAX_RADIUS 64
-#endif
-#if TRN_KERNEL_MAX_RADIUS < 3 || TRN_KERNEL_MAX_RADIUS > 1024
-#error "TRN_KERNEL_MAX_RADIUS must be in [3, 1024]"
-#endif
+/* The largest kernel radius, TRN_KERNEL_MAX_RADIUS, is in trn_config.h. */
 
 /** Default sigma_0, cells: 0.5 cell, so sigma_9 = 11.3 cells (1.13 m at 0.1 m cells), R_9 = 34. */
 #define TRN_KERNEL_SIGMA0_DEFAULT_CELLS 0.5f

@@ -129,7 +129,8 @@ size_t trn_pyramid_bytes(int32_t nx, int32_t ny, int32_t nz, int32_t nlevels);
 /**
  * @brief Build the min-filter pyramid of a distance volume into buf.
  * @retval TRN_OK, TRN_E_NULL, TRN_E_SIZE, TRN_E_ARG (nlevels or cap out of
- *         range), TRN_E_WORKSPACE.
+ *         range), TRN_E_WORKSPACE (len below trn_pyramid_bytes or buf not
+ *         TRN_WS_ALIGN-aligned).
  */
 trn_status_t trn_pyramid_build(trn_pyramid_t *p, const trn_vol_u8_t *dist, uint8_t cap,
                                int32_t nlevels, void *buf, size_t len);
@@ -140,7 +141,8 @@ size_t trn_search_bb_workspace_bytes(const trn_pyramid_t *p, const trn_window_t 
 /**
  * @brief Branch-and-bound search; returns exactly what trn_search_exhaustive
  * returns for the same arguments.
- * @retval as trn_search_exhaustive, plus TRN_E_WORKSPACE.
+ * @retval as trn_search_exhaustive, plus TRN_E_WORKSPACE (ws_bytes below
+ *         trn_search_bb_workspace_bytes or ws not TRN_WS_ALIGN-aligned).
  */
 trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
                            const trn_point_t *pts, size_t n, const trn_window_t *win,

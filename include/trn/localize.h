@@ -143,7 +143,8 @@ size_t trn_map_cfg_auto_workspace_bytes(int32_t width, int32_t height);
  * @param[in] cell_m   the DEM's cell, metres.
  * @param[out] sigma_h_m sigma_H (may be NULL).
  * @retval TRN_OK, TRN_E_NULL, TRN_E_ARG (cell or noise out of range),
- *         TRN_E_SIZE, TRN_E_WORKSPACE, TRN_E_NODATA (no valid height)
+ *         TRN_E_SIZE, TRN_E_WORKSPACE (ws below trn_map_cfg_auto_workspace_bytes
+ *         or not TRN_WS_ALIGN-aligned), TRN_E_NODATA (no valid height)
  */
 trn_status_t trn_map_cfg_auto(trn_map_cfg_t *cfg, const trn_grid_f32_t *dem, float cell_m,
                               void *ws, size_t ws_bytes, double *sigma_h_m);
@@ -157,9 +158,11 @@ size_t trn_map_bytes(const trn_map_cfg_t *cfg, int32_t width, int32_t height);
 /**
  * @brief Prepare a global map from its DEM (NaN / inf = not seen).
  * @param[out] map  filled; valid while buf lives and is unchanged.
- * @param[in]  buf  trn_map_bytes() bytes, 16-byte aligned.
+ * @param[in]  buf  trn_map_bytes() bytes, TRN_WS_ALIGN-aligned
+ *                  (TRN_WORKSPACE_DECLARE for a static one).
  * @retval TRN_OK
- * @retval TRN_E_NULL, TRN_E_SIZE, TRN_E_ARG, TRN_E_WORKSPACE
+ * @retval TRN_E_NULL, TRN_E_SIZE, TRN_E_ARG
+ * @retval TRN_E_WORKSPACE len below trn_map_bytes or buf not TRN_WS_ALIGN-aligned
  * @retval TRN_E_NODATA the DEM has no valid height
  */
 trn_status_t trn_map_build(trn_map_t *map, const trn_map_cfg_t *cfg, const trn_grid_f32_t *dem,
@@ -174,7 +177,9 @@ size_t trn_localize_workspace_bytes(const trn_map_t *map, const trn_window_t *wi
  * @retval TRN_OK
  * @retval TRN_E_ILLCOND the best pose is found (ix, iy, ll_best, failure
  *         probability are valid) but the peak has no finite covariance
- * @retval TRN_E_NULL, TRN_E_ARG, TRN_E_SIZE, TRN_E_WORKSPACE
+ * @retval TRN_E_NULL, TRN_E_ARG, TRN_E_SIZE
+ * @retval TRN_E_WORKSPACE ws_bytes below trn_localize_workspace_bytes or ws
+ *         not TRN_WS_ALIGN-aligned
  * @retval TRN_E_RANGE  window not inside the map
  * @retval TRN_E_NODATA no points
  */

@@ -16,7 +16,7 @@ typedef enum {
     TRN_E_NULL = -1,        /**< a required pointer argument was NULL */
     TRN_E_ARG = -2,         /**< a parameter is out of its documented range (or NaN) */
     TRN_E_SIZE = -3,        /**< a dimension is zero, too large, or inconsistent */
-    TRN_E_WORKSPACE = -4,   /**< the caller's buffer is smaller than the sizing function says */
+    TRN_E_WORKSPACE = -4,   /**< the caller's buffer is smaller than the sizing function says, or not TRN_WS_ALIGN-aligned */
     TRN_E_NODATA = -5,      /**< the input holds no usable data (all missing / nothing occupied) */
     TRN_E_RANGE = -6,       /**< a position or pose window lies off the map */
     TRN_E_ILLCOND = -7,     /**< the likelihood peak is flat or ridge-shaped: no finite covariance */

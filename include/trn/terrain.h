@@ -57,11 +57,11 @@ size_t trn_highpass_workspace_bytes(int32_t width, int32_t height);
  * @param[in]  dem   heights, metres; NaN/inf = missing.
  * @param[in]  cfg   terrain parameters.
  * @param[out] out   filtered heights, same size as dem (must not overlap dem).
- * @param[in]  ws    scratch of trn_highpass_workspace_bytes() bytes, 8-byte aligned.
+ * @param[in]  ws    scratch of trn_highpass_workspace_bytes() bytes, TRN_WS_ALIGN-aligned.
  * @param[in]  ws_bytes its size.
  * @retval TRN_OK
  * @retval TRN_E_NULL, TRN_E_SIZE (bad grids or size mismatch), TRN_E_ARG (cfg),
- *         TRN_E_WORKSPACE (ws too small)
+ *         TRN_E_WORKSPACE (ws too small or not TRN_WS_ALIGN-aligned)
  * @retval TRN_E_NODATA every height is missing (out is then all NaN)
  */
 trn_status_t trn_highpass(const trn_grid_f32_t *dem, const trn_terrain_cfg_t *cfg,

@@ -21,5 +21,6 @@
 #include "trn/select.h"
 #include "trn/field.h"
 #include "trn/mast.h"
+#include "trn/abi.h"
 
 #endif /* TRN_TRN_H */

@@ -6,6 +6,15 @@
  * example `-DTRN_USER_CONFIG_H="rover_trn_opts.h"`), that header is read first
  * and may override any value below; every value here is a guarded default; an
  * inconsistent configuration stops the build with #error.
+ *
+ * Every compile-time maximum of the core is here, and some size public
+ * structs (trn_kernels_t, trn_lnp_table_t, trn_pyramid_t, trn_map_t), so the
+ * library and every file that includes its headers must see the same
+ * configuration. With CMake, set the cache variable TRN_USER_CONFIG_H: the
+ * definition is then PUBLIC on the trn target and reaches every consumer
+ * (find_package or add_subdirectory). Otherwise define it for the whole
+ * build. TRN_ABI_CHECK() (trn/abi.h) tells at run time whether a file and
+ * the library agree.
  */
 #ifndef TRN_CONFIG_H
 #define TRN_CONFIG_H
@@ -36,6 +45,11 @@
 /** Largest number of branch-and-bound pyramid levels (blocks of 2^L poses). */
 #ifndef TRN_MAX_LEVELS
 #define TRN_MAX_LEVELS 6
+#endif
+
+/** Largest kernel radius, taps each side; trn_kernels_t stores 10 x (2 R + 1) floats. */
+#ifndef TRN_KERNEL_MAX_RADIUS
+#define TRN_KERNEL_MAX_RADIUS 64
 #endif
 
 /** Fixed-point scale of log-likelihood tables: table units per nat. */
@@ -69,6 +83,9 @@
 #endif
 #if TRN_MAX_LEVELS < 1 || TRN_MAX_LEVELS > 10
 #error "TRN_MAX_LEVELS must be in [1, 10]"
+#endif
+#if TRN_KERNEL_MAX_RADIUS < 3 || TRN_KERNEL_MAX_RADIUS > 1024
+#error "TRN_KERNEL_MAX_RADIUS must be in [3, 1024]"
 #endif
 #if TRN_LNP_SCALE < 1024 || TRN_LNP_SCALE > 1048576
 #error "TRN_LNP_SCALE must be in [1024, 1048576]"

@@ -20,8 +20,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     fz_t f = { data, size };
     static float gbuf[GW * GW], lbuf[LW * LW];
-    static double map_buf[(1u << 20) / sizeof(double)];
-    static double ws[(1u << 20) / sizeof(double)];
+    TRN_WORKSPACE_DECLARE(map_buf, 1u << 20);
+    TRN_WORKSPACE_DECLARE(ws, 1u << 20);
     trn_map_cfg_t cfg;
     trn_map_t map;
     trn_grid_f32_t g, l;

@@ -23,8 +23,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     fz_t f = { data, size };
     static uint8_t occ_buf[MAXXY * MAXXY * MAXZ], dist_buf[MAXXY * MAXXY * MAXZ];
-    static uint8_t pyr_buf[1 << 18];
-    static double ws[(1 << 16) / sizeof(double)];
+    TRN_WORKSPACE_DECLARE(pyr_buf, 1 << 18);
+    TRN_WORKSPACE_DECLARE(ws, 1 << 16);
     trn_vol_u8_t occ, dist;
     trn_lik_cfg_t cfg;
     trn_lnp_table_t t;

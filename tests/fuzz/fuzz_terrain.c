@@ -21,7 +21,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     fz_t f = { data, size };
     static float dem_buf[MAXW * MAXW], hp_buf[MAXW * MAXW];
-    static double ws[(MAXW * MAXW * 16 + 4096) / sizeof(double)];
+    TRN_WORKSPACE_DECLARE(ws, ((MAXW * MAXW * 16 + 4096) / sizeof(double)) * sizeof(double));
     static uint8_t occ_buf[MAXW * MAXW * MAXZ];
     static trn_point_t pts[MAXW * MAXW * MAXZ];
     trn_terrain_cfg_t cfg;
