@@ -691,10 +691,13 @@ static void sort_blocks(block_t *a, size_t n)
     }
 }
 
-trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
-                           const trn_point_t *pts, size_t n, const trn_window_t *win,
-                           const trn_exclusion_t *ex, void *ws, size_t ws_bytes,
-                           trn_best_t *best, trn_search_stats_t *stats)
+/* The branch-and-bound search of trn_search_bb; with floor, only poses
+ * scoring above *floor count (the search starts as if one had been found
+ * with that score, so blocks that cannot beat it are never opened). */
+static trn_status_t bb_run(const trn_pyramid_t *p, const trn_lnp_table_t *t, const trn_point_t *pts,
+                           size_t n, const trn_window_t *win, const trn_exclusion_t *ex, void *ws,
+                           size_t ws_bytes, const int64_t *floor, trn_best_t *best,
+                           trn_search_stats_t *stats)
 {
     trn_status_t st;
     block_t *tops;
@@ -725,6 +728,12 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
     }
     top_lv = p->nlevels;
     bs = (int32_t)(1u << (unsigned)top_lv);
+    if (floor != NULL) {
+        best->x = INT32_MAX; /* a tie with the floor is no improvement (checked at the end) */
+        best->y = INT32_MAX;
+        best->score = *floor;
+        found = 1;
+    }
     (void)bb_carve(p, win, ws, &lay);
     tops = lay.tops;
     tops_suf = lay.tops_suf;
@@ -826,7 +835,35 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
         stats->poses_scored = scored;
         stats->blocks_bounded = bounded;
     }
+    if (floor != NULL) {
+        return best->score > *floor ? TRN_OK : TRN_E_NODATA;
+    }
     return found ? TRN_OK : TRN_E_NODATA;
+}
+
+trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
+                           const trn_point_t *pts, size_t n, const trn_window_t *win,
+                           const trn_exclusion_t *ex, void *ws, size_t ws_bytes,
+                           trn_best_t *best, trn_search_stats_t *stats)
+{
+    return bb_run(p, t, pts, n, win, ex, ws, ws_bytes, NULL, best, stats);
+}
+
+trn_status_t trn_search_bb_above(const trn_pyramid_t *p, const trn_lnp_table_t *t,
+                                 const trn_point_t *pts, size_t n, const trn_window_t *win,
+                                 const trn_exclusion_t *ex, int64_t floor, void *ws, size_t ws_bytes,
+                                 trn_best_t *best, trn_search_stats_t *stats)
+{
+    trn_best_t b;
+    trn_status_t st;
+    if (best == NULL) {
+        return TRN_E_NULL;
+    }
+    st = bb_run(p, t, pts, n, win, ex, ws, ws_bytes, &floor, &b, stats);
+    if (st == TRN_OK) {
+        *best = b;
+    }
+    return st;
 }
 
 /* ------------------------------------------------------------ point order */

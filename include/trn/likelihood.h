@@ -150,6 +150,19 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
                            trn_best_t *best, trn_search_stats_t *stats);
 
 /**
+ * @brief trn_search_bb over the poses scoring strictly above floor (table
+ * units): blocks whose bound cannot beat floor are never opened. Chained
+ * over several point sets (e.g. the headings of trn_localize_points_heading)
+ * with floor = the best score so far, it finds their overall best exactly.
+ * best is written only on TRN_OK.
+ * @retval as trn_search_bb; TRN_E_NODATA also when no pose scores above floor.
+ */
+trn_status_t trn_search_bb_above(const trn_pyramid_t *p, const trn_lnp_table_t *t,
+                                 const trn_point_t *pts, size_t n, const trn_window_t *win,
+                                 const trn_exclusion_t *ex, int64_t floor, void *ws, size_t ws_bytes,
+                                 trn_best_t *best, trn_search_stats_t *stats);
+
+/**
  * @brief Reorder local points so that those in the least populated height
  * bins (of these points) come first. Scores are exact sums, so every score
  * and search result is unchanged; the order only makes trn_search_bb's

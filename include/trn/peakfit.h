@@ -46,6 +46,32 @@ typedef struct {
  */
 trn_status_t trn_peak_fit(const double ll[9], trn_peak_t *out);
 
+/** Result of the three-dimensional fit (trn_peak_fit3), in grid units. */
+typedef struct {
+    double d[3];     /**< peak offset from the centre sample, per axis */
+    double cov[9];   /**< covariance, row-major 3 x 3, units^2 */
+    double sigma[3]; /**< standard deviations, sqrt of cov's diagonal */
+} trn_peak3_t;
+
+/**
+ * @brief Eq. 6 in three dimensions (x, y, heading for
+ * trn_localize_points_heading): the 10-term quadratic fitted by least
+ * squares to ln L on a 3 x 3 x 3 grid of samples; peak -H^-1 g and
+ * covariance -H^-1, as trn_peak_fit.
+ * @param[in]  ll  ln L in nats, ll[(d2 + 1) * 9 + (d1 + 1) * 3 + (d0 + 1)],
+ *                 d0 fastest.
+ * @param[out] out the fit. On TRN_E_ILLCOND d = 0 and the variances and
+ *             sigmas are +infinity (off-diagonals 0).
+ * @retval TRN_OK
+ * @retval TRN_E_NULL    ll or out NULL
+ * @retval TRN_E_ARG     a value is NaN or infinite
+ * @retval TRN_E_ILLCOND -H not positive definite (a pivot of its Cholesky
+ *                       factor at or below the inputs' rounding noise), the
+ *                       peak outside the grid (an |offset| above 1), or an
+ *                       input more than 1e300 nats from the centre
+ */
+trn_status_t trn_peak_fit3(const double ll[27], trn_peak3_t *out);
+
 /**
  * @brief Probability that the best peak is the wrong one (method.md 2.9):
  * the two best separated hypotheses weighed by their likelihoods,

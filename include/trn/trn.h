@@ -21,6 +21,7 @@
 #include "trn/select.h"
 #include "trn/field.h"
 #include "trn/mast.h"
+#include "trn/heading.h"
 #include "trn/abi.h"
 
 #endif /* TRN_TRN_H */

@@ -52,6 +52,11 @@
 #define TRN_KERNEL_MAX_RADIUS 64
 #endif
 
+/** Largest number of headings (2 K + 1) trn_localize_points_heading searches. */
+#ifndef TRN_MAX_HEADING_STEPS
+#define TRN_MAX_HEADING_STEPS 1441
+#endif
+
 /** Fixed-point scale of log-likelihood tables: table units per nat. */
 #ifndef TRN_LNP_SCALE
 #define TRN_LNP_SCALE 65536
@@ -86,6 +91,9 @@
 #endif
 #if TRN_KERNEL_MAX_RADIUS < 3 || TRN_KERNEL_MAX_RADIUS > 1024
 #error "TRN_KERNEL_MAX_RADIUS must be in [3, 1024]"
+#endif
+#if TRN_MAX_HEADING_STEPS < 1 || TRN_MAX_HEADING_STEPS > 1000001
+#error "TRN_MAX_HEADING_STEPS must be in [1, 1000001]"
 #endif
 #if TRN_LNP_SCALE < 1024 || TRN_LNP_SCALE > 1048576
 #error "TRN_LNP_SCALE must be in [1024, 1048576]"
