@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # consumer_test.cmake - the `find_package_consumer` CTest test.
 #
 # Installs the already-built trn into a scratch prefix inside the build tree,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_port_linux.c - host unit tests of the Linux port (linux_can.h,
  * linux_gpio.h): what runs without CAN or GPIO in the kernel.
  *

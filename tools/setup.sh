@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # tools/setup.sh [group...] - install the Debian packages the build needs.
 #
 # Idempotent and fast when everything is present: each package is checked with

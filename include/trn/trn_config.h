@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file trn_config.h
  * @brief Compile-time maxima and build options of the trn core.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """clitest.py - the harness the `trn` command-line tests share.
 
 A Harness runs build/<preset>/trn (optionally with a fixed subcommand in front

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """tests/cli/test_cli.py - the `trn` command line end to end (CTest `cli`).
 
     python3 tests/cli/test_cli.py PATH/TO/trn WORKDIR

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tests/cli/test_cli_util.c - the `trn` option parsers, JSON writer and
  * option table (tools/trn/cli.[ch]). */
 #include <math.h>

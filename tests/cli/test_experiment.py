@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """tests/cli/test_experiment.py - `trn experiment` end to end (CTest `cli_experiment`).
 
     python3 tests/cli/test_experiment.py PATH/TO/trn WORKDIR

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """tests/cli/test_profile.py - `trn profile` end to end (CTest `cli_profile`,
 and `profile_instructions` with --instructions).
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* main.c - smallest user of an installed trn: checks that the public header is
  * found as <trn/status.h> and that libtrn.a links. Exit status 0 on success. */
 #include <stdio.h>

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # tools/analysis/run.sh - static analysis of the C code (docs/assurance.md,
 # "Static analysis"); exits non-zero on any finding.
 #

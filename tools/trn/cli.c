@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/cli.c - option parsing, errors, JSON and progress for `trn`. */
 #define _POSIX_C_SOURCE 200809L /* isatty */
 #include "cli.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/cli.h - what every `trn` subcommand shares: strict option
  * parsing from a table, the one-line error convention, a JSON writer and a
  * progress bar.

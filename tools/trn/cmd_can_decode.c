@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* cmd_can_decode.c - `trn can-decode LOG`: decode a candump -l log of the
  * mast / stereo-head bus (docs/can-protocol.md).
  *

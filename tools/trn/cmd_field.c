@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/cmd_field.c - `trn field`: the sensor uncertainty field (paper
  * section 6): for every rover position of an area, the predicted uncertainty
  * of its best landmark, computed coarse to fine by trn_field, as a GeoTIFF on

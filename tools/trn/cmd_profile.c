@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/cmd_profile.c - `trn profile`: the onboard pipeline's stages on a
  * stated configuration, timed on the host, optionally counted in
  * instructions under callgrind, with the workspace each needs and its share

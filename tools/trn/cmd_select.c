@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/cmd_select.c - `trn select`: the landmark a rover should sense
  * next (paper section 4): every candidate target's predicted localization
  * uncertainty from one rover position, the best one, the next best distinct

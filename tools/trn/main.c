@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/main.c - the `trn` host command line: `trn <subcommand> ...`.
  *
  * Subcommands are listed in commands.def (one line each) and live in

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file linux_gpio.h
  * @brief Linux GPIO port (libgpiod 1.6, the Debian bookworm API): the mast
