@@ -16,12 +16,16 @@
 set -euo pipefail
 
 declare -A PKG_GROUPS=(
-  # Build, host tests, aarch64 cross + qemu-user, bare-metal Cortex-R5F.
+  # Build, host tests, aarch64 cross + qemu-user, bare-metal Cortex-R5F;
+  # pkg-config, dpkg-dev and file for the install tests (the pkg-config
+  # consumer; CPack's DEB generator reads Depends with dpkg-shlibdeps, which
+  # needs file).
   [core]="cmake ninja-build make gcc libc6-dev pkg-config libcmocka-dev
           gcc-aarch64-linux-gnu binutils-aarch64-linux-gnu libc6-dev-arm64-cross
           libcmocka-dev:arm64 qemu-user
           libgpiod-dev libgpiod-dev:arm64
-          gcc-arm-none-eabi binutils-arm-none-eabi libnewlib-arm-none-eabi"
+          gcc-arm-none-eabi binutils-arm-none-eabi libnewlib-arm-none-eabi
+          dpkg-dev file"
   # Benchmarks: the optional OpenCV reference in trn_bench (C++).
   [bench]="g++ libopencv-dev"
   # The `trn` command line: GDAL's C API (any raster DEM in, GeoTIFF out),

@@ -78,6 +78,7 @@ def main():
     rc, out, err = run(*SMALL, "--json")
     check(rc == 0, f"--json: exit {rc}: {err.strip()}")
     j = json.loads(out)
+    H.check_version(j, "profile --json")
     cfg = j["config"]
     check(cfg["map_cells"] == 128 and cfg["local_cells"] == 32 and cfg["window_cells"] == 10,
           f"config echo wrong: {cfg}")

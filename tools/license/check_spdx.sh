@@ -7,7 +7,7 @@
 #   /* SPDX-License-Identifier: Apache-2.0 */     C, C++, headers, .def
 #   # SPDX-License-Identifier: Apache-2.0         CMake, shell, Python
 #
-# Source files: *.c *.h *.cpp *.def *.py *.sh *.cmake *.cmake.in,
+# Source files: *.c *.h *.cpp *.def *.py *.sh *.cmake *.in (templates),
 # CMakeLists.txt, and any other file whose first line is a shebang. The list
 # comes from `git ls-files` (every file under ROOT outside build/ and .git/
 # when ROOT is not a git work tree). Prints each offending file and exits 1;
@@ -25,7 +25,7 @@ fi
 
 is_source() {
   case $1 in
-    *.c|*.h|*.cpp|*.def|*.py|*.sh|*.cmake|*.cmake.in|CMakeLists.txt|*/CMakeLists.txt) return 0 ;;
+    *.c|*.h|*.cpp|*.def|*.py|*.sh|*.cmake|*.in|CMakeLists.txt|*/CMakeLists.txt) return 0 ;;
   esac
   [ -f "$1" ] && [ "$(head -c 2 "$1" | tr -d '\000')" = '#!' ]
 }

@@ -241,7 +241,7 @@ int trn_cmd_field(int argc, char **argv) {
   if (stats.best_x < 0) {
     cli_fail(cmd.name, "no informative target from any of the %u positions evaluated (featureless terrain?); "
              "nothing written", stats.evaluations);
-    rc = 3;
+    rc = CLI_NO_RESULT;
     goto done;
   }
 

@@ -21,7 +21,7 @@
 #include "trn/trn.h"
 
 #define PI 3.14159265358979323846
-#define EXIT_NO_TARGET 3
+#define EXIT_NO_TARGET CLI_NO_RESULT
 
 static void target_json(json_t *j, const selmap_t *w, const trn_candidate_t *c) {
   double x, y;
