@@ -378,7 +378,11 @@ static void test_lgpio_calls_null_and_closed(void **state)
     c.chip = "trn-no-such-chip";
     assert_int_equal(trn_lgpio_open(&g, &c), TRN_E_IO);
     assert_null(g.chip);
+#if TRN_GPIOD_API == 2
+    assert_null(g.request);
+#else
     assert_null(g.power);
+#endif
 
     assert_int_equal(trn_lgpio_close(NULL), TRN_E_NULL);
     assert_int_equal(trn_lgpio_close(&g), TRN_OK);
