@@ -26,6 +26,10 @@ declare -A PKG_GROUPS=(
           libgpiod-dev libgpiod-dev:arm64
           gcc-arm-none-eabi binutils-arm-none-eabi libnewlib-arm-none-eabi
           dpkg-dev file"
+  # libgpiod 2 for the Linux port's tests (tools/gpiod2/build-libgpiod2.sh:
+  # the C sources from the PyPI sdist of its bindings, fetched with the pip
+  # of the project venv .venv; used by tools/test.d/41-analysis.sh and 44-gpiod2.sh).
+  [gpiod2]="python3 python3-venv gcc binutils"
   # Benchmarks: the optional OpenCV reference in trn_bench (C++).
   [bench]="g++ libopencv-dev"
   # The `trn` command line: GDAL's C API (any raster DEM in, GeoTIFF out),
@@ -54,7 +58,7 @@ declare -A PKG_GROUPS=(
   [real]="python3 python3-venv python3-opencv python3-numpy python3-gdal gdal-bin
           python3-matplotlib python-matplotlib-data"
 )
-GROUP_ORDER=(core bench gdal can plot vm assure profile real)
+GROUP_ORDER=(core gpiod2 bench gdal can plot vm assure profile real)
 
 usage() {
   echo "usage: $0 [group...]   (default: core)"

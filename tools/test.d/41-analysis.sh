@@ -5,5 +5,5 @@
 # tools/analysis/deviations.txt (docs/assurance.md, "Static analysis").
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/../.."
-bash tools/setup.sh assure
+bash tools/setup.sh assure gpiod2
 bash tools/analysis/run.sh

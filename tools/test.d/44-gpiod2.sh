@@ -19,7 +19,7 @@ set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/../.."
 fail() { echo "44-gpiod2: $*" >&2; exit 1; }
 
-bash tools/setup.sh core vm
+bash tools/setup.sh core vm gpiod2
 G=$(bash tools/gpiod2/build-libgpiod2.sh)
 B=build/gpiod2
 rm -rf "$B"
