@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # FindCMocka.cmake - locate the cmocka unit-test library (Debian: libcmocka-dev).
 #
 # Plain find_path/find_library rather than pkg-config or cmocka's own CMake

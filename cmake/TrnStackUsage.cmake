@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # TrnStackUsage.cmake - per-function stack sizes and call graphs from GCC, for
 # tools/stack/trn_stack.py (docs/assurance.md, "Stack").
 #

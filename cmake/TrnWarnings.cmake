@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # TrnWarnings.cmake - the one warning set of the project (docs/architecture.md,
 # "Numbers"), applied to the core, the tests and the tools.
 #

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # check_no_malloc.cmake - fail if a library (libtrn.a, libtrn_proto.a) references a heap allocator.
 #
 # The core never allocates (docs/architecture.md, "Fixed memory"). This script

@@ -1,16 +1,22 @@
+# SPDX-License-Identifier: Apache-2.0
 # consumer_test.cmake - the `find_package_consumer` CTest test.
 #
 # Installs the already-built trn into a scratch prefix inside the build tree,
 # then configures, builds and runs tests/consumer/, a separate CMake project
-# that uses only `find_package(trn CONFIG REQUIRED)` and `trn::trn`. This checks
-# the installed headers, libtrn.a, trnTargets.cmake and trnConfig*.cmake
-# together, the way an integrator would use them.
+# that uses only `find_package(trn 0.1 CONFIG REQUIRED)` and the imported
+# targets (trn::trn with trn::trn_proto, trn::trn_shared). This checks the
+# installed headers, libtrn.a, libtrn.so, trnTargets.cmake and
+# trnConfig*.cmake together, the way an integrator would use them. Then it
+# compiles the same main.c with nothing but the compiler and
+# `pkg-config --cflags --libs trn trn-proto` (PKG_CONFIG_PATH = the prefix's
+# pkgconfig directory) and runs it, with LD_LIBRARY_PATH for libtrn.so.
 #
 #   cmake -DTRN_BINARY_DIR=... -DCONSUMER_SOURCE_DIR=... -DWORK_DIR=...
 #         -DGENERATOR=... -DMAKE_PROGRAM=... -DC_COMPILER=... -DBUILD_TYPE=...
-#         -DC_FLAGS=... -DLINKER_FLAGS=... -P consumer_test.cmake
+#         -DC_FLAGS=... -DLINKER_FLAGS=... -DTRN_VERSION=... -DPKG_CONFIG=...
+#         -DLIBDIR=... -P consumer_test.cmake
 
-foreach(var TRN_BINARY_DIR CONSUMER_SOURCE_DIR WORK_DIR GENERATOR C_COMPILER)
+foreach(var TRN_BINARY_DIR CONSUMER_SOURCE_DIR WORK_DIR GENERATOR C_COMPILER TRN_VERSION LIBDIR)
   if(NOT DEFINED ${var} OR "${${var}}" STREQUAL "")
     message(FATAL_ERROR "consumer_test.cmake: ${var} not set")
   endif()
@@ -52,7 +58,37 @@ if(MAKE_PROGRAM)
 endif()
 run("${CMAKE_COMMAND}" ${configure_args})
 
-# 3. build, 4. run
+# 3. build, 4. run (static; shared when the package has libtrn.so)
 run("${CMAKE_COMMAND}" --build "${build}")
 run("${build}/trn_consumer")
-message(STATUS "consumer: find_package(trn) consumer built and ran")
+if(EXISTS "${build}/trn_consumer_shared")
+  run("${build}/trn_consumer_shared")
+endif()
+message(STATUS "consumer: find_package(trn) consumers built and ran")
+
+# 5. pkg-config: the compiler and the .pc files only.
+if(NOT PKG_CONFIG)
+  message(FATAL_ERROR "consumer: pkg-config not found (bash tools/setup.sh core installs it)")
+endif()
+set(pcdir "${prefix}/${LIBDIR}/pkgconfig")
+set(pcenv "${CMAKE_COMMAND}" -E env "PKG_CONFIG_PATH=${pcdir}")
+execute_process(COMMAND ${pcenv} "${PKG_CONFIG}" --modversion trn
+  OUTPUT_VARIABLE pc_version OUTPUT_STRIP_TRAILING_WHITESPACE RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0 OR NOT pc_version STREQUAL TRN_VERSION)
+  message(FATAL_ERROR "consumer: pkg-config --modversion trn: '${pc_version}' (${rc}), want ${TRN_VERSION}")
+endif()
+execute_process(COMMAND ${pcenv} "${PKG_CONFIG}" --cflags --libs trn trn-proto
+  OUTPUT_VARIABLE pc_flags OUTPUT_STRIP_TRAILING_WHITESPACE RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "consumer: pkg-config --cflags --libs trn trn-proto failed (${rc})")
+endif()
+message(STATUS "consumer: pkg-config trn ${pc_version}: ${pc_flags}")
+separate_arguments(pc_flags UNIX_COMMAND "${pc_flags}")
+separate_arguments(c_flags UNIX_COMMAND "${C_FLAGS}")
+separate_arguments(ld_flags UNIX_COMMAND "${LINKER_FLAGS}")
+set(pc_exe "${WORK_DIR}/trn_consumer_pkgconfig")
+run("${C_COMPILER}" ${c_flags} -std=c99 -Wall -Wextra -pedantic -Werror
+    "-DEXPECT_VERSION=\"${TRN_VERSION}\"" -DCONSUMER_PROTO=1
+    "${CONSUMER_SOURCE_DIR}/main.c" -o "${pc_exe}" ${ld_flags} ${pc_flags})
+run("${CMAKE_COMMAND}" -E env "LD_LIBRARY_PATH=${prefix}/${LIBDIR}" "${pc_exe}")
+message(STATUS "consumer: pkg-config consumer built and ran")

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # cmake -DREADME=README.md -DMARKER=name -DOUT=file.c -P extract_readme_example.cmake
 #
 # Writes the first ```c block after the line `<!-- readme-example: NAME -->`

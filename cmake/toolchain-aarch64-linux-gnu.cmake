@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Cross toolchain: 64-bit ARM Linux (Debian's gcc-aarch64-linux-gnu).
 #
 # Libraries come from Debian multiarch: `dpkg --add-architecture arm64` puts

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Cross toolchain: bare-metal ARM Cortex-R5F (TI Hercules-class flight
 # processor) with Debian's gcc-arm-none-eabi + libnewlib-arm-none-eabi.
 #

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* abi.c - the library's struct sizes against a caller's (see trn/abi.h). */
 #include "trn/abi.h"
 

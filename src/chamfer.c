@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* chamfer.c - 3-D chamfer distance transform, Borgefors 3-4-5 weights
  * (see trn/chamfer.h and method.md 2.4).
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* field.c - coarse-to-fine sensor uncertainty field (see trn/field.h). */
 #include "trn/field.h"
 

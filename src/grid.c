@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* grid.c - views over caller memory (see trn/grid.h). */
 #include "trn/grid.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* heading.c - localization over (x, y, heading) (see trn/heading.h). */
 #include "trn/heading.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* kernels.c - the ten sqrt(2)-spaced Gaussian kernels (see trn/kernels.h). */
 #include "trn/kernels.h"
 

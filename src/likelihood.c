@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* likelihood.c - ln p(d) table, K, pose scoring and the two pose searches
  * (see trn/likelihood.h). */
 #include "trn/likelihood.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* localize.c - prepared maps and end-to-end localization (see trn/localize.h). */
 #include "trn/localize.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* mast.c - mast kinematics, camera -> map points, local DEM (mast.h). */
 #include "trn/mast.h"
 

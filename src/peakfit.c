@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* peakfit.c - eq. 6 fit and failure probability (see trn/peakfit.h). */
 #include "trn/peakfit.h"
 

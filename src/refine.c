@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* refine.c - continuous sub-cell pose refinement over heights (trn/refine.h). */
 #include "trn/refine.h"
 

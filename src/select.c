@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* select.c - candidate targets, expected log-likelihood by summed-area
  * tables, eq. 6 fit, ranking (see trn/select.h). */
 #include "trn/select.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* spread.c - eqs. 8 and 9, separable position-variant scatter (see trn/spread.h). */
 #include "trn/spread.h"
 

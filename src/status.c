@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* status.c - names of the trn status codes. */
 #include "trn/status.h"
 

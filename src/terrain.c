@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* terrain.c - high-pass filter and occupancy (see trn/terrain.h). */
 #include "trn/terrain.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* ws.h - the workspace rule, internal to the core (see docs/architecture.md,
  * "Workspace memory").
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_abi.c - trn_abi_check / TRN_ABI_CHECK (trn/abi.h): this file and the
  * library share the default configuration, so every size agrees; each size
  * off by one is reported. (A consumer with another configuration:

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_can_msg.c - CRC-32 (crc.h) and the mast / stereo-head CAN messages
  * (can_msg.h).
  *

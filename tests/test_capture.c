@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_capture.c - stereo capture bytes, segments and reassembly (capture.h).
  *
  * The byte layout is checked against a hand-written vector; captures of

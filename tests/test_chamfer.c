@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_chamfer.c - unit tests of trn_chamfer3d (method.md 2.4).
  *
  * Oracles:

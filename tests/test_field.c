@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_field.c - coarse-to-fine sensor uncertainty field (field.h).
  *
  * Oracle: the brute-force field (trn_select's best uncertainty at every

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_fuzz_regressions.c - every input the fuzzers (tests/fuzz/) found that
  * broke a contract, as a unit test written before the fix (docs/assurance.md,
  * "Fuzzing"). Each test names the harness and the artifact it came from and

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_grid.c - status codes (status.h) and grid/volume views (grid.h).
  *
  * Every documented @retval of trn_strerror, trn_grid_f32_init/check/sub and

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_heading.c - localization over (x, y, heading) (trn/heading.h) and its
  * parts: point rotation against the formula, the automatic step, eq. 6 in
  * three dimensions against analytic quadratics, trn_search_bb_above against

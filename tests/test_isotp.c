@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_isotp.c - ISO 15765-2 frame codec and receiver (isotp.h).
  *
  * Hand-written frames check the PCI layout (big-endian 12-bit length, type

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_kernels.c - the ten sqrt(2)-spaced kernels (kernels.h).
  *
  * Oracles: the definition (sigma_0 sqrt(2)^j, ceil(3 sigma) radius,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_likelihood.c - ln p table, K, pose scoring, pyramid, and the two pose
  * searches against slow obvious oracles. */
 #include <stdarg.h>

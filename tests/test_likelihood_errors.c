@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_likelihood_errors.c - one assertion per argument check of the
  * likelihood module (likelihood.h), each sub-condition of a compound check on
  * its own, as OSAL's coverage tests do: the rest of the arguments valid, one

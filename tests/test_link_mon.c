@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_link_mon.c - liveness and loss of periodic counter messages (link_mon.h).
  *
  * A simulated heartbeat stream (100 ms period) with the faults the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_localize.c - end-to-end localization on synthetic terrain: integer
  * shifts exact, subpixel shifts within 0.1 cell RMS (per axis at 4 m, radial at 6.4 m), flat and ridge peaks
  * ill-conditioned, periodic terrain ambiguous, every bad-input class. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_localize_errors.c - the argument checks of localize.h one
  * sub-condition at a time (test_localize.c's test_bad_inputs covers one case
  * per status; here every clause of each compound check gets its own

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_localize_natural.c - natural-terrain localization (docs/method.md
  * section 9): TRN_LOCAL_HP_MAP, the height refinement inside
  * trn_localize_dem, trn_map_cfg_auto, and the edges of trn_refine_pose.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_mast.c - mast kinematics, camera -> map transform, local DEM (mast.h).
  *
  * Hand-computed poses (zero offsets, and offsets chosen so that the answer

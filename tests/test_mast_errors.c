@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_mast_errors.c - every argument check of mast.h, one assertion per
  * rejected clause (docs/assurance.md, "Coverage"): each geometry field
  * not finite, each joint limit out of its range, each pose and target

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_peakfit.c - eq. 6 peak fit and failure probability (peakfit.h).
  *
  * Oracles: analytic 2-D Gaussian log-surfaces (exactly quadratic, so the

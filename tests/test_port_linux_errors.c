@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_port_linux_errors.c - the Linux port's own logic on the host, with a
  * Unix socket pair standing in for the kernel's CAN sockets (docs/
  * assurance.md, "Coverage").

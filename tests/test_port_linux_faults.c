@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_port_linux_faults.c - the Linux port's OS-error paths, with the
  * failure injected at the library boundary (docs/assurance.md, "Coverage").
  *

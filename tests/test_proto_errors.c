@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_proto_errors.c - the statuses and branches of port/proto the
  * functional tests (test_capture.c, test_isotp.c, test_can_msg.c) leave
  * out, one assertion per error path (docs/assurance.md, "Coverage"):

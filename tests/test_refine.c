@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_refine.c - continuous pose refinement over heights (refine.h).
  *
  * Oracles: a global DEM of an analytic smooth surface and a local DEM that is

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_select.c - landmark selection (select.h).
  *
  * ln p(d) changes sign (p1's peak density exceeds 1 per metre), so a patch

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_select_errors.c - every argument check of spread.h, select.h and
  * field.h, one assertion per rejected clause (OSAL style, docs/assurance.md
  * "Coverage"), and the paths the functional tests do not take: a sensor or

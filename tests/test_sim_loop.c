@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_sim_loop.c - the whole loop without the bus, many times: is the
  * reported covariance honest? (issue 12: "the whole-loop test's 2.3x
  * optimism").

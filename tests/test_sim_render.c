@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_sim_render.c - the simulator's stereo rendering (tools/sim/sim_render.h)
  * against analytic answers: ranges to a plane, points on a sloped plane,
  * the k r^2 noise statistics, the range limits, seeds, bad input. */

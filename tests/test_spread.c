@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_spread.c - eqs. 8 and 9, separable position-variant scatter (spread.h).
  *
  * Oracles: a direct 2-D convolution (constant sigma), a direct 2-D

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_terrain.c - high-pass filter and occupancy (terrain.h).
  *
  * Oracles: a brute-force box mean in double over the valid cells of the

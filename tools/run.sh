@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # tools/run.sh [--out DIR] [--seed S] [--trials N] - the main job: the paper's whole story on a
 # generated Mars-like terrain, every file in one folder (default build/run/, gitignored):
 #

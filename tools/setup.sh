@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # tools/setup.sh [group...] - install the Debian packages the build needs.
 #
 # Idempotent and fast when everything is present: each package is checked with
@@ -15,12 +16,20 @@
 set -euo pipefail
 
 declare -A PKG_GROUPS=(
-  # Build, host tests, aarch64 cross + qemu-user, bare-metal Cortex-R5F.
+  # Build, host tests, aarch64 cross + qemu-user, bare-metal Cortex-R5F;
+  # pkg-config, dpkg-dev and file for the install tests (the pkg-config
+  # consumer; CPack's DEB generator reads Depends with dpkg-shlibdeps, which
+  # needs file).
   [core]="cmake ninja-build make gcc libc6-dev pkg-config libcmocka-dev
           gcc-aarch64-linux-gnu binutils-aarch64-linux-gnu libc6-dev-arm64-cross
           libcmocka-dev:arm64 qemu-user
           libgpiod-dev libgpiod-dev:arm64
-          gcc-arm-none-eabi binutils-arm-none-eabi libnewlib-arm-none-eabi"
+          gcc-arm-none-eabi binutils-arm-none-eabi libnewlib-arm-none-eabi
+          dpkg-dev file"
+  # libgpiod 2 for the Linux port's tests (tools/gpiod2/build-libgpiod2.sh:
+  # the C sources from the PyPI sdist of its bindings, fetched with the pip
+  # of the project venv .venv; used by tools/test.d/41-analysis.sh and 44-gpiod2.sh).
+  [gpiod2]="python3 python3-venv gcc binutils"
   # Benchmarks: the optional OpenCV reference in trn_bench (C++).
   [bench]="g++ libopencv-dev"
   # The `trn` command line: GDAL's C API (any raster DEM in, GeoTIFF out),
@@ -49,7 +58,7 @@ declare -A PKG_GROUPS=(
   [real]="python3 python3-venv python3-opencv python3-numpy python3-gdal gdal-bin
           python3-matplotlib python-matplotlib-data"
 )
-GROUP_ORDER=(core bench gdal can plot vm assure profile real)
+GROUP_ORDER=(core gpiod2 bench gdal can plot vm assure profile real)
 
 usage() {
   echo "usage: $0 [group...]   (default: core)"

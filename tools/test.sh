@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # tools/test.sh - the project's full check (also what CI runs, via .ci/run).
 #
 #   1. tools/setup.sh core gdal plot profile real    (install what is missing)

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file abi.h
  * @brief Does the caller's view of the public structs match the library's?

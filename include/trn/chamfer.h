@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file chamfer.h
  * @brief 3-D chamfer distance transform (method.md 2.4): the distance from

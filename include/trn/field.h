@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file field.h
  * @brief Sensor uncertainty field (paper section 6; method.md 5): for rover

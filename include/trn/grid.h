@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file grid.h
  * @brief Views over caller-owned memory: 2-D float grids (DEMs, probability

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file heading.h
  * @brief Localization over (x, y, heading) when the rover's heading is

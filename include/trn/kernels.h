@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file kernels.h
  * @brief The ten truncated 1-D Gaussian kernels of the probability map

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file likelihood.h
  * @brief Maximum-likelihood pose search (paper section 2.1, eqs. 1-5;

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file localize.h
  * @brief End-to-end terrain-matching localization (paper section 2):

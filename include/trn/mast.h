@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file mast.h
  * @brief Mast kinematics: point the pan-tilt mast at a map target, carry

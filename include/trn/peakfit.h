@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file peakfit.h
  * @brief Uncertainty of the maximum-likelihood pose (paper eq. 6, method.md

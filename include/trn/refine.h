@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file refine.h
  * @brief Continuous sub-cell refinement of a matched pose over heights, with

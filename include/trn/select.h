@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file select.h
  * @brief Landmark selection (paper section 4; method.md 4): predicted

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file spread.h
  * @brief Probability mapping (paper section 3, eqs. 8 and 9; method.md 3):

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file status.h
  * @brief The one error convention of trn: every fallible function returns a

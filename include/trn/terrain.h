@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file terrain.h
  * @brief From a digital elevation map to the 3-D occupancy the matcher uses

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file trn.h
  * @brief Umbrella header of the trn core: terrain-matching localization and

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file trn_config.h
  * @brief Compile-time maxima and build options of the trn core.
@@ -11,9 +12,11 @@
  * structs (trn_kernels_t, trn_lnp_table_t, trn_pyramid_t, trn_map_t), so the
  * library and every file that includes its headers must see the same
  * configuration. With CMake, set the cache variable TRN_USER_CONFIG_H: the
- * definition is then PUBLIC on the trn target and reaches every consumer
- * (find_package or add_subdirectory). Otherwise define it for the whole
- * build. TRN_ABI_CHECK() (trn/abi.h) tells at run time whether a file and
+ * definition is then PUBLIC on the trn targets and reaches every consumer
+ * (add_subdirectory); installed, the header is copied to
+ * trn/trn_user_config.h and find_package and pkg-config consumers get
+ * TRN_INSTALLED_USER_CONFIG, which includes it. Otherwise define it for the
+ * whole build. TRN_ABI_CHECK() (trn/abi.h) tells at run time whether a file and
  * the library agree.
  */
 #ifndef TRN_CONFIG_H
@@ -21,6 +24,10 @@
 
 #ifdef TRN_USER_CONFIG_H
 #include TRN_USER_CONFIG_H
+#elif defined(TRN_INSTALLED_USER_CONFIG)
+/* an installed trn built with TRN_USER_CONFIG_H: its copy of that header
+ * (the installed CMake package and trn.pc define this macro) */
+#include "trn/trn_user_config.h"
 #endif
 
 /** Largest grid side, in cells, any module accepts (x or y). */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * linux_can.c - SocketCAN raw and ISO-TP sockets (port/include/trn_port/linux_can.h).
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * linux_gpio.c - mast power, stereo trigger and deployed switch through
  * libgpiod 1.6 (port/include/trn_port/linux_gpio.h).

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* bytes.h - explicit byte order for port/proto (private).
  * Shifts only, never struct overlays or pointer casts, so the result does
  * not depend on the processor's byte order. */

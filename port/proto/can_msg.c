@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* can_msg.c - encode/decode of the mast and stereo-head CAN messages (can_msg.h). */
 #include "trn_port/can_msg.h"
 

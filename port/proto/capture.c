@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* capture.c - stereo capture bytes, segments and reassembly (capture.h). */
 #include "trn_port/capture.h"
 

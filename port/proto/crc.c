@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* crc.c - CRC-32/ISO-HDLC, bitwise (crc.h). */
 #include "trn_port/crc.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* isotp.c - ISO 15765-2 frame codec and receiver state machine (isotp.h). */
 #include "trn_port/isotp.h"
 

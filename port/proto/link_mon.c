@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* link_mon.c - liveness and loss of a periodic counter message (link_mon.h). */
 #include "trn_port/link_mon.h"
 

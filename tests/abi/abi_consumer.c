@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* abi_consumer.c - a program built against a trn library with a user
  * configuration (tests/abi/user_opts.h). Compiled twice:
  *   abi_agree     through the library target, so with its PUBLIC

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* user_opts.h - an integrator's trn configuration for the ABI tests
  * (tests/abi/CMakeLists.txt): maxima other than trn_config.h's defaults,
  * each of which changes the size of a public struct. */

@@ -1,9 +1,12 @@
+# SPDX-License-Identifier: Apache-2.0
 """clitest.py - the harness the `trn` command-line tests share.
 
 A Harness runs build/<preset>/trn (optionally with a fixed subcommand in front
 of every call), counts checks, records failures, and checks the error
 convention of bad input: the given exit code, exactly one stderr line
 `trn <cmd>: <reason>` holding an expected phrase, and nothing on stdout.
+Every JSON object read through run_json must carry "version", equal to what
+`trn --version` prints (check_version for objects read otherwise).
 """
 import json
 import subprocess
@@ -16,6 +19,24 @@ class Harness:
         self.timeout = timeout
         self.checks = 0
         self.failures = []
+        self._version = None
+
+    def version(self):
+        """The version `trn --version` prints ("trn X.Y.Z" -> "X.Y.Z"), read once."""
+        if self._version is None:
+            p = subprocess.run([self.trn, "--version"], capture_output=True, text=True,
+                               timeout=self.timeout)
+            words = p.stdout.split()
+            ok = p.returncode == 0 and len(words) == 2 and words[0] == "trn"
+            self.check(ok, f"trn --version: exit {p.returncode}, {p.stdout!r}")
+            self._version = words[1] if ok else "?"
+        return self._version
+
+    def check_version(self, obj, label):
+        """obj (a parsed JSON object of trn) carries "version" = trn --version's."""
+        self.check(isinstance(obj, dict) and obj.get("version") == self.version(),
+                   f"{label}: JSON \"version\" {obj.get('version') if isinstance(obj, dict) else None!r}, "
+                   f"want {self.version()!r}")
 
     def check(self, cond, what):
         self.checks += 1
@@ -51,6 +72,7 @@ class Harness:
             self.check(False, f"{label}: stdout is not one JSON object: {out!r}")
             return {}
         self.check(out.count("\n") == 1, f"{label}: JSON is not one line")
+        self.check_version(obj, label)
         return obj
 
     def finish(self, name=""):

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """tests/cli/test_cli.py - the `trn` command line end to end (CTest `cli`).
 
     python3 tests/cli/test_cli.py PATH/TO/trn WORKDIR
@@ -48,6 +49,22 @@ os.makedirs(WORK)
 # ---- dispatcher -------------------------------------------------------------
 rc, out, err = run("--help")
 check(rc == 0 and "terrain" in out and "localize" in out, "trn --help lists terrain and localize")
+# exit statuses and the version (issue 15): --help lists 0-3, --version and
+# `version` print "trn X.Y.Z", the CMake project version in trn/version.h.
+check(all(k in out for k in ("0 ok", "1 bad input", "2 usage error", "3 no result")),
+      f"trn --help lists every exit status: {out[-300:]!r}")
+for cmd, has3 in (("terrain", False), ("select", True), ("field", True), ("profile", True),
+                  ("localize", False), ("experiment", False), ("can-decode", False)):
+    rc, hout, _ = run(cmd, "--help")
+    check(rc == 0 and "exit status: 0 ok, 1 bad input" in hout and ("2 usage error" in hout)
+          and ((", 3 " in hout) == has3), f"trn {cmd} --help: exit statuses ({hout[-200:]!r})")
+VERSION = H.version()
+check(VERSION.count(".") == 2 and all(x.isdigit() for x in VERSION.split(".")),
+      f"trn --version prints a version X.Y.Z: {VERSION!r}")
+rc, out, err = run("version")
+check(rc == 0 and out == f"trn {VERSION}\n" and err == "", f"trn version: {rc} {out!r}")
+rc, out, err = run("--version")
+check(rc == 0 and out == f"trn {VERSION}\n" and err == "", f"trn --version: {rc} {out!r}")
 rc, out, err = run("nosuch")
 check(rc == 2 and "unknown command" in err, "trn nosuch: exit 2, unknown command")
 for cmd in ("terrain", "localize"):
@@ -269,6 +286,8 @@ single = run_json("localize", "--dem", g_tif, *common, "--json")
 single15 = run_json("localize", "--dem", g_tif, *common, "--window-m", "1.5", "--json")
 out = run("localize", "--dem", g_tif, "--batch", p("batch.txt"))
 lines = [json.loads(x) for x in out[1].splitlines() if x.strip()]
+for k, obj in enumerate(lines):
+    H.check_version(obj, f"localize --batch line {k + 1}")
 check(len(lines) == 3, f"batch: three result lines: {len(lines)}")
 if len(lines) == 3:
     for got, want in ((lines[0], single), (lines[2], single15)):

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """tests/cli/test_cli_dem.py - real DEM files through dem_read (CTest `cli_dem`).
 
     python3 tests/cli/test_cli_dem.py PATH/TO/trn WORKDIR

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """tests/cli/test_cli_select.py - `trn select` and `trn field` end to end (CTest `cli_select`).
 
     python3 tests/cli/test_cli_select.py PATH/TO/trn WORKDIR

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tests/cli/test_cli_util.c - the `trn` option parsers, JSON writer and
  * option table (tools/trn/cli.[ch]). */
 #include <math.h>
@@ -11,6 +12,7 @@
 #include <cmocka.h>
 
 #include "cli.h"
+#include "trn/version.h"
 
 static void test_parse_double(void **state) {
   double v = 0.0;
@@ -79,8 +81,42 @@ static void test_json(void **state) {
   json_end(&j);
   slurp(f, buf, sizeof buf);
   fclose(f);
-  assert_string_equal(buf, "{\"s\": \"a\\\"b\\\\c\\nd\\te\\u0001f\", \"x\": 0.1, \"nan\": null, \"inf\": null, "
+  /* json_begin writes the version first: every JSON object of `trn` has it. */
+  assert_string_equal(buf, "{\"version\": \"" TRN_VERSION_STRING "\", \"s\": \"a\\\"b\\\\c\\nd\\te\\u0001f\", \"x\": 0.1, \"nan\": null, \"inf\": null, "
                            "\"n\": -7, \"t\": true, \"o\": {\"y\": 1e-300}}\n");
+}
+
+static void test_exit_status_help(void **state) {
+  char buf[512];
+  FILE *f = tmpfile();
+  (void)state;
+  assert_non_null(f);
+  cli_exit_status_help("terrain", f);
+  slurp(f, buf, sizeof buf);
+  fclose(f);
+  assert_string_equal(buf, "exit status: 0 ok, 1 bad input (one line on stderr), 2 usage error\n");
+  f = tmpfile();
+  assert_non_null(f);
+  cli_exit_status_help("select", f);
+  slurp(f, buf, sizeof buf);
+  fclose(f);
+  assert_non_null(strstr(buf, ", 3 no informative target\n"));
+  f = tmpfile();
+  assert_non_null(f);
+  cli_exit_status_help(NULL, f); /* trn --help: every status */
+  slurp(f, buf, sizeof buf);
+  fclose(f);
+  assert_non_null(strstr(buf, "0 ok"));
+  assert_non_null(strstr(buf, "2 usage error"));
+  assert_non_null(strstr(buf, "3 no result"));
+  assert_non_null(strstr(buf, "no informative target (select field)"));
+  assert_non_null(strstr(buf, "over its budget (--check) (profile)"));
+  f = tmpfile();
+  assert_non_null(f);
+  cli_exit_status_help("fiel", f); /* whole words only */
+  slurp(f, buf, sizeof buf);
+  fclose(f);
+  assert_null(strstr(buf, ", 3 "));
 }
 
 static void test_option_table(void **state) {
@@ -116,6 +152,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_parse_double), cmocka_unit_test(test_parse_integers),
       cmocka_unit_test(test_parse_xy),     cmocka_unit_test(test_json),
+      cmocka_unit_test(test_exit_status_help),
       cmocka_unit_test(test_option_table),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tests/cli/test_experiment.c - the pure parts of `trn experiment`
  * (tools/trn/experiment.h): interval statistics against analytic values, the
  * local-map sampler, the random streams, the parameter checks, and a tiny

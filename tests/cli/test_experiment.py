@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """tests/cli/test_experiment.py - `trn experiment` end to end (CTest `cli_experiment`).
 
     python3 tests/cli/test_experiment.py PATH/TO/trn WORKDIR
@@ -47,6 +48,7 @@ except ValueError:
     r = {}
     check(False, f"not one JSON object: {out1!r}")
 check(out1.count("\n") == 1, "JSON is not one line")
+H.check_version(r, "experiment --json")
 check(r.get("trials") == 6 and r.get("seed") == 5, f"trials / seed wrong: {r.get('trials')}, {r.get('seed')}")
 check(r.get("terrain", {}).get("seed") == 5 and r["terrain"].get("size_cells") == 128,
       "terrain seed defaults to --seed, size as asked")

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """tests/cli/test_profile.py - `trn profile` end to end (CTest `cli_profile`,
 and `profile_instructions` with --instructions).
 
@@ -77,6 +78,7 @@ def main():
     rc, out, err = run(*SMALL, "--json")
     check(rc == 0, f"--json: exit {rc}: {err.strip()}")
     j = json.loads(out)
+    H.check_version(j, "profile --json")
     cfg = j["config"]
     check(cfg["map_cells"] == 128 and cfg["local_cells"] == 32 and cfg["window_cells"] == 10,
           f"config echo wrong: {cfg}")

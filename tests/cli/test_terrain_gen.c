@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tests/cli/test_terrain_gen.c - the `trn terrain` generator against the
  * Golombek & Rapp model it claims to draw from (tools/trn/terrain_gen.h).
  *

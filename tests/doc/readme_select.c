@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tests/doc/readme_select.c - the README's "Using the library for selection"
  * example, compiled and run so it cannot rot. CMake extracts the C block that
  * follows the marker `<!-- readme-example: select -->` in README.md into

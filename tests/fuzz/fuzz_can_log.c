@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* fuzz_can_log.c - the candump log reader of `trn can-decode`
  * (tools/trn/can_log.c, can_log_parse: one line in, one parsed record out).
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* fuzz_can_msg.c - every CAN message decoder of port/proto (can_msg.h) on
  * arbitrary frames, the angle conversion on arbitrary floats, the counter gap.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* fuzz_capture.c - capture reassembly of port/proto (capture.h): segments
  * from the input, fed to trn_capture_rx_segment; also trn_capture_decode on
  * the raw bytes.

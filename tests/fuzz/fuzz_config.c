@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* fuzz_config.c - configuration and view validation with arbitrary values:
  * trn_terrain_cfg_check, trn_lik_cfg_check, trn_map_cfg_check, the grid and
  * volume view checks and constructors, and the sizing functions

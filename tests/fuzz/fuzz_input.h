@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* fuzz_input.h - read typed values from a libFuzzer input, for the harnesses
  * in tests/fuzz/. Past the end every read returns zero bytes, so any input
  * (including the empty one) is a valid sequence of values. Values are taken

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* fuzz_isotp.c - the ISO-TP frame decoder and the receiver and sender state
  * machines of port/proto (isotp.h), frames and times from the input.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* fuzz_localize.c - end to end on arbitrary small DEMs: trn_map_build on a
  * global DEM of up to 20 x 20 cells, trn_localize_dem with a local DEM of up
  * to 8 x 8 cells, both of raw float heights (NaN, inf, huge), a fuzzed prior

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* fuzz_mast.c - mast kinematics (mast.h) with arbitrary floats: geometry
  * check, pointing, camera-to-map transform, rigid apply, local DEM binning.
  *

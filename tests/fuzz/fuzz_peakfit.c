@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* fuzz_peakfit.c - trn_peak_fit on arbitrary 3x3 patches of doubles (NaN,
  * inf, huge, subnormal) and trn_failure_probability on arbitrary pairs.
  * Invariants: only documented statuses; on TRN_OK finite positive variances,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* fuzz_search.c - differential fuzzing of the matcher: an arbitrary
  * occupancy volume (up to 16 x 16 x 8, one bit per voxel from the input) ->
  * trn_chamfer3d -> trn_outlier_density -> trn_lnp_table_build ->

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* fuzz_terrain.c - the DEM-to-occupancy path with arbitrary heights and
  * configurations: trn_highpass -> trn_occupancy -> trn_occupancy_points on a
  * DEM of up to 24 x 24 cells whose heights are raw float bit patterns (NaN,

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """make_seeds.py - write the seed corpora of the protocol and mast harnesses
 (tests/fuzz/corpus/{can_msg,isotp,capture,can_log,mast}/), each file one
 meaningful input laid out as the harness reads it (see each fuzz_*.c).

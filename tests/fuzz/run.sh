@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # tests/fuzz/run.sh [RUNS] [target...] - build and run the libFuzzer harnesses
 # (docs/assurance.md, "Fuzzing").
 #

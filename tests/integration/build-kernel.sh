@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # tests/integration/build-kernel.sh - build (once) the small Linux the kernel
 # tests boot, and print the path of its bzImage.
 #

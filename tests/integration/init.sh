@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # /init of the kernel-test VM (tests/integration/init.sh; run-vm.sh copies it
 # into the initramfs). Mounts the pseudo file systems, makes vcan0 and a
 # gpio-sim chip, runs every program in /tests, and ends QEMU through

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * kt_can_raw.c - raw SocketCAN port against the real kernel (vcan), run in the VM.
  *

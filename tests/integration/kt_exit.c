@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * kt_exit.c - end the VM with a result code: QEMU's isa-debug-exit device
  * (iobase 0xf4) makes qemu-system-x86_64 exit with (code << 1) | 1, so

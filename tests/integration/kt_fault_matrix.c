@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * kt_fault_matrix.c - the bus fault matrix (docs/can-protocol.md "Fault
  * matrix"), run in the VM against the real kernel (vcan, can-isotp).

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * kt_gpio.c - GPIO port (libgpiod 1.6) against gpio-sim, run in the VM.
  *

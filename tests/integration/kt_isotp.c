@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * kt_isotp.c - ISO-TP port on the kernel's can-isotp over vcan, run in the VM.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * kt_loop.c - the whole loop of issue 6 in the VM: the rover's software
  * (trn + port) against the mast and stereo-head simulator on vcan, with the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * kt_sim.c - the rover's link (tools/sim/rover_link.h: port/linux + port/proto)
  * against the mast and stereo-head simulator (tools/sim/sim_node.h) on vcan,

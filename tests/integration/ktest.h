@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * ktest.h - the few checks the kernel tests need (cmocka has no static
  * library on Debian, and the VM runs static programs only).

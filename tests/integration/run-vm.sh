@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # tests/integration/run-vm.sh - run static test programs inside a small Linux
 # under QEMU (vcan0 and a gpio-sim chip set up by init.sh) and report.
 #

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * simrun.h - the simulator (tools/sim/sim_node.h) in a child process of a
  * kernel-test program: fork, run, stop with SIGTERM, read its counters back

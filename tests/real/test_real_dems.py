@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
 """tests/real/test_real_dems.py BUILD_TRN OUT - issue 12's real-terrain goals, asserted.
 
 Runs tools/real/bench_real.py (the DEMs installed and reprojected on first use) on 150

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* ref_chamfer.c - slow oracles for the chamfer transform (see ref_chamfer.h).
  * Written for obviousness, not speed: plain Dijkstra over the 26-neighbour
  * voxel graph, and a brute-force nearest-occupied-voxel search. */

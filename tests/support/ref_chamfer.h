@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* ref_chamfer.h - slow, obvious oracles for the chamfer transform (tests and
  * benchmarks only; they allocate with malloc and are not part of the core). */
 #ifndef TRN_TEST_REF_CHAMFER_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* rng.h - deterministic seeded generator for tests, tools and benchmarks
  * (splitmix64). The core itself has no random state. */
 #ifndef TRN_TEST_RNG_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* selworld.c - see selworld.h. */
 #define _POSIX_C_SOURCE 200112L
 #include "selworld.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* selworld.h - a prepared global map with its eq. 8 probability map, for the
  * landmark-selection tests, tools and benchmarks (heap memory; not core). */
 #ifndef TRN_TEST_SELWORLD_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* synth.h - analytic synthetic terrain for tests, tools and benchmarks:
  * rolling background plus ellipsoidal rocks, evaluated at any position so a
  * local map can be rendered at sub-cell offsets ("resampled terrain"). */

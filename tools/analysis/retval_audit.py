@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """retval_audit.py - every documented status of every public function is asserted by a test.
 
 For each function declared in the public headers (include/trn/*.h,

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # tools/analysis/run.sh - static analysis of the C code (docs/assurance.md,
 # "Static analysis"); exits non-zero on any finding.
 #
@@ -52,8 +53,12 @@ done < <(grep -v '^[[:space:]]*#' "$DEV" | grep -v '^[[:space:]]*$')
 shopt -s nullglob globstar
 core=(src/**/*.c port/proto/**/*.c)
 port_os=()
+# port/linux/linux_gpio_v2.c is the libgpiod 2 variant of linux_gpio.c: it
+# needs libgpiod 2's gpiod.h (Debian 12 has 1.6), so it is checked on its own
+# below against the one tools/gpiod2/build-libgpiod2.sh builds.
+gpio_v2=port/linux/linux_gpio_v2.c
 for f in port/**/*.c; do
-  case $f in port/proto/*) ;; *) port_os+=("$f") ;; esac
+  case $f in port/proto/*|"$gpio_v2") ;; *) port_os+=("$f") ;; esac
 done
 incs=(-I include -I src)
 [ -d port/include ] && incs+=(-I port/include)
@@ -82,6 +87,19 @@ if ! clang-tidy --quiet --checks="$CHECKS" --warnings-as-errors='*' "${all[@]}" 
      -- -std=c99 "${incs[@]}" -D_DEFAULT_SOURCE >"$log" 2>&1; then
   grep -E 'warning:|error:' "$log" || cat "$log"
   fail=1
+fi
+
+if [ -f "$gpio_v2" ]; then
+  g2=$(bash tools/gpiod2/build-libgpiod2.sh)
+  echo "--- cppcheck (no MISRA) and clang-tidy: $gpio_v2 against libgpiod $(cat "$g2/libgpiod-version")"
+  cppcheck "${common[@]}" -I "$g2/include" -DTRN_GPIOD_API=2 --cppcheck-build-dir="$OUT/cppcheck-port" \
+    "$gpio_v2" || fail=1
+  if ! clang-tidy --quiet --checks="$CHECKS" --warnings-as-errors='*' "$gpio_v2" \
+       -- -std=c99 "${incs[@]}" -isystem "$g2/include" -DTRN_GPIOD_API=2 -D_DEFAULT_SOURCE \
+       >"$OUT/clang-tidy-gpio-v2.log" 2>&1; then
+    grep -E 'warning:|error:' "$OUT/clang-tidy-gpio-v2.log" || cat "$OUT/clang-tidy-gpio-v2.log"
+    fail=1
+  fi
 fi
 
 echo "--- argument checks always compiled in (no assert, no NDEBUG in the core)"

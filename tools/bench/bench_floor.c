@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* bench_floor.c - the relaxation-only floor of a two-pass 3-4-5 chamfer
  * transform (bench_floor.h), timed by trn_bench beside trn_chamfer3d.
  *

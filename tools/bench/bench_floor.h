@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* bench_floor.h - the timing floor of a two-pass 3-4-5 chamfer transform,
  * for trn_bench's "chamfer:" rows (see bench_floor.c). Bench code, not core. */
 #ifndef TRN_BENCH_FLOOR_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* bench_select.c - see bench_select.h.
  *
  *   pmap     trn_prob_global_map (eq. 8, one sensing position at the map

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* bench_select.h - trn_bench's landmark-selection part (bench_select.c):
  * probability map (eq. 8), all candidates of one rover position, and the
  * sensor uncertainty field, each against the naive version in the same run. */

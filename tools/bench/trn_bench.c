@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* trn_bench - speed of the trn core against naive references, in one run.
  *
  *   trn_bench [--sizes 256,512] [--repeats N] [--seed S] [--quick] [--help]

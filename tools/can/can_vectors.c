@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* can_vectors.c - print test vectors of the C message encoders as JSON, for
  * the cantools cross-check (tools/can/check_dbc.py, CTest `can_dbc_cantools`).
  *

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """check_dbc.py DBC VECTORS.json - cross-check the C encoders against cantools.
 
 For every vector printed by trn_can_vectors (tools/can/can_vectors.c):

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # tools/can/check_dbc.sh VECTORS_PROGRAM [DBC] - the cantools cross-check.
 #
 # Makes sure the project venv (.venv, gitignored) exists and has cantools

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """make_fixture.py OUT_DIR - write the hand-made candump logs of tests/data/can.
 
 An implementation independent of the C code (struct, zlib.crc32, its own

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # tools/can/test_can_decode.sh TRN DATA_DIR - CTest `can_decode_logs`.
 #
 # Runs `TRN can-decode` on the hand-made logs in DATA_DIR (tests/data/can,

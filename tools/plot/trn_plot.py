@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
 """tools/plot/trn_plot.py - figures from the `trn` command line's outputs.
 
     trn_plot.py dem     DEM.tif --out dem.png [--rover X,Y] [--target X,Y] [--prior X,Y]

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """tools/profile/add_stack.py - add the worst-case stack of each stage to `trn profile --json`.
 
     trn profile --json > prof.json

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
 """tools/real/bench_real.py - seeded real-terrain benchmark: trn against two peers.
 
     /usr/bin/python3 tools/real/bench_real.py [--dem ID ...] [--cases N] [--seed S]

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """tools/real/cases.py - seeded localization cases cut from a real global DEM.
 
 For a global DEM G (north-up, square cell c metres) a case is:

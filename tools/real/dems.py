@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
 """tools/real/dems.py - real DEMs for the real-terrain benchmark (issue 12 item 4).
 
     /usr/bin/python3 tools/real/dems.py --list        # the registry

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """tools/real/peers.py - the two peer localizers of the real-terrain benchmark.
 
 Both search the integer poses of the global grid whose cell centre lies within

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
 """tools/real/plot_real.py - figures of the real-terrain benchmark (bench_real.py).
 
     /usr/bin/python3 tools/real/plot_real.py build/real/bench.json [--out DIR]

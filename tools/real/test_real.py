@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
 """tools/real/test_real.py - quick self-test of the real-terrain benchmark's pieces.
 
     /usr/bin/python3 tools/real/test_real.py      # exit 0: all checks passed

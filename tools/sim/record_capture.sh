@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # tools/sim/record_capture.sh [OUT] - re-record tests/data/can/sim_capture.log:
 # runs kt_loop in the VM (its first run records the bus with `candump -l`
 # from just before CAPTURE_CMD to the end of the capture and prints the log

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* rover_link.c - see rover_link.h. */
 #include "rover_link.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file rover_link.h
  * @brief The rover's side of the mast / stereo-head link, as onboard

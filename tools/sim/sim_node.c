@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* sim_node.c - see sim_node.h. */
 #include "sim_node.h"
 

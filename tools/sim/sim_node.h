@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file sim_node.h
  * @brief The mast and stereo-head simulator (docs/modules/sim.md): one Linux

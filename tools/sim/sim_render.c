@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* sim_render.c - see sim_render.h. */
 #include "sim_render.h"
 

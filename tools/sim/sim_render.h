@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file sim_render.h
  * @brief The stereo head of the simulator (tools/sim): range points of a

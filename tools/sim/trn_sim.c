@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* trn_sim.c - the mast and stereo-head simulator as a program (docs/modules/sim.md).
  *
  *   trn_sim [--if vcan0] [--seed N] [--terrain-seed N] [--size CELLS] [--cell M]

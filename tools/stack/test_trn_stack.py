@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Tests of trn_stack.py (run by tools/test.d/40-stack.sh; also `python3 -m unittest`).
 
 1. The figure for a small call chain equals the hand count from its

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """trn_stack.py - worst-case stack depth of every public function, from the build.
 
 GCC writes, next to each object compiled with -fstack-usage -fcallgraph-info=su,

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # 40-stack.sh - worst-case stack of every public function, from the build
 # (docs/assurance.md, "Stack"): the tool's own tests (hand count, cycle,
 # indirect call, unknown callee, limit), then the arm-none-eabi and

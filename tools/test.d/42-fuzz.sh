@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # 42-fuzz.sh - every libFuzzer harness in tests/fuzz/ (clang, ASan + UBSan)
 # for a bounded number of executions from its seed corpus; fails on any crash,
 # sanitizer report, leak or timeout (docs/assurance.md, "Fuzzing").

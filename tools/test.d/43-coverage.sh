@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # 43-coverage.sh - line and branch coverage of src/ and port/ by the unit
 # tests (coverage preset: gcc --coverage -O0), reported per file with gcovr,
 # floors enforced per directory (docs/assurance.md, "Coverage"):

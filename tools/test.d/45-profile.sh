@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # tools/test.d/45-profile.sh - `trn profile` on the optimised build: its
 # command-line test and the instruction counts under callgrind, twice,
 # identical (CTest cli_profile and profile_instructions of the host-release

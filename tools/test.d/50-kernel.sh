@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # tools/test.d/50-kernel.sh - the kernel tests: the Linux port against a real
 # kernel (vcan, can-isotp, gpio-sim) in a small VM under QEMU.
 #

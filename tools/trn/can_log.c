@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* can_log.c - parse candump -l lines (can_log.h). */
 #include "can_log.h"
 

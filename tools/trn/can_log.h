@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* can_log.h - one line of a candump log (can-utils `candump -l`), parsed.
  *
  *   (1700000000.123456) vcan0 121#0102030405060708

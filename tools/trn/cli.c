@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/cli.c - option parsing, errors, JSON and progress for `trn`. */
 #define _POSIX_C_SOURCE 200809L /* isatty */
 #include "cli.h"
@@ -8,6 +9,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+
+#include "trn/version.h"
 
 /* ------------------------------------------------------------------------ */
 /* strict value parsers                                                       */
@@ -132,7 +135,43 @@ void cli_usage(const cli_cmd_t *cmd, FILE *out) {
   if (cmd->details != NULL) {
     fprintf(out, "\n%s\n", cmd->details);
   }
-  fprintf(out, "\nexit status: 0 ok, 1 bad input (one line on stderr), 2 usage error\n");
+  fputc('\n', out);
+  cli_exit_status_help(cmd->name, out);
+}
+
+/* The commands that exit 3 (CLI_NO_RESULT), and what it means for them. */
+static const struct {
+  const char *cmds; /* space-separated */
+  const char *meaning;
+} k_exit3[] = {
+    {"select field", "no informative target"},
+    {"profile", "a stage over its budget (--check)"},
+};
+
+/* 1 if name is one of the space-separated words of list. */
+static int in_list(const char *name, const char *list) {
+  size_t n = strlen(name);
+  const char *p = list;
+  while ((p = strstr(p, name)) != NULL) {
+    if ((p == list || p[-1] == ' ') && (p[n] == '\0' || p[n] == ' ')) {
+      return 1;
+    }
+    p += n;
+  }
+  return 0;
+}
+
+void cli_exit_status_help(const char *cmd, FILE *out) {
+  size_t i;
+  fprintf(out, "exit status: 0 ok, 1 bad input (one line on stderr), 2 usage error");
+  for (i = 0; i < sizeof k_exit3 / sizeof k_exit3[0]; ++i) {
+    if (cmd == NULL) {
+      fprintf(out, "%s%s (%s)", i == 0 ? ",\n  3 no result: " : "; ", k_exit3[i].meaning, k_exit3[i].cmds);
+    } else if (in_list(cmd, k_exit3[i].cmds)) {
+      fprintf(out, ", 3 %s", k_exit3[i].meaning);
+    }
+  }
+  fputc('\n', out);
 }
 
 static int set_value(const cli_cmd_t *cmd, cli_opt_t *o, const char *v) {
@@ -289,6 +328,7 @@ void json_begin(json_t *j, FILE *out) {
   j->depth = 0;
   j->first[0] = 1;
   fputc('{', out);
+  json_str(j, "version", TRN_VERSION_STRING);
 }
 
 void json_end(json_t *j) {

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/cli.h - what every `trn` subcommand shares: strict option
  * parsing from a table, the one-line error convention, a JSON writer and a
  * progress bar.
@@ -9,7 +10,13 @@
  *      `trn <cmd>: <reason>` on stderr
  *   2  usage: unknown option, option without its value, a required option
  *      missing, a stray positional argument; one line plus a pointer to --help
- * `--help` / `-h` prints the subcommand's usage on stdout and exits 0. */
+ *   3  no result (select, field: no informative target; profile --check: a
+ *      stage over its budget)
+ * `--help` / `-h` prints the subcommand's usage on stdout, with the statuses
+ * that subcommand uses (cli_exit_status_help), and exits 0.
+ *
+ * Every JSON object the tool prints starts with "version" (json_begin), the
+ * version of trn/version.h. */
 #ifndef TRN_CLI_H
 #define TRN_CLI_H
 
@@ -20,6 +27,7 @@
 #define CLI_OK 0
 #define CLI_BAD_INPUT 1
 #define CLI_USAGE 2
+#define CLI_NO_RESULT 3
 #define CLI_HELP (-1) /* cli_parse: --help was printed; exit 0 */
 
 typedef enum {
@@ -57,6 +65,11 @@ int cli_parse(cli_cmd_t *cmd, int argc, char **argv);
 /* Print the usage of cmd (synopsis, options with ranges). */
 void cli_usage(const cli_cmd_t *cmd, FILE *out);
 
+/* The "exit status: ..." line(s) of `trn <cmd> --help`: 0, 1 and 2 for
+ * every command, 3 with its meaning for the commands that use it. cmd NULL:
+ * every status of the tool (`trn --help`). */
+void cli_exit_status_help(const char *cmd, FILE *out);
+
 /* Print `trn <cmd>: <reason>` (one line) on stderr; returns CLI_BAD_INPUT. */
 int cli_fail(const char *cmd, const char *fmt, ...)
 #if defined(__GNUC__)
@@ -78,7 +91,7 @@ typedef struct {
   int first[8]; /* nothing written yet at this depth */
 } json_t;
 
-void json_begin(json_t *j, FILE *out);          /* "{" */
+void json_begin(json_t *j, FILE *out);          /* {"version": TRN_VERSION_STRING */
 void json_end(json_t *j);                       /* "}\n" */
 void json_obj(json_t *j, const char *key);      /* "key": { */
 void json_obj_end(json_t *j);                   /* } */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* cmd_can_decode.c - `trn can-decode LOG`: decode a candump -l log of the
  * mast / stereo-head bus (docs/can-protocol.md).
  *
@@ -15,6 +16,7 @@
 #include <string.h>
 
 #include "can_log.h"
+#include "cli.h"
 #include "commands.h"
 #include "trn_port/can_msg.h"
 #include "trn_port/capture.h"
@@ -41,7 +43,8 @@ static void usage(FILE *out) {
           "  from their ISO-TP frames, a summary line at the end.\n"
           "  LOG '-' reads standard input. Malformed lines: 'LOG:N: reason' on stderr,\n"
           "  exit status 1 at the end. --strict: exit 1 also on invalid messages of\n"
-          "  ours and failed captures. --n-cr-ms: ISO-TP N_Cr timeout (default 1000).\n");
+          "  ours and failed captures. --n-cr-ms: ISO-TP N_Cr timeout (default 1000).\n\n");
+  cli_exit_status_help("can-decode", out);
 }
 
 /* raw counts of 1e-4 as an exact decimal, e.g. -12345 -> "-1.2345" */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/cmd_experiment.c - `trn experiment`: the paper's section 5 Monte
  * Carlo, localization with and without landmark selection (experiment.h;
  * docs/method.md section 8). */

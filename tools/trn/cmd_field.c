@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/cmd_field.c - `trn field`: the sensor uncertainty field (paper
  * section 6): for every rover position of an area, the predicted uncertainty
  * of its best landmark, computed coarse to fine by trn_field, as a GeoTIFF on
@@ -240,7 +241,7 @@ int trn_cmd_field(int argc, char **argv) {
   if (stats.best_x < 0) {
     cli_fail(cmd.name, "no informative target from any of the %u positions evaluated (featureless terrain?); "
              "nothing written", stats.evaluations);
-    rc = 3;
+    rc = CLI_NO_RESULT;
     goto done;
   }
 

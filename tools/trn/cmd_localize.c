@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/cmd_localize.c - `trn localize`: the maximum-likelihood rover
  * position of a local DEM (rover frame) in a global DEM (map frame).
  *

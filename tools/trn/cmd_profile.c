@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/cmd_profile.c - `trn profile`: the onboard pipeline's stages on a
  * stated configuration, timed on the host, optionally counted in
  * instructions under callgrind, with the workspace each needs and its share
@@ -55,7 +56,7 @@
 #define PI 3.14159265358979323846
 #define MAX_RUNS 1000
 #define CG_ENV "TRN_PROFILE_CALLGRIND_OUT"
-#define EXIT_OVER_BUDGET 3
+#define EXIT_OVER_BUDGET CLI_NO_RESULT
 
 typedef enum {
   ST_HIGHPASS_OCC = 0,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/cmd_select.c - `trn select`: the landmark a rover should sense
  * next (paper section 4): every candidate target's predicted localization
  * uncertainty from one rover position, the best one, the next best distinct
@@ -20,7 +21,7 @@
 #include "trn/trn.h"
 
 #define PI 3.14159265358979323846
-#define EXIT_NO_TARGET 3
+#define EXIT_NO_TARGET CLI_NO_RESULT
 
 static void target_json(json_t *j, const selmap_t *w, const trn_candidate_t *c) {
   double x, y;

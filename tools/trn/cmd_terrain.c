@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/cmd_terrain.c - `trn terrain`: a synthetic Mars terrain
  * (Golombek & Rapp rocks on smooth relief) as a georeferenced GeoTIFF. */
 #include <math.h>

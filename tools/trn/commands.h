@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/commands.h - prototypes of the subcommands in commands.def. */
 #ifndef TRN_TOOLS_COMMANDS_H
 #define TRN_TOOLS_COMMANDS_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/dem_io.c - GDAL C API DEM reading and GeoTIFF writing. */
 #include "dem_io.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/dem_io.h - DEMs in and out of GDAL, and map <-> cell coordinates.
  *
  * A DEM in memory (dem_t) is always north-up: row 0 is the northern edge,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/experiment.c - the paper's section 5 Monte Carlo (see experiment.h). */
 #include "experiment.h"
 

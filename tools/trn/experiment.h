@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/experiment.h - the paper's section 5 Monte Carlo (`trn experiment`):
  * localization success and accuracy with and without landmark selection on a
  * synthetic Golombek & Rapp terrain (docs/method.md section 8 states every

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/main.c - the `trn` host command line: `trn <subcommand> ...`.
  *
  * Subcommands are listed in commands.def (one line each) and live in
@@ -5,8 +6,10 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "cli.h"
 #include "commands.h"
 #include "trn/trn.h"
+#include "trn/version.h"
 
 typedef struct {
   const char *name;
@@ -31,6 +34,9 @@ static void usage(FILE *out) {
   for (i = 0; i < N_COMMANDS; ++i) {
     fprintf(out, "  %-12s %s\n", k_commands[i].name, k_commands[i].summary);
   }
+  fprintf(out, "\noptions:\n  --version    print the trn version (also `trn version`)\n"
+               "  --help       this text\n\n");
+  cli_exit_status_help(NULL, out);
 }
 
 static int cmd_version(int argc, char **argv) {
@@ -49,6 +55,9 @@ int main(int argc, char **argv) {
   if (strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0 || strcmp(argv[1], "help") == 0) {
     usage(stdout);
     return 0;
+  }
+  if (strcmp(argv[1], "--version") == 0) {
+    return cmd_version(argc - 1, argv + 1);
   }
   for (i = 0; i < N_COMMANDS; ++i) {
     if (strcmp(argv[1], k_commands[i].name) == 0) {

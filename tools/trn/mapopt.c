@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/mapopt.c - the map configuration as options (mapopt.h). */
 #include "mapopt.h"
 

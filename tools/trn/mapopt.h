@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/mapopt.h - the map configuration as command-line options, shared
  * by the commands that prepare a map (docs/method.md section 9).
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/profile_budget.c - see profile_budget.h. */
 #include "profile_budget.h"
 

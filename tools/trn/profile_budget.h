@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/profile_budget.h - the budget file of `trn profile`.
  *
  * A text file, one statement per line; `#` starts a comment that runs to the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/selmap.c - see selmap.h. */
 #include "selmap.h"
 

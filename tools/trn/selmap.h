@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/selmap.h - what `trn select` and `trn field` share: a global DEM
  * prepared for landmark selection (map, kernels, eq. 8 probability map), the
  * selection options in map terms and their conversion to the core's grid

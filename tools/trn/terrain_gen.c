@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/terrain_gen.c - Golombek & Rapp rock fields (see terrain_gen.h). */
 #include "terrain_gen.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tools/trn/terrain_gen.h - synthetic Mars terrain: rocks drawn from the
  * Golombek & Rapp (1997) size-frequency model on a smooth background.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file can_msg.h
  * @brief The mast / stereo-head CAN messages (docs/can-protocol.md,

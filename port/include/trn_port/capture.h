@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file capture.h
  * @brief One stereo capture on the wire (docs/can-protocol.md, "Capture"):

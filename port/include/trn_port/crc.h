@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file crc.h
  * @brief CRC-32 of a stereo capture (docs/can-protocol.md, "Capture CRC").

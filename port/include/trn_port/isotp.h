@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file isotp.h
  * @brief ISO 15765-2 (ISO-TP) on classic CAN, without an operating system:

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file link_mon.h
  * @brief Liveness and loss of one periodic CAN message that carries a

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file linux_can.h
  * @brief Linux SocketCAN port: classic CAN on a raw socket (filters, receive

@@ -1,6 +1,8 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file linux_gpio.h
- * @brief Linux GPIO port (libgpiod 1.6, the Debian bookworm API): the mast
+ * @brief Linux GPIO port (libgpiod 1.6, the Debian bookworm API, or libgpiod
+ * 2.x with TRN_GPIOD_API=2, which the build defines for its users): the mast
  * power enable output, the stereo trigger output pulse and the "mast
  * deployed" input, waited on with a timeout through edge events.
  *
@@ -29,8 +31,21 @@ extern "C" {
 /** Highest line offset accepted (a chip has at most this many + 1 lines). */
 #define TRN_LGPIO_MAX_OFFSET 1023u
 
+/** The libgpiod API the port is built for: 1 (1.6, linux_gpio.c) or 2 (2.x,
+ * linux_gpio_v2.c). port/CMakeLists.txt picks it from the gpiod.h it finds
+ * and makes TRN_GPIOD_API=2 a PUBLIC definition of trn_port_linux (also in
+ * trn-port-linux.pc), since the handle below differs between the two. */
+#ifndef TRN_GPIOD_API
+#define TRN_GPIOD_API 1
+#endif
+
 struct gpiod_chip;
+#if TRN_GPIOD_API == 2
+struct gpiod_line_request;
+struct gpiod_edge_event_buffer;
+#else
 struct gpiod_line;
+#endif
 
 /** Configuration. A zeroed struct is not valid (chip NULL); start from
  * trn_lgpio_cfg_default(). */
@@ -46,6 +61,19 @@ typedef struct {
     uint32_t trigger_pulse_us;   /**< pulse width, 1..TRN_LGPIO_MAX_PULSE_US */
 } trn_lgpio_cfg_t;
 
+#if TRN_GPIOD_API == 2
+/** The open lines (libgpiod 2: one request for the three). Owned by the
+ * caller; open fills it, close empties it. */
+typedef struct {
+    struct gpiod_chip *chip;                 /**< NULL when closed */
+    struct gpiod_line_request *request;      /**< power, trigger (outputs), deployed (edges) */
+    struct gpiod_edge_event_buffer *events;  /**< one event, read by wait_deployed */
+    uint32_t power_offset;                   /**< the lines' offsets on the chip */
+    uint32_t trigger_offset;
+    uint32_t deployed_offset;
+    uint32_t pulse_us;                       /**< trigger pulse width */
+} trn_lgpio_t;
+#else
 /** The open lines. Owned by the caller; open fills it, close empties it. */
 typedef struct {
     struct gpiod_chip *chip;     /**< NULL when closed */
@@ -54,6 +82,7 @@ typedef struct {
     struct gpiod_line *deployed; /**< requested for both-edge events */
     uint32_t pulse_us;           /**< trigger pulse width */
 } trn_lgpio_t;
+#endif
 
 /**
  * @brief Defaults: chip "gpiochip0", consumer "trn", offsets 0 (power),

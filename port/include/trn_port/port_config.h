@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file port_config.h
  * @brief Compile-time maxima of the port layer's protocol code (port/proto).

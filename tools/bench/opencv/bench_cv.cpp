@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 // bench_cv.cpp - OpenCV reference for trn_bench: cv::distanceTransform on
 // every z-slice of an occupancy volume (see bench_cv.h). Host-only benchmark
 // code; it allocates freely, but only in bench_cv_dt_create.

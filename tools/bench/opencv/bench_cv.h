@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* bench_cv.h - the C interface of trn_bench's OpenCV reference (bench_cv.cpp).
  *
  * Built only when CMake finds OpenCV (core, imgproc); the target then defines

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* handcount.c - a tiny call chain whose stack depth is counted by hand from
  * the arm-none-eabi disassembly (tools/stack/test_trn_stack.py). Not part of
  * any library. noinline keeps the three frames separate; volatile arrays keep
