@@ -80,19 +80,37 @@ trn_status_t trn_points_rotate(const trn_point_t *in, size_t n, double angle_rad
     return TRN_OK;
 }
 
-/* The workspace: the turned points, the 27 ln L of the fit (kept off the
- * stack), then trn_search_bb's workspace. */
+/* One heading of a search (see search_all). */
+typedef struct {
+    int32_t k;
+    int64_t proxy; /* score of the seed's best pose at this heading */
+} heading_t;
+
+/* The fit's samples and result, in the workspace (kept off the stack). */
+typedef struct {
+    double ll[27];
+    trn_peak3_t pk;
+} fit_t;
+
+/* The workspace: the turned points, the fit, the search's heading list,
+ * then trn_search_bb's workspace. */
 static size_t heading_carve(const trn_map_t *map, size_t n, const trn_window_t *win, void *base,
-                            trn_point_t **buf, double **ll, void **search, size_t *search_bytes)
+                            trn_point_t **buf, fit_t **fit, heading_t **hs, void **search, size_t *search_bytes)
 {
     trn_ws_t w;
     size_t sw = trn_localize_workspace_bytes(map, win);
+    *buf = NULL;
+    *fit = NULL;
+    *hs = NULL;
+    *search = NULL;
+    *search_bytes = 0u;
     if (sw == 0u || n == 0u || n > (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_ZBINS) {
         return 0u;
     }
     trn_ws_begin(&w, base);
     *buf = (trn_point_t *)trn_ws_take(&w, n * sizeof(trn_point_t));
-    *ll = (double *)trn_ws_take(&w, 27u * sizeof(double));
+    *fit = (fit_t *)trn_ws_take(&w, sizeof(fit_t));
+    *hs = (heading_t *)trn_ws_take(&w, (size_t)TRN_MAX_HEADING_STEPS * sizeof(heading_t));
     *search = trn_ws_take(&w, sw);
     *search_bytes = sw;
     return w.total;
@@ -101,10 +119,11 @@ static size_t heading_carve(const trn_map_t *map, size_t n, const trn_window_t *
 size_t trn_localize_heading_workspace_bytes(const trn_map_t *map, size_t n, const trn_window_t *win)
 {
     trn_point_t *buf;
-    double *ll;
+    fit_t *fit;
+    heading_t *hs;
     void *search;
     size_t sb;
-    return heading_carve(map, n, win, NULL, &buf, &ll, &search, &sb);
+    return heading_carve(map, n, win, NULL, &buf, &fit, &hs, &search, &sb);
 }
 
 /* k of the i-th heading searched: 0, -1, 1, -2, 2, ... */
@@ -128,35 +147,112 @@ static void add_stats(trn_search_stats_t *sum, const trn_search_stats_t *s)
     sum->blocks_bounded += s->blocks_bounded;
 }
 
-/* The best pose over every heading, each searched above the best so far;
- * with ex, poses within ex of headings |k - ex_k| <= ex_steps are skipped. */
-static trn_status_t search_all(const trn_map_t *map, const trn_point_t *pts, size_t n, const trn_window_t *win,
-                               const trn_heading_cfg_t *cfg, double step, int32_t kk, const trn_exclusion_t *ex,
-                               int32_t ex_k, int32_t ex_steps, trn_point_t *buf, void *sws, size_t swb,
-                               trn_best_t *best, int32_t *best_k, trn_search_stats_t *stats)
+/* Tie rank of step k in the order 0, -1, +1, -2, +2, ...: the lower wins a tie. */
+static int32_t tie_rank(int32_t k) { return k > 0 ? 2 * k : (k < 0 ? -2 * k - 1 : 0); }
+
+/* Larger proxy first, then tie rank: the order headings are searched in. */
+static int heading_before(const heading_t *a, const heading_t *b)
 {
-    int32_t i;
+    if (a->proxy != b->proxy) {
+        return a->proxy > b->proxy;
+    }
+    return tie_rank(a->k) < tie_rank(b->k);
+}
+
+/* Sort hs[0..m) by heading_before (insertion sort into place; m is at most
+ * TRN_MAX_HEADING_STEPS and nearly sorted by construction). */
+static void sort_headings(heading_t *hs, int32_t m)
+{
+    int32_t i, j;
+    for (i = 1; i < m; ++i) {
+        const heading_t v = hs[i];
+        for (j = i; j > 0 && heading_before(&v, &hs[j - 1]); --j) {
+            hs[j] = hs[j - 1];
+        }
+        hs[j] = v;
+    }
+}
+
+/* The search's context: map, points, window, headings, exclusion. */
+typedef struct {
+    const trn_map_t *map;
+    const trn_point_t *pts;
+    size_t n;
+    const trn_window_t *win;
+    const trn_heading_cfg_t *cfg;
+    double step;
+    int32_t kk;
+    const trn_exclusion_t *ex; /* with ex, poses within ex of headings |k - ex_k| <= ex_steps are skipped */
+    int32_t ex_k, ex_steps;
+    trn_point_t *buf;
+    heading_t *hs; /* 2 kk + 1 */
+    void *sws;
+    size_t swb;
+} hsearch_t;
+
+/* Search heading k for a pose beating (best, best_k) under the tie rule
+ * (score, then tie rank of the heading, then trn_search_bb's order), or any
+ * pose above *floor when nothing is found yet (floor NULL: any pose). */
+static trn_status_t search_one(hsearch_t *h, int32_t k, const int64_t *floor, int *found, trn_best_t *best,
+                               int32_t *best_k, trn_search_stats_t *stats)
+{
+    const trn_exclusion_t *e = (h->ex != NULL && abs(k - h->ex_k) <= h->ex_steps) ? h->ex : NULL;
+    trn_search_stats_t s = {0u, 0u};
+    trn_best_t b;
+    trn_status_t st = turn(h->pts, h->n, h->cfg, h->step, k, h->map->dist.nz, h->buf);
+    if (st != TRN_OK) {
+        return st;
+    }
+    if (*found) { /* a tie counts only when this heading ranks first */
+        const int64_t f = tie_rank(k) < tie_rank(*best_k) ? best->score - 1 : best->score;
+        st = trn_search_bb_above(&h->map->pyr, &h->map->lnp, h->buf, h->n, h->win, e, f, h->sws, h->swb, &b, &s);
+    } else if (floor != NULL) {
+        st = trn_search_bb_above(&h->map->pyr, &h->map->lnp, h->buf, h->n, h->win, e, *floor, h->sws, h->swb, &b,
+                                 &s);
+    } else {
+        st = trn_search_bb(&h->map->pyr, &h->map->lnp, h->buf, h->n, h->win, e, h->sws, h->swb, &b, &s);
+    }
+    add_stats(stats, &s);
+    if (st == TRN_OK) {
+        *best = b;
+        *best_k = k;
+        *found = 1;
+    }
+    return st == TRN_E_NODATA ? TRN_OK : st;
+}
+
+/* The best pose over every heading (exactly: each heading is searched by
+ * branch-and-bound above the best found so far). The seed heading first;
+ * the others in the order of the score the seed's answer has at them, so a
+ * good floor comes early and the rest stop after a few blocks. */
+static trn_status_t search_all(hsearch_t *h, int32_t seed, const int64_t *floor, trn_best_t *best,
+                               int32_t *best_k, trn_search_stats_t *stats)
+{
+    int32_t i, m = 0;
     int found = 0;
-    for (i = 0; i <= 2 * kk; ++i) {
+    trn_status_t st = search_one(h, seed, floor, &found, best, best_k, stats);
+    if (st != TRN_OK) {
+        return st;
+    }
+    for (i = 0; i <= 2 * h->kk; ++i) {
         const int32_t k = step_of(i);
-        const trn_exclusion_t *e = (ex != NULL && abs(k - ex_k) <= ex_steps) ? ex : NULL;
-        trn_search_stats_t s = {0u, 0u};
-        trn_best_t b;
-        trn_status_t st = turn(pts, n, cfg, step, k, map->dist.nz, buf);
-        if (st != TRN_OK) {
-            return st;
+        int64_t p = 0; /* ordering proxy; all equal when the seed found nothing */
+        if (k == seed) {
+            continue;
         }
-        if (!found) {
-            st = trn_search_bb(&map->pyr, &map->lnp, buf, n, win, e, sws, swb, &b, &s);
-        } else {
-            st = trn_search_bb_above(&map->pyr, &map->lnp, buf, n, win, e, best->score, sws, swb, &b, &s);
+        if (found) {
+            if ((st = turn(h->pts, h->n, h->cfg, h->step, k, h->map->dist.nz, h->buf)) != TRN_OK ||
+                (st = trn_score_pose(&h->map->dist, &h->map->lnp, h->buf, h->n, best->x, best->y, &p)) != TRN_OK) {
+                return st;
+            }
         }
-        add_stats(stats, &s);
-        if (st == TRN_OK) {
-            *best = b;
-            *best_k = k;
-            found = 1;
-        } else if (st != TRN_E_NODATA) {
+        h->hs[m].k = k;
+        h->hs[m].proxy = p;
+        ++m;
+    }
+    sort_headings(h->hs, m);
+    for (i = 0; i < m; ++i) {
+        if ((st = search_one(h, h->hs[i].k, floor, &found, best, best_k, stats)) != TRN_OK) {
             return st;
         }
     }
@@ -207,7 +303,6 @@ static trn_status_t fixed_heading(const trn_map_t *map, const trn_point_t *pts, 
     out->cov3[4] = out->loc.cov_m2[1];
     out->cov3[1] = out->cov3[3] = out->loc.cov_m2[2];
     out->best_step = 0;
-    out->exclusion_steps = 0;
     return st;
 }
 
@@ -217,13 +312,16 @@ trn_status_t trn_localize_points_heading(const trn_map_t *map, const trn_point_t
 {
     trn_status_t st, fit_st;
     trn_point_t *buf;
+    heading_t *hsl;
+    hsearch_t h;
+    int64_t margin;
     void *sws;
     size_t swb, need;
-    double step, cell, *ll;
-    int32_t kk, bk = 0, rk = 1, r, sk = 0;
+    double step, cell;
+    fit_t *fit;
+    int32_t kk, bk = 0, r, sk = 0;
     trn_best_t best, second;
     trn_exclusion_t ex;
-    trn_peak3_t pk;
     trn_search_stats_t stats = {0u, 0u}, s2 = {0u, 0u};
 
     if (map == NULL || pts == NULL || win == NULL || cfg == NULL || ws == NULL || out == NULL) {
@@ -236,14 +334,14 @@ trn_status_t trn_localize_points_heading(const trn_map_t *map, const trn_point_t
         win->y1 >= map->dist.ny) {
         return TRN_E_RANGE;
     }
-    need = heading_carve(map, n, win, NULL, &buf, &ll, &sws, &swb);
+    need = heading_carve(map, n, win, NULL, &buf, &fit, &hsl, &sws, &swb);
     if (need == 0u) {
         return TRN_E_ARG;
     }
     if ((st = trn_ws_check(ws, ws_bytes, need)) != TRN_OK) {
         return st;
     }
-    (void)heading_carve(map, n, win, ws, &buf, &ll, &sws, &swb);
+    (void)heading_carve(map, n, win, ws, &buf, &fit, &hsl, &sws, &swb);
     out->step_rad = step;
     out->half_steps = kk;
     if (kk == 0) {
@@ -251,7 +349,21 @@ trn_status_t trn_localize_points_heading(const trn_map_t *map, const trn_point_t
     }
 
     /* the best (x, y, heading): exact, each heading above the best so far */
-    if ((st = search_all(map, pts, n, win, cfg, step, kk, NULL, 0, 0, buf, sws, swb, &best, &bk, &stats)) != TRN_OK) {
+    h.map = map;
+    h.pts = pts;
+    h.n = n;
+    h.win = win;
+    h.cfg = cfg;
+    h.step = step;
+    h.kk = kk;
+    h.ex = NULL;
+    h.ex_k = 0;
+    h.ex_steps = 0;
+    h.buf = buf;
+    h.hs = hsl;
+    h.sws = sws;
+    h.swb = swb;
+    if ((st = search_all(&h, 0, NULL, &best, &bk, &stats)) != TRN_OK) {
         return st;
     }
     out->loc.refined = 0;
@@ -265,47 +377,49 @@ trn_status_t trn_localize_points_heading(const trn_map_t *map, const trn_point_t
     out->best_step = bk;
 
     /* eq. 6 in (x, y, heading) */
-    if ((st = grid27(map, pts, n, cfg, step, best.x, best.y, bk, buf, ll)) != TRN_OK) {
+    if ((st = grid27(map, pts, n, cfg, step, best.x, best.y, bk, buf, fit->ll)) != TRN_OK) {
         return st;
     }
-    fit_st = trn_peak_fit3(ll, &pk);
+    fit_st = trn_peak_fit3(fit->ll, &fit->pk);
     cell = (double)map->cfg.terrain.cell_m;
     {
         const double sc[3] = {cell, cell, step};
         int32_t i;
         for (i = 0; i < 9; ++i) {
-            out->cov3[i] = pk.cov[i] * sc[i / 3] * sc[i % 3];
+            out->cov3[i] = fit->pk.covariance[i] * sc[i / 3] * sc[i % 3];
         }
     }
-    out->loc.x = (double)best.x + pk.d[0];
-    out->loc.y = (double)best.y + pk.d[1];
-    out->heading_rad = cfg->center_rad + ((double)bk + pk.d[2]) * step;
-    out->sigma_heading_rad = pk.sigma[2] * step;
-    out->loc.sigma_x_m = pk.sigma[0] * cell;
-    out->loc.sigma_y_m = pk.sigma[1] * cell;
-    out->loc.rho = (fit_st == TRN_OK) ? pk.cov[1] / (pk.sigma[0] * pk.sigma[1]) : 0.0;
+    out->loc.x = (double)best.x + fit->pk.offset[0];
+    out->loc.y = (double)best.y + fit->pk.offset[1];
+    out->heading_rad = cfg->center_rad + ((double)bk + fit->pk.offset[2]) * step;
+    out->sigma_heading_rad = fit->pk.sigma[2] * step;
+    out->loc.sigma_x_m = fit->pk.sigma[0] * cell;
+    out->loc.sigma_y_m = fit->pk.sigma[1] * cell;
+    out->loc.rho = (fit_st == TRN_OK) ? fit->pk.covariance[1] / (fit->pk.sigma[0] * fit->pk.sigma[1]) : 0.0;
     out->loc.cov_m2[0] = out->cov3[0];
     out->loc.cov_m2[1] = out->cov3[4];
     out->loc.cov_m2[2] = out->cov3[1];
 
-    /* the competitor: the best pose outside ~4 sigma of the peak in (x, y, heading) */
+    /* the competitor: the best pose, at any heading, outside ~4 sigma of the
+     * peak's position (a position failure is what the probability is of; the
+     * same position at another heading is this peak's own tail) */
     r = map->cfg.min_exclusion_cells;
     if (fit_st == TRN_OK) {
-        const double smax = pk.sigma[0] > pk.sigma[1] ? pk.sigma[0] : pk.sigma[1];
+        const double smax = fit->pk.sigma[0] > fit->pk.sigma[1] ? fit->pk.sigma[0] : fit->pk.sigma[1];
         if (4.0 * smax > (double)r) {
             r = 4.0 * smax < (double)TRN_MAX_DIM ? (int32_t)ceil(4.0 * smax) : TRN_MAX_DIM;
-        }
-        if (4.0 * pk.sigma[2] > (double)rk) {
-            rk = 4.0 * pk.sigma[2] < (double)TRN_MAX_HEADING_STEPS ? (int32_t)ceil(4.0 * pk.sigma[2])
-                                                                 : TRN_MAX_HEADING_STEPS;
         }
     }
     ex.cx = best.x;
     ex.cy = best.y;
     ex.radius = r;
     out->loc.exclusion_cells = r;
-    out->exclusion_steps = rk;
-    st = search_all(map, pts, n, win, cfg, step, kk, &ex, bk, rk, buf, sws, swb, &second, &sk, &s2);
+    h.ex = &ex;
+    h.ex_k = bk;
+    h.ex_steps = 2 * kk; /* every heading */
+    /* scores are sums of n int32 table entries, n < 2^31: the difference cannot wrap */
+    margin = best.score - (int64_t)TRN_HEADING_MARGIN_NATS * (int64_t)TRN_LNP_SCALE;
+    st = search_all(&h, bk, &margin, &second, &sk, &s2);
     out->loc.stats = stats; /* the first search's work, as trn_localize_points */
     if (st == TRN_OK) {
         out->loc.has_second = 1;

@@ -609,6 +609,9 @@ static size_t bb_carve(const trn_pyramid_t *p, const trn_window_t *win, void *ba
 {
     int32_t bs;
     trn_ws_t w;
+    lay->tops = lay->stack = NULL;
+    lay->tops_suf = lay->stack_suf = NULL;
+    lay->ntop_max = 0u;
     if (p == NULL || win == NULL || p->nlevels < 1 || p->nlevels > TRN_MAX_LEVELS ||
         win->x1 < win->x0 || win->y1 < win->y0 || win->x1 - win->x0 >= TRN_MAX_DIM ||
         win->y1 - win->y0 >= TRN_MAX_DIM) {

@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* localize.c - prepared maps and end-to-end localization (see trn/localize.h). */
 #include "trn/localize.h"
+#include "trn/heading.h"
 
 #include <float.h>
 #include <math.h>
@@ -681,4 +682,86 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
         st = out->refined && !out->misfit ? TRN_OK : TRN_E_ILLCOND;
     }
     return st;
+}
+
+/* Layout of trn_localize_dem_heading's workspace: [hp grid | highpass ws |
+ * points | trn_localize_points_heading's workspace]. */
+typedef struct {
+    size_t hp, hpws, pts, heading, total;
+} head_layout_t;
+
+static int head_layout(const trn_map_t *map, int32_t w, int32_t h, size_t max_points, const trn_window_t *win,
+                       head_layout_t *lay)
+{
+    size_t hpws = trn_highpass_workspace_bytes(w, h);
+    size_t hw = trn_localize_heading_workspace_bytes(map, max_points, win);
+    trn_ws_t ws;
+    if (hpws == 0u || hw == 0u) {
+        return 0;
+    }
+    trn_ws_begin(&ws, NULL);
+    lay->hp = trn_ws_offset(&ws, (size_t)w * (size_t)h * sizeof(float));
+    lay->hpws = trn_ws_offset(&ws, hpws);
+    lay->pts = trn_ws_offset(&ws, max_points * sizeof(trn_point_t));
+    lay->heading = trn_ws_offset(&ws, hw);
+    lay->total = ws.total;
+    return 1;
+}
+
+size_t trn_localize_dem_heading_workspace_bytes(const trn_map_t *map, int32_t width, int32_t height,
+                                                size_t max_points, const trn_window_t *win)
+{
+    head_layout_t lay;
+    if (map == NULL || win == NULL || !map_ok(map) || !window_ok(map, win) || max_points == 0u ||
+        max_points > (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM) {
+        return 0u;
+    }
+    return head_layout(map, width, height, max_points, win, &lay) ? lay.total : 0u;
+}
+
+trn_status_t trn_localize_dem_heading(const trn_map_t *map, const trn_grid_f32_t *local_dem, int32_t rover_x,
+                                      int32_t rover_y, size_t max_points, const trn_window_t *win,
+                                      const trn_heading_cfg_t *cfg, void *ws, size_t ws_bytes,
+                                      trn_heading_result_t *out)
+{
+    trn_status_t st;
+    head_layout_t lay;
+    uint8_t *b = (uint8_t *)ws;
+    trn_grid_f32_t hp;
+    size_t n = 0;
+
+    if (map == NULL || local_dem == NULL || win == NULL || cfg == NULL || ws == NULL || out == NULL) {
+        return TRN_E_NULL;
+    }
+    if ((st = trn_grid_f32_check(local_dem)) != TRN_OK) {
+        return st;
+    }
+    if (!map_ok(map) || map->cfg.match != TRN_MATCH_VOXEL || map->cfg.refine != 0 || max_points == 0u ||
+        max_points > (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM) {
+        return TRN_E_ARG;
+    }
+    if (!window_ok(map, win) || !head_layout(map, local_dem->width, local_dem->height, max_points, win, &lay)) {
+        return TRN_E_RANGE;
+    }
+    if ((st = trn_ws_check(ws, ws_bytes, lay.total)) != TRN_OK) {
+        return st;
+    }
+    if ((st = trn_grid_f32_init(&hp, (float *)(void *)(b + lay.hp),
+                                (size_t)local_dem->width * (size_t)local_dem->height, local_dem->width,
+                                local_dem->height)) != TRN_OK) {
+        return st;
+    }
+    if (map->cfg.local_highpass == TRN_LOCAL_HP_MAP) {
+        st = highpass_by_map(map, local_dem, rover_x, rover_y, (win->x0 + win->x1) / 2, (win->y0 + win->y1) / 2,
+                             &hp);
+    } else {
+        st = trn_highpass(local_dem, &map->cfg.terrain, &hp, b + lay.hpws, lay.pts - lay.hpws);
+    }
+    if (st != TRN_OK ||
+        (st = trn_occupancy_points(&hp, &map->cfg.terrain, rover_x, rover_y, (trn_point_t *)(void *)(b + lay.pts),
+                                   max_points, &n)) != TRN_OK) {
+        return st;
+    }
+    return trn_localize_points_heading(map, (const trn_point_t *)(void *)(b + lay.pts), n, win, cfg,
+                                       b + lay.heading, ws_bytes - lay.heading, out);
 }

@@ -141,11 +141,11 @@ static void set_illcond3(trn_peak3_t *out)
 {
     int i;
     for (i = 0; i < 3; ++i) {
-        out->d[i] = 0.0;
+        out->offset[i] = 0.0;
         out->sigma[i] = HUGE_VAL;
     }
     for (i = 0; i < 9; ++i) {
-        out->cov[i] = (i % 4 == 0) ? HUGE_VAL : 0.0;
+        out->covariance[i] = (i % 4 == 0) ? HUGE_VAL : 0.0;
     }
 }
 
@@ -281,22 +281,22 @@ trn_status_t trn_peak_fit3(const double ll[27], trn_peak3_t *out)
         for (i = 0; i < 3; ++i) {
             gs[i] = g[i] / scale;
         }
-        chol3_solve(l, gs, out->d); /* peak: (-H)^-1 g */
+        chol3_solve(l, gs, out->offset); /* peak: (-H)^-1 g */
         for (j = 0; j < 3; ++j) {
             e[0] = e[1] = e[2] = 0.0;
             e[j] = 1.0;
             chol3_solve(l, e, col);
             for (i = 0; i < 3; ++i) {
-                out->cov[i * 3 + j] = col[i] / scale;
+                out->covariance[i * 3 + j] = col[i] / scale;
             }
         }
     }
     for (i = 0; i < 3; ++i) {
-        if (!(fabs(out->d[i]) <= 1.0)) {
+        if (!(fabs(out->offset[i]) <= 1.0)) {
             set_illcond3(out);
             return TRN_E_ILLCOND;
         }
-        out->sigma[i] = sqrt(out->cov[(size_t)i * 4u]);
+        out->sigma[i] = sqrt(out->covariance[(size_t)i * 4u]);
     }
     return TRN_OK;
 }

@@ -31,6 +31,8 @@ static size_t highpass_carve(int32_t width, int32_t height, void *base, double *
 {
     size_t cells;
     trn_ws_t w;
+    *sum = NULL;
+    *cnt = NULL;
     if (width < 1 || height < 1 || width > TRN_MAX_DIM || height > TRN_MAX_DIM) {
         return 0u;
     }

@@ -73,9 +73,12 @@ static void world_build(uint64_t seed, int flat)
  * (map cells, sub-cell), seen with the heading off by delta: local offset o
  * sees the terrain at the map offset turned by delta (trn_points_rotate's
  * convention), so turning the points by delta puts them back. */
+static float g_loc[LW * LW];
+
 static size_t local_points(double rx, double ry, double delta)
 {
-    static float loc[LW * LW], hp[LW * LW];
+    static float hp[LW * LW];
+    float *loc = g_loc;
     TRN_WORKSPACE_DECLARE(hws, 64u << 10);
     trn_grid_f32_t lg, hg;
     const double c = cos(delta), s = sin(delta);
@@ -217,14 +220,14 @@ static void test_fit3_analytic(void **state)
     quad27(g, a, -1234.5, ll);
     assert_int_equal(trn_peak_fit3(ll, &pk), TRN_OK);
     for (i = 0; i < 3; ++i) {
-        assert_true(fabs(pk.d[i] - truth_d[i]) < 1e-9);
-        assert_true(fabs(pk.sigma[i] - sqrt(pk.cov[i * 4])) < 1e-15);
+        assert_true(fabs(pk.offset[i] - truth_d[i]) < 1e-9);
+        assert_true(fabs(pk.sigma[i] - sqrt(pk.covariance[i * 4])) < 1e-15);
     }
     for (i = 0; i < 3; ++i) { /* cov x A = identity */
         for (j = 0; j < 3; ++j) {
             prod[i * 3 + j] = 0.0;
             for (k = 0; k < 3; ++k) {
-                prod[i * 3 + j] += pk.cov[i * 3 + k] * a[k * 3 + j];
+                prod[i * 3 + j] += pk.covariance[i * 3 + k] * a[k * 3 + j];
             }
             assert_true(fabs(prod[i * 3 + j] - (i == j ? 1.0 : 0.0)) < 1e-9);
         }
@@ -235,7 +238,7 @@ static void test_fit3_analytic(void **state)
         const double g0[3] = {0.0, 0.0, 0.0};
         quad27(g0, ridge, 10.0, ll);
         assert_int_equal(trn_peak_fit3(ll, &pk), TRN_E_ILLCOND);
-        assert_true(isinf(pk.sigma[2]) && pk.d[0] == 0.0);
+        assert_true(isinf(pk.sigma[2]) && pk.offset[0] == 0.0);
     }
     /* a peak outside the grid (offset 1.5 along x) */
     {
@@ -488,6 +491,88 @@ static void test_bad_inputs(void **state)
     }
 }
 
+/* The DEM entry: the same answer as the points entry on the points it
+ * makes (box high-pass and occupancy of the map's configuration), and its
+ * own bad inputs. */
+static void test_dem_entry(void **state)
+{
+    trn_window_t win = {52, 50, 66, 64};
+    trn_heading_cfg_t c = {0.0, 6.0 * DEG, 0.0};
+    trn_heading_result_t a, b;
+    trn_grid_f32_t lg;
+    trn_map_t m2;
+    size_t np, wb, wp;
+    trn_status_t sa, sb;
+    (void)state;
+    world_build(14, 0);
+    np = local_points(59.3, 57.8, 4.0 * DEG); /* g_loc: the local DEM */
+    assert_int_equal(trn_grid_f32_init(&lg, g_loc, LW * LW, LW, LW), TRN_OK);
+    wb = trn_localize_dem_heading_workspace_bytes(&g_w.map, LW, LW, MAXPTS, &win);
+    wp = trn_localize_heading_workspace_bytes(&g_w.map, np, &win);
+    assert_true(wb > 0u && wb + 16u <= sizeof g_ws && wp > 0u);
+    sa = trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a);
+    assert_int_equal(sa, TRN_OK);
+    sb = trn_localize_points_heading(&g_w.map, g_pts, np, &win, &c, g_ws, wp, &b);
+    assert_int_equal(sa, sb);
+    assert_true(a.loc.x == b.loc.x && a.loc.y == b.loc.y && a.heading_rad == b.heading_rad);
+    assert_true(a.loc.ll_best == b.loc.ll_best && a.loc.failure_probability == b.loc.failure_probability);
+    assert_true(fabs(a.heading_rad - 4.0 * DEG) < 1.0 * DEG && fabs(a.loc.x - 59.3) < 1.0 && fabs(a.loc.y - 57.8) < 1.0);
+    /* sizing refusals */
+    assert_int_equal(trn_localize_dem_heading_workspace_bytes(NULL, LW, LW, MAXPTS, &win), 0u);
+    assert_int_equal(trn_localize_dem_heading_workspace_bytes(&g_w.map, LW, LW, 0, &win), 0u);
+    assert_int_equal(trn_localize_dem_heading_workspace_bytes(&g_w.map, 0, LW, MAXPTS, &win), 0u);
+    /* bad inputs, one class each */
+    assert_int_equal(trn_localize_dem_heading(NULL, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a), TRN_E_NULL);
+    assert_int_equal(trn_localize_dem_heading(&g_w.map, NULL, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a), TRN_E_NULL);
+    assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, NULL, &c, g_ws, wb, &a), TRN_E_NULL);
+    assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, NULL, g_ws, wb, &a), TRN_E_NULL);
+    assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &c, NULL, wb, &a), TRN_E_NULL);
+    assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, NULL), TRN_E_NULL);
+    {
+        trn_grid_f32_t bad = lg;
+        bad.width = 0;
+        assert_int_equal(trn_localize_dem_heading(&g_w.map, &bad, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a),
+                         TRN_E_SIZE);
+    }
+    m2 = g_w.map;
+    m2.cfg.refine = 1; /* the height refinement is not heading-aware yet */
+    assert_int_equal(trn_localize_dem_heading(&m2, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a), TRN_E_ARG);
+    assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, 0, &win, &c, g_ws, wb, &a), TRN_E_ARG);
+    {
+        trn_window_t off = {200, 50, 210, 60};
+        trn_heading_cfg_t fine = {0.0, M_PI, 1e-4}, nan_c = {NAN, 0.1, 0.0};
+        assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &off, &c, g_ws, wb, &a), TRN_E_RANGE);
+        assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &fine, g_ws, wb, &a),
+                         TRN_E_SIZE);
+        assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &nan_c, g_ws, wb, &a),
+                         TRN_E_ARG);
+    }
+    assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb - 1u, &a),
+                     TRN_E_WORKSPACE);
+    assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &c, g_ws + 8, wb, &a),
+                     TRN_E_WORKSPACE);
+    assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, 3, &win, &c, g_ws, wb, &a), TRN_E_CAPACITY);
+    {
+        int i;
+        for (i = 0; i < LW * LW; ++i) {
+            g_loc[i] = NAN;
+        }
+        assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a),
+                         TRN_E_NODATA);
+    }
+    /* flat map, flat local DEM: every pose and heading alike */
+    world_build(14, 1);
+    {
+        int i;
+        for (i = 0; i < LW * LW; ++i) {
+            g_loc[i] = (i % LW - LR) * (i % LW - LR) + (i / LW - LR) * (i / LW - LR) <= LR * LR ? 1.0f : NAN;
+        }
+        wb = trn_localize_dem_heading_workspace_bytes(&g_w.map, LW, LW, MAXPTS, &win);
+        assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a),
+                         TRN_E_ILLCOND);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -495,6 +580,7 @@ int main(void)
         cmocka_unit_test(test_fit3_analytic),   cmocka_unit_test(test_search_bb_above),
         cmocka_unit_test(test_equals_exhaustive), cmocka_unit_test(test_recovers_heading),
         cmocka_unit_test(test_w0_is_2d),        cmocka_unit_test(test_bad_inputs),
+        cmocka_unit_test(test_dem_entry),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -10,11 +10,15 @@
  * trn_localize_points. Headings are searched from the centre outwards, each
  * by branch-and-bound above the best score found so far
  * (trn_search_bb_above), so the result is exactly the best (x, y, heading)
- * of the exhaustive search over all of them (ties: the heading searched
- * first, then trn_search_bb's order). Eq. 6 in three dimensions
+ * of the exhaustive search over all of them (ties: the heading first in the
+ * order 0, -1, +1, -2, ... steps, then trn_search_bb's order). The order
+ * searched: heading 0, then the others by the score its answer has at them,
+ * so a high bound comes early. Eq. 6 in three dimensions
  * (trn_peak_fit3) gives the sub-step pose and the 3 x 3 covariance; the
- * failure probability weighs the best pose against the best one outside a
- * zone around it in (x, y, heading).
+ * failure probability weighs the best pose against the best one, at any
+ * heading, outside the position zone around it (max(min_exclusion_cells,
+ * 4 sigma) cells: a position failure is what it is the probability of),
+ * searched above the best's ln L minus TRN_HEADING_MARGIN_NATS.
  *
  * Angles: radians, counterclockwise in the (east, north) plane; a point at
  * (x cells east, y cells along +row, i.e. south) turned by a goes to
@@ -35,6 +39,11 @@ extern "C" {
 
 /** Largest half-window in radians (a half turn). */
 #define TRN_HEADING_MAX_WINDOW_RAD 3.14159265358979323846
+
+/** The competitor is searched only above the best's ln L minus this many
+ *  nats: one further below gives a failure probability under e^-40
+ *  (4e-18), reported as 0 with has_second = 0. */
+#define TRN_HEADING_MARGIN_NATS 40
 
 /** Heading search. */
 typedef struct {
@@ -58,7 +67,6 @@ typedef struct {
     double step_rad;        /**< step used */
     int32_t half_steps;     /**< K: headings centre + k step, k = -K..K */
     int32_t best_step;      /**< k of the best integer pose */
-    int32_t exclusion_steps; /**< heading half-width of the zone for the competitor */
 } trn_heading_result_t;
 
 /** @brief Heading step and K for cfg and these points (step 0: automatic).
@@ -94,6 +102,29 @@ size_t trn_localize_heading_workspace_bytes(const trn_map_t *map, size_t n, cons
 trn_status_t trn_localize_points_heading(const trn_map_t *map, const trn_point_t *pts, size_t n,
                                          const trn_window_t *win, const trn_heading_cfg_t *cfg,
                                          void *ws, size_t ws_bytes, trn_heading_result_t *out);
+
+/** @brief Workspace bytes of trn_localize_dem_heading (0 if invalid). */
+size_t trn_localize_dem_heading_workspace_bytes(const trn_map_t *map, int32_t width, int32_t height,
+                                                size_t max_points, const trn_window_t *win);
+
+/**
+ * @brief trn_localize_points_heading on a local DEM: its high-pass
+ * (cfg.local_highpass; with TRN_LOCAL_HP_MAP one pass, against the map's
+ * low-pass at the window's centre) and occupancy with the map's terrain
+ * configuration, then the search over (x, y, heading). The local DEM is in
+ * the map's orientation as the rover believes it (the heading then found is
+ * the correction to that belief). Only the voxel matcher without refinement
+ * searches heading so far (trn_map_cfg_default; issue 14).
+ * @retval as trn_localize_points_heading, plus TRN_E_ARG (the map matches
+ *         heights or refines), TRN_E_CAPACITY (more than max_points occupied
+ *         voxels) and TRN_E_NODATA (local DEM all missing); TRN_E_RANGE also
+ *         when the window is not inside the map or the local DEM's size is
+ *         out of range.
+ */
+trn_status_t trn_localize_dem_heading(const trn_map_t *map, const trn_grid_f32_t *local_dem, int32_t rover_x,
+                                      int32_t rover_y, size_t max_points, const trn_window_t *win,
+                                      const trn_heading_cfg_t *cfg, void *ws, size_t ws_bytes,
+                                      trn_heading_result_t *out);
 
 #ifdef __cplusplus
 }

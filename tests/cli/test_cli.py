@@ -300,6 +300,50 @@ for mode in ("auto", "paper"):
     check(err < 0.5 * CELL and r["status"] == "ok", f"--map-config {mode}: error {err:.4f} m, {r['status']}")
     check(r["map_config"]["refine"] == (1 if mode == "auto" else 0), f"--map-config {mode}: refine {r['map_config']}")
 
+# ---- localize over heading (--heading-deg, --heading-window-deg; issue 14) -------
+# The local DEM seen with the heading off by DELTA: its cell offset o (east,
+# south, cells) shows the terrain at o turned DELTA counterclockwise about the
+# rover, bilinear from G; the search must give the correction DELTA.
+DELTA = 4.0
+c_, s_ = math.cos(math.radians(DELTA)), math.sin(math.radians(DELTA))
+jj, ii = np.meshgrid(np.arange(L) - 32.0, np.arange(L) - 32.0)  # jj: column offset, ii: row offset
+gx, gy = RC + jj * c_ + ii * s_, RR - jj * s_ + ii * c_
+x0, y0 = np.floor(gx).astype(int), np.floor(gy).astype(int)
+fx, fy = gx - x0, gy - y0
+rot = (G[y0, x0] * (1 - fx) * (1 - fy) + G[y0, x0 + 1] * fx * (1 - fy) + G[y0 + 1, x0] * (1 - fx) * fy
+       + G[y0 + 1, x0 + 1] * fx * fy).astype(np.float32)
+rot_gt = (-32.5 * CELL, CELL, 0.0, 32.5 * CELL, 0.0, -CELL)  # rover at the centre of local cell (32, 32)
+write_raster(p("local_turned.tif"), rot, rot_gt)
+turned = ["--local", p("local_turned.tif"), "--prior", prior, "--map-config", "paper"]
+r = run_json("localize", "--dem", g_tif, *turned, "--heading-window-deg", "8", "--json")
+if r.get("heading_deg") is not None:
+    err = math.hypot(r["x_m"] - truth[0], r["y_m"] - truth[1])
+    cov3 = r["cov3"]
+    print(f"localize over heading: {r['heading_deg']:+.3f} deg (true {DELTA:+.1f}), sigma {r['sigma_heading_deg']:.3f} "
+          f"deg, position error {err:.4f} m, {r['status']}")
+    check(abs(r["heading_deg"] - DELTA) < 1.0, f"--heading-window-deg: heading {r['heading_deg']} vs {DELTA}")
+    check(err < 1.5 * CELL and r["status"] == "ok", f"--heading-window-deg: position error {err:.4f} m, {r['status']}")
+    check(len(cov3) == 9 and all(abs(cov3[3 * a + b] - cov3[3 * b + a]) < 1e-12 for a in range(3) for b in range(3))
+          and cov3[8] > 0 and abs(cov3[8] ** 0.5 - r["sigma_heading_deg"]) < 1e-9 and cov3[0] == r["cov_m2"][0],
+          f"--heading-window-deg: cov3 symmetric, its heading variance sigma^2: {cov3}")
+else:
+    check(False, f"--heading-window-deg: no heading in {r}")
+r0 = run_json("localize", "--dem", g_tif, *turned, "--json")
+err0 = math.hypot(r0["x_m"] - truth[0], r0["y_m"] - truth[1]) if r0.get("x_m") is not None else 1e9
+check("heading_deg" not in r0, "no heading fields without the heading options")
+print(f"the same case with the heading taken as known: error {err0:.4f} m, {r0.get('status')}")
+# --heading-deg alone turns the local DEM by the given correction (window 0): the turned map back in place
+rh = run_json("localize", "--dem", g_tif, *turned, "--heading-deg", str(DELTA), "--json")
+errh = math.hypot(rh["x_m"] - truth[0], rh["y_m"] - truth[1]) if rh.get("x_m") is not None else 1e9
+check(rh.get("heading_deg") == DELTA and rh.get("sigma_heading_deg") == 0 and errh < 1.5 * CELL,
+      f"--heading-deg {DELTA} alone: heading {rh.get('heading_deg')}, error {errh:.4f} m")
+expect_error(1, "the heading search needs the voxel matcher", "localize", "--dem", g_tif, *common,
+             "--heading-window-deg", "5")
+expect_error(1, "--heading-window-deg: 200 is out of range", "localize", "--dem", g_tif, *turned,
+             "--heading-window-deg", "200")
+expect_error(1, "--heading-deg: 'nan' is not a finite number", "localize", "--dem", g_tif, *turned,
+             "--heading-deg", "nan")
+
 # ---- figures (tools/plot/trn_plot.py), when matplotlib is there -----------------
 try:
     import matplotlib  # noqa: F401

@@ -46,6 +46,7 @@
 
 #include "bench_floor.h"
 #include "bench_select.h"
+#include "bench_heading.h"
 #include "ref_chamfer.h"
 #include "rng.h"
 #include "synth.h"
@@ -628,6 +629,7 @@ typedef struct {
     int32_t win[N_WINDOWS];   /* half-widths used (clamped on small maps) */
     double search_speedup[N_WINDOWS]; /* median exhaustive / median branch-and-bound */
     bench_select_result_t sel;/* landmark selection rows */
+    bench_heading_result_t head; /* the (x, y, heading) search row */
     int wrong;                /* a wrong answer was seen */
 } size_result_t;
 
@@ -1153,6 +1155,11 @@ static int bench_size(const opts_t *o, int32_t n, size_result_t *r)
         rc = bench_select_run(&w.mc.map, n, o->repeats, &r->sel);
         r->wrong |= r->sel.wrong;
     }
+    if (rc == 0) {
+        rc = bench_heading_run(&w.mc.map, w.pts, w.n_pts, w.px, w.py, k_windows[0] < w.wfit ? k_windows[0] : w.wfit,
+                               n, o->repeats, &r->head);
+        r->wrong |= r->head.wrong;
+    }
     world_free(&w);
     return rc;
 }
@@ -1252,6 +1259,11 @@ int main(int argc, char **argv)
         printf("target all candidates of one rover position < 20 ms%s: %s (%d: %.2f ms)\n",
                res[i].n >= 512 ? "" : " (info below 512)",
                b->select_ms < 20.0 ? "PASS" : "MISS", (int)res[i].n, b->select_ms);
+    }
+    for (i = 0; i < o.nsizes; ++i) {
+        printf("target (x, y, heading) search <= 0.2 of the 2-DOF search x headings: %s (%d: %.3f, %d headings)\n",
+               res[i].head.ratio <= 0.2 ? "PASS" : "MISS", (int)res[i].n, res[i].head.ratio,
+               (int)res[i].head.steps);
     }
     printf("same answer (branch-and-bound = exhaustive = localize, chamfer = Dijkstra, "
            "selection = naive): %s\n",

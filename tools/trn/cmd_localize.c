@@ -46,6 +46,8 @@ typedef struct {
   trn_map_t map;
   void *mraw;
   long local_band, max_local;
+  int heading;                        /* search heading too (--heading-window-deg or --heading-deg) */
+  double heading_deg, heading_win_deg; /* centre and half-window, degrees counterclockwise */
 } loc_ctx_t;
 
 static double now_ms(void) {
@@ -57,10 +59,39 @@ static double now_ms(void) {
 /* The result of one case in map terms. */
 typedef struct {
   double x_m, y_m, rho_en, cov_en[3], time_ms;
+  double heading_deg, sigma_heading_deg, cov3[9]; /* heading search: (east m, north m, heading deg) */
   long radius;
   trn_loc_result_t res;
   trn_status_t st;
 } loc_out_t;
+
+/* The (x, y, heading) search of one case (the local DEM lg, rover cell rx, ry):
+ * o->res from its position part, the heading and the 3 x 3 covariance in
+ * (east m, north m, heading deg). Returns the core's status. */
+static trn_status_t localize_heading(const loc_ctx_t *c, const trn_grid_f32_t *lg, int rx, int ry, size_t max_pts,
+                                     const trn_window_t *win, loc_out_t *o) {
+  const double deg = 180.0 / 3.14159265358979323846;
+  const trn_heading_cfg_t hc = {c->heading_deg / deg, c->heading_win_deg / deg, 0.0};
+  const double sgn[3] = {1.0, -1.0, deg}; /* core rows point south: flip north terms; radians to degrees */
+  trn_heading_result_t hr;
+  size_t wb = trn_localize_dem_heading_workspace_bytes(&c->map, lg->width, lg->height, max_pts, win);
+  void *raw = NULL, *ws = wb > 0 ? alloc16(wb, &raw) : NULL;
+  trn_status_t st;
+  int i;
+  if (ws == NULL) {
+    return TRN_E_WORKSPACE;
+  }
+  st = trn_localize_dem_heading(&c->map, lg, rx, ry, max_pts, win, &hc, ws, wb, &hr);
+  free(raw);
+  o->res = hr.loc;
+  o->heading_deg = hr.heading_rad * deg;
+  o->sigma_heading_deg = hr.sigma_heading_rad * deg;
+  for (i = 0; i < 9; ++i) {
+    const double v = hr.cov3[i] * sgn[i / 3] * sgn[i % 3];
+    o->cov3[i] = v == 0.0 ? 0.0 : v;
+  }
+  return st;
+}
 
 /* Localize the local DEM at local_path around prior (map metres). Returns 0,
  * or -1 with a one-line reason in err. */
@@ -138,7 +169,11 @@ static int localize_one(loc_ctx_t *c, const char *local_path, const double prior
     goto done;
   }
   t0 = now_ms();
-  o->st = trn_localize_dem(&c->map, &lg, rx, ry, max_pts, &win, ws, wb, &o->res);
+  if (c->heading) {
+    o->st = localize_heading(c, &lg, rx, ry, max_pts, &win, o);
+  } else {
+    o->st = trn_localize_dem(&c->map, &lg, rx, ry, max_pts, &win, ws, wb, &o->res);
+  }
   o->time_ms = now_ms() - t0;
   if (o->st != TRN_OK && o->st != TRN_E_ILLCOND) {
     snprintf(err, err_len, "localization failed: %s", trn_strerror(o->st));
@@ -175,6 +210,16 @@ static void print_json(const loc_ctx_t *c, const char *local, const double prior
   json_num(&j, NULL, o->cov_en[2]);
   json_arr_end(&j);
   json_num(&j, "failure_probability", o->res.failure_probability);
+  if (c->heading) {
+    int i;
+    json_num(&j, "heading_deg", o->heading_deg);
+    json_num(&j, "sigma_heading_deg", o->sigma_heading_deg);
+    json_arr(&j, "cov3");
+    for (i = 0; i < 9; ++i) {
+      json_num(&j, NULL, o->cov3[i]);
+    }
+    json_arr_end(&j);
+  }
   json_str(&j, "status", status_word(o->st));
   json_bool(&j, "refined", o->res.refined != 0);
   json_obj(&j, "prior");
@@ -248,7 +293,7 @@ int trn_cmd_localize(int argc, char **argv) {
   int json = 0;
   mapopt_t mo;
   loc_ctx_t c;
-  cli_opt_t opts[8 + MAPOPT_N] = {
+  cli_opt_t opts[10 + MAPOPT_N] = {
       {"--dem", CLI_STRING, &dem_path, 0, 0, 1, "FILE", "global DEM (any GDAL raster; map frame)", 0},
       {"--local", CLI_STRING, &local_path, 0, 0, 0, "FILE", "local DEM in the rover frame (rover at 0,0; x east, y north)", 0},
       {"--prior", CLI_XY, prior, 0, 0, 0, "X,Y", "where the rover believes it is, map metres", 0},
@@ -257,9 +302,11 @@ int trn_cmd_localize(int argc, char **argv) {
       {"--band", CLI_LONG, &band, 1, 65535, 0, "N", "band of --dem (default 1)", 0},
       {"--local-band", CLI_LONG, &c.local_band, 1, 65535, 0, "N", "band of --local (default 1)", 0},
       {"--max-local-cells", CLI_LONG, &c.max_local, 8, TRN_MAX_DIM, 0, "N", "largest local map side accepted, cells (default 1024)", 0},
+      {"--heading-deg", CLI_DOUBLE, &c.heading_deg, -180.0, 180.0, 0, "H", "turn the local DEM by H degrees (counterclockwise) before matching: the believed heading's correction (default 0)", 0},
+      {"--heading-window-deg", CLI_DOUBLE, &c.heading_win_deg, 0.0, 180.0, 0, "W", "also search the heading over H +- W degrees (step: one cell of arc at the local map's farthest point); needs --map-config paper or --match voxel without --refine (default: heading known)", 0},
   };
   cli_opt_t json_opt = {"--json", CLI_FLAG, &json, 0, 0, 0, NULL, "print one JSON object instead of the summary", 0};
-  cli_opt_t all[9 + MAPOPT_N];
+  cli_opt_t all[11 + MAPOPT_N];
   cli_cmd_t cmd = {"localize", "Localize a rover: match its local DEM against the global DEM (paper section 2).",
                    "Both DEMs must have the same square cell size; heights in metres, no-data and NaN\n"
                    "mean \"not seen\". Give --local and --prior, or --batch. The map configuration is\n"
@@ -282,9 +329,9 @@ int trn_cmd_localize(int argc, char **argv) {
   c.local_band = 1;
   c.max_local = 1024;
   mapopt_init(&mo);
-  memcpy(all, opts, 8 * sizeof opts[0]);
-  mapopt_cli(&mo, all + 8);
-  all[8 + MAPOPT_N] = json_opt;
+  memcpy(all, opts, 10 * sizeof opts[0]);
+  mapopt_cli(&mo, all + 10);
+  all[10 + MAPOPT_N] = json_opt;
   rc = cli_parse(&cmd, argc, argv);
   if (rc == CLI_HELP) {
     return 0;
@@ -307,6 +354,13 @@ int trn_cmd_localize(int argc, char **argv) {
   cell = c.g.cell_m;
   if (mapopt_config(&mo, c.g.data, c.g.width, c.g.height, cell, &c.cfg, NULL, err, sizeof err) != 0) {
     cli_fail(cmd.name, "--dem: %s", err);
+    goto done;
+  }
+  c.heading = all[8].seen || all[9].seen;
+  if (c.heading && (c.cfg.match != TRN_MATCH_VOXEL || c.cfg.refine != 0)) {
+    cli_fail(cmd.name, "--heading-deg/--heading-window-deg: the heading search needs the voxel matcher without "
+                       "refinement (--map-config paper, or --match voxel --refine 0); the height matcher does "
+                       "not search heading yet");
     goto done;
   }
   if (trn_grid_f32_init(&gg, c.g.data, (size_t)c.g.width * (size_t)c.g.height, c.g.width, c.g.height) != TRN_OK) {
@@ -341,6 +395,10 @@ int trn_cmd_localize(int argc, char **argv) {
            o.radius);
     printf("covariance   sigma_x = %.4f m  sigma_y = %.4f m  rho = %.3f%s\n", o.res.sigma_x_m, o.res.sigma_y_m,
            o.rho_en, o.res.refined ? "   (height refinement)" : "   (eq. 6)");
+    if (c.heading) {
+      printf("heading      %+.3f deg   sigma %.3f deg   (searched %+.1f +- %.1f deg)\n", o.heading_deg,
+             o.sigma_heading_deg, c.heading_deg, c.heading_win_deg);
+    }
     printf("failure      probability %.3g%s\n", o.res.failure_probability,
            o.res.on_window_edge ? "   (best pose on the window edge: widen --window-m)" : "");
     printf("matched      %zu local %s, %llu poses scored exactly, %.1f ms\n", o.res.n_points,
