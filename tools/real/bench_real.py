@@ -280,6 +280,7 @@ def print_table(dem_id, meta, ms):
 
 # --- one DEM --------------------------------------------------------------------
 def bench_dem(a, dem_id, batch):
+    os.environ.setdefault("TRN", a.trn)  # the synthetic DEM is made by this trn
     try:
         path = dems.get(dem_id)
     except Exception as e:  # a recipe failed: name it
