@@ -406,12 +406,20 @@ trn_status_t trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_
 
 /* ---- ground path: selection from prepared map data (select_pre.h) ------- */
 
-/* y[i] += a * x[i], i < n: spread.c's axpy, the same products in the same
- * order (distinct arrays, restrict lets GCC vectorise it). */
+/* y[i] += a * x[i], i < n: spread.c's axpy, the same product and sum for
+ * every element (distinct arrays). Four elements per step: GCC's -O2 SLP
+ * vectoriser turns them into one SIMD multiply and add (element-wise, so
+ * the same floats). */
 static void pre_axpy(float *restrict y, const float *restrict x, float a, int32_t n)
 {
-    int32_t i;
-    for (i = 0; i < n; ++i) {
+    int32_t i = 0;
+    for (; i + 4 <= n; i += 4) {
+        y[i] += a * x[i];
+        y[i + 1] += a * x[i + 1];
+        y[i + 2] += a * x[i + 2];
+        y[i + 3] += a * x[i + 3];
+    }
+    for (; i < n; ++i) {
         y[i] += a * x[i];
     }
 }
@@ -430,7 +438,7 @@ static uint8_t pre_kernel(const trn_kernels_t *k, const trn_sigma_model_t *m, fl
 }
 
 typedef struct {
-    size_t joff, rowptr, src, lnpv, cxy, lat, nl, touched, t, p, sat, total;
+    size_t joff, rowptr, src, lnpv, cxy, lat, nl, touched, u, hit, lok, latan, t, p, sat, acc, total;
     int32_t half, n, m, side_w, side_h, src_h;
     size_t ncap;
 } pre_layout_t;
@@ -459,7 +467,7 @@ static int pre_layout(const trn_select_cfg_t *cfg, const trn_map_t *map, const t
           (double)L->src_h * ((double)L->side_w * 4.0 + 1.0) +
           (double)nz * (double)L->side_w * (double)L->side_h * 4.0 +
           9.0 * ((double)L->side_w + 1.0) * ((double)L->side_h + 1.0) * 8.0 +
-          (double)L->ncap * 8.0 + 1.0e6;
+          (double)L->ncap * 17.0 + (double)nz * (double)L->side_h + 1.0e6;
     if (tot > (double)(SIZE_MAX / 2u)) {
         return 0;
     }
@@ -471,12 +479,17 @@ static int pre_layout(const trn_select_cfg_t *cfg, const trn_map_t *map, const t
     L->lat = TRN_ALIGN_UP((size_t)(2 * L->n + 1) * 2u * sizeof(int32_t));
     L->nl = TRN_ALIGN_UP((size_t)L->side_h * 2u * sizeof(int32_t));
     L->touched = TRN_ALIGN_UP((size_t)L->src_h);
+    L->u = TRN_ALIGN_UP((size_t)L->src_h * 2u * sizeof(int32_t));
+    L->hit = TRN_ALIGN_UP((size_t)nz * (size_t)L->side_h);
+    L->lok = TRN_ALIGN_UP(L->ncap);
+    L->latan = TRN_ALIGN_UP(L->ncap * sizeof(double));
     L->t = TRN_ALIGN_UP((size_t)L->src_h * (size_t)L->side_w * sizeof(float));
     L->p = TRN_ALIGN_UP((size_t)nz * (size_t)L->side_w * (size_t)L->side_h * sizeof(float));
     L->sat = TRN_ALIGN_UP(9u * ((size_t)L->side_w + 1u) * ((size_t)L->side_h + 1u) *
                           sizeof(int64_t));
+    L->acc = TRN_ALIGN_UP(9u * (size_t)L->side_w * sizeof(int64_t));
     L->total = L->joff + L->rowptr + L->src + L->lnpv + L->cxy + L->lat + L->nl + L->touched +
-               L->t + L->p + L->sat;
+               L->u + L->hit + L->lok + L->latan + L->t + L->p + L->sat + L->acc;
     return 1;
 }
 
@@ -540,6 +553,8 @@ trn_status_t trn_selpre_init(trn_selpre_t *s, const trn_map_t *map, const trn_ke
     size_t *rowptr, nnz, i;
     trn_selpre_src_t *src;
     int32_t *lnpv;
+    uint8_t *lok;
+    double *latan;
     int32_t x, y, z, d, mw;
     const uint8_t cap = map != NULL ? map->lnp.cap : 0u;
 
@@ -585,11 +600,22 @@ trn_status_t trn_selpre_init(trn_selpre_t *s, const trn_map_t *map, const trn_ke
     b += L.nl;
     s->touched = b;
     b += L.touched;
+    s->ulo = (int32_t *)(void *)b;
+    s->uhi = s->ulo + L.src_h;
+    b += L.u;
+    s->hit = b;
+    b += L.hit;
+    lok = b;
+    b += L.lok;
+    latan = (double *)(void *)b;
+    b += L.latan;
     s->t = (float *)(void *)b;
     b += L.t;
     s->p = (float *)(void *)b;
     b += L.p;
     s->sat = (int64_t *)(void *)b;
+    b += L.sat;
+    s->acc = (int64_t *)(void *)b;
 
     /* kernel index by offset, and the largest radius any offset uses */
     mw = 2 * L.m + 1;
@@ -634,6 +660,33 @@ trn_status_t trn_selpre_init(trn_selpre_t *s, const trn_map_t *map, const trn_ke
         const int32_t a = map->lnp.lnp[d] < 0 ? -map->lnp.lnp[d] : map->lnp.lnp[d];
         s->lmax = a > s->lmax ? a : s->lmax;
     }
+    /* candidate rules that depend on the lattice offset only (trn_select's
+     * candidate_ok expressions; the rover is on a whole cell) */
+    {
+        const double cellm = (double)map->cfg.terrain.cell_m;
+        const double hx = (double)L.half + 0.5;
+        const int32_t nl = 2 * L.n + 1;
+        for (y = 0; y < nl; ++y) {
+            for (x = 0; x < nl; ++x) {
+                const double dx = (double)((x - L.n) * cfg->stride_cells);
+                const double dy = (double)((y - L.n) * cfg->stride_cells);
+                const double r = sqrt(dx * dx + dy * dy) * cellm;
+                double ex = fabs(dx) - hx, ey = fabs(dy) - hx;
+                const size_t i2 = (size_t)y * (size_t)nl + (size_t)x;
+                ex = ex > 0.0 ? ex : 0.0;
+                ey = ey > 0.0 ? ey : 0.0;
+                lok[i2] = (uint8_t)(r >= (double)cfg->min_range_m && r <= (double)cfg->max_range_m &&
+                                    sqrt(ex * ex + ey * ey) * cellm >=
+                                        (double)cfg->footprint_radius_m);
+                latan[i2] = atan2(dy, dx);
+            }
+        }
+        /* remainder(., 2 pi) lies in [-pi, pi] (double), inside the float
+         * limits (float)-pi .. (float)pi: the whole circle passes every bearing */
+        s->full_pan = cfg->pan_min_rad <= (float)-SEL_PI && cfg->pan_max_rad >= (float)SEL_PI;
+    }
+    s->lok = lok;
+    s->latan = latan;
     s->joff = joff;
     s->rowptr = rowptr;
     s->src = src;
@@ -650,7 +703,6 @@ static void pre_eq9_slice(const trn_selpre_t *s, const trn_window_t *roi, int32_
     const int32_t w = roi->x1 - roi->x0 + 1, h = roi->y1 - roi->y0 + 1;
     const int32_t sy0 = roi->y0 - s->rmax > 0 ? roi->y0 - s->rmax : 0;
     const int32_t sy1 = roi->y1 + s->rmax < s->ny - 1 ? roi->y1 + s->rmax : s->ny - 1;
-    const int32_t xmin = roi->x0 - s->rmax, xmax = roi->x1 + s->rmax;
     const size_t mw = (size_t)(2 * s->m + 1);
     float *pz = s->p + (size_t)z * (size_t)w * (size_t)h;
     int32_t sy, r;
@@ -662,8 +714,13 @@ static void pre_eq9_slice(const trn_selpre_t *s, const trn_window_t *roi, int32_
         const trn_selpre_src_t *end =
             s->src + s->rowptr[(size_t)z * (size_t)s->ny + (size_t)sy + 1u];
         float *trow = s->t + row * (size_t)w;
+        const int32_t ua = roi->x0 + s->ulo[row], ub = roi->x0 + s->uhi[row];
+        const int32_t xmin = ua - s->rmax, xmax = ub + s->rmax;
         size_t lo_i = 0u, hi_i = (size_t)(end - e);
         s->touched[row] = 0u;
+        if (ua > ub) {
+            continue;
+        }
         while (lo_i < hi_i) { /* first source at x >= xmin */
             const size_t mid = lo_i + (hi_i - lo_i) / 2u;
             if (e[mid].x < xmin) {
@@ -676,11 +733,12 @@ static void pre_eq9_slice(const trn_selpre_t *s, const trn_window_t *roi, int32_
             const int32_t sx = e->x;
             const int32_t j = (int32_t)s->joff[jb + (size_t)(sx - rx + s->m)];
             const int32_t rr = k->radius[j];
-            const int32_t lo = sx - rr > roi->x0 ? sx - rr : roi->x0;
-            const int32_t hi = sx + rr < roi->x1 ? sx + rr : roi->x1;
+            const int32_t lo = sx - rr > ua ? sx - rr : ua;
+            const int32_t hi = sx + rr < ub ? sx + rr : ub;
             if (lo <= hi) {
                 if (s->touched[row] == 0u) {
-                    memset(trow, 0, (size_t)w * sizeof *trow);
+                    memset(trow + s->ulo[row], 0,
+                           (size_t)(s->uhi[row] - s->ulo[row] + 1) * sizeof *trow);
                     s->touched[row] = 1u;
                 }
                 pre_axpy(trow + (lo - roi->x0),
@@ -691,6 +749,7 @@ static void pre_eq9_slice(const trn_selpre_t *s, const trn_window_t *roi, int32_
     }
     /* y pass into the patch columns of each region row */
     for (r = 0; r < h; ++r) {
+        s->hit[(size_t)z * (size_t)h + (size_t)r] = 0u;
         if (s->nlo[r] <= s->nhi[r]) {
             memset(pz + (size_t)r * (size_t)w + (size_t)s->nlo[r], 0,
                    (size_t)(s->nhi[r] - s->nlo[r] + 1) * sizeof *pz);
@@ -700,11 +759,12 @@ static void pre_eq9_slice(const trn_selpre_t *s, const trn_window_t *roi, int32_
         const size_t row = (size_t)(sy - sy0);
         const size_t jb = (size_t)(sy - ry + s->m) * mw + (size_t)(roi->x0 - rx + s->m);
         const float *trow = s->t + row * (size_t)w;
-        int32_t x = 0;
+        const int32_t xend = s->uhi[row] + 1;
+        int32_t x = s->ulo[row];
         if (s->touched[row] == 0u) {
             continue;
         }
-        while (x < w) {
+        while (x < xend) {
             int32_t xe, j, rr, lo, hi, gy;
             const float *tp;
             if (trow[x] == 0.0f) {
@@ -713,7 +773,7 @@ static void pre_eq9_slice(const trn_selpre_t *s, const trn_window_t *roi, int32_
             }
             j = (int32_t)s->joff[jb + (size_t)x];
             xe = x + 1;
-            while (xe < w && trow[xe] != 0.0f && (int32_t)s->joff[jb + (size_t)xe] == j) {
+            while (xe < xend && trow[xe] != 0.0f && (int32_t)s->joff[jb + (size_t)xe] == j) {
                 ++xe;
             }
             rr = k->radius[j];
@@ -725,6 +785,7 @@ static void pre_eq9_slice(const trn_selpre_t *s, const trn_window_t *roi, int32_
                 const int32_t a = x > s->nlo[gr] ? x : s->nlo[gr];
                 const int32_t bb = xe - 1 < s->nhi[gr] ? xe - 1 : s->nhi[gr];
                 if (a <= bb) {
+                    s->hit[(size_t)z * (size_t)h + (size_t)gr] = 1u;
                     pre_axpy(pz + (size_t)gr * (size_t)w + (size_t)a, trow + a, tp[gy - sy + rr],
                              bb - a + 1);
                 }
@@ -735,59 +796,77 @@ static void pre_eq9_slice(const trn_selpre_t *s, const trn_window_t *roi, int32_
 }
 
 /* The nine summed-area tables of C_d over the region (cells outside every
- * patch count 0: no window reads them), from the nonzero P voxels. */
+ * patch count 0: no window reads them), from the nonzero P voxels of the
+ * slices the y pass wrote, row by row. */
 static void pre_sats(const trn_selpre_t *s, const trn_window_t *roi)
 {
     const int32_t w = roi->x1 - roi->x0 + 1, h = roi->y1 - roi->y0 + 1;
     const size_t w1 = (size_t)w + 1u, plane = w1 * ((size_t)h + 1u);
-    const size_t pplane = (size_t)w * (size_t)h, nz = (size_t)s->nz;
+    const size_t pplane = (size_t)w * (size_t)h, nz = (size_t)s->nz, wz = (size_t)w;
     const size_t lrow = (size_t)s->nx * nz;
     int32_t r, x, d;
+    size_t z;
     for (d = 0; d < 9; ++d) {
         memset(s->sat + (size_t)d * plane, 0, w1 * sizeof *s->sat);
     }
     for (r = 0; r < h; ++r) {
-        int64_t run[9] = {0};
+        const int32_t lo = s->nlo[r], hi = s->nhi[r];
         const size_t y1 = (size_t)r + 1u;
-        for (d = 0; d < 9; ++d) {
-            s->sat[(size_t)d * plane + y1 * w1] = 0;
-        }
-        for (x = 0; x < w; ++x) {
-            int64_t acc[9] = {0};
-            if (x >= s->nlo[r] && x <= s->nhi[r]) {
-                /* a patch cell: its 3 x 3 neighbours lie on the map (patches
-                 * keep a one-cell margin inside it, trn_select's rule) */
-                const size_t c0 = ((size_t)(roi->y0 + r - 1) * (size_t)s->nx +
-                                   (size_t)(roi->x0 + x - 1)) * nz;
-                const float *pv = s->p + (size_t)r * (size_t)w + (size_t)x;
-                size_t z;
-                for (z = 0; z < nz; ++z) {
-                    const float v = pv[z * pplane];
+        if (lo <= hi) {
+            /* patch cells: their 3 x 3 neighbours lie on the map (patches keep
+             * a one-cell margin inside it, trn_select's rule) */
+            const size_t row0 = (size_t)(roi->y0 + r - 1) * (size_t)s->nx;
+            for (d = 0; d < 9; ++d) {
+                memset(s->acc + (size_t)d * wz + (size_t)lo, 0,
+                       (size_t)(hi - lo + 1) * sizeof *s->acc);
+            }
+            for (z = 0; z < nz; ++z) {
+                const float *prow = s->p + z * pplane + (size_t)r * wz;
+                if (s->hit[z * (size_t)h + (size_t)r] == 0u) {
+                    continue;
+                }
+                for (x = lo; x <= hi; ++x) {
+                    const float v = prow[x];
                     int64_t q;
                     const int32_t *l0, *l1, *l2;
+                    int64_t *ac = s->acc + (size_t)x;
                     if (!(v > 0.0f)) {
                         continue;
                     }
                     q = v >= 4.0f ? (int64_t)SEL_QMAX
                                   : (int64_t)(int32_t)(v * (float)TRN_SELECT_PROB_SCALE + 0.5f);
-                    l0 = s->lnpv + c0 + z;
+                    l0 = s->lnpv + (row0 + (size_t)(roi->x0 + x - 1)) * nz + z;
                     l1 = l0 + lrow;
                     l2 = l1 + lrow;
-                    acc[0] += q * l0[0];
-                    acc[1] += q * l0[nz];
-                    acc[2] += q * l0[2u * nz];
-                    acc[3] += q * l1[0];
-                    acc[4] += q * l1[nz];
-                    acc[5] += q * l1[2u * nz];
-                    acc[6] += q * l2[0];
-                    acc[7] += q * l2[nz];
-                    acc[8] += q * l2[2u * nz];
+                    ac[0] += q * l0[0];
+                    ac[wz] += q * l0[nz];
+                    ac[2u * wz] += q * l0[2u * nz];
+                    ac[3u * wz] += q * l1[0];
+                    ac[4u * wz] += q * l1[nz];
+                    ac[5u * wz] += q * l1[2u * nz];
+                    ac[6u * wz] += q * l2[0];
+                    ac[7u * wz] += q * l2[nz];
+                    ac[8u * wz] += q * l2[2u * nz];
                 }
             }
-            for (d = 0; d < 9; ++d) {
-                int64_t *sd = s->sat + (size_t)d * plane;
-                run[d] += acc[d];
-                sd[y1 * w1 + (size_t)x + 1u] = sd[(size_t)r * w1 + (size_t)x + 1u] + run[d];
+        }
+        for (d = 0; d < 9; ++d) {
+            int64_t *sd = s->sat + (size_t)d * plane;
+            const int64_t *ad = s->acc + (size_t)d * wz;
+            int64_t *srow = sd + y1 * w1 + 1u;
+            const int64_t *sup = sd + (size_t)r * w1 + 1u;
+            const int32_t e0 = lo < w ? lo : w, e1 = hi + 1 > e0 ? hi + 1 : e0;
+            int64_t run = 0;
+            sd[y1 * w1] = 0;
+            for (x = 0; x < e0; ++x) { /* run is 0 left of the patch columns */
+                srow[x] = sup[x];
+            }
+            for (; x < e1; ++x) {
+                run += ad[x];
+                srow[x] = sup[x] + run;
+            }
+            for (; x < w; ++x) {
+                srow[x] = sup[x] + run;
             }
         }
     }
@@ -826,9 +905,17 @@ trn_status_t trn_selpre_best(const trn_selpre_t *s, int32_t rx, int32_t ry, floa
         *hi = -1;
         for (i_x = -g.n; i_x <= g.n; ++i_x) {
             const int32_t cx = g.rx + i_x * cfg->stride_cells, cy = g.ry + i_y * cfg->stride_cells;
-            float rm, bb;
-            if (!candidate_ok(cfg, &g, cx, cy, &rm, &bb)) {
+            const size_t oi = (size_t)(i_y + g.n) * (size_t)(2 * g.n + 1) + (size_t)(i_x + g.n);
+            /* candidate_ok: the map edge, then the offset's rules, then the bearing */
+            if (cx - g.half - 1 < 0 || cy - g.half - 1 < 0 || cx + g.half + 1 > g.nx - 1 ||
+                cy + g.half + 1 > g.ny - 1 || s->lok[oi] == 0u) {
                 continue;
+            }
+            if (!s->full_pan) {
+                const double b = remainder(s->latan[oi] - g.heading, 2.0 * SEL_PI);
+                if (b < (double)cfg->pan_min_rad || b > (double)cfg->pan_max_rad) {
+                    continue;
+                }
             }
             s->cxy[2u * nc] = cx;
             s->cxy[2u * nc + 1u] = cy;
@@ -866,6 +953,25 @@ trn_status_t trn_selpre_best(const trn_selpre_t *s, int32_t rx, int32_t ry, floa
             const int32_t a = s->latlo[i_y] - g.half - roi.x0, b = s->lathi[i_y] + g.half - roi.x0;
             s->nlo[rr] = a < s->nlo[rr] ? a : s->nlo[rr];
             s->nhi[rr] = b > s->nhi[rr] ? b : s->nhi[rr];
+        }
+    }
+
+    /* per source row: the region columns its y pass can reach that a patch needs */
+    {
+        const int32_t sy0 = roi.y0 - s->rmax > 0 ? roi.y0 - s->rmax : 0;
+        const int32_t sy1 = roi.y1 + s->rmax < s->ny - 1 ? roi.y1 + s->rmax : s->ny - 1;
+        int32_t sy;
+        for (sy = sy0; sy <= sy1; ++sy) {
+            const int32_t g0 = sy - s->rmax > roi.y0 ? sy - s->rmax : roi.y0;
+            const int32_t g1 = sy + s->rmax < roi.y1 ? sy + s->rmax : roi.y1;
+            int32_t a = side_w, b = -1, gy;
+            for (gy = g0; gy <= g1; ++gy) {
+                const int32_t rr = gy - roi.y0;
+                a = s->nlo[rr] < a ? s->nlo[rr] : a;
+                b = s->nhi[rr] > b ? s->nhi[rr] : b;
+            }
+            s->ulo[sy - sy0] = a;
+            s->uhi[sy - sy0] = b;
         }
     }
 

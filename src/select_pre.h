@@ -41,9 +41,15 @@ typedef struct {
     int32_t *latlo, *lathi;       /* per lattice row: leftmost, rightmost centre */
     int32_t *nlo, *nhi;           /* per region row: columns inside some patch */
     uint8_t *touched;             /* per source row: holds an x-pass value */
+    int32_t *ulo, *uhi;           /* per source row: region columns some patch row it reaches needs */
+    uint8_t *hit;                 /* per slice and region row: the y pass wrote to it */
+    const uint8_t *lok;           /* per lattice offset: range and footprint rules hold */
+    const double *latan;          /* per lattice offset: atan2(dy, dx) */
+    int full_pan;                 /* pan limits are the whole circle: no bearing test */
     float *t;                     /* x pass, src_h rows x side_w */
     float *p;                     /* eq. 9 over the region, nz slices */
     int64_t *sat;                 /* nine summed-area tables */
+    int64_t *acc;                 /* one region row of the nine C_d */
 } trn_selpre_t;
 
 /* Bytes of trn_selpre_init's memory for this map and P_G (0 if invalid). */
