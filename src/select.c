@@ -872,6 +872,33 @@ static void pre_sats(const trn_selpre_t *s, const trn_window_t *roi)
     }
 }
 
+/* 1 when the eq. 6 fit of ll cannot give an uncertainty below best (m):
+ * the fit's covariance is -H^-1 of its quadratic's Hessian H, and
+ * sigma_x^2 + sigma_y^2 = trace(-H^-1) = 1/l1 + 1/l2 >= 4 / (l1 + l2) =
+ * 4 / trace(-H) for the eigenvalues l1, l2 > 0 of -H (harmonic <= arithmetic
+ * mean); trace(-H) = 4 s0 / 3 - sxx - syy from the same sums trn_peak_fit
+ * forms. The bound is taken 1e-6 below itself, far beyond the rounding of
+ * either computation, so a skipped candidate is never the lowest or a tie. A
+ * fit that would fail (not informative) is never the lowest either. */
+static int pre_cannot_beat(const double ll[9], double cell_m, double best)
+{
+    double s0 = 0.0, sxx = 0.0, syy = 0.0, tr;
+    int x, y;
+    for (y = -1; y <= 1; ++y) {
+        for (x = -1; x <= 1; ++x) {
+            const double v = ll[(y + 1) * 3 + (x + 1)] - ll[4];
+            s0 += v;
+            sxx += (double)(x * x) * v;
+            syy += (double)(y * y) * v;
+        }
+    }
+    tr = 4.0 * s0 / 3.0 - sxx - syy;
+    if (!(tr > 0.0) || !isfinite(tr)) {
+        return 0; /* no bound: fit it */
+    }
+    return 4.0 / tr * cell_m * cell_m * (1.0 - 1.0e-6) > best * best;
+}
+
 trn_status_t trn_selpre_best(const trn_selpre_t *s, int32_t rx, int32_t ry, float heading_rad,
                              double *best_m)
 {
@@ -992,6 +1019,9 @@ trn_status_t trn_selpre_best(const trn_selpre_t *s, int32_t rx, int32_t ry, floa
         patch_window(&g, s->cxy[2u * i], s->cxy[2u * i + 1u], &pw);
         for (d = 0; d < 9; ++d) {
             ll[d] = (double)window_sum(s->sat + (size_t)d * plane, w1, &roi, &pw) * scale;
+        }
+        if (found && pre_cannot_beat(ll, g.cell, best)) {
+            continue;
         }
         if (trn_peak_fit(ll, &pk) == TRN_OK) {
             const double sx = pk.sigma_x * g.cell, sy = pk.sigma_y * g.cell;
