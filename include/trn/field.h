@@ -41,6 +41,10 @@ extern "C" {
  */
 typedef int32_t (*trn_field_progress_fn_t)(void *user, uint32_t done, uint32_t total);
 
+/** Stack the progress callback may use (it runs on the core's stack; the
+ * stack analysis, tools/stack, counts this budget for the call). */
+#define TRN_FIELD_PROGRESS_STACK_BYTES 512
+
 /** Refinement parameters. */
 typedef struct {
     int32_t coarse_step_cells; /**< power of two, 1..256 */
