@@ -476,7 +476,7 @@ static int pre_layout(const trn_select_cfg_t *cfg, const trn_map_t *map, const t
     L->src = TRN_ALIGN_UP(nnz * sizeof(trn_selpre_src_t));
     L->lnpv = TRN_ALIGN_UP((size_t)nx * (size_t)ny * (size_t)nz * sizeof(int32_t));
     L->cxy = TRN_ALIGN_UP(L->ncap * 2u * sizeof(int32_t));
-    L->lat = TRN_ALIGN_UP((size_t)(2 * L->n + 1) * 2u * sizeof(int32_t));
+    L->lat = TRN_ALIGN_UP((2u * (size_t)L->n + 1u) * 2u * sizeof(int32_t));
     L->nl = TRN_ALIGN_UP((size_t)L->side_h * 2u * sizeof(int32_t));
     L->touched = TRN_ALIGN_UP((size_t)L->src_h);
     L->u = TRN_ALIGN_UP((size_t)L->src_h * 2u * sizeof(int32_t));
@@ -703,7 +703,7 @@ static void pre_eq9_slice(const trn_selpre_t *s, const trn_window_t *roi, int32_
     const int32_t w = roi->x1 - roi->x0 + 1, h = roi->y1 - roi->y0 + 1;
     const int32_t sy0 = roi->y0 - s->rmax > 0 ? roi->y0 - s->rmax : 0;
     const int32_t sy1 = roi->y1 + s->rmax < s->ny - 1 ? roi->y1 + s->rmax : s->ny - 1;
-    const size_t mw = (size_t)(2 * s->m + 1);
+    const size_t mw = 2u * (size_t)s->m + 1u;
     float *pz = s->p + (size_t)z * (size_t)w * (size_t)h;
     int32_t sy, r;
     /* x pass: each source row's values over the region's columns */
@@ -932,7 +932,7 @@ trn_status_t trn_selpre_best(const trn_selpre_t *s, int32_t rx, int32_t ry, floa
         *hi = -1;
         for (i_x = -g.n; i_x <= g.n; ++i_x) {
             const int32_t cx = g.rx + i_x * cfg->stride_cells, cy = g.ry + i_y * cfg->stride_cells;
-            const size_t oi = (size_t)(i_y + g.n) * (size_t)(2 * g.n + 1) + (size_t)(i_x + g.n);
+            const size_t oi = (size_t)(i_y + g.n) * (2u * (size_t)g.n + 1u) + (size_t)(i_x + g.n);
             /* candidate_ok: the map edge, then the offset's rules, then the bearing */
             if (cx - g.half - 1 < 0 || cy - g.half - 1 < 0 || cx + g.half + 1 > g.nx - 1 ||
                 cy + g.half + 1 > g.ny - 1 || s->lok[oi] == 0u) {
