@@ -128,7 +128,9 @@ size_t trn_field_fast_workspace_bytes(const trn_select_cfg_t *scfg, const trn_ma
  * @retval TRN_OK (also when no position has an informative target)
  * @retval TRN_E_NULL a pointer argument NULL (or pg->data, map->dist.data)
  * @retval TRN_E_ARG  a configuration or the heading invalid, or k not a built table
- * @retval TRN_E_SIZE out or evaluated not area-sized, pg not the map's size
+ * @retval TRN_E_SIZE out or evaluated not area-sized, pg not the map's size, the
+ *         map's distance cap out of range, or a region too large for exact
+ *         int64 sums (as trn_select)
  * @retval TRN_E_RANGE area empty or off the map
  * @retval TRN_E_WORKSPACE ws_bytes below trn_field_fast_workspace_bytes or ws not aligned
  * @retval TRN_E_CANCELLED fcfg->progress returned nonzero
