@@ -438,7 +438,7 @@ static uint8_t pre_kernel(const trn_kernels_t *k, const trn_sigma_model_t *m, fl
 }
 
 typedef struct {
-    size_t joff, rowptr, src, lnpv, cxy, lat, nl, touched, u, hit, lok, latan, t, p, sat, acc, total;
+    size_t joff, rowptr, src, lnpv, cxy, lat, nl, touched, u, hit, lok, latan, t, p, sat, total;
     int32_t half, n, m, side_w, side_h, src_h;
     size_t ncap;
 } pre_layout_t;
@@ -466,7 +466,7 @@ static int pre_layout(const trn_select_cfg_t *cfg, const trn_map_t *map, const t
           (double)nx * (double)ny * (double)nz * (double)sizeof(int32_t) +
           (double)L->src_h * ((double)L->side_w * 4.0 + 1.0) +
           (double)nz * (double)L->side_w * (double)L->side_h * 4.0 +
-          9.0 * ((double)L->side_w + 1.0) * ((double)L->side_h + 1.0) * 8.0 +
+          9.0 * ((double)L->half * 2.0 + 3.0) * ((double)L->side_w + 1.0) * 8.0 +
           (double)L->ncap * 17.0 + (double)nz * (double)L->side_h + 1.0e6;
     if (tot > (double)(SIZE_MAX / 2u)) {
         return 0;
@@ -485,11 +485,12 @@ static int pre_layout(const trn_select_cfg_t *cfg, const trn_map_t *map, const t
     L->latan = TRN_ALIGN_UP(L->ncap * sizeof(double));
     L->t = TRN_ALIGN_UP((size_t)L->src_h * (size_t)L->side_w * sizeof(float));
     L->p = TRN_ALIGN_UP((size_t)nz * (size_t)L->side_w * (size_t)L->side_h * sizeof(float));
-    L->sat = TRN_ALIGN_UP(9u * ((size_t)L->side_w + 1u) * ((size_t)L->side_h + 1u) *
-                          sizeof(int64_t));
-    L->acc = TRN_ALIGN_UP(9u * (size_t)L->side_w * sizeof(int64_t));
+    /* a ring of patch_cells rows of the nine C_d, their column sums, a prefix row */
+    L->sat = TRN_ALIGN_UP(((size_t)(2 * L->half + 1) + 1u) * 9u * (size_t)L->side_w *
+                          sizeof(int64_t)) +
+             TRN_ALIGN_UP(9u * ((size_t)L->side_w + 1u) * sizeof(int64_t));
     L->total = L->joff + L->rowptr + L->src + L->lnpv + L->cxy + L->lat + L->nl + L->touched +
-               L->u + L->hit + L->lok + L->latan + L->t + L->p + L->sat + L->acc;
+               L->u + L->hit + L->lok + L->latan + L->t + L->p + L->sat;
     return 1;
 }
 
@@ -613,9 +614,10 @@ trn_status_t trn_selpre_init(trn_selpre_t *s, const trn_map_t *map, const trn_ke
     b += L.t;
     s->p = (float *)(void *)b;
     b += L.p;
-    s->sat = (int64_t *)(void *)b;
-    b += L.sat;
-    s->acc = (int64_t *)(void *)b;
+    s->ring = (int64_t *)(void *)b;
+    s->colsum = s->ring + (size_t)(2 * L.half + 1) * 9u * (size_t)L.side_w;
+    s->prefix = (int64_t *)(void *)(b + TRN_ALIGN_UP(((size_t)(2 * L.half + 1) + 1u) * 9u *
+                                                     (size_t)L.side_w * sizeof(int64_t)));
 
     /* kernel index by offset, and the largest radius any offset uses */
     mw = 2 * L.m + 1;
@@ -795,83 +797,6 @@ static void pre_eq9_slice(const trn_selpre_t *s, const trn_window_t *roi, int32_
     }
 }
 
-/* The nine summed-area tables of C_d over the region (cells outside every
- * patch count 0: no window reads them), from the nonzero P voxels of the
- * slices the y pass wrote, row by row. */
-static void pre_sats(const trn_selpre_t *s, const trn_window_t *roi)
-{
-    const int32_t w = roi->x1 - roi->x0 + 1, h = roi->y1 - roi->y0 + 1;
-    const size_t w1 = (size_t)w + 1u, plane = w1 * ((size_t)h + 1u);
-    const size_t pplane = (size_t)w * (size_t)h, nz = (size_t)s->nz, wz = (size_t)w;
-    const size_t lrow = (size_t)s->nx * nz;
-    int32_t r, x, d;
-    size_t z;
-    for (d = 0; d < 9; ++d) {
-        memset(s->sat + (size_t)d * plane, 0, w1 * sizeof *s->sat);
-    }
-    for (r = 0; r < h; ++r) {
-        const int32_t lo = s->nlo[r], hi = s->nhi[r];
-        const size_t y1 = (size_t)r + 1u;
-        if (lo <= hi) {
-            /* patch cells: their 3 x 3 neighbours lie on the map (patches keep
-             * a one-cell margin inside it, trn_select's rule) */
-            const size_t row0 = (size_t)(roi->y0 + r - 1) * (size_t)s->nx;
-            for (d = 0; d < 9; ++d) {
-                memset(s->acc + (size_t)d * wz + (size_t)lo, 0,
-                       (size_t)(hi - lo + 1) * sizeof *s->acc);
-            }
-            for (z = 0; z < nz; ++z) {
-                const float *prow = s->p + z * pplane + (size_t)r * wz;
-                if (s->hit[z * (size_t)h + (size_t)r] == 0u) {
-                    continue;
-                }
-                for (x = lo; x <= hi; ++x) {
-                    const float v = prow[x];
-                    int64_t q;
-                    const int32_t *l0, *l1, *l2;
-                    int64_t *ac = s->acc + (size_t)x;
-                    if (!(v > 0.0f)) {
-                        continue;
-                    }
-                    q = v >= 4.0f ? (int64_t)SEL_QMAX
-                                  : (int64_t)(int32_t)(v * (float)TRN_SELECT_PROB_SCALE + 0.5f);
-                    l0 = s->lnpv + (row0 + (size_t)(roi->x0 + x - 1)) * nz + z;
-                    l1 = l0 + lrow;
-                    l2 = l1 + lrow;
-                    ac[0] += q * l0[0];
-                    ac[wz] += q * l0[nz];
-                    ac[2u * wz] += q * l0[2u * nz];
-                    ac[3u * wz] += q * l1[0];
-                    ac[4u * wz] += q * l1[nz];
-                    ac[5u * wz] += q * l1[2u * nz];
-                    ac[6u * wz] += q * l2[0];
-                    ac[7u * wz] += q * l2[nz];
-                    ac[8u * wz] += q * l2[2u * nz];
-                }
-            }
-        }
-        for (d = 0; d < 9; ++d) {
-            int64_t *sd = s->sat + (size_t)d * plane;
-            const int64_t *ad = s->acc + (size_t)d * wz;
-            int64_t *srow = sd + y1 * w1 + 1u;
-            const int64_t *sup = sd + (size_t)r * w1 + 1u;
-            const int32_t e0 = lo < w ? lo : w, e1 = hi + 1 > e0 ? hi + 1 : e0;
-            int64_t run = 0;
-            sd[y1 * w1] = 0;
-            for (x = 0; x < e0; ++x) { /* run is 0 left of the patch columns */
-                srow[x] = sup[x];
-            }
-            for (; x < e1; ++x) {
-                run += ad[x];
-                srow[x] = sup[x] + run;
-            }
-            for (; x < w; ++x) {
-                srow[x] = sup[x] + run;
-            }
-        }
-    }
-}
-
 /* 1 when the eq. 6 fit of ll cannot give an uncertainty below best (m):
  * the fit's covariance is -H^-1 of its quadratic's Hessian H, and
  * sigma_x^2 + sigma_y^2 = trace(-H^-1) = 1/l1 + 1/l2 >= 4 / (l1 + l2) =
@@ -899,14 +824,121 @@ static int pre_cannot_beat(const double ll[9], double cell_m, double best)
     return 4.0 / tr * cell_m * cell_m * (1.0 - 1.0e-6) > best * best;
 }
 
+/* Region rows in order: the nine C_d of the row (from the nonzero P voxels of
+ * the slices the y pass wrote; cells outside every patch are never read),
+ * the column sums of the last patch_cells rows (a ring of rows: the row
+ * leaving is subtracted before its slot is reused), and on a row where
+ * candidates' patches end, prefix sums along it, their nine window sums
+ * (exact int64: the values trn_select's summed-area tables give) and their
+ * fits, in candidate order (so the first lowest wins, as in trn_select). */
+static void pre_windows(const trn_selpre_t *s, const trn_window_t *roi, const geom_t *g,
+                        size_t nc, double *best, int *found)
+{
+    const int32_t w = roi->x1 - roi->x0 + 1, h = roi->y1 - roi->y0 + 1;
+    const int32_t ph = 2 * g->half + 1;
+    const size_t wz = (size_t)w, w1 = wz + 1u, rowsz = 9u * wz;
+    const size_t pplane = (size_t)w * (size_t)h, nz = (size_t)s->nz;
+    const size_t lrow = (size_t)s->nx * nz;
+    const double scale = 1.0 / ((double)TRN_SELECT_PROB_SCALE * (double)TRN_LNP_SCALE);
+    int64_t *vs = s->colsum, *pre = s->prefix;
+    size_t ci = 0u, z;
+    int32_t r, x, d;
+    memset(vs, 0, rowsz * sizeof *vs);
+    for (r = 0; r < h && ci < nc; ++r) {
+        const int32_t lo = s->nlo[r], hi = s->nhi[r];
+        const int32_t gy = roi->y0 + r;
+        int64_t *acc = s->ring + (size_t)(r % ph) * rowsz;
+        if (r >= ph && s->nlo[r - ph] <= s->nhi[r - ph]) { /* the row leaving the window */
+            for (d = 0; d < 9; ++d) {
+                for (x = s->nlo[r - ph]; x <= s->nhi[r - ph]; ++x) {
+                    vs[(size_t)d * wz + (size_t)x] -= acc[(size_t)d * wz + (size_t)x];
+                }
+            }
+        }
+        if (lo <= hi) {
+            /* patch cells: their 3 x 3 neighbours lie on the map (patches keep
+             * a one-cell margin inside it, trn_select's rule) */
+            const size_t row0 = (size_t)(gy - 1) * (size_t)s->nx;
+            for (d = 0; d < 9; ++d) {
+                memset(acc + (size_t)d * wz + (size_t)lo, 0, (size_t)(hi - lo + 1) * sizeof *acc);
+            }
+            for (z = 0; z < nz; ++z) {
+                const float *prow = s->p + z * pplane + (size_t)r * wz;
+                if (s->hit[z * (size_t)h + (size_t)r] == 0u) {
+                    continue;
+                }
+                for (x = lo; x <= hi; ++x) {
+                    const float v = prow[x];
+                    int64_t q;
+                    const int32_t *l0, *l1, *l2;
+                    int64_t *ac = acc + (size_t)x;
+                    if (!(v > 0.0f)) {
+                        continue;
+                    }
+                    q = v >= 4.0f ? (int64_t)SEL_QMAX
+                                  : (int64_t)(int32_t)(v * (float)TRN_SELECT_PROB_SCALE + 0.5f);
+                    l0 = s->lnpv + (row0 + (size_t)(roi->x0 + x - 1)) * nz + z;
+                    l1 = l0 + lrow;
+                    l2 = l1 + lrow;
+                    ac[0] += q * l0[0];
+                    ac[wz] += q * l0[nz];
+                    ac[2u * wz] += q * l0[2u * nz];
+                    ac[3u * wz] += q * l1[0];
+                    ac[4u * wz] += q * l1[nz];
+                    ac[5u * wz] += q * l1[2u * nz];
+                    ac[6u * wz] += q * l2[0];
+                    ac[7u * wz] += q * l2[nz];
+                    ac[8u * wz] += q * l2[2u * nz];
+                }
+            }
+            for (d = 0; d < 9; ++d) {
+                for (x = lo; x <= hi; ++x) {
+                    vs[(size_t)d * wz + (size_t)x] += acc[(size_t)d * wz + (size_t)x];
+                }
+            }
+        }
+        if (s->cxy[2u * ci + 1u] + g->half != gy) {
+            continue;
+        }
+        for (d = 0; d < 9; ++d) {
+            int64_t run = 0;
+            pre[(size_t)d * w1] = 0;
+            for (x = 0; x < w; ++x) {
+                run += vs[(size_t)d * wz + (size_t)x];
+                pre[(size_t)d * w1 + (size_t)x + 1u] = run;
+            }
+        }
+        for (; ci < nc && s->cxy[2u * ci + 1u] + g->half == gy; ++ci) {
+            const size_t x0 = (size_t)(s->cxy[2u * ci] - g->half - roi->x0);
+            const size_t x1 = (size_t)(s->cxy[2u * ci] + g->half - roi->x0) + 1u;
+            double ll[9];
+            trn_peak_t pk;
+            for (d = 0; d < 9; ++d) {
+                ll[d] = (double)(pre[(size_t)d * w1 + x1] - pre[(size_t)d * w1 + x0]) * scale;
+            }
+            if (*found && pre_cannot_beat(ll, g->cell, *best)) {
+                continue;
+            }
+            if (trn_peak_fit(ll, &pk) == TRN_OK) {
+                const double sx = pk.sigma_x * g->cell, sy = pk.sigma_y * g->cell;
+                const double u = sqrt(sx * sx + sy * sy);
+                if (!*found || u < *best) {
+                    *best = u;
+                    *found = 1;
+                }
+            }
+        }
+    }
+}
+
 trn_status_t trn_selpre_best(const trn_selpre_t *s, int32_t rx, int32_t ry, float heading_rad,
                              double *best_m)
 {
     geom_t g;
     trn_window_t roi, pw;
-    size_t nc = 0u, i, plane, w1;
+    size_t nc = 0u;
     int32_t i_x, i_y, r, z, side_w, side_h;
-    double scale, best = HUGE_VAL;
+    double best = HUGE_VAL;
     int found = 0;
     const trn_select_cfg_t *cfg = s->cfg;
 
@@ -1006,32 +1038,7 @@ trn_status_t trn_selpre_best(const trn_selpre_t *s, int32_t rx, int32_t ry, floa
     for (z = 0; z < s->nz; ++z) {
         pre_eq9_slice(s, &roi, rx, ry, z);
     }
-    pre_sats(s, &roi);
-
-    /* 4. eq. 6 per candidate; the first lowest uncertainty (trn_select's best) */
-    w1 = (size_t)side_w + 1u;
-    plane = w1 * ((size_t)side_h + 1u);
-    scale = 1.0 / ((double)TRN_SELECT_PROB_SCALE * (double)TRN_LNP_SCALE);
-    for (i = 0; i < nc; ++i) {
-        double ll[9];
-        trn_peak_t pk;
-        int d;
-        patch_window(&g, s->cxy[2u * i], s->cxy[2u * i + 1u], &pw);
-        for (d = 0; d < 9; ++d) {
-            ll[d] = (double)window_sum(s->sat + (size_t)d * plane, w1, &roi, &pw) * scale;
-        }
-        if (found && pre_cannot_beat(ll, g.cell, best)) {
-            continue;
-        }
-        if (trn_peak_fit(ll, &pk) == TRN_OK) {
-            const double sx = pk.sigma_x * g.cell, sy = pk.sigma_y * g.cell;
-            const double u = sqrt(sx * sx + sy * sy);
-            if (!found || u < best) {
-                best = u;
-                found = 1;
-            }
-        }
-    }
+    pre_windows(s, &roi, &g, nc, &best, &found);
     if (!found) {
         return TRN_E_NOTARGET;
     }

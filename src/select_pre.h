@@ -9,9 +9,13 @@
  *    ascending x), every output value receiving the same products in the
  *    same order as trn_prob_local's x and y passes (so the same floats);
  *  - ln p of the capped distance is stored per voxel with z innermost, and
- *    the nine exact int64 summed-area tables are built in one pass over the
- *    cells of the candidate patches, from the nonzero P voxels only (exact
- *    integer sums: the order of the additions does not matter).
+ *    each candidate's nine exact int64 window sums come from one pass over
+ *    the region's rows: C_d of the row from the nonzero P voxels, column sums
+ *    of the last patch_cells rows, prefix sums along the row where patches
+ *    end (exact integer sums: the order of the additions does not matter,
+ *    so the same values as trn_select's summed-area tables);
+ *  - a candidate's eq. 6 fit is skipped when the trace bound shows it cannot
+ *    beat the best so far.
  *
  * Memory (trn_selpre_bytes): the P_G nonzeros (8 bytes each), ln p per voxel
  * (4 bytes), the offset table and one position's region buffers. */
@@ -48,8 +52,9 @@ typedef struct {
     int full_pan;                 /* pan limits are the whole circle: no bearing test */
     float *t;                     /* x pass, src_h rows x side_w */
     float *p;                     /* eq. 9 over the region, nz slices */
-    int64_t *sat;                 /* nine summed-area tables */
-    int64_t *acc;                 /* one region row of the nine C_d */
+    int64_t *ring;                /* the nine C_d of the last patch_cells region rows */
+    int64_t *colsum;              /* their column sums, 9 x side_w */
+    int64_t *prefix;              /* prefix sums of colsum along a row, 9 x (side_w + 1) */
 } trn_selpre_t;
 
 /* Bytes of trn_selpre_init's memory for this map and P_G (0 if invalid). */
