@@ -7,7 +7,8 @@
  * the same statistics (best_m compared as a double, ==), on seeded terrains
  * and configurations: areas touching every map edge, every cell evaluated
  * (coarse step 1: each position's value compared), several ranges, patch
- * sizes, strides, restricted pan with a heading, a steeper local error model
+ * sizes, strides (one wider than the patch), pan restricted on one or both
+ * sides with a heading, a steeper local error model
  * (more kernels in the region), a terrain with featureless parts
  * (uninformative positions). Then every documented status of the new
  * functions, and the callback's counts. */
@@ -143,6 +144,16 @@ static void test_coarse_to_fine_equal(void **state)
     sc.local_sigma.k_per_m = 0.05f;
     sc.stride_cells = 3;
     compare(&w, &sc, &fc, -0.7f, &inner);
+    /* a lattice wider than the patch: region rows and columns no patch covers */
+    small_cfg(&sc);
+    sc.stride_cells = 6;
+    sc.patch_m = 0.3f;
+    compare(&w, &sc, &fc, 0.0f, &inner);
+    /* pan limited on one side only */
+    small_cfg(&sc);
+    sc.pan_min_rad = (float)-3.14159265358979323846;
+    sc.pan_max_rad = 1.0f;
+    compare(&w, &sc, &fc, 0.9f, &inner);
     selworld_free(&w);
 
     /* few rocks, no background: featureless parts give +inf positions */
