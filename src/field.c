@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* field.c - coarse-to-fine sensor uncertainty field (see trn/field.h). */
 #include "trn/field.h"
+#include "select_pre.h"
 
 #include <math.h>
 #include <string.h>
@@ -11,6 +12,8 @@ void trn_field_cfg_default(trn_field_cfg_t *cfg)
         cfg->coarse_step_cells = 16;
         cfg->margin_rel = 0.4f;
         cfg->change_rel = 1.5f;
+        cfg->progress = NULL;
+        cfg->progress_user = NULL;
     }
 }
 
@@ -58,6 +61,9 @@ typedef struct {
     void *sws;
     size_t swsb;
     trn_field_stats_t *st;
+    const trn_selpre_t *pre;       /* ground path (trn_field_fast) or NULL */
+    trn_field_progress_fn_t progress;
+    void *progress_user;
 } field_t;
 
 /* Evaluate area cell (x, y) unless known. */
@@ -67,21 +73,26 @@ static trn_status_t eval_cell(field_t *f, int32_t x, int32_t y)
     trn_select_result_t r;
     size_t ranked;
     trn_status_t s;
-    double v;
+    double v = HUGE_VAL;
     const size_t i = (size_t)y * (size_t)f->w + (size_t)x;
     if (f->ev[i] != 0u) {
         return TRN_OK;
     }
-    rv.pos.x_cells = (float)(f->area.x0 + x);
-    rv.pos.y_cells = (float)(f->area.y0 + y);
-    rv.heading_rad = f->heading;
-    s = trn_select(f->map, f->k, f->pg, f->scfg, &rv, f->cands, f->ncap, &ranked, 1u, &r,
-                   f->sws, f->swsb);
-    if (s == TRN_OK) {
-        v = f->cands[r.best].uncertainty_m;
-    } else if (s == TRN_E_NOTARGET) {
-        v = HUGE_VAL;
+    if (f->pre != NULL) {
+        s = trn_selpre_best(f->pre, f->area.x0 + x, f->area.y0 + y, f->heading, &v);
     } else {
+        rv.pos.x_cells = (float)(f->area.x0 + x);
+        rv.pos.y_cells = (float)(f->area.y0 + y);
+        rv.heading_rad = f->heading;
+        s = trn_select(f->map, f->k, f->pg, f->scfg, &rv, f->cands, f->ncap, &ranked, 1u, &r,
+                       f->sws, f->swsb);
+        if (s == TRN_OK) {
+            v = f->cands[r.best].uncertainty_m;
+        }
+    }
+    if (s == TRN_E_NOTARGET) {
+        v = HUGE_VAL;
+    } else if (s != TRN_OK) {
         return s;
     }
     f->ev[i] = 1u;
@@ -91,6 +102,9 @@ static trn_status_t eval_cell(field_t *f, int32_t x, int32_t y)
         f->st->best_m = v;
         f->st->best_x = f->area.x0 + x;
         f->st->best_y = f->area.y0 + y;
+    }
+    if (f->progress != NULL && f->progress(f->progress_user, f->st->evaluations, f->st->cells) != 0) {
+        return TRN_E_CANCELLED;
     }
     return TRN_OK;
 }
@@ -107,18 +121,15 @@ static int32_t nint(int32_t s, int32_t n)
     return (n - 1 + s - 1) / s;
 }
 
-trn_status_t trn_field(const trn_map_t *map, const trn_kernels_t *k, const trn_vol_f32_t *pg,
-                       const trn_select_cfg_t *scfg, const trn_field_cfg_t *fcfg,
-                       float heading_rad, const trn_window_t *area, trn_grid_f32_t *out,
-                       uint8_t *evaluated, size_t evaluated_len, trn_field_stats_t *stats,
-                       void *ws, size_t ws_bytes)
+/* Checks common to trn_field and trn_field_fast (not the workspace). */
+static trn_status_t field_check(const trn_map_t *map, const trn_kernels_t *k,
+                                const trn_vol_f32_t *pg, const trn_select_cfg_t *scfg,
+                                const trn_field_cfg_t *fcfg, float heading_rad,
+                                const trn_window_t *area, const trn_grid_f32_t *out,
+                                const uint8_t *evaluated, size_t evaluated_len,
+                                const trn_field_stats_t *stats, const void *ws)
 {
-    field_t f;
     trn_status_t s;
-    size_t need;
-    int32_t step, i, j, x, y, w, h;
-    double spread;
-
     if (map == NULL || k == NULL || pg == NULL || scfg == NULL || fcfg == NULL ||
         area == NULL || out == NULL || evaluated == NULL || stats == NULL || ws == NULL) {
         return TRN_E_NULL;
@@ -142,42 +153,38 @@ trn_status_t trn_field(const trn_map_t *map, const trn_kernels_t *k, const trn_v
         area->x1 >= map->dist.nx || area->y1 >= map->dist.ny) {
         return TRN_E_RANGE;
     }
-    w = area->x1 - area->x0 + 1;
-    h = area->y1 - area->y0 + 1;
-    if (out->width != w || out->height != h || evaluated_len < (size_t)w * (size_t)h) {
+    if (out->width != area->x1 - area->x0 + 1 || out->height != area->y1 - area->y0 + 1 ||
+        evaluated_len < (size_t)out->width * (size_t)out->height) {
         return TRN_E_SIZE;
     }
-    need = trn_field_workspace_bytes(scfg, map, k);
-    if (need == 0u || ws_bytes < need || ((uintptr_t)ws & 15u) != 0u) {
-        return TRN_E_WORKSPACE;
-    }
-    f.map = map;
-    f.k = k;
-    f.pg = pg;
-    f.scfg = scfg;
-    f.heading = heading_rad;
-    f.area = *area;
-    f.w = w;
-    f.h = h;
-    f.out = out;
-    f.ev = evaluated;
-    f.cands = (trn_candidate_t *)ws;
-    f.ncap = trn_select_max_candidates(scfg, map->cfg.terrain.cell_m);
-    f.sws = (uint8_t *)ws + TRN_ALIGN_UP(f.ncap * sizeof(trn_candidate_t));
-    f.swsb = ws_bytes - TRN_ALIGN_UP(f.ncap * sizeof(trn_candidate_t));
-    f.st = stats;
+    return TRN_OK;
+}
+
+/* The coarse-to-fine rule (field.h) over f, set up by the caller. */
+static trn_status_t field_run(field_t *f, const trn_field_cfg_t *fcfg)
+{
+    trn_status_t s;
+    const int32_t w = f->w, h = f->h;
+    trn_grid_f32_t *out = f->out;
+    uint8_t *evaluated = f->ev;
+    trn_field_stats_t *stats = f->st;
+    int32_t step, i, j, x, y;
+    double spread;
+
     memset(evaluated, 0, (size_t)w * (size_t)h);
     stats->evaluations = 0u;
     stats->cells = (uint32_t)w * (uint32_t)h;
     stats->best_x = -1;
     stats->best_y = -1;
     stats->best_m = HUGE_VAL;
+    f->progress = fcfg->progress;
+    f->progress_user = fcfg->progress_user;
 
     /* coarse lattice */
     step = fcfg->coarse_step_cells;
     for (j = 0; j <= nint(step, h); ++j) {
         for (i = 0; i <= nint(step, w); ++i) {
-            if ((s = eval_cell(&f, lat(i, step, w), lat(j, step, h))) != TRN_OK) {
+            if ((s = eval_cell(f, lat(i, step, w), lat(j, step, h))) != TRN_OK) {
                 return s;
             }
         }
@@ -240,9 +247,9 @@ trn_status_t trn_field(const trn_map_t *map, const trn_kernels_t *k, const trn_v
                 if (!refine) {
                     continue;
                 }
-                if ((s = eval_cell(&f, xm, ya)) != TRN_OK || (s = eval_cell(&f, xa, ym)) != TRN_OK ||
-                    (s = eval_cell(&f, xm, ym)) != TRN_OK || (s = eval_cell(&f, xb, ym)) != TRN_OK ||
-                    (s = eval_cell(&f, xm, yb)) != TRN_OK) {
+                if ((s = eval_cell(f, xm, ya)) != TRN_OK || (s = eval_cell(f, xa, ym)) != TRN_OK ||
+                    (s = eval_cell(f, xm, ym)) != TRN_OK || (s = eval_cell(f, xb, ym)) != TRN_OK ||
+                    (s = eval_cell(f, xm, yb)) != TRN_OK) {
                     return s;
                 }
             }
@@ -277,5 +284,92 @@ trn_status_t trn_field(const trn_map_t *map, const trn_kernels_t *k, const trn_v
             }
         }
     }
+    if (f->progress != NULL) {
+        (void)f->progress(f->progress_user, stats->cells, stats->cells);
+    }
     return TRN_OK;
+}
+
+trn_status_t trn_field(const trn_map_t *map, const trn_kernels_t *k, const trn_vol_f32_t *pg,
+                       const trn_select_cfg_t *scfg, const trn_field_cfg_t *fcfg,
+                       float heading_rad, const trn_window_t *area, trn_grid_f32_t *out,
+                       uint8_t *evaluated, size_t evaluated_len, trn_field_stats_t *stats,
+                       void *ws, size_t ws_bytes)
+{
+    field_t f;
+    trn_status_t s;
+    size_t need;
+
+    if ((s = field_check(map, k, pg, scfg, fcfg, heading_rad, area, out, evaluated,
+                         evaluated_len, stats, ws)) != TRN_OK) {
+        return s;
+    }
+    need = trn_field_workspace_bytes(scfg, map, k);
+    if (need == 0u || ws_bytes < need || ((uintptr_t)ws & 15u) != 0u) {
+        return TRN_E_WORKSPACE;
+    }
+    memset(&f, 0, sizeof f);
+    f.map = map;
+    f.k = k;
+    f.pg = pg;
+    f.scfg = scfg;
+    f.heading = heading_rad;
+    f.area = *area;
+    f.w = out->width;
+    f.h = out->height;
+    f.out = out;
+    f.ev = evaluated;
+    f.cands = (trn_candidate_t *)ws;
+    f.ncap = trn_select_max_candidates(scfg, map->cfg.terrain.cell_m);
+    f.sws = (uint8_t *)ws + TRN_ALIGN_UP(f.ncap * sizeof(trn_candidate_t));
+    f.swsb = ws_bytes - TRN_ALIGN_UP(f.ncap * sizeof(trn_candidate_t));
+    f.st = stats;
+    f.pre = NULL;
+    return field_run(&f, fcfg);
+}
+
+size_t trn_field_fast_workspace_bytes(const trn_select_cfg_t *scfg, const trn_map_t *map,
+                                      const trn_kernels_t *k, const trn_vol_f32_t *pg)
+{
+    const size_t b = trn_selpre_bytes(scfg, map, k, pg);
+    return b == 0u ? 0u : TRN_ALIGN_UP(sizeof(trn_selpre_t)) + b;
+}
+
+trn_status_t trn_field_fast(const trn_map_t *map, const trn_kernels_t *k, const trn_vol_f32_t *pg,
+                            const trn_select_cfg_t *scfg, const trn_field_cfg_t *fcfg,
+                            float heading_rad, const trn_window_t *area, trn_grid_f32_t *out,
+                            uint8_t *evaluated, size_t evaluated_len, trn_field_stats_t *stats,
+                            void *ws, size_t ws_bytes)
+{
+    field_t f;
+    trn_status_t s;
+    trn_selpre_t *pre;
+    const size_t hb = TRN_ALIGN_UP(sizeof(trn_selpre_t));
+
+    if ((s = field_check(map, k, pg, scfg, fcfg, heading_rad, area, out, evaluated,
+                         evaluated_len, stats, ws)) != TRN_OK) {
+        return s;
+    }
+    if (ws_bytes < hb || ((uintptr_t)ws & 15u) != 0u) {
+        return TRN_E_WORKSPACE;
+    }
+    pre = (trn_selpre_t *)ws;
+    if ((s = trn_selpre_init(pre, map, k, pg, scfg, (uint8_t *)ws + hb, ws_bytes - hb)) !=
+        TRN_OK) {
+        return s;
+    }
+    memset(&f, 0, sizeof f);
+    f.map = map;
+    f.k = k;
+    f.pg = pg;
+    f.scfg = scfg;
+    f.heading = heading_rad;
+    f.area = *area;
+    f.w = out->width;
+    f.h = out->height;
+    f.out = out;
+    f.ev = evaluated;
+    f.st = stats;
+    f.pre = pre;
+    return field_run(&f, fcfg);
 }

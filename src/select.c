@@ -2,8 +2,10 @@
 /* select.c - candidate targets, expected log-likelihood by summed-area
  * tables, eq. 6 fit, ranking (see trn/select.h). */
 #include "trn/select.h"
+#include "select_pre.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <string.h>
 
 #define SEL_PI 3.14159265358979323846
@@ -400,5 +402,647 @@ trn_status_t trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_
     }
     res->n_ranked = nr;
     res->best = ranked[0];
+    return TRN_OK;
+}
+
+/* ---- ground path: selection from prepared map data (select_pre.h) ------- */
+
+/* y[i] += a * x[i], i < n: spread.c's axpy, the same product and sum for
+ * every element (distinct arrays). Four elements per step: GCC's -O2 SLP
+ * vectoriser turns them into one SIMD multiply and add (element-wise, so
+ * the same floats). */
+static void pre_axpy(float *restrict y, const float *restrict x, float a, int32_t n)
+{
+    int32_t i = 0;
+    for (; i + 4 <= n; i += 4) {
+        y[i] += a * x[i];
+        y[i + 1] += a * x[i + 1];
+        y[i + 2] += a * x[i + 2];
+        y[i + 3] += a * x[i + 3];
+    }
+    for (; i < n; ++i) {
+        y[i] += a * x[i];
+    }
+}
+
+/* Kernel of a cell at integer offset (ox, oy) from the rover: spread.c's
+ * kernel_map expression (one sensing position), hence the same index. */
+static uint8_t pre_kernel(const trn_kernels_t *k, const trn_sigma_model_t *m, float cell_m,
+                          int32_t ox, int32_t oy)
+{
+    const double c2 = (double)cell_m * (double)cell_m;
+    const double ex = (double)ox, ey = (double)oy;
+    const double best = ex * ex + ey * ey;
+    const double sig = ((double)m->sigma_min_m + (double)m->k_per_m * best * c2) /
+                       (double)cell_m;
+    return (uint8_t)trn_kernel_pick(k, sig < 1e30 ? (float)sig : 1e30f);
+}
+
+typedef struct {
+    size_t joff, rowptr, src, lnpv, cxy, lat, nl, touched, u, hit, lok, latan, t, p, sat, total;
+    int32_t half, n, m, side_w, side_h, src_h;
+    size_t ncap;
+} pre_layout_t;
+
+/* Slice sizes for nnz nonzero P_G voxels; 0 when the total does not fit. */
+static int pre_layout(const trn_select_cfg_t *cfg, const trn_map_t *map, const trn_kernels_t *k,
+                      size_t nnz, pre_layout_t *L)
+{
+    const float cell = map->cfg.terrain.cell_m;
+    const int32_t nx = map->dist.nx, ny = map->dist.ny, nz = map->dist.nz;
+    const int32_t r9 = k->radius[TRN_KERNEL_COUNT - 1];
+    const int32_t reach = reach_cells(cfg, cell);
+    double mw, tot;
+    L->half = patch_cells(cfg, cell) / 2;
+    L->n = reach / cfg->stride_cells + 1;
+    L->m = reach + L->half + r9 + 1;
+    L->side_w = roi_side(cfg, cell, nx);
+    L->side_h = roi_side(cfg, cell, ny);
+    L->src_h = L->side_h + 2 * r9 < ny ? L->side_h + 2 * r9 : ny;
+    L->ncap = trn_select_max_candidates(cfg, cell);
+    mw = 2.0 * (double)L->m + 1.0;
+    /* the largest slice first, in double: no size_t overflow on 32-bit targets */
+    tot = mw * mw + ((double)nz * (double)ny + 1.0) * (double)sizeof(size_t) +
+          (double)nnz * (double)sizeof(trn_selpre_src_t) +
+          (double)nx * (double)ny * (double)nz * (double)sizeof(int32_t) +
+          (double)L->src_h * ((double)L->side_w * 4.0 + 1.0) +
+          (double)nz * (double)L->side_w * (double)L->side_h * 4.0 +
+          9.0 * ((double)L->half * 2.0 + 3.0) * ((double)L->side_w + 1.0) * 8.0 +
+          (double)L->ncap * 17.0 + (double)nz * (double)L->side_h + 1.0e6;
+    if (tot > (double)(SIZE_MAX / 2u)) {
+        return 0;
+    }
+    L->joff = TRN_ALIGN_UP((size_t)mw * (size_t)mw);
+    L->rowptr = TRN_ALIGN_UP(((size_t)nz * (size_t)ny + 1u) * sizeof(size_t));
+    L->src = TRN_ALIGN_UP(nnz * sizeof(trn_selpre_src_t));
+    L->lnpv = TRN_ALIGN_UP((size_t)nx * (size_t)ny * (size_t)nz * sizeof(int32_t));
+    L->cxy = TRN_ALIGN_UP(L->ncap * 2u * sizeof(int32_t));
+    L->lat = TRN_ALIGN_UP((2u * (size_t)L->n + 1u) * 2u * sizeof(int32_t));
+    L->nl = TRN_ALIGN_UP((size_t)L->side_h * 2u * sizeof(int32_t));
+    L->touched = TRN_ALIGN_UP((size_t)L->src_h);
+    L->u = TRN_ALIGN_UP((size_t)L->src_h * 2u * sizeof(int32_t));
+    L->hit = TRN_ALIGN_UP((size_t)nz * (size_t)L->side_h);
+    L->lok = TRN_ALIGN_UP(L->ncap);
+    L->latan = TRN_ALIGN_UP(L->ncap * sizeof(double));
+    L->t = TRN_ALIGN_UP((size_t)L->src_h * (size_t)L->side_w * sizeof(float));
+    L->p = TRN_ALIGN_UP((size_t)nz * (size_t)L->side_w * (size_t)L->side_h * sizeof(float));
+    /* a ring of patch_cells rows of the nine C_d, their column sums, a prefix row */
+    L->sat = TRN_ALIGN_UP(((size_t)(2 * L->half + 1) + 1u) * 9u * (size_t)L->side_w *
+                          sizeof(int64_t)) +
+             TRN_ALIGN_UP(9u * ((size_t)L->side_w + 1u) * sizeof(int64_t));
+    L->total = L->joff + L->rowptr + L->src + L->lnpv + L->cxy + L->lat + L->nl + L->touched +
+               L->u + L->hit + L->lok + L->latan + L->t + L->p + L->sat;
+    return 1;
+}
+
+static size_t pre_nnz(const trn_vol_f32_t *pg)
+{
+    const size_t nvox = (size_t)pg->nx * (size_t)pg->ny * (size_t)pg->nz;
+    size_t i, nnz = 0u;
+    for (i = 0; i < nvox; ++i) {
+        if (pg->data[i] != 0.0f) {
+            ++nnz;
+        }
+    }
+    return nnz;
+}
+
+/* Arguments as trn_select checks them (no rover). */
+static trn_status_t pre_check(const trn_select_cfg_t *cfg, const trn_map_t *map,
+                              const trn_kernels_t *k, const trn_vol_f32_t *pg)
+{
+    trn_status_t st;
+    if (map == NULL || k == NULL || pg == NULL || cfg == NULL || pg->data == NULL ||
+        map->dist.data == NULL) {
+        return TRN_E_NULL;
+    }
+    if ((st = trn_select_cfg_check(cfg, map->cfg.terrain.cell_m)) != TRN_OK) {
+        return st;
+    }
+    if (!(k->sigma0_cells >= 0.05f) || k->radius[TRN_KERNEL_COUNT - 1] < 1 ||
+        k->radius[TRN_KERNEL_COUNT - 1] > TRN_KERNEL_MAX_RADIUS) {
+        return TRN_E_ARG; /* not a built table (trn_prob_local's check) */
+    }
+    if ((st = trn_vol_u8_check(&map->dist)) != TRN_OK) {
+        return st;
+    }
+    if (pg->nx != map->dist.nx || pg->ny != map->dist.ny || pg->nz != map->dist.nz ||
+        map->lnp.cap < 1u || map->lnp.cap > TRN_CHAMFER_CAP_MAX) {
+        return TRN_E_SIZE;
+    }
+    return TRN_OK;
+}
+
+size_t trn_selpre_bytes(const trn_select_cfg_t *cfg, const trn_map_t *map,
+                        const trn_kernels_t *k, const trn_vol_f32_t *pg)
+{
+    pre_layout_t L;
+    if (pre_check(cfg, map, k, pg) != TRN_OK ||
+        !pre_layout(cfg, map, k, pre_nnz(pg), &L)) {
+        return 0u;
+    }
+    return L.total;
+}
+
+trn_status_t trn_selpre_init(trn_selpre_t *s, const trn_map_t *map, const trn_kernels_t *k,
+                             const trn_vol_f32_t *pg, const trn_select_cfg_t *cfg, void *mem,
+                             size_t bytes)
+{
+    pre_layout_t L;
+    trn_status_t st;
+    uint8_t *b = (uint8_t *)mem;
+    uint8_t *joff;
+    size_t *rowptr, nnz, i;
+    trn_selpre_src_t *src;
+    int32_t *lnpv;
+    uint8_t *lok;
+    double *latan;
+    int32_t x, y, z, d, mw;
+    const uint8_t cap = map != NULL ? map->lnp.cap : 0u;
+
+    if (s == NULL || mem == NULL) {
+        return TRN_E_NULL;
+    }
+    if ((st = pre_check(cfg, map, k, pg)) != TRN_OK) {
+        return st;
+    }
+    nnz = pre_nnz(pg);
+    if (!pre_layout(cfg, map, k, nnz, &L) || bytes < L.total || ((uintptr_t)mem & 15u) != 0u) {
+        return TRN_E_WORKSPACE;
+    }
+    memset(s, 0, sizeof *s);
+    s->map = map;
+    s->k = k;
+    s->cfg = cfg;
+    s->nx = map->dist.nx;
+    s->ny = map->dist.ny;
+    s->nz = map->dist.nz;
+    s->half = L.half;
+    s->n = L.n;
+    s->m = L.m;
+    s->side_w = L.side_w;
+    s->side_h = L.side_h;
+    s->src_h = L.src_h;
+    s->ncap = L.ncap;
+    joff = b;
+    b += L.joff;
+    rowptr = (size_t *)(void *)b;
+    b += L.rowptr;
+    src = (trn_selpre_src_t *)(void *)b;
+    b += L.src;
+    lnpv = (int32_t *)(void *)b;
+    b += L.lnpv;
+    s->cxy = (int32_t *)(void *)b;
+    b += L.cxy;
+    s->latlo = (int32_t *)(void *)b;
+    s->lathi = s->latlo + (2 * L.n + 1);
+    b += L.lat;
+    s->nlo = (int32_t *)(void *)b;
+    s->nhi = s->nlo + L.side_h;
+    b += L.nl;
+    s->touched = b;
+    b += L.touched;
+    s->ulo = (int32_t *)(void *)b;
+    s->uhi = s->ulo + L.src_h;
+    b += L.u;
+    s->hit = b;
+    b += L.hit;
+    lok = b;
+    b += L.lok;
+    latan = (double *)(void *)b;
+    b += L.latan;
+    s->t = (float *)(void *)b;
+    b += L.t;
+    s->p = (float *)(void *)b;
+    b += L.p;
+    s->ring = (int64_t *)(void *)b;
+    s->colsum = s->ring + (size_t)(2 * L.half + 1) * 9u * (size_t)L.side_w;
+    s->prefix = (int64_t *)(void *)(b + TRN_ALIGN_UP(((size_t)(2 * L.half + 1) + 1u) * 9u *
+                                                     (size_t)L.side_w * sizeof(int64_t)));
+
+    /* kernel index by offset, and the largest radius any offset uses */
+    mw = 2 * L.m + 1;
+    s->rmax = 0;
+    for (y = 0; y < mw; ++y) {
+        for (x = 0; x < mw; ++x) {
+            const uint8_t j = pre_kernel(k, &cfg->local_sigma, map->cfg.terrain.cell_m,
+                                         x - L.m, y - L.m);
+            joff[(size_t)y * (size_t)mw + (size_t)x] = j;
+            s->rmax = k->radius[j] > s->rmax ? k->radius[j] : s->rmax;
+        }
+    }
+    /* nonzero P_G by (z, y) row, ascending x */
+    i = 0u;
+    for (z = 0; z < s->nz; ++z) {
+        for (y = 0; y < s->ny; ++y) {
+            const float *row = pg->data + ((size_t)z * (size_t)s->ny + (size_t)y) * (size_t)s->nx;
+            rowptr[(size_t)z * (size_t)s->ny + (size_t)y] = i;
+            for (x = 0; x < s->nx; ++x) {
+                if (row[x] != 0.0f) {
+                    src[i].x = x;
+                    src[i].v = row[x];
+                    ++i;
+                }
+            }
+        }
+    }
+    rowptr[(size_t)s->nz * (size_t)s->ny] = i;
+    /* ln p of the capped distance, z innermost */
+    for (z = 0; z < s->nz; ++z) {
+        for (y = 0; y < s->ny; ++y) {
+            const uint8_t *drow = map->dist.data + TRN_VOL_IDX(&map->dist, 0, y, z);
+            for (x = 0; x < s->nx; ++x) {
+                const uint8_t dv = drow[x] < cap ? drow[x] : cap;
+                lnpv[((size_t)y * (size_t)s->nx + (size_t)x) * (size_t)s->nz + (size_t)z] =
+                    map->lnp.lnp[dv];
+            }
+        }
+    }
+    s->lmax = 0;
+    for (d = 0; d <= (int32_t)cap; ++d) {
+        const int32_t a = map->lnp.lnp[d] < 0 ? -map->lnp.lnp[d] : map->lnp.lnp[d];
+        s->lmax = a > s->lmax ? a : s->lmax;
+    }
+    /* candidate rules that depend on the lattice offset only (trn_select's
+     * candidate_ok expressions; the rover is on a whole cell) */
+    {
+        const double cellm = (double)map->cfg.terrain.cell_m;
+        const double hx = (double)L.half + 0.5;
+        const int32_t nl = 2 * L.n + 1;
+        for (y = 0; y < nl; ++y) {
+            for (x = 0; x < nl; ++x) {
+                const double dx = (double)((x - L.n) * cfg->stride_cells);
+                const double dy = (double)((y - L.n) * cfg->stride_cells);
+                const double r = sqrt(dx * dx + dy * dy) * cellm;
+                double ex = fabs(dx) - hx, ey = fabs(dy) - hx;
+                const size_t i2 = (size_t)y * (size_t)nl + (size_t)x;
+                ex = ex > 0.0 ? ex : 0.0;
+                ey = ey > 0.0 ? ey : 0.0;
+                lok[i2] = (uint8_t)(r >= (double)cfg->min_range_m && r <= (double)cfg->max_range_m &&
+                                    sqrt(ex * ex + ey * ey) * cellm >=
+                                        (double)cfg->footprint_radius_m);
+                latan[i2] = atan2(dy, dx);
+            }
+        }
+        /* remainder(., 2 pi) lies in [-pi, pi] (double), inside the float
+         * limits (float)-pi .. (float)pi: the whole circle passes every bearing */
+        s->full_pan = cfg->pan_min_rad <= (float)-SEL_PI && cfg->pan_max_rad >= (float)SEL_PI;
+    }
+    s->lok = lok;
+    s->latan = latan;
+    s->joff = joff;
+    s->rowptr = rowptr;
+    s->src = src;
+    s->lnpv = lnpv;
+    return TRN_OK;
+}
+
+/* Eq. 9 over the region, slice z, into s->p: trn_prob_local's x and y passes
+ * restricted to the nonzero sources and to the patch columns nlo..nhi. */
+static void pre_eq9_slice(const trn_selpre_t *s, const trn_window_t *roi, int32_t rx, int32_t ry,
+                          int32_t z)
+{
+    const trn_kernels_t *k = s->k;
+    const int32_t w = roi->x1 - roi->x0 + 1, h = roi->y1 - roi->y0 + 1;
+    const int32_t sy0 = roi->y0 - s->rmax > 0 ? roi->y0 - s->rmax : 0;
+    const int32_t sy1 = roi->y1 + s->rmax < s->ny - 1 ? roi->y1 + s->rmax : s->ny - 1;
+    const size_t mw = 2u * (size_t)s->m + 1u;
+    float *pz = s->p + (size_t)z * (size_t)w * (size_t)h;
+    int32_t sy, r;
+    /* x pass: each source row's values over the region's columns */
+    for (sy = sy0; sy <= sy1; ++sy) {
+        const size_t row = (size_t)(sy - sy0);
+        const size_t jb = (size_t)(sy - ry + s->m) * mw;
+        const trn_selpre_src_t *e = s->src + s->rowptr[(size_t)z * (size_t)s->ny + (size_t)sy];
+        const trn_selpre_src_t *end =
+            s->src + s->rowptr[(size_t)z * (size_t)s->ny + (size_t)sy + 1u];
+        float *trow = s->t + row * (size_t)w;
+        const int32_t ua = roi->x0 + s->ulo[row], ub = roi->x0 + s->uhi[row];
+        const int32_t xmin = ua - s->rmax, xmax = ub + s->rmax;
+        size_t lo_i = 0u, hi_i = (size_t)(end - e);
+        s->touched[row] = 0u;
+        if (ua > ub) {
+            continue;
+        }
+        while (lo_i < hi_i) { /* first source at x >= xmin */
+            const size_t mid = lo_i + (hi_i - lo_i) / 2u;
+            if (e[mid].x < xmin) {
+                lo_i = mid + 1u;
+            } else {
+                hi_i = mid;
+            }
+        }
+        for (e += lo_i; e < end && e->x <= xmax; ++e) {
+            const int32_t sx = e->x;
+            const int32_t j = (int32_t)s->joff[jb + (size_t)(sx - rx + s->m)];
+            const int32_t rr = k->radius[j];
+            const int32_t lo = sx - rr > ua ? sx - rr : ua;
+            const int32_t hi = sx + rr < ub ? sx + rr : ub;
+            if (lo <= hi) {
+                if (s->touched[row] == 0u) {
+                    memset(trow + s->ulo[row], 0,
+                           (size_t)(s->uhi[row] - s->ulo[row] + 1) * sizeof *trow);
+                    s->touched[row] = 1u;
+                }
+                pre_axpy(trow + (lo - roi->x0),
+                         k->taps[j] + (TRN_KERNEL_MAX_RADIUS - rr) + (lo - sx + rr), e->v,
+                         hi - lo + 1);
+            }
+        }
+    }
+    /* y pass into the patch columns of each region row */
+    for (r = 0; r < h; ++r) {
+        s->hit[(size_t)z * (size_t)h + (size_t)r] = 0u;
+        if (s->nlo[r] <= s->nhi[r]) {
+            memset(pz + (size_t)r * (size_t)w + (size_t)s->nlo[r], 0,
+                   (size_t)(s->nhi[r] - s->nlo[r] + 1) * sizeof *pz);
+        }
+    }
+    for (sy = sy0; sy <= sy1; ++sy) {
+        const size_t row = (size_t)(sy - sy0);
+        const size_t jb = (size_t)(sy - ry + s->m) * mw + (size_t)(roi->x0 - rx + s->m);
+        const float *trow = s->t + row * (size_t)w;
+        const int32_t xend = s->uhi[row] + 1;
+        int32_t x = s->ulo[row];
+        if (s->touched[row] == 0u) {
+            continue;
+        }
+        while (x < xend) {
+            int32_t xe, j, rr, lo, hi, gy;
+            const float *tp;
+            if (trow[x] == 0.0f) {
+                ++x;
+                continue;
+            }
+            j = (int32_t)s->joff[jb + (size_t)x];
+            xe = x + 1;
+            while (xe < xend && trow[xe] != 0.0f && (int32_t)s->joff[jb + (size_t)xe] == j) {
+                ++xe;
+            }
+            rr = k->radius[j];
+            tp = k->taps[j] + (TRN_KERNEL_MAX_RADIUS - rr);
+            lo = sy - rr > roi->y0 ? sy - rr : roi->y0;
+            hi = sy + rr < roi->y1 ? sy + rr : roi->y1;
+            for (gy = lo; gy <= hi; ++gy) {
+                const int32_t gr = gy - roi->y0;
+                const int32_t a = x > s->nlo[gr] ? x : s->nlo[gr];
+                const int32_t bb = xe - 1 < s->nhi[gr] ? xe - 1 : s->nhi[gr];
+                if (a <= bb) {
+                    s->hit[(size_t)z * (size_t)h + (size_t)gr] = 1u;
+                    pre_axpy(pz + (size_t)gr * (size_t)w + (size_t)a, trow + a, tp[gy - sy + rr],
+                             bb - a + 1);
+                }
+            }
+            x = xe;
+        }
+    }
+}
+
+/* 1 when the eq. 6 fit of ll cannot give an uncertainty below best (m):
+ * the fit's covariance is -H^-1 of its quadratic's Hessian H, and
+ * sigma_x^2 + sigma_y^2 = trace(-H^-1) = 1/l1 + 1/l2 >= 4 / (l1 + l2) =
+ * 4 / trace(-H) for the eigenvalues l1, l2 > 0 of -H (harmonic <= arithmetic
+ * mean); trace(-H) = 4 s0 / 3 - sxx - syy from the same sums trn_peak_fit
+ * forms. The bound is taken 1e-6 below itself, far beyond the rounding of
+ * either computation, so a skipped candidate is never the lowest or a tie. A
+ * fit that would fail (not informative) is never the lowest either. */
+static int pre_cannot_beat(const double ll[9], double cell_m, double best)
+{
+    double s0 = 0.0, sxx = 0.0, syy = 0.0, tr;
+    int x, y;
+    for (y = -1; y <= 1; ++y) {
+        for (x = -1; x <= 1; ++x) {
+            const double v = ll[(y + 1) * 3 + (x + 1)] - ll[4];
+            s0 += v;
+            sxx += (double)(x * x) * v;
+            syy += (double)(y * y) * v;
+        }
+    }
+    tr = 4.0 * s0 / 3.0 - sxx - syy;
+    if (!(tr > 0.0) || !isfinite(tr)) {
+        return 0; /* no bound: fit it */
+    }
+    return 4.0 / tr * cell_m * cell_m * (1.0 - 1.0e-6) > best * best;
+}
+
+/* Region rows in order: the nine C_d of the row (from the nonzero P voxels of
+ * the slices the y pass wrote; cells outside every patch are never read),
+ * the column sums of the last patch_cells rows (a ring of rows: the row
+ * leaving is subtracted before its slot is reused), and on a row where
+ * candidates' patches end, prefix sums along it, their nine window sums
+ * (exact int64: the values trn_select's summed-area tables give) and their
+ * fits, in candidate order (so the first lowest wins, as in trn_select). */
+static void pre_windows(const trn_selpre_t *s, const trn_window_t *roi, const geom_t *g,
+                        size_t nc, double *best, int *found)
+{
+    const int32_t w = roi->x1 - roi->x0 + 1, h = roi->y1 - roi->y0 + 1;
+    const int32_t ph = 2 * g->half + 1;
+    const size_t wz = (size_t)w, w1 = wz + 1u, rowsz = 9u * wz;
+    const size_t pplane = (size_t)w * (size_t)h, nz = (size_t)s->nz;
+    const size_t lrow = (size_t)s->nx * nz;
+    const double scale = 1.0 / ((double)TRN_SELECT_PROB_SCALE * (double)TRN_LNP_SCALE);
+    int64_t *vs = s->colsum, *pre = s->prefix;
+    size_t ci = 0u, z;
+    int32_t r, x, d;
+    memset(vs, 0, rowsz * sizeof *vs);
+    for (r = 0; r < h && ci < nc; ++r) {
+        const int32_t lo = s->nlo[r], hi = s->nhi[r];
+        const int32_t gy = roi->y0 + r;
+        int64_t *acc = s->ring + (size_t)(r % ph) * rowsz;
+        if (r >= ph && s->nlo[r - ph] <= s->nhi[r - ph]) { /* the row leaving the window */
+            for (d = 0; d < 9; ++d) {
+                for (x = s->nlo[r - ph]; x <= s->nhi[r - ph]; ++x) {
+                    vs[(size_t)d * wz + (size_t)x] -= acc[(size_t)d * wz + (size_t)x];
+                }
+            }
+        }
+        if (lo <= hi) {
+            /* patch cells: their 3 x 3 neighbours lie on the map (patches keep
+             * a one-cell margin inside it, trn_select's rule) */
+            const size_t row0 = (size_t)(gy - 1) * (size_t)s->nx;
+            for (d = 0; d < 9; ++d) {
+                memset(acc + (size_t)d * wz + (size_t)lo, 0, (size_t)(hi - lo + 1) * sizeof *acc);
+            }
+            for (z = 0; z < nz; ++z) {
+                const float *prow = s->p + z * pplane + (size_t)r * wz;
+                if (s->hit[z * (size_t)h + (size_t)r] == 0u) {
+                    continue;
+                }
+                for (x = lo; x <= hi; ++x) {
+                    const float v = prow[x];
+                    int64_t q;
+                    const int32_t *l0, *l1, *l2;
+                    int64_t *ac = acc + (size_t)x;
+                    if (!(v > 0.0f)) {
+                        continue;
+                    }
+                    q = v >= 4.0f ? (int64_t)SEL_QMAX
+                                  : (int64_t)(int32_t)(v * (float)TRN_SELECT_PROB_SCALE + 0.5f);
+                    l0 = s->lnpv + (row0 + (size_t)(roi->x0 + x - 1)) * nz + z;
+                    l1 = l0 + lrow;
+                    l2 = l1 + lrow;
+                    ac[0] += q * l0[0];
+                    ac[wz] += q * l0[nz];
+                    ac[2u * wz] += q * l0[2u * nz];
+                    ac[3u * wz] += q * l1[0];
+                    ac[4u * wz] += q * l1[nz];
+                    ac[5u * wz] += q * l1[2u * nz];
+                    ac[6u * wz] += q * l2[0];
+                    ac[7u * wz] += q * l2[nz];
+                    ac[8u * wz] += q * l2[2u * nz];
+                }
+            }
+            for (d = 0; d < 9; ++d) {
+                for (x = lo; x <= hi; ++x) {
+                    vs[(size_t)d * wz + (size_t)x] += acc[(size_t)d * wz + (size_t)x];
+                }
+            }
+        }
+        if (s->cxy[2u * ci + 1u] + g->half != gy) {
+            continue;
+        }
+        for (d = 0; d < 9; ++d) {
+            int64_t run = 0;
+            pre[(size_t)d * w1] = 0;
+            for (x = 0; x < w; ++x) {
+                run += vs[(size_t)d * wz + (size_t)x];
+                pre[(size_t)d * w1 + (size_t)x + 1u] = run;
+            }
+        }
+        for (; ci < nc && s->cxy[2u * ci + 1u] + g->half == gy; ++ci) {
+            const size_t x0 = (size_t)(s->cxy[2u * ci] - g->half - roi->x0);
+            const size_t x1 = (size_t)(s->cxy[2u * ci] + g->half - roi->x0) + 1u;
+            double ll[9];
+            trn_peak_t pk;
+            for (d = 0; d < 9; ++d) {
+                ll[d] = (double)(pre[(size_t)d * w1 + x1] - pre[(size_t)d * w1 + x0]) * scale;
+            }
+            if (*found && pre_cannot_beat(ll, g->cell, *best)) {
+                continue;
+            }
+            if (trn_peak_fit(ll, &pk) == TRN_OK) {
+                const double sx = pk.sigma_x * g->cell, sy = pk.sigma_y * g->cell;
+                const double u = sqrt(sx * sx + sy * sy);
+                if (!*found || u < *best) {
+                    *best = u;
+                    *found = 1;
+                }
+            }
+        }
+    }
+}
+
+trn_status_t trn_selpre_best(const trn_selpre_t *s, int32_t rx, int32_t ry, float heading_rad,
+                             double *best_m)
+{
+    geom_t g;
+    trn_window_t roi, pw;
+    size_t nc = 0u;
+    int32_t i_x, i_y, r, z, side_w, side_h;
+    double best = HUGE_VAL;
+    int found = 0;
+    const trn_select_cfg_t *cfg = s->cfg;
+
+    g.nx = s->nx;
+    g.ny = s->ny;
+    g.half = s->half;
+    g.rxf = (double)(float)rx;
+    g.ryf = (double)(float)ry;
+    g.rx = rx;
+    g.ry = ry;
+    g.cell = (double)s->map->cfg.terrain.cell_m;
+    g.heading = (double)heading_rad;
+    g.n = s->n;
+
+    /* 1. candidates (trn_select's lattice and rules), region, patch columns */
+    roi.x0 = g.nx;
+    roi.y0 = g.ny;
+    roi.x1 = -1;
+    roi.y1 = -1;
+    for (i_y = -g.n; i_y <= g.n; ++i_y) {
+        int32_t *lo = &s->latlo[i_y + g.n], *hi = &s->lathi[i_y + g.n];
+        *lo = g.nx;
+        *hi = -1;
+        for (i_x = -g.n; i_x <= g.n; ++i_x) {
+            const int32_t cx = g.rx + i_x * cfg->stride_cells, cy = g.ry + i_y * cfg->stride_cells;
+            const size_t oi = (size_t)(i_y + g.n) * (2u * (size_t)g.n + 1u) + (size_t)(i_x + g.n);
+            /* candidate_ok: the map edge, then the offset's rules, then the bearing */
+            if (cx - g.half - 1 < 0 || cy - g.half - 1 < 0 || cx + g.half + 1 > g.nx - 1 ||
+                cy + g.half + 1 > g.ny - 1 || s->lok[oi] == 0u) {
+                continue;
+            }
+            if (!s->full_pan) {
+                const double b = remainder(s->latan[oi] - g.heading, 2.0 * SEL_PI);
+                if (b < (double)cfg->pan_min_rad || b > (double)cfg->pan_max_rad) {
+                    continue;
+                }
+            }
+            s->cxy[2u * nc] = cx;
+            s->cxy[2u * nc + 1u] = cy;
+            patch_window(&g, cx, cy, &pw);
+            roi.x0 = pw.x0 < roi.x0 ? pw.x0 : roi.x0;
+            roi.y0 = pw.y0 < roi.y0 ? pw.y0 : roi.y0;
+            roi.x1 = pw.x1 > roi.x1 ? pw.x1 : roi.x1;
+            roi.y1 = pw.y1 > roi.y1 ? pw.y1 : roi.y1;
+            *lo = cx < *lo ? cx : *lo;
+            *hi = cx > *hi ? cx : *hi;
+            ++nc;
+        }
+    }
+    if (nc == 0u) {
+        return TRN_E_NOTARGET;
+    }
+    side_w = roi.x1 - roi.x0 + 1;
+    side_h = roi.y1 - roi.y0 + 1;
+    if ((double)side_w * (double)side_h * (double)s->nz * (double)SEL_QMAX * (double)s->lmax >
+        9.0e18) {
+        return TRN_E_SIZE;
+    }
+    for (r = 0; r < side_h; ++r) {
+        s->nlo[r] = side_w;
+        s->nhi[r] = -1;
+    }
+    for (i_y = 0; i_y <= 2 * g.n; ++i_y) {
+        const int32_t cy = g.ry + (i_y - g.n) * cfg->stride_cells;
+        int32_t y;
+        if (s->lathi[i_y] < 0) {
+            continue;
+        }
+        for (y = cy - g.half; y <= cy + g.half; ++y) {
+            const int32_t rr = y - roi.y0;
+            const int32_t a = s->latlo[i_y] - g.half - roi.x0, b = s->lathi[i_y] + g.half - roi.x0;
+            s->nlo[rr] = a < s->nlo[rr] ? a : s->nlo[rr];
+            s->nhi[rr] = b > s->nhi[rr] ? b : s->nhi[rr];
+        }
+    }
+
+    /* per source row: the region columns its y pass can reach that a patch needs */
+    {
+        const int32_t sy0 = roi.y0 - s->rmax > 0 ? roi.y0 - s->rmax : 0;
+        const int32_t sy1 = roi.y1 + s->rmax < s->ny - 1 ? roi.y1 + s->rmax : s->ny - 1;
+        int32_t sy;
+        for (sy = sy0; sy <= sy1; ++sy) {
+            const int32_t g0 = sy - s->rmax > roi.y0 ? sy - s->rmax : roi.y0;
+            const int32_t g1 = sy + s->rmax < roi.y1 ? sy + s->rmax : roi.y1;
+            int32_t a = side_w, b = -1, gy;
+            for (gy = g0; gy <= g1; ++gy) {
+                const int32_t rr = gy - roi.y0;
+                a = s->nlo[rr] < a ? s->nlo[rr] : a;
+                b = s->nhi[rr] > b ? s->nhi[rr] : b;
+            }
+            s->ulo[sy - sy0] = a;
+            s->uhi[sy - sy0] = b;
+        }
+    }
+
+    /* 2. eq. 9 slice by slice, 3. the nine tables */
+    for (z = 0; z < s->nz; ++z) {
+        pre_eq9_slice(s, &roi, rx, ry, z);
+    }
+    pre_windows(s, &roi, &g, nc, &best, &found);
+    if (!found) {
+        return TRN_E_NOTARGET;
+    }
+    *best_m = best;
     return TRN_OK;
 }

@@ -21,6 +21,7 @@ const char *trn_strerror(trn_status_t status)
     case TRN_E_BUS: return "bus error";
     case TRN_E_IO: return "operating-system call failed";
     case TRN_E_FORMAT: return "malformed message or record";
+    case TRN_E_CANCELLED: return "cancelled by the caller";
     default: return "unknown status";
     }
 }

@@ -32,11 +32,27 @@
 extern "C" {
 #endif
 
+/**
+ * Progress and cancel callback: called after every evaluated position with
+ * done = positions evaluated so far and total = the area's cells (the most
+ * evaluations there can be), and once more after the fill with
+ * done = total. A nonzero return during the evaluations stops the field:
+ * trn_field / trn_field_fast return TRN_E_CANCELLED (out and evaluated are
+ * then partly written); the last call's return is ignored.
+ */
+typedef int32_t (*trn_field_progress_fn_t)(void *user, uint32_t done, uint32_t total);
+
+/** Stack the progress callback may use (it runs on the core's stack; the
+ * stack analysis, tools/stack, counts this budget for the call). */
+#define TRN_FIELD_PROGRESS_STACK_BYTES 512
+
 /** Refinement parameters. */
 typedef struct {
     int32_t coarse_step_cells; /**< power of two, 1..256 */
     float margin_rel;          /**< "low" margin, [0, 100] */
     float change_rel;          /**< "changes fast" threshold, [0, 100] */
+    trn_field_progress_fn_t progress; /**< NULL: none (trn_field_progress_fn_t) */
+    void *progress_user;       /**< passed to progress */
 } trn_field_cfg_t;
 
 /** Work and answer of one field computation. */
@@ -47,7 +63,7 @@ typedef struct {
     double best_m;             /**< that value, m (+inf if none finite) */
 } trn_field_stats_t;
 
-/** @brief Defaults: coarse step 16 cells (1.6 m), margin 0.5, change 1.5.
+/** @brief Defaults: coarse step 16 cells (1.6 m), margin 0.4, change 1.5, no progress callback.
  * @param[out] cfg the defaults; NULL is ignored. */
 void trn_field_cfg_default(trn_field_cfg_t *cfg);
 
@@ -76,12 +92,57 @@ size_t trn_field_workspace_bytes(const trn_select_cfg_t *scfg, const trn_map_t *
  * @retval TRN_E_NULL, TRN_E_ARG (cfgs, heading), TRN_E_SIZE (out or evaluated
  *         not area-sized, pg mismatch), TRN_E_RANGE (area empty or off the
  *         map), TRN_E_WORKSPACE, or another trn_select error
+ * @retval TRN_E_CANCELLED fcfg->progress returned nonzero
  */
 trn_status_t trn_field(const trn_map_t *map, const trn_kernels_t *k, const trn_vol_f32_t *pg,
                        const trn_select_cfg_t *scfg, const trn_field_cfg_t *fcfg,
                        float heading_rad, const trn_window_t *area, trn_grid_f32_t *out,
                        uint8_t *evaluated, size_t evaluated_len, trn_field_stats_t *stats,
                        void *ws, size_t ws_bytes);
+
+/**
+ * @brief Workspace bytes of trn_field_fast for this map and P_G (0 if
+ * invalid): the nonzero P_G voxels (8 bytes each), ln p of every voxel's
+ * capped distance (4 bytes per voxel), the kernel index of every rover offset
+ * within reach ((2 m + 1)^2 bytes, m = reach + half patch + largest kernel
+ * radius, cells) and one position's region: eq. 9 (4 bytes per region voxel)
+ * and nine int64 sums over a ring of patch rows. Ground (host) use: it grows
+ * with the map (main job, 256 x 256 x 16: 9.2 MB; trn_field 5.5 MB).
+ * @param[in] scfg, map, k as trn_select_workspace_bytes.
+ * @param[in] pg the eq. 8 map trn_field_fast will read (its nonzeros are counted).
+ */
+size_t trn_field_fast_workspace_bytes(const trn_select_cfg_t *scfg, const trn_map_t *map,
+                                      const trn_kernels_t *k, const trn_vol_f32_t *pg);
+
+/**
+ * @brief trn_field's field, bit for bit (same out, evaluated and stats), from
+ * rover-independent data prepared once in ws (ground path; field.md): the
+ * kernel index of eq. 9 by offset from the rover, P_G's nonzero voxels by
+ * row and ln p of the capped distances. Each position then computes eq. 9
+ * from the nonzero sources only, with trn_prob_local's products in its order,
+ * over the candidate patches only, each candidate's nine exact int64 window
+ * sums in one pass over the region's rows from the nonzero P voxels, and
+ * no eq. 6 fit for a candidate whose trace bound shows it cannot be the best.
+ * @param[in]  map, k, pg, scfg, fcfg, heading_rad, area  as trn_field.
+ * @param[out] out, evaluated, stats                       as trn_field.
+ * @param[in]  evaluated_len                               as trn_field.
+ * @param[in]  ws       trn_field_fast_workspace_bytes bytes, 16-byte aligned.
+ * @param[in]  ws_bytes bytes at ws.
+ * @retval TRN_OK (also when no position has an informative target)
+ * @retval TRN_E_NULL a pointer argument NULL (or pg->data, map->dist.data)
+ * @retval TRN_E_ARG  a configuration or the heading invalid, or k not a built table
+ * @retval TRN_E_SIZE out or evaluated not area-sized, pg not the map's size, the
+ *         map's distance cap out of range, or a region too large for exact
+ *         int64 sums (as trn_select)
+ * @retval TRN_E_RANGE area empty or off the map
+ * @retval TRN_E_WORKSPACE ws_bytes below trn_field_fast_workspace_bytes or ws not aligned
+ * @retval TRN_E_CANCELLED fcfg->progress returned nonzero
+ */
+trn_status_t trn_field_fast(const trn_map_t *map, const trn_kernels_t *k, const trn_vol_f32_t *pg,
+                            const trn_select_cfg_t *scfg, const trn_field_cfg_t *fcfg,
+                            float heading_rad, const trn_window_t *area, trn_grid_f32_t *out,
+                            uint8_t *evaluated, size_t evaluated_len, trn_field_stats_t *stats,
+                            void *ws, size_t ws_bytes);
 
 #ifdef __cplusplus
 }

@@ -28,7 +28,8 @@ typedef enum {
     TRN_E_SEQ = -12,        /**< a sequence number was out of order */
     TRN_E_BUS = -13,        /**< bus error (bus-off, error-passive, overflow) */
     TRN_E_IO = -14,         /**< an operating-system call failed (port layer only) */
-    TRN_E_FORMAT = -15      /**< malformed message or record */
+    TRN_E_FORMAT = -15,     /**< malformed message or record */
+    TRN_E_CANCELLED = -16   /**< the caller's progress callback asked to stop */
 } trn_status_t;
 
 /**

@@ -250,6 +250,16 @@ if "evaluations" in fj:
     fa = run_json("field", "--dem", g_asc, "--out", p("field_asc.tif"), *FCFG, "--json")
     check(fa.get("evaluations") == fj["evaluations"] and fa.get("best") == fj["best"], "field: AAIGrid = GeoTIFF")
     check(np.array_equal(read(p("field_asc.tif"))[1], F, equal_nan=True), "field: AAIGrid map = GeoTIFF map")
+    # the onboard algorithm (--reference: trn_field) gives the same raster, bit for bit
+    check(fj.get("algorithm") == "trn_field_fast" and fj.get("workspace_bytes", 0) > 0,
+          f"field --json names the ground path and its workspace: {fj.get('algorithm')}")
+    fr = run_json("field", "--dem", g_tif, "--out", p("field_ref.tif"), "--evaluated-out", p("ev_ref.tif"),
+                  *FCFG, "--reference", "--json")
+    check(fr.get("algorithm") == "trn_field" and fr.get("evaluations") == fj["evaluations"] and
+          fr.get("best") == fj["best"], f"field --reference: same evaluations and best ({fr.get('best')})")
+    Fr = read(p("field_ref.tif"))[1]
+    check(Fr.tobytes() == F.tobytes(), "field --reference: the same raster, bit for bit")
+    check(read(p("ev_ref.tif"))[1].tobytes() == read(p("ev.tif"))[1].tobytes(), "field --reference: same evaluated mask")
 rc, out, err = run("field", "--dem", g_tif, "--out", p("field2.tif"), *FCFG)
 check(rc == 0 and out.startswith("wrote ") and "evaluated" in out and err == "",
       f"field human summary, quiet stderr off a terminal: {err!r}")

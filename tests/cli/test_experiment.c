@@ -353,6 +353,41 @@ static void test_params_check(void **state) {
  * (the same trials, the same numbers); the same terrain at 10x the cell and
  * 10x the heights (the paper's map configuration, every length scaled) gives
  * the same successes and errors x 10. */
+typedef struct {
+  long calls, last_done, last_total, stop_at;
+} exp_prog_t;
+
+static int exp_on_progress(void *ctx, long done, long total) {
+  exp_prog_t *c = (exp_prog_t *)ctx;
+  ++c->calls;
+  c->last_done = done;
+  c->last_total = total;
+  return c->stop_at > 0 && done >= c->stop_at;
+}
+
+/* The progress callback counts every trial up to the total; a nonzero
+ * return cancels the run (-1, "cancelled" in err). */
+static void test_run_progress_cancel(void **state) {
+  exp_params_t p;
+  exp_result_t a;
+  exp_prog_t c;
+  char err[256];
+  (void)state;
+  exp_params_default(&p);
+  p.size_cells = 128;
+  p.trials = 4;
+  memset(&c, 0, sizeof c);
+  assert_int_equal(exp_run(&p, &a, exp_on_progress, &c, err, sizeof err), 0);
+  assert_int_equal(c.calls, 4);
+  assert_int_equal(c.last_done, 4);
+  assert_int_equal(c.last_total, 4);
+  memset(&c, 0, sizeof c);
+  c.stop_at = 2;
+  assert_int_equal(exp_run(&p, &a, exp_on_progress, &c, err, sizeof err), -1);
+  assert_int_equal(c.calls, 2);
+  assert_non_null(strstr(err, "cancelled after 2 of 4 trials"));
+}
+
 static void test_run_dem(void **state) {
   const int n = 128;
   exp_params_t p;
@@ -488,6 +523,7 @@ int main(void) {
       cmocka_unit_test(test_params_check),
       cmocka_unit_test(test_run_small),
       cmocka_unit_test(test_run_dem),
+      cmocka_unit_test(test_run_progress_cancel),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -14,7 +14,13 @@
  *   field    trn_field with a small reach (0.5-2 m, 0.9 m patches, stride 2)
  *            over the whole map, against brute force (trn_select at every
  *            rover cell): brute force is timed on a 32 x 32 block and
- *            scaled by the cell count (printed as an estimate).
+ *            scaled by the cell count (printed as an estimate); and
+ *            trn_field_fast (the ground path) on the same field.
+ *   field    the paper's defaults (trn_select_cfg_default: 1-10 m, 2 m
+ *   (paper)  patches, stride 2; trn_field_cfg_default), as `trn field` runs
+ *            them, over a 64 x 64 area at the map's centre: trn_field against
+ *            trn_field_fast in the same run. Both fields must be identical
+ *            (raster, evaluated cells, statistics), else a wrong answer.
  */
 #define _POSIX_C_SOURCE 200112L
 
@@ -259,14 +265,62 @@ typedef struct {
     size_t cap;
     void *sws;
     size_t swsb;
+    int fast;      /* run trn_field_fast (ws of its size) */
 } field_ctx_t;
 
 static int run_field(void *p)
 {
     field_ctx_t *c = (field_ctx_t *)p;
-    return trn_field(c->map, c->k, c->pg, &c->scfg, &c->fcfg, 0.0f, &c->area, &c->g, c->ev,
-                     (size_t)c->g.width * (size_t)c->g.height, &c->st, c->ws, c->wsb) == TRN_OK
-               ? 0 : -1;
+    const size_t n = (size_t)c->g.width * (size_t)c->g.height;
+    trn_status_t s;
+    if (c->fast) {
+        s = trn_field_fast(c->map, c->k, c->pg, &c->scfg, &c->fcfg, 0.0f, &c->area, &c->g, c->ev,
+                           n, &c->st, c->ws, c->wsb);
+    } else {
+        s = trn_field(c->map, c->k, c->pg, &c->scfg, &c->fcfg, 0.0f, &c->area, &c->g, c->ev, n,
+                      &c->st, c->ws, c->wsb);
+    }
+    return s == TRN_OK ? 0 : -1;
+}
+
+/* Run the field of c with both algorithms (timed, at most reps each); 0 when
+ * both ran, *same = 1 when their answers are identical bit for bit. */
+static int field_pair(field_ctx_t *c, int reps, double budget_s, bs_t *t_old, bs_t *t_new,
+                      size_t *ws_old, size_t *ws_new, int *same)
+{
+    const size_t n = (size_t)c->g.width * (size_t)c->g.height;
+    float *o_old = (float *)malloc(n * sizeof(float));
+    uint8_t *e_old = (uint8_t *)malloc(n);
+    trn_field_stats_t s_old;
+    int rc = -1;
+    *same = 0;
+    *ws_old = trn_field_workspace_bytes(&c->scfg, c->map, c->k);
+    *ws_new = trn_field_fast_workspace_bytes(&c->scfg, c->map, c->k, c->pg);
+    c->fast = 0;
+    c->wsb = *ws_old > *ws_new ? *ws_old : *ws_new;
+    c->ws = bs_alloc(c->wsb);
+    if (o_old == NULL || e_old == NULL || c->ws == NULL || *ws_old == 0u || *ws_new == 0u ||
+        bs_time(run_field, c, 0, reps, budget_s, t_old) != 0) {
+        goto done;
+    }
+    memcpy(o_old, c->g.data, n * sizeof(float));
+    memcpy(e_old, c->ev, n);
+    s_old = c->st;
+    c->fast = 1;
+    if (bs_time(run_field, c, 0, reps, budget_s, t_new) != 0) {
+        goto done;
+    }
+    *same = memcmp(o_old, c->g.data, n * sizeof(float)) == 0 && memcmp(e_old, c->ev, n) == 0 &&
+            s_old.evaluations == c->st.evaluations && s_old.best_x == c->st.best_x &&
+            s_old.best_y == c->st.best_y &&
+            (s_old.best_m == c->st.best_m || (isinf(s_old.best_m) && isinf(c->st.best_m)));
+    rc = 0;
+done:
+    free(o_old);
+    free(e_old);
+    free(c->ws);
+    c->ws = NULL;
+    return rc;
 }
 
 static int run_field_block(void *p)
@@ -447,38 +501,87 @@ int bench_select_run(const trn_map_t *map, int32_t n, int repeats, bench_select_
     fc.g.width = n;
     fc.g.height = n;
     fc.g.stride = n;
-    fc.wsb = trn_field_workspace_bytes(&fc.scfg, map, &k);
-    fc.ws = bs_alloc(fc.wsb);
     fc.cap = trn_select_max_candidates(&fc.scfg, map->cfg.terrain.cell_m);
     fc.c = (trn_candidate_t *)malloc(fc.cap * sizeof *fc.c);
     fc.swsb = trn_select_workspace_bytes(&fc.scfg, map, &k);
     fc.sws = bs_alloc(fc.swsb);
-    if (fc.ev == NULL || fc.g.data == NULL || fc.ws == NULL || fc.c == NULL || fc.sws == NULL ||
-        bs_time(run_field, &fc, 0, repeats < 3 ? repeats : 3, 20.0, &t_f) != 0 ||
-        bs_time(run_field_block, &fc, 0, repeats < 3 ? repeats : 3, 10.0, &t_fb) != 0) {
-        free(fc.ev);
-        free(fc.g.data);
-        free(fc.ws);
-        free(fc.c);
-        free(fc.sws);
-        goto out;
+    {
+        bs_t t_ff;
+        size_t wso, wsn;
+        int same = 0;
+        if (fc.ev == NULL || fc.g.data == NULL || fc.c == NULL || fc.sws == NULL ||
+            field_pair(&fc, repeats < 3 ? repeats : 3, 20.0, &t_f, &t_ff, &wso, &wsn, &same) != 0 ||
+            bs_time(run_field_block, &fc, 0, repeats < 3 ? repeats : 3, 10.0, &t_fb) != 0) {
+            free(fc.ev);
+            free(fc.g.data);
+            free(fc.c);
+            free(fc.sws);
+            goto out;
+        }
+        r->field_ms = t_f.med;
+        r->field_fast_ms = t_ff.med;
+        r->field_evals = fc.st.evaluations;
+        r->field_cells = fc.st.cells;
+        r->field_naive_est_ms = t_fb.med * (double)n * (double)n / (32.0 * 32.0);
+        snprintf(note, sizeof note, "reach 0.5-2 m, 0.9 m patches; %u evaluations of %u cells "
+                 "(%.1fx fewer); min %.4f m at (%d, %d)", fc.st.evaluations, fc.st.cells,
+                 (double)fc.st.cells / fc.st.evaluations, fc.st.best_m, (int)fc.st.best_x,
+                 (int)fc.st.best_y);
+        bs_row(n, "field: trn_field, whole map", &t_f, note);
+        snprintf(note, sizeof note, "brute force on a 32x32 block: %.3f ms per position; whole map "
+                 "estimated %.0f ms", t_fb.med / 1024.0, r->field_naive_est_ms);
+        bs_row(n, "field: brute force, 32x32 block", &t_fb, note);
+        snprintf(note, sizeof note, "same field as trn_field: %s; workspace %.1f MB (trn_field "
+                 "%.2f MB)", same ? "yes" : "NO", (double)wsn / 1048576.0,
+                 (double)wso / 1048576.0);
+        bs_row(n, "field: trn_field_fast (ground path), whole map", &t_ff, note);
+        if (!same) {
+            r->wrong = 1;
+        }
+        bs_ratio("brute force (estimated) / trn_field", r->field_naive_est_ms, t_f.med, NULL);
+        bs_ratio("trn_field / trn_field_fast", t_f.med, t_ff.med, NULL);
     }
-    r->field_ms = t_f.med;
-    r->field_evals = fc.st.evaluations;
-    r->field_cells = fc.st.cells;
-    r->field_naive_est_ms = t_fb.med * (double)n * (double)n / (32.0 * 32.0);
-    snprintf(note, sizeof note, "reach 0.5-2 m, 0.9 m patches; %u evaluations of %u cells "
-             "(%.1fx fewer); min %.4f m at (%d, %d)", fc.st.evaluations, fc.st.cells,
-             (double)fc.st.cells / fc.st.evaluations, fc.st.best_m, (int)fc.st.best_x,
-             (int)fc.st.best_y);
-    bs_row(n, "field: trn_field, whole map", &t_f, note);
-    snprintf(note, sizeof note, "brute force on a 32x32 block: %.3f ms per position; whole map "
-             "estimated %.0f ms", t_fb.med / 1024.0, r->field_naive_est_ms);
-    bs_row(n, "field: brute force, 32x32 block", &t_fb, note);
-    bs_ratio("brute force (estimated) / trn_field", r->field_naive_est_ms, t_f.med, NULL);
+    /* the paper's defaults, as `trn field` runs them, on a 64 x 64 area */
+    {
+        bs_t t_fo, t_fn;
+        size_t wso, wsn;
+        int same = 0;
+        trn_select_cfg_default(&fc.scfg);
+        trn_field_cfg_default(&fc.fcfg);
+        fc.area.x0 = n / 2 - 32;
+        fc.area.y0 = n / 2 - 32;
+        fc.area.x1 = n / 2 + 31;
+        fc.area.y1 = n / 2 + 31;
+        fc.g.width = 64;
+        fc.g.height = 64;
+        fc.g.stride = 64;
+        if (field_pair(&fc, 1, 0.0, &t_fo, &t_fn, &wso, &wsn, &same) != 0) {
+            free(fc.ev);
+            free(fc.g.data);
+            free(fc.c);
+            free(fc.sws);
+            goto out;
+        }
+        r->fpaper_ms = t_fo.med;
+        r->fpaper_fast_ms = t_fn.med;
+        r->fpaper_evals = fc.st.evaluations;
+        r->fpaper_ws = wso;
+        r->fpaper_fast_ws = wsn;
+        snprintf(note, sizeof note, "1-10 m, 2 m patches, stride 2, coarse 16: %u evaluations of "
+                 "4096 cells (%.2f ms each); workspace %.2f MB", fc.st.evaluations,
+                 t_fo.med / fc.st.evaluations, (double)wso / 1048576.0);
+        bs_row(n, "field (paper): trn_field, 64x64 area", &t_fo, note);
+        snprintf(note, sizeof note, "same field: %s (%.2f ms each); workspace %.1f MB",
+                 same ? "yes" : "NO", t_fn.med / fc.st.evaluations, (double)wsn / 1048576.0);
+        bs_row(n, "field (paper): trn_field_fast, 64x64 area", &t_fn, note);
+        if (!same) {
+            r->wrong = 1;
+        }
+        bs_ratio("trn_field / trn_field_fast (paper defaults)", t_fo.med, t_fn.med,
+                 "(target >= 10x)");
+    }
     free(fc.ev);
     free(fc.g.data);
-    free(fc.ws);
     free(fc.c);
     free(fc.sws);
     rc = 0;

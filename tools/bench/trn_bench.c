@@ -24,7 +24,8 @@
  *             off by up to 10 cells, windows +-25 and +-50 cells: exhaustive
  *             search against branch-and-bound (answers must be identical).
  *   localize  one whole trn_localize_dem call per window, and its parts.
- *   pmap, select, field  the landmark-selection rows (bench_select.c).
+ *   pmap, select, field  the landmark-selection rows (bench_select.c), with
+ *             trn_field against trn_field_fast (the ground path) in the same run.
  *
  * Timing: CLOCK_MONOTONIC, one warm-up call, then `repeats` timed calls;
  * median and minimum reported. Ratios compare medians measured in the same
@@ -1259,6 +1260,10 @@ int main(int argc, char **argv)
         printf("target all candidates of one rover position < 20 ms%s: %s (%d: %.2f ms)\n",
                res[i].n >= 512 ? "" : " (info below 512)",
                b->select_ms < 20.0 ? "PASS" : "MISS", (int)res[i].n, b->select_ms);
+        printf("target trn_field_fast >= 10x trn_field (paper defaults, 64x64 area, same field): "
+               "%s (%d: %.2fx; small reach, whole map: %.2fx)\n",
+               b->fpaper_ms >= 10.0 * b->fpaper_fast_ms ? "PASS" : "MISS", (int)res[i].n,
+               b->fpaper_ms / b->fpaper_fast_ms, b->field_ms / b->field_fast_ms);
     }
     for (i = 0; i < o.nsizes; ++i) {
         printf("target (x, y, heading) search <= 0.2 of the 2-DOF search x headings: %s (%d: %.3f, %d headings)\n",
@@ -1266,7 +1271,7 @@ int main(int argc, char **argv)
                (int)res[i].head.steps);
     }
     printf("same answer (branch-and-bound = exhaustive = localize, chamfer = Dijkstra, "
-           "selection = naive): %s\n",
+           "selection = naive, trn_field_fast = trn_field): %s\n",
            wrong ? "NO" : "yes");
     printf("total run time %.1f s\n", now_s() - t0);
     (void)g_sink;

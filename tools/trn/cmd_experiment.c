@@ -40,9 +40,10 @@ static size_t opt_index(const cli_opt_t *o, size_t n, const char *name) {
   return i;
 }
 
-static void on_progress(void *ctx, long done, long total) {
+static int on_progress(void *ctx, long done, long total) {
   ((progress_t *)ctx)->total = total;
   progress_update((progress_t *)ctx, done);
+  return 0;
 }
 
 static void json_ci(json_t *j, const char *key, const double ci[2]) {

@@ -4,12 +4,15 @@
  * of its best landmark, computed coarse to fine by trn_field, as a GeoTIFF on
  * the DEM's grid.
  *
- * Progress: trn_field has no progress callback, so the `trn` binary is linked
- * with -Wl,--wrap=trn_select (tools/trn/CMakeLists.txt) and __wrap_trn_select
- * counts the evaluations while a field runs; the count is drawn on stderr only
- * when stderr is a terminal. The coarse lattice's size is known in advance,
- * the refinement's is not, so the line shows the coarse phase as a fraction
- * and then the running count. */
+ * By default the ground path trn_field_fast (the same raster as trn_field,
+ * bit for bit, about an order of magnitude faster, more memory: field.md);
+ * --reference runs trn_field, the onboard algorithm.
+ *
+ * Progress: trn_field's progress callback (trn_field_cfg_t.progress) counts
+ * the evaluations; the count is drawn on stderr only when stderr is a
+ * terminal. The coarse lattice's size is known in advance, the refinement's
+ * is not, so the line shows the coarse phase as a fraction and then the
+ * running count. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdint.h>
@@ -25,18 +28,9 @@
 #include "selmap.h"
 #include "trn/trn.h"
 
-/* ---- evaluation counter around trn_select (see the file comment) ------- */
-trn_status_t __real_trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_vol_f32_t *pg,
-                               const trn_select_cfg_t *cfg, const trn_rover_t *rover, trn_candidate_t *cands,
-                               size_t capacity, size_t *ranked, size_t ranked_cap, trn_select_result_t *res,
-                               void *ws, size_t ws_bytes);
-trn_status_t __wrap_trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_vol_f32_t *pg,
-                               const trn_select_cfg_t *cfg, const trn_rover_t *rover, trn_candidate_t *cands,
-                               size_t capacity, size_t *ranked, size_t ranked_cap, trn_select_result_t *res,
-                               void *ws, size_t ws_bytes);
-
+/* ---- progress line (trn_field_cfg_t.progress) --------------------------- */
 static struct {
-  int active; /* a field runs and stderr is a terminal */
+  int active; /* stderr is a terminal */
   long count, coarse;
   long shown;
 } g_prog;
@@ -53,17 +47,17 @@ static void prog_draw(void) {
   g_prog.shown = g_prog.count;
 }
 
-trn_status_t __wrap_trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_vol_f32_t *pg,
-                               const trn_select_cfg_t *cfg, const trn_rover_t *rover, trn_candidate_t *cands,
-                               size_t capacity, size_t *ranked, size_t ranked_cap, trn_select_result_t *res,
-                               void *ws, size_t ws_bytes) {
-  if (g_prog.active) {
-    ++g_prog.count;
+/* Called by the core after every evaluation (done = evaluations so far) and
+ * once at the end (done = total); never cancels. */
+static int32_t field_progress(void *user, uint32_t done, uint32_t total) {
+  (void)user;
+  if (g_prog.active && done < total) {
+    g_prog.count = (long)done;
     if (g_prog.count - g_prog.shown >= 16 || g_prog.count == g_prog.coarse) {
       prog_draw();
     }
   }
-  return __real_trn_select(map, k, pg, cfg, rover, cands, capacity, ranked, ranked_cap, res, ws, ws_bytes);
+  return 0;
 }
 
 /* "X0,Y0,X1,Y1" -> 4 finite numbers; 1 ok. */
@@ -101,9 +95,9 @@ int trn_cmd_field(int argc, char **argv) {
   const char *dem_path = NULL, *out = NULL, *area_text = NULL, *ev_out = NULL;
   long coarse = 16;
   double margin = 0.5, change = 1.5;
-  int json = 0;
+  int json = 0, reference = 0;
   selmap_opts_t so;
-  cli_opt_t opts[7 + SELMAP_N_OPTS + 1];
+  cli_opt_t opts[7 + SELMAP_N_OPTS + 2];
   cli_cmd_t cmd = {"field",
                    "Sensor uncertainty field: the predicted uncertainty of the best landmark from every rover\n"
                    "position of an area (paper section 6), computed coarse to fine.",
@@ -148,6 +142,9 @@ int trn_cmd_field(int argc, char **argv) {
   opts[7 + 7].help = "candidate lattice step, cells (default 2, as trn_select_cfg_default)";
   opts[7 + SELMAP_N_OPTS] = (cli_opt_t){"--json", CLI_FLAG, &json, 0, 0, 0, NULL,
                                         "print one JSON object instead of the summary", 0};
+  opts[7 + SELMAP_N_OPTS + 1] = (cli_opt_t){"--reference", CLI_FLAG, &reference, 0, 0, 0, NULL,
+                                            "run the onboard algorithm trn_field (same raster, slower, "
+                                            "less memory) instead of trn_field_fast", 0};
   cmd.n_opts = sizeof opts / sizeof opts[0];
 
   rc = cli_parse(&cmd, argc, argv);
@@ -207,7 +204,10 @@ int trn_cmd_field(int argc, char **argv) {
   fcfg.coarse_step_cells = (int32_t)coarse;
   fcfg.margin_rel = (float)margin;
   fcfg.change_rel = (float)change;
-  wsb = trn_field_workspace_bytes(&w.scfg, &w.map, &w.k);
+  fcfg.progress = field_progress;
+  fcfg.progress_user = NULL;
+  wsb = reference ? trn_field_workspace_bytes(&w.scfg, &w.map, &w.k)
+                  : trn_field_fast_workspace_bytes(&w.scfg, &w.map, &w.k, &w.pg);
   ws = wsb > 0 ? selmap_alloc16(wsb, &wsraw) : NULL;
   fbuf = malloc(n * sizeof *fbuf);
   ev = malloc(n);
@@ -226,7 +226,12 @@ int trn_cmd_field(int argc, char **argv) {
   g_prog.shown = 0;
   g_prog.coarse = lattice_count((long)aw, coarse) * lattice_count((long)ah, coarse);
   clock_gettime(CLOCK_MONOTONIC, &t0);
-  st = trn_field(&w.map, &w.k, &w.pg, &w.scfg, &fcfg, w.heading_grid_rad, &area, &g, ev, n, &stats, ws, wsb);
+  if (reference) {
+    st = trn_field(&w.map, &w.k, &w.pg, &w.scfg, &fcfg, w.heading_grid_rad, &area, &g, ev, n, &stats, ws, wsb);
+  } else {
+    st = trn_field_fast(&w.map, &w.k, &w.pg, &w.scfg, &fcfg, w.heading_grid_rad, &area, &g, ev, n, &stats, ws,
+                        wsb);
+  }
   clock_gettime(CLOCK_MONOTONIC, &t1);
   if (g_prog.active) {
     prog_draw();
@@ -319,6 +324,8 @@ int trn_cmd_field(int argc, char **argv) {
     json_int(&j, "coarse_step_cells", coarse);
     json_int(&j, "stride_cells", so.stride_cells);
     json_num(&j, "seconds", secs);
+    json_str(&j, "algorithm", reference ? "trn_field" : "trn_field_fast");
+    json_int(&j, "workspace_bytes", (long long)wsb);
     selmap_json_config(&j, &so, &w.cfg, w.sigma_h);
     json_end(&j);
   } else {

@@ -870,8 +870,9 @@ int exp_run(const exp_params_t *p, exp_result_t *out, exp_progress_fn progress, 
       }
       tally(&out->without, &s, p->success_cells * p->cell_m, p->cell_m, &ko[t], &eo[t], &e2o[t]);
     }
-    if (progress != NULL) {
-      progress(ctx, t + 1, p->trials);
+    if (progress != NULL && progress(ctx, t + 1, p->trials) != 0) {
+      snprintf(err, err_len, "cancelled after %ld of %ld trials", t + 1, p->trials);
+      goto done;
     }
   }
 

@@ -164,10 +164,12 @@ typedef struct {
   trn_select_cfg_t scfg;        /* the selection rules used (ranges in metres) */
 } exp_result_t;
 
-/* Progress callback: trials done of total. */
-typedef void (*exp_progress_fn)(void *ctx, long done, long total);
+/* Progress and cancel callback: trials done of total, after every trial;
+ * a nonzero return stops the run (exp_run returns -1, err says cancelled). */
+typedef int (*exp_progress_fn)(void *ctx, long done, long total);
 
-/* Run the experiment. Returns 0, or -1 with a one-line reason in err. */
+/* Run the experiment. Returns 0, or -1 with a one-line reason in err
+ * (also when the progress callback cancelled it). */
 int exp_run(const exp_params_t *p, exp_result_t *out, exp_progress_fn progress, void *ctx, char *err,
             size_t err_len);
 

@@ -1,0 +1,74 @@
+/* select_pre.h - internal to the core (not installed): landmark selection
+ * from rover-independent map data prepared once, for the ground path of the
+ * sensor uncertainty field (trn_field_fast, field.c). The answer of one
+ * rover cell is the best uncertainty trn_select gives there, bit for bit:
+ *
+ *  - the kernel index of eq. 9 depends only on the integer offset of a cell
+ *    from the rover cell, so it is tabulated once (joff);
+ *  - eq. 9 is evaluated from the nonzero P_G voxels only (compressed rows,
+ *    ascending x), every output value receiving the same products in the
+ *    same order as trn_prob_local's x and y passes (so the same floats);
+ *  - ln p of the capped distance is stored per voxel with z innermost, and
+ *    each candidate's nine exact int64 window sums come from one pass over
+ *    the region's rows: C_d of the row from the nonzero P voxels, column sums
+ *    of the last patch_cells rows, prefix sums along the row where patches
+ *    end (exact integer sums: the order of the additions does not matter,
+ *    so the same values as trn_select's summed-area tables);
+ *  - a candidate's eq. 6 fit is skipped when the trace bound shows it cannot
+ *    beat the best so far.
+ *
+ * Memory (trn_selpre_bytes): the P_G nonzeros (8 bytes each), ln p per voxel
+ * (4 bytes), the offset table and one position's region buffers. */
+#ifndef TRN_SELECT_PRE_H
+#define TRN_SELECT_PRE_H
+
+#include "trn/select.h"
+
+typedef struct {
+    int32_t x;
+    float v;
+} trn_selpre_src_t;
+
+typedef struct {
+    const trn_map_t *map;
+    const trn_kernels_t *k;
+    const trn_select_cfg_t *cfg;
+    int32_t nx, ny, nz, half, n, m, rmax, side_w, side_h, src_h;
+    int32_t lmax;
+    const uint8_t *joff;          /* kernel index by offset, (2m+1)^2, row-major */
+    const size_t *rowptr;         /* nz * ny + 1 */
+    const trn_selpre_src_t *src;  /* nonzero P_G by (z, y) row, ascending x */
+    const int32_t *lnpv;          /* lnp[min(D, cap)], index (y * nx + x) * nz + z */
+    int32_t *cxy;                 /* candidate centres, 2 per candidate */
+    double *ll;                   /* 9 per candidate */
+    size_t ncap;
+    int32_t *latlo, *lathi;       /* per lattice row: leftmost, rightmost centre */
+    int32_t *nlo, *nhi;           /* per region row: columns inside some patch */
+    uint8_t *touched;             /* per source row: holds an x-pass value */
+    int32_t *ulo, *uhi;           /* per source row: region columns some patch row it reaches needs */
+    uint8_t *hit;                 /* per slice and region row: the y pass wrote to it */
+    const uint8_t *lok;           /* per lattice offset: range and footprint rules hold */
+    const double *latan;          /* per lattice offset: atan2(dy, dx) */
+    int full_pan;                 /* pan limits are the whole circle: no bearing test */
+    float *t;                     /* x pass, src_h rows x side_w */
+    float *p;                     /* eq. 9 over the region, nz slices */
+    int64_t *ring;                /* the nine C_d of the last patch_cells region rows */
+    int64_t *colsum;              /* their column sums, 9 x side_w */
+    int64_t *prefix;              /* prefix sums of colsum along a row, 9 x (side_w + 1) */
+} trn_selpre_t;
+
+/* Bytes of trn_selpre_init's memory for this map and P_G (0 if invalid). */
+size_t trn_selpre_bytes(const trn_select_cfg_t *cfg, const trn_map_t *map,
+                        const trn_kernels_t *k, const trn_vol_f32_t *pg);
+
+/* Prepare s (arguments checked as trn_select does; mem 16-byte aligned). */
+trn_status_t trn_selpre_init(trn_selpre_t *s, const trn_map_t *map, const trn_kernels_t *k,
+                             const trn_vol_f32_t *pg, const trn_select_cfg_t *cfg, void *mem,
+                             size_t bytes);
+
+/* Best uncertainty (m) from rover cell (rx, ry), on the map, heading finite:
+ * TRN_OK, TRN_E_NOTARGET (as trn_select) or TRN_E_SIZE (int64 bound). */
+trn_status_t trn_selpre_best(const trn_selpre_t *s, int32_t rx, int32_t ry, float heading_rad,
+                             double *best_m);
+
+#endif /* TRN_SELECT_PRE_H */
