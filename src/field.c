@@ -2,6 +2,7 @@
 /* field.c - coarse-to-fine sensor uncertainty field (see trn/field.h). */
 #include "trn/field.h"
 #include "select_pre.h"
+#include "ws.h"
 
 #include <math.h>
 #include <string.h>
@@ -31,10 +32,16 @@ trn_status_t trn_field_cfg_check(const trn_field_cfg_t *cfg)
     return TRN_OK;
 }
 
-size_t trn_field_workspace_bytes(const trn_select_cfg_t *scfg, const trn_map_t *map,
-                                 const trn_kernels_t *k)
+/* trn_field's carve: the candidate list, then trn_select's workspace
+ * (base NULL: sizing only). Returns the bytes, 0 if refused. */
+static size_t field_carve(const trn_select_cfg_t *scfg, const trn_map_t *map, const trn_kernels_t *k, void *base,
+                          trn_candidate_t **cands, size_t *ncap, void **sws, size_t *swsb)
 {
     size_t sw, nc;
+    trn_ws_t w;
+    *cands = NULL;
+    *sws = NULL;
+    *ncap = *swsb = 0u;
     if (map == NULL) {
         return 0u;
     }
@@ -43,7 +50,21 @@ size_t trn_field_workspace_bytes(const trn_select_cfg_t *scfg, const trn_map_t *
     if (sw == 0u || nc == 0u) {
         return 0u;
     }
-    return TRN_ALIGN_UP(nc * sizeof(trn_candidate_t)) + sw;
+    trn_ws_begin(&w, base);
+    *cands = (trn_candidate_t *)trn_ws_take(&w, nc * sizeof(trn_candidate_t));
+    *sws = trn_ws_take(&w, sw);
+    *ncap = nc;
+    *swsb = sw;
+    return w.total;
+}
+
+size_t trn_field_workspace_bytes(const trn_select_cfg_t *scfg, const trn_map_t *map,
+                                 const trn_kernels_t *k)
+{
+    trn_candidate_t *c;
+    void *s;
+    size_t nc, sb;
+    return field_carve(scfg, map, k, NULL, &c, &nc, &s, &sb);
 }
 
 typedef struct {
@@ -305,8 +326,8 @@ trn_status_t trn_field(const trn_map_t *map, const trn_kernels_t *k, const trn_v
         return s;
     }
     need = trn_field_workspace_bytes(scfg, map, k);
-    if (need == 0u || ws_bytes < need || ((uintptr_t)ws & 15u) != 0u) {
-        return TRN_E_WORKSPACE;
+    if ((s = trn_ws_check(ws, ws_bytes, need)) != TRN_OK) {
+        return s;
     }
     memset(&f, 0, sizeof f);
     f.map = map;
@@ -319,20 +340,39 @@ trn_status_t trn_field(const trn_map_t *map, const trn_kernels_t *k, const trn_v
     f.h = out->height;
     f.out = out;
     f.ev = evaluated;
-    f.cands = (trn_candidate_t *)ws;
-    f.ncap = trn_select_max_candidates(scfg, map->cfg.terrain.cell_m);
-    f.sws = (uint8_t *)ws + TRN_ALIGN_UP(f.ncap * sizeof(trn_candidate_t));
-    f.swsb = ws_bytes - TRN_ALIGN_UP(f.ncap * sizeof(trn_candidate_t));
+    (void)field_carve(scfg, map, k, ws, &f.cands, &f.ncap, &f.sws, &f.swsb);
     f.st = stats;
     f.pre = NULL;
     return field_run(&f, fcfg);
 }
 
+/* trn_field_fast's carve: the precomputation's header, then its tables
+ * (base NULL: sizing only). Returns the bytes, 0 if refused. */
+static size_t field_fast_carve(const trn_select_cfg_t *scfg, const trn_map_t *map, const trn_kernels_t *k,
+                               const trn_vol_f32_t *pg, void *base, trn_selpre_t **pre, void **tables,
+                               size_t *tables_bytes)
+{
+    const size_t b = trn_selpre_bytes(scfg, map, k, pg);
+    trn_ws_t w;
+    *pre = NULL;
+    *tables = NULL;
+    *tables_bytes = b;
+    if (b == 0u) {
+        return 0u;
+    }
+    trn_ws_begin(&w, base);
+    *pre = (trn_selpre_t *)trn_ws_take(&w, sizeof(trn_selpre_t));
+    *tables = trn_ws_take(&w, b);
+    return w.total;
+}
+
 size_t trn_field_fast_workspace_bytes(const trn_select_cfg_t *scfg, const trn_map_t *map,
                                       const trn_kernels_t *k, const trn_vol_f32_t *pg)
 {
-    const size_t b = trn_selpre_bytes(scfg, map, k, pg);
-    return b == 0u ? 0u : TRN_ALIGN_UP(sizeof(trn_selpre_t)) + b;
+    trn_selpre_t *pre;
+    void *t;
+    size_t tb;
+    return field_fast_carve(scfg, map, k, pg, NULL, &pre, &t, &tb);
 }
 
 trn_status_t trn_field_fast(const trn_map_t *map, const trn_kernels_t *k, const trn_vol_f32_t *pg,
@@ -344,18 +384,25 @@ trn_status_t trn_field_fast(const trn_map_t *map, const trn_kernels_t *k, const 
     field_t f;
     trn_status_t s;
     trn_selpre_t *pre;
+    void *tables;
+    size_t need, tb;
     const size_t hb = TRN_ALIGN_UP(sizeof(trn_selpre_t));
 
     if ((s = field_check(map, k, pg, scfg, fcfg, heading_rad, area, out, evaluated,
                          evaluated_len, stats, ws)) != TRN_OK) {
         return s;
     }
-    if (ws_bytes < hb || ((uintptr_t)ws & 15u) != 0u) {
-        return TRN_E_WORKSPACE;
+    /* sizes refused (need 0): the header at least, and trn_selpre_init says why */
+    need = field_fast_carve(scfg, map, k, pg, NULL, &pre, &tables, &tb);
+    if ((s = trn_ws_check(ws, ws_bytes, need != 0u ? need : hb)) != TRN_OK) {
+        return s;
     }
-    pre = (trn_selpre_t *)ws;
-    if ((s = trn_selpre_init(pre, map, k, pg, scfg, (uint8_t *)ws + hb, ws_bytes - hb)) !=
-        TRN_OK) {
+    (void)field_fast_carve(scfg, map, k, pg, ws, &pre, &tables, &tb);
+    if (pre == NULL) {
+        pre = (trn_selpre_t *)ws;
+        tables = (uint8_t *)ws + hb;
+    }
+    if ((s = trn_selpre_init(pre, map, k, pg, scfg, tables, ws_bytes - hb)) != TRN_OK) {
         return s;
     }
     memset(&f, 0, sizeof f);

@@ -3,6 +3,7 @@
  * tables, eq. 6 fit, ranking (see trn/select.h). */
 #include "trn/select.h"
 #include "select_pre.h"
+#include "ws.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -86,9 +87,31 @@ static int32_t roi_side(const trn_select_cfg_t *cfg, float cell_m, int32_t dim)
     return s < dim ? s : dim;
 }
 
+/* trn_select's carve for a region of w x h cells and nz bins: eq. 9's
+ * volume, trn_prob_local's workspace (lw bytes), the summed-area table and
+ * its row of column sums (base NULL: sizing only). Returns the bytes. The
+ * sizing function carves the largest region, trn_select the one it has. */
+typedef struct {
+    float *p;
+    void *lws;
+    int64_t *sat, *crow;
+} sel_layout_t;
+
+static size_t select_carve(int32_t w, int32_t h, int32_t nz, size_t lw, void *base, sel_layout_t *lay)
+{
+    trn_ws_t c;
+    trn_ws_begin(&c, base);
+    lay->p = (float *)trn_ws_take(&c, (size_t)w * (size_t)h * (size_t)nz * sizeof(float));
+    lay->lws = trn_ws_take(&c, lw);
+    lay->sat = (int64_t *)trn_ws_take(&c, ((size_t)w + 1u) * ((size_t)h + 1u) * sizeof(int64_t));
+    lay->crow = (int64_t *)trn_ws_take(&c, (size_t)w * sizeof(int64_t));
+    return c.total;
+}
+
 size_t trn_select_workspace_bytes(const trn_select_cfg_t *cfg, const trn_map_t *map,
                                   const trn_kernels_t *k)
 {
+    sel_layout_t lay;
     int32_t w, h;
     trn_window_t r;
     size_t lw;
@@ -106,9 +129,7 @@ size_t trn_select_workspace_bytes(const trn_select_cfg_t *cfg, const trn_map_t *
     if (lw == 0u) {
         return 0u;
     }
-    return TRN_ALIGN_UP((size_t)w * (size_t)h * (size_t)map->dist.nz * sizeof(float)) + lw +
-           TRN_ALIGN_UP((size_t)(w + 1) * (size_t)(h + 1) * sizeof(int64_t)) +
-           TRN_ALIGN_UP((size_t)w * sizeof(int64_t));
+    return select_carve(w, h, map->dist.nz, lw, NULL, &lay);
 }
 
 typedef struct {
@@ -221,7 +242,7 @@ trn_status_t trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_
     trn_window_t roi, pw;
     trn_vol_f32_t p;
     int64_t *sat, *crow;
-    uint8_t *base;
+    sel_layout_t lay;
     size_t need, nc = 0u, i, ninf = 0u, nr = 0u, lw, w1;
     int32_t i_x, i_y, d, side_w, side_h, lmax = 0;
     double scale, sep2_cells;
@@ -254,8 +275,8 @@ trn_status_t trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_
         return TRN_E_CAPACITY;
     }
     need = trn_select_workspace_bytes(cfg, map, k);
-    if (need == 0u || ws_bytes < need || ((uintptr_t)ws & 15u) != 0u) {
-        return TRN_E_WORKSPACE;
+    if ((st = trn_ws_check(ws, ws_bytes, need)) != TRN_OK) {
+        return st;
     }
 
     g.nx = map->dist.nx;
@@ -317,24 +338,21 @@ trn_status_t trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_
         return TRN_E_SIZE;
     }
 
-    /* 2. eq. 9 over the region */
-    base = (uint8_t *)ws;
-    p.data = (float *)(void *)base;
+    /* 2. eq. 9 over the region (this region's carve: within the largest one's) */
+    lw = trn_prob_local_workspace_bytes(k, &roi);
+    (void)select_carve(side_w, side_h, pg->nz, lw, ws, &lay);
+    p.data = lay.p;
     p.nx = side_w;
     p.ny = side_h;
     p.nz = pg->nz;
-    base += TRN_ALIGN_UP((size_t)side_w * (size_t)side_h * (size_t)pg->nz * sizeof(float));
-    lw = trn_prob_local_workspace_bytes(k, &roi);
     st = trn_prob_local(k, &cfg->local_sigma, map->cfg.terrain.cell_m, rover->pos, pg, &roi, &p,
-                        base, lw);
+                        lay.lws, lw);
     if (st != TRN_OK) {
         return st;
     }
-    base += lw;
-    sat = (int64_t *)(void *)base;
+    sat = lay.sat;
     w1 = (size_t)side_w + 1u;
-    base += TRN_ALIGN_UP(w1 * ((size_t)side_h + 1u) * sizeof(int64_t));
-    crow = (int64_t *)(void *)base;
+    crow = lay.crow;
 
     /* 3. one summed-area table per pose offset, every window read from it */
     scale = 1.0 / ((double)TRN_SELECT_PROB_SCALE * (double)TRN_LNP_SCALE);
@@ -567,8 +585,11 @@ trn_status_t trn_selpre_init(trn_selpre_t *s, const trn_map_t *map, const trn_ke
         return st;
     }
     nnz = pre_nnz(pg);
-    if (!pre_layout(cfg, map, k, nnz, &L) || bytes < L.total || ((uintptr_t)mem & 15u) != 0u) {
+    if (!pre_layout(cfg, map, k, nnz, &L)) {
         return TRN_E_WORKSPACE;
+    }
+    if ((st = trn_ws_check(mem, bytes, L.total)) != TRN_OK) {
+        return st;
     }
     memset(s, 0, sizeof *s);
     s->map = map;

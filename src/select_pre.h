@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* select_pre.h - internal to the core (not installed): landmark selection
  * from rover-independent map data prepared once, for the ground path of the
  * sensor uncertainty field (trn_field_fast, field.c). The answer of one

@@ -6,6 +6,8 @@
 #include <math.h>
 #include <string.h>
 
+#include "ws.h"
+
 void trn_sigma_global_default(trn_sigma_model_t *m)
 {
     if (m != NULL) {
@@ -234,13 +236,26 @@ static void ypass(const pass_t *p, float *out)
     }
 }
 
+/* The separable pass's carve for a source of rows x cols cells, dest
+ * width w: the x-pass rows (rows x w floats), then the kernel index of each
+ * source cell (base NULL: sizing only). Returns the bytes. */
+static size_t pass_carve(size_t rows, size_t w, size_t cols, void *base, float **tmp, uint8_t **idx)
+{
+    trn_ws_t c;
+    trn_ws_begin(&c, base);
+    *tmp = (float *)trn_ws_take(&c, rows * w * sizeof(float));
+    *idx = (uint8_t *)trn_ws_take(&c, rows * cols);
+    return c.total;
+}
+
 size_t trn_prob_global_workspace_bytes(int32_t nx, int32_t ny)
 {
+    float *t;
+    uint8_t *i;
     if (nx < 1 || ny < 1 || nx > TRN_MAX_DIM || ny > TRN_MAX_DIM) {
         return 0u;
     }
-    return TRN_ALIGN_UP((size_t)nx * (size_t)ny * sizeof(float)) +
-           TRN_ALIGN_UP((size_t)nx * (size_t)ny);
+    return pass_carve((size_t)ny, (size_t)nx, (size_t)nx, NULL, &t, &i);
 }
 
 static trn_status_t prob_global(const trn_kernels_t *k, const trn_sigma_model_t *m, float cell_m,
@@ -252,6 +267,7 @@ static trn_status_t prob_global(const trn_kernels_t *k, const trn_sigma_model_t 
     trn_status_t st;
     pass_t p;
     size_t need, plane, s;
+    uint8_t *idx;
     int32_t z;
 
     if (sensors == NULL || occ == NULL || pg == NULL || ws == NULL || pg->data == NULL) {
@@ -273,8 +289,8 @@ static trn_status_t prob_global(const trn_kernels_t *k, const trn_sigma_model_t 
         }
     }
     need = trn_prob_global_workspace_bytes(occ->nx, occ->ny);
-    if (ws_bytes < need || ((uintptr_t)ws & 15u) != 0u) {
-        return TRN_E_WORKSPACE;
+    if ((st = trn_ws_check(ws, ws_bytes, need)) != TRN_OK) {
+        return st;
     }
     plane = (size_t)occ->nx * (size_t)occ->ny;
     p.k = k;
@@ -285,10 +301,9 @@ static trn_status_t prob_global(const trn_kernels_t *k, const trn_sigma_model_t 
     p.dw = p.sw;
     p.sww = p.dww = occ->nx;
     p.swh = p.dwh = occ->ny;
-    p.tmp = (float *)ws;
-    p.idx = (const uint8_t *)ws + TRN_ALIGN_UP(plane * sizeof(float));
-    kernel_map(k, m, cell_m, sensors, n_sensors, &p.sw, p.sww, p.swh, sg, (uint8_t *)ws +
-               TRN_ALIGN_UP(plane * sizeof(float)));
+    (void)pass_carve((size_t)occ->ny, (size_t)occ->nx, (size_t)occ->nx, ws, &p.tmp, &idx);
+    p.idx = idx;
+    kernel_map(k, m, cell_m, sensors, n_sensors, &p.sw, p.sww, p.swh, sg, idx);
     for (z = 0; z < occ->nz; ++z) {
         xpass_u8(&p, occ->data + (size_t)z * plane, occ->nx, zero_occupied);
         ypass(&p, pg->data + (size_t)z * plane);
@@ -376,8 +391,11 @@ size_t trn_prob_local_workspace_bytes(const trn_kernels_t *k, const trn_window_t
         return 0u;
     }
     /* source rows <= h + 2r, source cols <= w + 2r */
-    return TRN_ALIGN_UP((size_t)(h + 2 * r) * (size_t)w * sizeof(float)) +
-           TRN_ALIGN_UP((size_t)(h + 2 * r) * (size_t)(w + 2 * r));
+    {
+        float *t;
+        uint8_t *i;
+        return pass_carve((size_t)h + 2u * (size_t)r, (size_t)w, (size_t)w + 2u * (size_t)r, NULL, &t, &i);
+    }
 }
 
 trn_status_t trn_prob_local(const trn_kernels_t *k, const trn_sigma_model_t *m, float cell_m,
@@ -387,6 +405,7 @@ trn_status_t trn_prob_local(const trn_kernels_t *k, const trn_sigma_model_t *m, 
     trn_status_t st;
     pass_t ps;
     size_t gplane, lplane;
+    uint8_t *idx;
     int32_t w, h, z;
 
     if (pg == NULL || roi == NULL || p == NULL || ws == NULL || pg->data == NULL ||
@@ -410,8 +429,8 @@ trn_status_t trn_prob_local(const trn_kernels_t *k, const trn_sigma_model_t *m, 
     if (p->nx != w || p->ny != h || p->nz != pg->nz) {
         return TRN_E_SIZE;
     }
-    if (ws_bytes < trn_prob_local_workspace_bytes(k, roi) || ((uintptr_t)ws & 15u) != 0u) {
-        return TRN_E_WORKSPACE;
+    if ((st = trn_ws_check(ws, ws_bytes, trn_prob_local_workspace_bytes(k, roi))) != TRN_OK) {
+        return st;
     }
     ps.k = k;
     source_window(k, m, cell_m, rover, roi, pg->nx, pg->ny, &ps.sw);
@@ -420,11 +439,10 @@ trn_status_t trn_prob_local(const trn_kernels_t *k, const trn_sigma_model_t *m, 
     ps.swh = ps.sw.y1 - ps.sw.y0 + 1;
     ps.dww = w;
     ps.dwh = h;
-    ps.tmp = (float *)ws;
-    ps.idx = (const uint8_t *)ws +
-             TRN_ALIGN_UP((size_t)ps.swh * (size_t)w * sizeof(float));
-    kernel_map(k, m, cell_m, &rover, 1u, &ps.sw, ps.sww, ps.swh,
-               NULL, (uint8_t *)ws + TRN_ALIGN_UP((size_t)ps.swh * (size_t)w * sizeof(float)));
+    /* this source's carve: within the sizing's (rows <= h + 2r, cols <= w + 2r) */
+    (void)pass_carve((size_t)ps.swh, (size_t)w, (size_t)ps.sww, ws, &ps.tmp, &idx);
+    ps.idx = idx;
+    kernel_map(k, m, cell_m, &rover, 1u, &ps.sw, ps.sww, ps.swh, NULL, idx);
     gplane = (size_t)pg->nx * (size_t)pg->ny;
     lplane = (size_t)w * (size_t)h;
     for (z = 0; z < pg->nz; ++z) {

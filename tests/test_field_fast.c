@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* test_field_fast.c - the ground path of the sensor uncertainty field
  * (trn_field_fast, trn_field_fast_workspace_bytes) and the progress/cancel
  * callback of both field functions (field.h).

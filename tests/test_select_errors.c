@@ -224,6 +224,7 @@ static void test_prob_global_clauses(void **state)
     pb.nz -= 1;
     assert_int_equal(PGM(&m, 1, &pb, ws, wsb), TRN_E_SIZE);
     assert_int_equal(PGM(&m, 1, &pg, ws, wsb - 1u), TRN_E_WORKSPACE);
+    assert_int_equal(PGM(&m, 1, &pg, ws + 1, wsb), TRN_E_WORKSPACE); /* misaligned */
 #undef PGM
     free(ws);
     free(pd);
