@@ -86,10 +86,28 @@ typedef struct {
     int64_t proxy; /* score of the seed's best pose at this heading */
 } heading_t;
 
+/* The search's context: map, points, window, headings, exclusion. */
+typedef struct {
+    const trn_map_t *map;
+    const trn_point_t *pts;
+    size_t n;
+    const trn_window_t *win;
+    const trn_heading_cfg_t *cfg;
+    double step;
+    int32_t kk;
+    const trn_exclusion_t *ex; /* with ex, poses within ex of headings |k - ex_k| <= ex_steps are skipped */
+    int32_t ex_k, ex_steps;
+    trn_point_t *buf;
+    heading_t *hs; /* 2 kk + 1 */
+    void *sws;
+    size_t swb;
+} hsearch_t;
+
 /* The fit's samples and result, in the workspace (kept off the stack). */
 typedef struct {
     double ll[27];
     trn_peak3_t pk;
+    hsearch_t h; /* the search's context */
 } fit_t;
 
 /* The workspace: the turned points, the fit, the search's heading list,
@@ -173,22 +191,6 @@ static void sort_headings(heading_t *hs, int32_t m)
     }
 }
 
-/* The search's context: map, points, window, headings, exclusion. */
-typedef struct {
-    const trn_map_t *map;
-    const trn_point_t *pts;
-    size_t n;
-    const trn_window_t *win;
-    const trn_heading_cfg_t *cfg;
-    double step;
-    int32_t kk;
-    const trn_exclusion_t *ex; /* with ex, poses within ex of headings |k - ex_k| <= ex_steps are skipped */
-    int32_t ex_k, ex_steps;
-    trn_point_t *buf;
-    heading_t *hs; /* 2 kk + 1 */
-    void *sws;
-    size_t swb;
-} hsearch_t;
 
 /* Search heading k for a pose beating (best, best_k) under the tie rule
  * (score, then tie rank of the heading, then trn_search_bb's order), or any
@@ -313,7 +315,7 @@ trn_status_t trn_localize_points_heading(const trn_map_t *map, const trn_point_t
     trn_status_t st, fit_st;
     trn_point_t *buf;
     heading_t *hsl;
-    hsearch_t h;
+    hsearch_t *h;
     int64_t margin;
     void *sws;
     size_t swb, need;
@@ -342,6 +344,7 @@ trn_status_t trn_localize_points_heading(const trn_map_t *map, const trn_point_t
         return st;
     }
     (void)heading_carve(map, n, win, ws, &buf, &fit, &hsl, &sws, &swb);
+    h = &fit->h;
     out->step_rad = step;
     out->half_steps = kk;
     if (kk == 0) {
@@ -349,21 +352,21 @@ trn_status_t trn_localize_points_heading(const trn_map_t *map, const trn_point_t
     }
 
     /* the best (x, y, heading): exact, each heading above the best so far */
-    h.map = map;
-    h.pts = pts;
-    h.n = n;
-    h.win = win;
-    h.cfg = cfg;
-    h.step = step;
-    h.kk = kk;
-    h.ex = NULL;
-    h.ex_k = 0;
-    h.ex_steps = 0;
-    h.buf = buf;
-    h.hs = hsl;
-    h.sws = sws;
-    h.swb = swb;
-    if ((st = search_all(&h, 0, NULL, &best, &bk, &stats)) != TRN_OK) {
+    h->map = map;
+    h->pts = pts;
+    h->n = n;
+    h->win = win;
+    h->cfg = cfg;
+    h->step = step;
+    h->kk = kk;
+    h->ex = NULL;
+    h->ex_k = 0;
+    h->ex_steps = 0;
+    h->buf = buf;
+    h->hs = hsl;
+    h->sws = sws;
+    h->swb = swb;
+    if ((st = search_all(h, 0, NULL, &best, &bk, &stats)) != TRN_OK) {
         return st;
     }
     out->loc.refined = 0;
@@ -414,12 +417,12 @@ trn_status_t trn_localize_points_heading(const trn_map_t *map, const trn_point_t
     ex.cy = best.y;
     ex.radius = r;
     out->loc.exclusion_cells = r;
-    h.ex = &ex;
-    h.ex_k = bk;
-    h.ex_steps = 2 * kk; /* every heading */
+    h->ex = &ex;
+    h->ex_k = bk;
+    h->ex_steps = 2 * kk; /* every heading */
     /* scores are sums of n int32 table entries, n < 2^31: the difference cannot wrap */
     margin = best.score - (int64_t)TRN_HEADING_MARGIN_NATS * (int64_t)TRN_LNP_SCALE;
-    st = search_all(&h, bk, &margin, &second, &sk, &s2);
+    st = search_all(h, bk, &margin, &second, &sk, &s2);
     out->loc.stats = stats; /* the first search's work, as trn_localize_points */
     if (st == TRN_OK) {
         out->loc.has_second = 1;
