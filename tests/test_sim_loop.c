@@ -4,7 +4,7 @@
  * optimism").
  *
  * Per seeded run, as tests/integration/kt_loop.c does over CAN in the VM: a
- * synthetic rock field (tests/support/synth) as the global DEM at 0.1 m and
+ * synthetic rock field (tools/support/synth) as the global DEM at 0.1 m and
  * as the simulator's truth at 0.05 m; a true rover pose and a believed one
  * up to 0.8 m off; the landmark selected from the belief (trn_select); the
  * mast pointed at it from the belief (trn_mast_point_at); the stereo head

@@ -4,7 +4,7 @@
  * (trn + port) against the mast and stereo-head simulator on vcan, with the
  * stereo trigger on a gpio-sim line.
  *
- * Per seeded run: a synthetic global DEM (tests/support/synth, 19.2 m at
+ * Per seeded run: a synthetic global DEM (tools/support/synth, 19.2 m at
  * 0.1 m) -> trn_map_build + eq. 8 probability map -> trn_select picks the
  * target from the rover's believed position (the truth plus a prior offset
  * of up to 0.8 m per axis; bearings within the mast's pan limits) -> trn_mast_point_at -> MAST_CMD until MAST_STATUS

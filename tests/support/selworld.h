@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* selworld.h - a prepared global map with its eq. 8 probability map, for the
- * landmark-selection tests, tools and benchmarks (heap memory; not core). */
+ * landmark-selection tests (heap memory; not core). Test-only: what the tools
+ * share with the tests is tools/support/. */
 #ifndef TRN_TEST_SELWORLD_H
 #define TRN_TEST_SELWORLD_H
 #include "trn/trn.h"

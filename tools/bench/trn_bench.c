@@ -4,7 +4,7 @@
  *   trn_bench [--sizes 256,512] [--repeats N] [--seed S] [--quick] [--help]
  *
  * For each global map size N (N x N cells of 0.1 m, synthetic rocky terrain
- * from tests/support/synth.h, trn_map_cfg_default: 16 height bins, cap 60):
+ * from tools/support/synth.h, trn_map_cfg_default: 16 height bins, cap 60):
  *
  *   chamfer   trn_chamfer3d on the map's occupancy volume, against
  *             - two plain streaming passes over the same voxels, forward

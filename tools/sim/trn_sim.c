@@ -5,7 +5,7 @@
  *           [--pose X,Y,HEADING] [--run-ms MS] [--trigger VALUE_FILE]
  *           [--fault none|drop|corrupt|silent|stuck-pan|bus-off] [--fault-arg N]
  *
- * Terrain: tests/support/synth (rocks on a rolling background), size x size
+ * Terrain: tools/support/synth (rocks on a rolling background), size x size
  * cells of --cell metres from (0, 0); the rover stands at --pose.
  * Runs until --run-ms or SIGINT/SIGTERM, then prints its counters. */
 #include <signal.h>

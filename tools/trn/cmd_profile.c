@@ -4,7 +4,7 @@
  * instructions under callgrind, with the workspace each needs and its share
  * of a target budget.
  *
- * Input: a deterministic synthetic terrain made in-process (tests/support
+ * Input: a deterministic synthetic terrain made in-process (tools/support
  * synth: the main job's rock field, 15 % cover, radii 5-30 cm, 0.1 m cells),
  * a rover near the map centre whose local map is rendered at a sub-cell
  * offset, a prior a few cells off, and the map centre as the global map's

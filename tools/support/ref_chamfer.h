@@ -1,8 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* ref_chamfer.h - slow, obvious oracles for the chamfer transform (tests and
  * benchmarks only; they allocate with malloc and are not part of the core). */
-#ifndef TRN_TEST_REF_CHAMFER_H
-#define TRN_TEST_REF_CHAMFER_H
+#ifndef TRN_SUPPORT_REF_CHAMFER_H
+#define TRN_SUPPORT_REF_CHAMFER_H
 #include <stdint.h>
 
 /**

@@ -1,8 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* rng.h - deterministic seeded generator for tests, tools and benchmarks
  * (splitmix64). The core itself has no random state. */
-#ifndef TRN_TEST_RNG_H
-#define TRN_TEST_RNG_H
+#ifndef TRN_SUPPORT_RNG_H
+#define TRN_SUPPORT_RNG_H
 #include <stdint.h>
 
 typedef struct { uint64_t s; } trn_rng_t;

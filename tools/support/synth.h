@@ -2,8 +2,8 @@
 /* synth.h - analytic synthetic terrain for tests, tools and benchmarks:
  * rolling background plus ellipsoidal rocks, evaluated at any position so a
  * local map can be rendered at sub-cell offsets ("resampled terrain"). */
-#ifndef TRN_TEST_SYNTH_H
-#define TRN_TEST_SYNTH_H
+#ifndef TRN_SUPPORT_SYNTH_H
+#define TRN_SUPPORT_SYNTH_H
 #include <stddef.h>
 #include <stdint.h>
 
