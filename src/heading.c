@@ -95,8 +95,7 @@ typedef struct {
     const trn_heading_cfg_t *cfg;
     double step;
     int32_t kk;
-    const trn_exclusion_t *ex; /* with ex, poses within ex of headings |k - ex_k| <= ex_steps are skipped */
-    int32_t ex_k, ex_steps;
+    const trn_exclusion_t *ex; /* poses in this zone are skipped at every heading */
     trn_point_t *buf;
     heading_t *hs; /* 2 kk + 1 */
     void *sws;
@@ -147,15 +146,14 @@ size_t trn_localize_heading_workspace_bytes(const trn_map_t *map, size_t n, cons
 /* k of the i-th heading searched: 0, -1, 1, -2, 2, ... */
 static int32_t step_of(int32_t i) { return (i % 2 == 1) ? -(i + 1) / 2 : i / 2; }
 
-/* The points turned to heading step k, ordered for the search. */
-static trn_status_t turn(const trn_point_t *pts, size_t n, const trn_heading_cfg_t *cfg, double step,
-                         int32_t k, int32_t nz, trn_point_t *buf)
+/* The points turned to heading step k, ordered for the search. Neither
+ * call can fail: trn_localize_points_heading checked every point's offsets
+ * and bins first, and n is below UINT32_MAX. */
+static void turn(const trn_point_t *pts, size_t n, const trn_heading_cfg_t *cfg, double step, int32_t k,
+                 int32_t nz, trn_point_t *buf)
 {
-    trn_status_t st = trn_points_rotate(pts, n, cfg->center_rad + (double)k * step, buf);
-    if (st == TRN_OK) {
-        st = trn_points_order(buf, n, nz);
-    }
-    return st;
+    (void)trn_points_rotate(pts, n, cfg->center_rad + (double)k * step, buf);
+    (void)trn_points_order(buf, n, nz);
 }
 
 /* Add a search's work to the result's counters. */
@@ -194,25 +192,25 @@ static void sort_headings(heading_t *hs, int32_t m)
 
 /* Search heading k for a pose beating (best, best_k) under the tie rule
  * (score, then tie rank of the heading, then trn_search_bb's order), or any
- * pose above *floor when nothing is found yet (floor NULL: any pose). */
-static trn_status_t search_one(hsearch_t *h, int32_t k, const int64_t *floor, int *found, trn_best_t *best,
-                               int32_t *best_k, trn_search_stats_t *stats)
+ * pose above *floor when nothing is found yet (floor NULL: any pose). The
+ * searches can only answer TRN_OK or TRN_E_NODATA here: the map, window,
+ * points and workspace were checked before (trn_localize_points_heading). */
+static void search_one(hsearch_t *h, int32_t k, const int64_t *floor, int *found, trn_best_t *best,
+                       int32_t *best_k, trn_search_stats_t *stats)
 {
-    const trn_exclusion_t *e = (h->ex != NULL && abs(k - h->ex_k) <= h->ex_steps) ? h->ex : NULL;
     trn_search_stats_t s = {0u, 0u};
     trn_best_t b;
-    trn_status_t st = turn(h->pts, h->n, h->cfg, h->step, k, h->map->dist.nz, h->buf);
-    if (st != TRN_OK) {
-        return st;
-    }
+    trn_status_t st;
+    turn(h->pts, h->n, h->cfg, h->step, k, h->map->dist.nz, h->buf);
     if (*found) { /* a tie counts only when this heading ranks first */
         const int64_t f = tie_rank(k) < tie_rank(*best_k) ? best->score - 1 : best->score;
-        st = trn_search_bb_above(&h->map->pyr, &h->map->lnp, h->buf, h->n, h->win, e, f, h->sws, h->swb, &b, &s);
-    } else if (floor != NULL) {
-        st = trn_search_bb_above(&h->map->pyr, &h->map->lnp, h->buf, h->n, h->win, e, *floor, h->sws, h->swb, &b,
+        st = trn_search_bb_above(&h->map->pyr, &h->map->lnp, h->buf, h->n, h->win, h->ex, f, h->sws, h->swb, &b,
                                  &s);
+    } else if (floor != NULL) {
+        st = trn_search_bb_above(&h->map->pyr, &h->map->lnp, h->buf, h->n, h->win, h->ex, *floor, h->sws, h->swb,
+                                 &b, &s);
     } else {
-        st = trn_search_bb(&h->map->pyr, &h->map->lnp, h->buf, h->n, h->win, e, h->sws, h->swb, &b, &s);
+        st = trn_search_bb(&h->map->pyr, &h->map->lnp, h->buf, h->n, h->win, h->ex, h->sws, h->swb, &b, &s);
     }
     add_stats(stats, &s);
     if (st == TRN_OK) {
@@ -220,33 +218,28 @@ static trn_status_t search_one(hsearch_t *h, int32_t k, const int64_t *floor, in
         *best_k = k;
         *found = 1;
     }
-    return st == TRN_E_NODATA ? TRN_OK : st;
 }
 
 /* The best pose over every heading (exactly: each heading is searched by
- * branch-and-bound above the best found so far). The seed heading first;
- * the others in the order of the score the seed's answer has at them, so a
- * good floor comes early and the rest stop after a few blocks. */
+ * branch-and-bound above the best found so far), TRN_OK or TRN_E_NODATA.
+ * The seed heading first; the others in the order of the score the seed's
+ * answer has at them, so a good floor comes early and the rest stop after a
+ * few blocks. */
 static trn_status_t search_all(hsearch_t *h, int32_t seed, const int64_t *floor, trn_best_t *best,
                                int32_t *best_k, trn_search_stats_t *stats)
 {
     int32_t i, m = 0;
     int found = 0;
-    trn_status_t st = search_one(h, seed, floor, &found, best, best_k, stats);
-    if (st != TRN_OK) {
-        return st;
-    }
+    search_one(h, seed, floor, &found, best, best_k, stats);
     for (i = 0; i <= 2 * h->kk; ++i) {
         const int32_t k = step_of(i);
         int64_t p = 0; /* ordering proxy; all equal when the seed found nothing */
         if (k == seed) {
             continue;
         }
-        if (found) {
-            if ((st = turn(h->pts, h->n, h->cfg, h->step, k, h->map->dist.nz, h->buf)) != TRN_OK ||
-                (st = trn_score_pose(&h->map->dist, &h->map->lnp, h->buf, h->n, best->x, best->y, &p)) != TRN_OK) {
-                return st;
-            }
+        if (found) { /* a pose inside the map's range: cannot fail */
+            turn(h->pts, h->n, h->cfg, h->step, k, h->map->dist.nz, h->buf);
+            (void)trn_score_pose(&h->map->dist, &h->map->lnp, h->buf, h->n, best->x, best->y, &p);
         }
         h->hs[m].k = k;
         h->hs[m].proxy = p;
@@ -254,48 +247,35 @@ static trn_status_t search_all(hsearch_t *h, int32_t seed, const int64_t *floor,
     }
     sort_headings(h->hs, m);
     for (i = 0; i < m; ++i) {
-        if ((st = search_one(h, h->hs[i].k, floor, &found, best, best_k, stats)) != TRN_OK) {
-            return st;
-        }
+        search_one(h, h->hs[i].k, floor, &found, best, best_k, stats);
     }
     return found ? TRN_OK : TRN_E_NODATA;
 }
 
-/* ln L, nats, on the 3 x 3 x 3 grid around (x, y, k). */
-static trn_status_t grid27(const trn_map_t *map, const trn_point_t *pts, size_t n, const trn_heading_cfg_t *cfg,
-                           double step, int32_t x, int32_t y, int32_t k, trn_point_t *buf, double ll[27])
+/* ln L, nats, on the 3 x 3 x 3 grid around (x, y, k) (checked points, poses
+ * within one cell of the window: the scorer cannot fail). */
+static void grid27(const trn_map_t *map, const trn_point_t *pts, size_t n, const trn_heading_cfg_t *cfg,
+                   double step, int32_t x, int32_t y, int32_t k, trn_point_t *buf, double ll[27])
 {
     int32_t dk, i;
     for (dk = -1; dk <= 1; ++dk) {
-        trn_status_t st = trn_points_rotate(pts, n, cfg->center_rad + (double)(k + dk) * step, buf);
-        if (st != TRN_OK) {
-            return st;
-        }
+        (void)trn_points_rotate(pts, n, cfg->center_rad + (double)(k + dk) * step, buf);
         for (i = 0; i < 9; ++i) {
-            int64_t s;
-            if ((st = trn_score_pose(&map->dist, &map->lnp, buf, n, x + i % 3 - 1, y + i / 3 - 1, &s)) != TRN_OK) {
-                return st;
-            }
+            int64_t s = 0;
+            (void)trn_score_pose(&map->dist, &map->lnp, buf, n, x + i % 3 - 1, y + i / 3 - 1, &s);
             ll[(dk + 1) * 9 + i] = (double)s / (double)TRN_LNP_SCALE;
         }
     }
-    return TRN_OK;
 }
 
-/* W = 0: trn_localize_points on the points turned by the centre. */
-static trn_status_t fixed_heading(const trn_map_t *map, const trn_point_t *pts, size_t n, const trn_window_t *win,
-                                  const trn_heading_cfg_t *cfg, trn_point_t *buf, void *sws, size_t swb,
+/* W = 0: trn_localize_points on the points turned by the centre (buf, by
+ * the caller's check); its status, the result filled in either case. */
+static trn_status_t fixed_heading(const trn_map_t *map, size_t n, const trn_window_t *win,
+                                  const trn_heading_cfg_t *cfg, const trn_point_t *buf, void *sws, size_t swb,
                                   trn_heading_result_t *out)
 {
-    trn_status_t st = trn_points_rotate(pts, n, cfg->center_rad, buf);
+    const trn_status_t st = trn_localize_points(map, buf, n, win, sws, swb, &out->loc);
     int32_t i;
-    if (st != TRN_OK) {
-        return st;
-    }
-    st = trn_localize_points(map, buf, n, win, sws, swb, &out->loc);
-    if (st != TRN_OK && st != TRN_E_ILLCOND) {
-        return st;
-    }
     out->heading_rad = cfg->center_rad;
     out->sigma_heading_rad = 0.0;
     for (i = 0; i < 9; ++i) {
@@ -318,7 +298,7 @@ trn_status_t trn_localize_points_heading(const trn_map_t *map, const trn_point_t
     hsearch_t *h;
     int64_t margin;
     void *sws;
-    size_t swb, need;
+    size_t swb, need, i;
     double step, cell;
     fit_t *fit;
     int32_t kk, bk = 0, r, sk = 0;
@@ -345,10 +325,19 @@ trn_status_t trn_localize_points_heading(const trn_map_t *map, const trn_point_t
     }
     (void)heading_carve(map, n, win, ws, &buf, &fit, &hsl, &sws, &swb);
     h = &fit->h;
+    /* every point turnable and in the map's bins, so that nothing below can fail */
+    if ((st = trn_points_rotate(pts, n, cfg->center_rad, buf)) != TRN_OK) {
+        return st;
+    }
+    for (i = 0; i < n; ++i) {
+        if (pts[i].z < 0 || pts[i].z >= map->dist.nz) {
+            return TRN_E_ARG;
+        }
+    }
     out->step_rad = step;
     out->half_steps = kk;
     if (kk == 0) {
-        return fixed_heading(map, pts, n, win, cfg, buf, sws, swb, out);
+        return fixed_heading(map, n, win, cfg, buf, sws, swb, out);
     }
 
     /* the best (x, y, heading): exact, each heading above the best so far */
@@ -360,15 +349,11 @@ trn_status_t trn_localize_points_heading(const trn_map_t *map, const trn_point_t
     h->step = step;
     h->kk = kk;
     h->ex = NULL;
-    h->ex_k = 0;
-    h->ex_steps = 0;
     h->buf = buf;
     h->hs = hsl;
     h->sws = sws;
     h->swb = swb;
-    if ((st = search_all(h, 0, NULL, &best, &bk, &stats)) != TRN_OK) {
-        return st;
-    }
+    (void)search_all(h, 0, NULL, &best, &bk, &stats); /* n > 0 points, no zone: always a best */
     out->loc.refined = 0;
     out->loc.misfit = 0;
     out->loc.ix = best.x;
@@ -380,16 +365,13 @@ trn_status_t trn_localize_points_heading(const trn_map_t *map, const trn_point_t
     out->best_step = bk;
 
     /* eq. 6 in (x, y, heading) */
-    if ((st = grid27(map, pts, n, cfg, step, best.x, best.y, bk, buf, fit->ll)) != TRN_OK) {
-        return st;
-    }
+    grid27(map, pts, n, cfg, step, best.x, best.y, bk, buf, fit->ll);
     fit_st = trn_peak_fit3(fit->ll, &fit->pk);
     cell = (double)map->cfg.terrain.cell_m;
     {
         const double sc[3] = {cell, cell, step};
-        int32_t i;
-        for (i = 0; i < 9; ++i) {
-            out->cov3[i] = fit->pk.covariance[i] * sc[i / 3] * sc[i % 3];
+        for (i = 0; i < 9u; ++i) {
+            out->cov3[i] = fit->pk.covariance[i] * sc[i / 3u] * sc[i % 3u];
         }
     }
     out->loc.x = (double)best.x + fit->pk.offset[0];
@@ -408,18 +390,15 @@ trn_status_t trn_localize_points_heading(const trn_map_t *map, const trn_point_t
      * same position at another heading is this peak's own tail) */
     r = map->cfg.min_exclusion_cells;
     if (fit_st == TRN_OK) {
-        const double smax = fit->pk.sigma[0] > fit->pk.sigma[1] ? fit->pk.sigma[0] : fit->pk.sigma[1];
-        if (4.0 * smax > (double)r) {
-            r = 4.0 * smax < (double)TRN_MAX_DIM ? (int32_t)ceil(4.0 * smax) : TRN_MAX_DIM;
-        }
+        /* finite sigmas (a fitted peak); beyond the map no zone is wider */
+        const double r4 = ceil(fmin(4.0 * fmax(fit->pk.sigma[0], fit->pk.sigma[1]), (double)TRN_MAX_DIM));
+        r = (int32_t)fmax((double)r, r4);
     }
     ex.cx = best.x;
     ex.cy = best.y;
     ex.radius = r;
     out->loc.exclusion_cells = r;
     h->ex = &ex;
-    h->ex_k = bk;
-    h->ex_steps = 2 * kk; /* every heading */
     /* scores are sums of n int32 table entries, n < 2^31: the difference cannot wrap */
     margin = best.score - (int64_t)TRN_HEADING_MARGIN_NATS * (int64_t)TRN_LNP_SCALE;
     st = search_all(h, bk, &margin, &second, &sk, &s2);
@@ -429,18 +408,14 @@ trn_status_t trn_localize_points_heading(const trn_map_t *map, const trn_point_t
         out->loc.second_x = second.x;
         out->loc.second_y = second.y;
         out->loc.ll_second = (double)second.score / (double)TRN_LNP_SCALE;
-        if ((st = trn_failure_probability(out->loc.ll_best, out->loc.ll_second,
-                                          &out->loc.failure_probability)) != TRN_OK) {
-            return st;
-        }
-    } else if (st == TRN_E_NODATA) {
+        /* finite, and at most the best's (the best is the maximum): cannot fail */
+        (void)trn_failure_probability(out->loc.ll_best, out->loc.ll_second, &out->loc.failure_probability);
+    } else { /* TRN_E_NODATA: nothing outside the zone within the margin */
         out->loc.has_second = 0;
         out->loc.second_x = best.x;
         out->loc.second_y = best.y;
         out->loc.ll_second = out->loc.ll_best;
         out->loc.failure_probability = 0.0;
-    } else {
-        return st;
     }
     (void)sk;
     return fit_st == TRN_OK ? TRN_OK : TRN_E_ILLCOND;

@@ -45,6 +45,7 @@ static world_t g_w;
 static synth_rock_t g_rocks[2000];
 TRN_WORKSPACE_DECLARE(g_mapbuf, 8u << 20);
 TRN_WORKSPACE_DECLARE(g_ws, 4u << 20);
+TRN_WORKSPACE_DECLARE(g_mapbuf2, 8u << 20);
 static trn_point_t g_pts[MAXPTS], g_rot[MAXPTS];
 
 /* A 0.1 m rock field (the paper's terrain, as tests/test_localize.c). */
@@ -148,6 +149,12 @@ static void test_rotate_formula(void **state)
     assert_int_equal(trn_points_rotate(in, 1, 0.1, out), TRN_E_ARG);
     in[0].x = 0; in[0].y = -16384;
     assert_int_equal(trn_points_rotate(in, 1, 0.1, out), TRN_E_ARG);
+    in[0].y = 16384;
+    assert_int_equal(trn_points_rotate(in, 1, 0.1, out), TRN_E_ARG);
+    in[0].x = -16384; in[0].y = 0;
+    assert_int_equal(trn_points_rotate(in, 1, 0.1, out), TRN_E_ARG);
+    in[0].x = 16383; in[0].y = -16383; /* the largest offsets turn within int16_t */
+    assert_int_equal(trn_points_rotate(in, 1, 0.7, out), TRN_OK);
 }
 
 static void test_steps(void **state)
@@ -189,11 +196,16 @@ static void test_steps(void **state)
     c.window_rad = 0.5;
     c.step_rad = NAN;
     assert_int_equal(trn_heading_steps(p, 3, &c, &step, &k), TRN_E_ARG);
+    c.step_rad = 3.5; /* over a half turn */
+    assert_int_equal(trn_heading_steps(p, 3, &c, &step, &k), TRN_E_ARG);
     c.step_rad = 1e-4; /* 10001 headings: too fine */
     assert_int_equal(trn_heading_steps(p, 3, &c, &step, &k), TRN_E_SIZE);
     c.step_rad = 0.0; /* automatic, but no lever arm */
     p[0].x = p[0].y = p[1].x = p[1].y = p[2].x = p[2].y = 0;
     assert_int_equal(trn_heading_steps(p, 3, &c, &step, &k), TRN_E_NODATA);
+    c.window_rad = 0.0; /* no lever arm, but no heading searched either */
+    assert_int_equal(trn_heading_steps(p, 3, &c, &step, &k), TRN_OK);
+    assert_int_equal(k, 0);
 }
 
 /* ln L of an analytic quadratic c + g.d - d^T A d / 2 on the 3x3x3 grid. */
@@ -530,6 +542,20 @@ static void test_bad_inputs(void **state)
     /* window out of range, inverted */
     assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &off, &c, g_ws, wb, &res), TRN_E_RANGE);
     assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &inv, &c, g_ws, wb, &res), TRN_E_RANGE);
+    {
+        const trn_window_t offs[4] = {{-1, 50, 70, 70}, {50, -1, 70, 70}, {50, 50, 70, N}, {50, 60, 70, 50}};
+        int i;
+        for (i = 0; i < 4; ++i) {
+            assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &offs[i], &c, g_ws, wb, &res),
+                             TRN_E_RANGE);
+        }
+    }
+    { /* the truth at the window's edge: found there, and flagged */
+        trn_window_t edge = {60, 55, 70, 65};
+        assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &edge, &c, g_ws, wb, &res), TRN_OK);
+        assert_int_equal(res.loc.ix, 60);
+        assert_int_equal(res.loc.on_window_edge, 1);
+    }
     /* heading window out of range, NaN heading, step too fine */
     bc = c; bc.window_rad = 4.0;
     assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &win, &bc, g_ws, wb, &res), TRN_E_ARG);
@@ -593,6 +619,21 @@ static void test_dem_entry(void **state)
     assert_true(a.loc.x == b.loc.x && a.loc.y == b.loc.y && a.heading_rad == b.heading_rad);
     assert_true(a.loc.ll_best == b.loc.ll_best && a.loc.failure_probability == b.loc.failure_probability);
     assert_true(fabs(a.heading_rad - 4.0 * DEG) < 1.0 * DEG && fabs(a.loc.x - 59.3) < 1.0 && fabs(a.loc.y - 57.8) < 1.0);
+    { /* the local filter against the map's low-pass (TRN_LOCAL_HP_MAP) finds it too */
+        trn_map_cfg_t mc;
+        trn_map_t mm;
+        size_t mb, wb2;
+        trn_map_cfg_default(&mc);
+        mc.local_highpass = TRN_LOCAL_HP_MAP;
+        mb = trn_map_bytes(&mc, N, N);
+        assert_true(mb > 0u && mb <= sizeof g_mapbuf2);
+        assert_int_equal(trn_map_build(&mm, &mc, &g_w.g, g_mapbuf2, mb), TRN_OK);
+        wb2 = trn_localize_dem_heading_workspace_bytes(&mm, LW, LW, MAXPTS, &win);
+        assert_true(wb2 > 0u && wb2 <= sizeof g_ws);
+        assert_int_equal(trn_localize_dem_heading(&mm, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb2, &b), TRN_OK);
+        assert_true(fabs(b.heading_rad - 4.0 * DEG) < 1.0 * DEG && fabs(b.loc.x - 59.3) < 1.0 &&
+                    fabs(b.loc.y - 57.8) < 1.0);
+    }
     /* sizing refusals */
     assert_int_equal(trn_localize_dem_heading_workspace_bytes(NULL, LW, LW, MAXPTS, &win), 0u);
     assert_int_equal(trn_localize_dem_heading_workspace_bytes(&g_w.map, LW, LW, 0, &win), 0u);
@@ -613,6 +654,21 @@ static void test_dem_entry(void **state)
     m2 = g_w.map;
     m2.cfg.refine = 1; /* the height refinement is not heading-aware yet */
     assert_int_equal(trn_localize_dem_heading(&m2, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a), TRN_E_ARG);
+    m2 = g_w.map;
+    m2.cfg.match = TRN_MATCH_HEIGHTS; /* nor the height matcher */
+    assert_int_equal(trn_localize_dem_heading(&m2, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a), TRN_E_ARG);
+    assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, (size_t)TRN_MAX_DIM * TRN_MAX_DIM + 1u, &win, &c,
+                                              g_ws, wb, &a), TRN_E_ARG);
+    assert_int_equal(trn_localize_dem_heading_workspace_bytes(&g_w.map, LW, LW, MAXPTS, NULL), 0u);
+    assert_int_equal(trn_localize_dem_heading_workspace_bytes(&g_w.map, LW, LW, (size_t)TRN_MAX_DIM * TRN_MAX_DIM + 1u,
+                                                              &win), 0u);
+    {
+        trn_window_t off = {200, 50, 210, 60};
+        assert_int_equal(trn_localize_dem_heading_workspace_bytes(&g_w.map, LW, LW, MAXPTS, &off), 0u);
+        m2 = g_w.map;
+        m2.pyr.nlevels = 0;
+        assert_int_equal(trn_localize_dem_heading_workspace_bytes(&m2, LW, LW, MAXPTS, &win), 0u);
+    }
     assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, 0, &win, &c, g_ws, wb, &a), TRN_E_ARG);
     {
         trn_window_t off = {200, 50, 210, 60};

@@ -71,6 +71,23 @@ for cmd in ("terrain", "localize"):
     rc, out, err = run(cmd, "--help")
     check(rc == 0 and out.startswith(f"usage: trn {cmd}") and err == "", f"trn {cmd} --help")
 
+# Every option with a value states its default (printed from the value the
+# command starts with, or said in words), and --help anywhere prints it.
+import re  # noqa: E402
+for cmd in ("terrain", "select", "field", "localize", "experiment", "profile"):
+    rc, out, _ = run(cmd, "--bogus-first", "--help")
+    check(rc == 0 and out.startswith(f"usage: trn {cmd}"), f"trn {cmd}: --help after another argument")
+    for line in out.splitlines():
+        m = re.match(r"  (--[a-z0-9-]+) (\S+)\s+(.*)$", line)
+        if m and "default" not in m.group(3) and "required" not in m.group(3):
+            check(m.group(1) in ("--dem", "--out", "--rover", "--local", "--batch", "--reference"),
+                  f"trn {cmd} --help: {m.group(1)} states no default: {line.strip()}")
+rc, out, _ = run("field", "--help")
+check(re.search(r"--margin-rel M .*\(default 0\.4\)", out) is not None and
+      re.search(r"--change-rel C .*\(default 1\.5\)", out) is not None and
+      re.search(r"--coarse-step-cells N .*\(default 16\)", out) is not None,
+      "trn field --help: the core's trn_field_cfg_default (0.4, 1.5, 16), printed from the values used")
+
 # ---- terrain: happy path ----------------------------------------------------
 ORIGIN = (1000.0, 2000.0)
 CELL = 0.1

@@ -115,6 +115,31 @@ static void range_text(const cli_opt_t *o, char *buf, size_t n) {
   }
 }
 
+/* " (default V)" from the option's variable (its value before parsing: the
+ * default the command set, from the core's *_cfg_default where there is
+ * one), unless the help text speaks of its default itself (a sentinel value
+ * meaning "chosen later") or there is none. */
+static void default_text(const cli_opt_t *o, char *buf, size_t n) {
+  buf[0] = '\0';
+  if (o->required || o->dst == NULL || (o->help != NULL && strstr(o->help, "default") != NULL)) {
+    return;
+  }
+  switch (o->kind) {
+  case CLI_LONG: snprintf(buf, n, " (default %ld)", *(const long *)o->dst); break;
+  case CLI_U64: snprintf(buf, n, " (default %llu)", (unsigned long long)*(const uint64_t *)o->dst); break;
+  case CLI_DOUBLE: snprintf(buf, n, " (default %g)", *(const double *)o->dst); break;
+  case CLI_XY:
+    snprintf(buf, n, " (default %g,%g)", ((const double *)o->dst)[0], ((const double *)o->dst)[1]);
+    break;
+  case CLI_STRING:
+    if (*(const char *const *)o->dst != NULL) {
+      snprintf(buf, n, " (default %s)", *(const char *const *)o->dst);
+    }
+    break;
+  case CLI_FLAG: break;
+  }
+}
+
 void cli_usage(const cli_cmd_t *cmd, FILE *out) {
   size_t i;
   fprintf(out, "usage: trn %s", cmd->name);
@@ -126,10 +151,11 @@ void cli_usage(const cli_cmd_t *cmd, FILE *out) {
   fprintf(out, "\n\n%s\n\noptions:\n", cmd->summary);
   for (i = 0; i < cmd->n_opts; ++i) {
     const cli_opt_t *o = &cmd->opts[i];
-    char head[64], range[64];
+    char head[64], range[64], dflt[128];
     snprintf(head, sizeof head, "%s%s%s", o->name, o->metavar ? " " : "", o->metavar ? o->metavar : "");
     range_text(o, range, sizeof range);
-    fprintf(out, "  %-22s %s%s\n", head, o->help, range);
+    default_text(o, dflt, sizeof dflt);
+    fprintf(out, "  %-22s %s%s%s\n", head, o->help, dflt, range);
   }
   fprintf(out, "  %-22s %s\n", "--help", "this text");
   if (cmd->details != NULL) {
@@ -226,11 +252,28 @@ static int set_value(const cli_cmd_t *cmd, cli_opt_t *o, const char *v) {
   return cli_fail(cmd->name, "%s: internal error (option kind)", o->name);
 }
 
+cli_opt_t *cli_find(cli_opt_t *opts, size_t n, const char *name) {
+  size_t k;
+  for (k = 0; k < n; ++k) {
+    if (strcmp(opts[k].name, name) == 0) {
+      return &opts[k];
+    }
+  }
+  return NULL;
+}
+
 int cli_parse(cli_cmd_t *cmd, int argc, char **argv) {
   int i;
   size_t k;
   for (k = 0; k < cmd->n_opts; ++k) {
     cmd->opts[k].seen = 0;
+  }
+  /* --help anywhere: the usage with the defaults, before any value is set */
+  for (i = 1; i < argc; ++i) {
+    if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
+      cli_usage(cmd, stdout);
+      return CLI_HELP;
+    }
   }
   for (i = 1; i < argc; ++i) {
     const char *a = argv[i];
@@ -239,10 +282,6 @@ int cli_parse(cli_cmd_t *cmd, int argc, char **argv) {
     size_t name_len;
     cli_opt_t *o = NULL;
     int rc;
-    if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
-      cli_usage(cmd, stdout);
-      return CLI_HELP;
-    }
     if (strncmp(a, "--", 2) != 0) {
       return usage_error(cmd, "unexpected argument", a);
     }

@@ -46,7 +46,8 @@ typedef struct {
   double lo, hi;       /* range of CLI_LONG / CLI_DOUBLE (inclusive) */
   int required;
   const char *metavar; /* "FILE.tif", "N", "X,Y" */
-  const char *help;    /* one line; the default is part of the text */
+  const char *help;    /* one line; --help appends " (default V)" from *dst as it
+                          was before parsing, unless the text says "default" */
   int seen;            /* set by cli_parse */
 } cli_opt_t;
 
@@ -62,7 +63,11 @@ typedef struct {
  * (usage printed on stdout), CLI_BAD_INPUT or CLI_USAGE (message printed). */
 int cli_parse(cli_cmd_t *cmd, int argc, char **argv);
 
-/* Print the usage of cmd (synopsis, options with ranges). */
+/* The option named name ("--prior") among opts[0..n), or NULL: options are
+ * looked up by name, never by position in a table. */
+cli_opt_t *cli_find(cli_opt_t *opts, size_t n, const char *name);
+
+/* Print the usage of cmd (synopsis, options with defaults and ranges). */
 void cli_usage(const cli_cmd_t *cmd, FILE *out);
 
 /* The "exit status: ..." line(s) of `trn <cmd> --help`: 0, 1 and 2 for

@@ -30,16 +30,6 @@ static int map_cfg_cb(void *ctx, const float *dem, int width, int height, double
 }
 
 /* Index of option `name` in a table of n. */
-static size_t opt_index(const cli_opt_t *o, size_t n, const char *name) {
-  size_t i;
-  for (i = 0; i < n; ++i) {
-    if (strcmp(o[i].name, name) == 0) {
-      break;
-    }
-  }
-  return i;
-}
-
 static int on_progress(void *ctx, long done, long total) {
   ((progress_t *)ctx)->total = total;
   progress_update((progress_t *)ctx, done);
@@ -113,10 +103,10 @@ int trn_cmd_experiment(int argc, char **argv) {
   cfg_ctx_t cc;
 #define EXP_N_OWN 20
   cli_opt_t own[EXP_N_OWN] = {
-      {"--trials", CLI_LONG, &trials, 1, 1000000, 0, "N", "trials (default 1000)", 0},
-      {"--seed", CLI_U64, &seed, 0, 0, 0, "S", "seed of the trials and, unless --terrain-seed, of the terrain (default 1)", 0},
+      {"--trials", CLI_LONG, &trials, 1, 1000000, 0, "N", "trials", 0},
+      {"--seed", CLI_U64, &seed, 0, 0, 0, "S", "seed of the trials and, unless --terrain-seed, of the terrain", 0},
       {"--dem", CLI_STRING, &dem_path, 0, 0, 0, "FILE", "run on this DEM (projected, metres; at most 1024 x 1024) instead of a generated terrain", 0},
-      {"--band", CLI_LONG, &band, 1, 65535, 0, "N", "band of --dem (default 1)", 0},
+      {"--band", CLI_LONG, &band, 1, 65535, 0, "N", "band of --dem", 0},
       {"--coverage", CLI_DOUBLE, &k, 0.01, 0.5, 0, "K", "rock coverage k of the terrain (default 0.1, as `trn terrain`)", 0},
       {"--terrain-seed", CLI_U64, &tseed, 0, 0, 0, "S", "seed of the terrain (default: --seed)", 0},
       {"--min-diameter-m", CLI_DOUBLE, &dmin, 0.1, 10.0, 0, "D", "smallest rock of the terrain (default 2 cells, as `trn terrain`)", 0},
@@ -129,14 +119,13 @@ int trn_cmd_experiment(int argc, char **argv) {
       {"--max-range-m", CLI_DOUBLE, &maxr, 1e-6, 1e6, 0, "R", "farthest target (default 10 m = 100 cells)", 0},
       {"--patch-m", CLI_DOUBLE, &patch, 1e-6, 1e6, 0, "S", "side of the sensed patch (default 2 m = 21 cells)", 0},
       {"--footprint-m", CLI_DOUBLE, &foot, 0.0, 1e6, 0, "R", "rover footprint radius no patch may touch (default 0.5 m = 5 cells)", 0},
-      {"--success-cells", CLI_DOUBLE, &succ, 0.1, 100.0, 0, "C", "success: error <= C cells (default 2)", 0},
+      {"--success-cells", CLI_DOUBLE, &succ, 0.1, 100.0, 0, "C", "success: error <= C cells", 0},
       {"--sensor", CLI_STRING, &sensor, 0, 0, 0, "prob|dem", "local-map model: prob = sampled from the probability map (the paper's, default); dem = the true DEM with height noise (diagnostic)", 0},
-      {"--height-noise-m", CLI_DOUBLE, &hnoise, 0.0, 1.0, 0, "H", "with --sensor dem: Gaussian height noise per cell, m (default 0)", 0},
+      {"--height-noise-m", CLI_DOUBLE, &hnoise, 0.0, 1.0, 0, "H", "with --sensor dem: Gaussian height noise per cell, m", 0},
       {"--json", CLI_FLAG, &json, 0, 0, 0, NULL, "print one JSON object instead of the table", 0},
   };
   cli_opt_t opts[EXP_N_OWN + SELMAP_N_GERR_OPTS + MAPOPT_N];
   const size_t n_opts = sizeof opts / sizeof opts[0];
-  size_t i_mc;
   cli_cmd_t cmd = {"experiment",
                    "The paper's section 5 Monte Carlo: localization success and accuracy with and without "
                    "landmark selection.",
@@ -172,8 +161,7 @@ int trn_cmd_experiment(int argc, char **argv) {
   memcpy(opts, own, (EXP_N_OWN) * sizeof own[0]);
   selmap_gerr_opts(&so, opts + EXP_N_OWN);
   mapopt_cli(&so.mo, opts + EXP_N_OWN + SELMAP_N_GERR_OPTS);
-  i_mc = opt_index(opts, n_opts, "--map-config");
-  opts[i_mc].help = "map configuration: paper (as in the paper, scaled to the cell; default on the generated terrain) "
+  cli_find(opts, n_opts, "--map-config")->help = "map configuration: paper (as in the paper, scaled to the cell; default on the generated terrain) "
                     "or auto (from the DEM, docs/method.md 9; default with --dem)";
   cmd.n_opts = n_opts;
   rc = cli_parse(&cmd, argc, argv);
@@ -183,7 +171,7 @@ int trn_cmd_experiment(int argc, char **argv) {
   if (rc != CLI_OK) {
     return rc;
   }
-#define SEEN(name) (opts[opt_index(opts, n_opts, name)].seen)
+#define SEEN(name) (cli_find(opts, n_opts, name)->seen)
   if (dem_path != NULL) {
     static const char *const synth[] = {"--coverage", "--terrain-seed", "--min-diameter-m", "--relief-m", "--size-cells"};
     for (i = 0; i < sizeof synth / sizeof synth[0]; ++i) {

@@ -93,8 +93,8 @@ static long lattice_count(long n, long step) { return (n - 1 + step - 1) / step 
 
 int trn_cmd_field(int argc, char **argv) {
   const char *dem_path = NULL, *out = NULL, *area_text = NULL, *ev_out = NULL;
-  long coarse = 16;
-  double margin = 0.5, change = 1.5;
+  long coarse;
+  double margin, change;
   int json = 0, reference = 0;
   selmap_opts_t so;
   cli_opt_t opts[7 + SELMAP_N_OPTS + 2];
@@ -125,21 +125,26 @@ int trn_cmd_field(int argc, char **argv) {
   double secs, bx = NAN, by = NAN, vmin = INFINITY, vmed = NAN;
   long n_inf = 0;
 
+  /* the defaults are the core's (trn_field_cfg_default), printed by --help from these */
+  trn_field_cfg_default(&fcfg);
+  coarse = fcfg.coarse_step_cells;
+  margin = (double)fcfg.margin_rel;
+  change = (double)fcfg.change_rel;
   selmap_opts_default(&so, 2);
   opts[0] = (cli_opt_t){"--dem", CLI_STRING, &dem_path, 0, 0, 1, "FILE", "global DEM (any GDAL raster; map frame)", 0};
   opts[1] = (cli_opt_t){"--out", CLI_STRING, &out, 0, 0, 1, "FILE.tif", "the field, GeoTIFF (metres)", 0};
   opts[2] = (cli_opt_t){"--area-m", CLI_STRING, &area_text, 0, 0, 0, "X0,Y0,X1,Y1",
                         "rover positions covered: a map box in metres (default: the whole DEM)", 0};
   opts[3] = (cli_opt_t){"--coarse-step-cells", CLI_LONG, &coarse, 1, 256, 0, "N",
-                        "first lattice step, a power of two (default 16)", 0};
+                        "first lattice step, a power of two", 0};
   opts[4] = (cli_opt_t){"--margin-rel", CLI_DOUBLE, &margin, 0.0, 100.0, 0, "M",
-                        "refine squares within M x spread of the best (default 0.4)", 0};
+                        "refine squares within M x spread of the best", 0};
   opts[5] = (cli_opt_t){"--change-rel", CLI_DOUBLE, &change, 0.0, 100.0, 0, "C",
-                        "refine squares changing by more than C x spread (default 1.5)", 0};
+                        "refine squares changing by more than C x spread", 0};
   opts[6] = (cli_opt_t){"--evaluated-out", CLI_STRING, &ev_out, 0, 0, 0, "FILE.tif",
-                        "also write 1 where computed, 0 where interpolated", 0};
+                        "also write 1 where computed, 0 where interpolated (default: none)", 0};
   selmap_opts(&so, opts + 7);
-  opts[7 + 7].help = "candidate lattice step, cells (default 2, as trn_select_cfg_default)";
+  cli_find(opts, 7 + SELMAP_N_OPTS, "--stride-cells")->help = "candidate lattice step, cells, as the core's select configuration";
   opts[7 + SELMAP_N_OPTS] = (cli_opt_t){"--json", CLI_FLAG, &json, 0, 0, 0, NULL,
                                         "print one JSON object instead of the summary", 0};
   opts[7 + SELMAP_N_OPTS + 1] = (cli_opt_t){"--reference", CLI_FLAG, &reference, 0, 0, 0, NULL,

@@ -296,13 +296,13 @@ int trn_cmd_localize(int argc, char **argv) {
   cli_opt_t opts[10 + MAPOPT_N] = {
       {"--dem", CLI_STRING, &dem_path, 0, 0, 1, "FILE", "global DEM (any GDAL raster; map frame)", 0},
       {"--local", CLI_STRING, &local_path, 0, 0, 0, "FILE", "local DEM in the rover frame (rover at 0,0; x east, y north)", 0},
-      {"--prior", CLI_XY, prior, 0, 0, 0, "X,Y", "where the rover believes it is, map metres", 0},
+      {"--prior", CLI_XY, prior, 0, 0, 0, "X,Y", "where the rover believes it is, map metres (no default: required without --batch)", 0},
       {"--batch", CLI_STRING, &batch_path, 0, 0, 0, "LIST", "many cases, one per line 'LOCAL PRIOR_X PRIOR_Y [WINDOW_M]': the map is prepared once, one JSON line per case", 0},
-      {"--window-m", CLI_DOUBLE, &window_m, 0.0, 1e6, 0, "R", "prior uncertainty searched: +-R metres per axis (default 2.5)", 0},
-      {"--band", CLI_LONG, &band, 1, 65535, 0, "N", "band of --dem (default 1)", 0},
-      {"--local-band", CLI_LONG, &c.local_band, 1, 65535, 0, "N", "band of --local (default 1)", 0},
-      {"--max-local-cells", CLI_LONG, &c.max_local, 8, TRN_MAX_DIM, 0, "N", "largest local map side accepted, cells (default 1024)", 0},
-      {"--heading-deg", CLI_DOUBLE, &c.heading_deg, -180.0, 180.0, 0, "H", "turn the local DEM by H degrees (counterclockwise) before matching: the believed heading's correction (default 0)", 0},
+      {"--window-m", CLI_DOUBLE, &window_m, 0.0, 1e6, 0, "R", "prior uncertainty searched: +-R metres per axis", 0},
+      {"--band", CLI_LONG, &band, 1, 65535, 0, "N", "band of --dem", 0},
+      {"--local-band", CLI_LONG, &c.local_band, 1, 65535, 0, "N", "band of --local", 0},
+      {"--max-local-cells", CLI_LONG, &c.max_local, 8, TRN_MAX_DIM, 0, "N", "largest local map side accepted, cells", 0},
+      {"--heading-deg", CLI_DOUBLE, &c.heading_deg, -180.0, 180.0, 0, "H", "turn the local DEM by H degrees (counterclockwise) before matching: the believed heading's correction", 0},
       {"--heading-window-deg", CLI_DOUBLE, &c.heading_win_deg, 0.0, 180.0, 0, "W", "also search the heading over H +- W degrees (step: one cell of arc at the local map's farthest point); needs --map-config paper or --match voxel without --refine (default: heading known)", 0},
   };
   cli_opt_t json_opt = {"--json", CLI_FLAG, &json, 0, 0, 0, NULL, "print one JSON object instead of the summary", 0};
@@ -339,11 +339,11 @@ int trn_cmd_localize(int argc, char **argv) {
   if (rc != CLI_OK) {
     return rc;
   }
-  if (batch_path == NULL && (local_path == NULL || !all[2].seen)) {
+  if (batch_path == NULL && (local_path == NULL || !cli_find(all, sizeof all / sizeof all[0], "--prior")->seen)) {
     fprintf(stderr, "trn localize: give --local FILE and --prior X,Y, or --batch LIST (see --help)\n");
     return CLI_USAGE;
   }
-  if (batch_path != NULL && (local_path != NULL || all[2].seen)) {
+  if (batch_path != NULL && (local_path != NULL || cli_find(all, sizeof all / sizeof all[0], "--prior")->seen)) {
     fprintf(stderr, "trn localize: --batch replaces --local and --prior; give one or the other (see --help)\n");
     return CLI_USAGE;
   }
@@ -356,7 +356,8 @@ int trn_cmd_localize(int argc, char **argv) {
     cli_fail(cmd.name, "--dem: %s", err);
     goto done;
   }
-  c.heading = all[8].seen || all[9].seen;
+  c.heading = cli_find(all, sizeof all / sizeof all[0], "--heading-deg")->seen ||
+              cli_find(all, sizeof all / sizeof all[0], "--heading-window-deg")->seen;
   if (c.heading && (c.cfg.match != TRN_MATCH_VOXEL || c.cfg.refine != 0)) {
     cli_fail(cmd.name, "--heading-deg/--heading-window-deg: the heading search needs the voxel matcher without "
                        "refinement (--map-config paper, or --match voxel --refine 0); the height matcher does "

@@ -73,11 +73,11 @@ int trn_cmd_select(int argc, char **argv) {
   opts[0] = (cli_opt_t){"--dem", CLI_STRING, &dem_path, 0, 0, 1, "FILE", "global DEM (any GDAL raster; map frame)", 0};
   opts[1] = (cli_opt_t){"--rover", CLI_XY, rover_m, 0, 0, 1, "X,Y", "rover position, map metres", 0};
   opts[2] = (cli_opt_t){"--out-map", CLI_STRING, &out_map, 0, 0, 0, "FILE.tif",
-                        "write every candidate's predicted uncertainty (m) as a GeoTIFF", 0};
+                        "write every candidate's predicted uncertainty (m) as a GeoTIFF (default: none)", 0};
   opts[3] = (cli_opt_t){"--next-best", CLI_LONG, &next_best, 0, 64, 0, "N",
-                        "distinct next best targets listed (default 5)", 0};
+                        "distinct next best targets listed", 0};
   selmap_opts(&so, opts + 4);
-  opts[4 + 7].help = "candidate lattice step, cells (default 1: every cell, the full Fig. 2b map)";
+  cli_find(opts, 4 + SELMAP_N_OPTS, "--stride-cells")->help = "candidate lattice step, cells (1: every cell, the full Fig. 2b map)";
   opts[4 + SELMAP_N_OPTS] = (cli_opt_t){"--json", CLI_FLAG, &json, 0, 0, 0, NULL,
                                         "print one JSON object instead of the summary", 0};
   cmd.n_opts = sizeof opts / sizeof opts[0];

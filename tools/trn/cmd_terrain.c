@@ -25,14 +25,14 @@ int trn_cmd_terrain(int argc, char **argv) {
   int json = 0;
   cli_opt_t opts[] = {
       {"--out", CLI_STRING, &out, 0, 0, 1, "FILE.tif", "GeoTIFF to write", 0},
-      {"--size-cells", CLI_LONG, &size, 8, TRN_MAX_DIM, 0, "N", "map side, cells (default 256)", 0},
-      {"--cell-m", CLI_DOUBLE, &cell, 0.001, 100.0, 0, "C", "cell size, metres (default 0.1)", 0},
-      {"--coverage", CLI_DOUBLE, &k, 0.01, 0.5, 0, "K", "rock coverage k of F_k(D) = k exp(-q(k) D) (default 0.1)", 0},
-      {"--seed", CLI_U64, &seed, 0, 0, 0, "S", "random seed (default 1)", 0},
+      {"--size-cells", CLI_LONG, &size, 8, TRN_MAX_DIM, 0, "N", "map side, cells", 0},
+      {"--cell-m", CLI_DOUBLE, &cell, 0.001, 100.0, 0, "C", "cell size, metres", 0},
+      {"--coverage", CLI_DOUBLE, &k, 0.01, 0.5, 0, "K", "rock coverage k of F_k(D) = k exp(-q(k) D)", 0},
+      {"--seed", CLI_U64, &seed, 0, 0, 0, "S", "random seed", 0},
       {"--height-ratio", CLI_DOUBLE, &ratio, 0.05, 2.0, 0, "R", "rock height / diameter (default 0.5: hemispheres)", 0},
       {"--min-diameter-m", CLI_DOUBLE, &dmin, 0.001, 100.0, 0, "D", "smallest rock drawn (default 2 cells)", 0},
       {"--max-diameter-m", CLI_DOUBLE, &dmax, 0.001, 100.0, 0, "D", "largest rock drawn (default ln(1e4)/q(k))", 0},
-      {"--relief-m", CLI_DOUBLE, &relief, 0.0, 100.0, 0, "A", "RMS of the smooth background relief (default 0.05)", 0},
+      {"--relief-m", CLI_DOUBLE, &relief, 0.0, 100.0, 0, "A", "RMS of the smooth background relief", 0},
       {"--origin", CLI_XY, origin, 0, 0, 0, "X,Y", "map coordinates of the south-west corner (default 0,0)", 0},
       {"--crs", CLI_STRING, &crs, 0, 0, 0, "SRS", "CRS to tag the file with (EPSG:n, IAU_2015:n, WKT, PROJ; default none)", 0},
       {"--json", CLI_FLAG, &json, 0, 0, 0, NULL, "print one JSON object instead of the summary", 0},
@@ -62,8 +62,8 @@ int trn_cmd_terrain(int argc, char **argv) {
   tg_default(&p, (int)size, (int)size, cell);
   p.coverage_k = k;
   p.height_ratio = ratio;
-  p.d_min_m = opts[6].seen ? dmin : 2.0 * cell;
-  p.d_max_m = opts[7].seen ? dmax : tg_auto_d_max(k);
+  p.d_min_m = cli_find(opts, sizeof opts / sizeof opts[0], "--min-diameter-m")->seen ? dmin : 2.0 * cell;
+  p.d_max_m = cli_find(opts, sizeof opts / sizeof opts[0], "--max-diameter-m")->seen ? dmax : tg_auto_d_max(k);
   p.relief_m = relief;
   p.seed = seed;
   if (p.d_max_m < p.d_min_m) {

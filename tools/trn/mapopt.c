@@ -40,9 +40,9 @@ void mapopt_cli(mapopt_t *m, cli_opt_t *o) {
       {"--inlier-prob", CLI_DOUBLE, &m->inlier_prob, 0.01, 0.99, 0, "A", "inlier probability a (default " MAPOPT_STR(TRN_MAP_INLIER_PROB_DEFAULT) ")", 0},
       {"--noise-m", CLI_DOUBLE, &m->noise_m, 1e-6, 1000.0, 0, "M", "local map height noise, constant part, metres (default " MAPOPT_STR(MAPOPT_NOISE_M) ")", 0},
       {"--noise-k", CLI_DOUBLE, &m->noise_k, 0.0, 1000.0, 0, "K", "local map height noise, range-squared part, 1/m (default " MAPOPT_STR(MAPOPT_NOISE_K_PER_CELL) "/cell)", 0},
-      {"--local-highpass", CLI_STRING, &m->local_hp, 0, 0, 0, "box|map", "local DEM filter: box (its own, the paper) or map (the map's low-pass; auto)", 0},
-      {"--refine", CLI_LONG, &m->refine, 0, 1, 0, "0|1", "refine the pose over heights (1 with auto, 0 with paper)", 0},
-      {"--match", CLI_STRING, &m->match, 0, 0, 0, "voxel|heights", "what localize matches: voxel occupancy (paper) or heights (auto)", 0},
+      {"--local-highpass", CLI_STRING, &m->local_hp, 0, 0, 0, "box|map", "local DEM filter: box (its own, the paper) or map (the map's low-pass; auto) (default: --map-config's)", 0},
+      {"--refine", CLI_LONG, &m->refine, 0, 1, 0, "0|1", "refine the pose over heights (default 1 with auto, 0 with paper)", 0},
+      {"--match", CLI_STRING, &m->match, 0, 0, 0, "voxel|heights", "what localize matches: voxel occupancy (paper) or heights (auto) (default: --map-config's)", 0},
   };
   memcpy(o, t, sizeof t);
 }

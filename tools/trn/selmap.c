@@ -57,7 +57,7 @@ void selmap_gerr_opts(selmap_opts_t *o, cli_opt_t *d) {
       {"--global-sigma-k", CLI_DOUBLE, &o->gsig_k, 0.0, 100.0, 0, "K",
        "global map's error growth with squared range from the nearest sensing position, 1/m (default 0.001)", 0},
       {"--global-error", CLI_STRING, &o->gerr, 0, 0, 0, "FILE",
-       "per-cell error raster of the global map, m (e.g. a HiRISE DTM's), the --dem's grid; no-data = the model", 0},
+       "per-cell error raster of the global map, m (e.g. a HiRISE DTM's), the --dem's grid; no-data = the model (default: none)", 0},
   };
   memcpy(d, t, sizeof t);
 }
@@ -174,20 +174,20 @@ void selmap_json_config(json_t *j, const selmap_opts_t *o, const trn_map_cfg_t *
 
 void selmap_opts(selmap_opts_t *o, cli_opt_t *d) {
   const cli_opt_t t[SELMAP_N_SEL_OPTS] = {
-      {"--band", CLI_LONG, &o->band, 1, 65535, 0, "N", "band of --dem (default 1)", 0},
+      {"--band", CLI_LONG, &o->band, 1, 65535, 0, "N", "band of --dem", 0},
       {"--heading-deg", CLI_DOUBLE, &o->heading_deg, -360.0, 360.0, 0, "A",
-       "rover heading, degrees counter-clockwise from east (default 0)", 0},
+       "rover heading, degrees counter-clockwise from east", 0},
       {"--pan-deg", CLI_XY, o->pan_deg, 0, 0, 0, "MIN,MAX",
        "bearings the mast can look at, degrees from the heading, CCW positive (default -180,180)", 0},
-      {"--min-range-m", CLI_DOUBLE, &o->min_range_m, 0.0, 1e6, 0, "R", "nearest target, m (default 1)", 0},
-      {"--max-range-m", CLI_DOUBLE, &o->max_range_m, 1e-3, 1e6, 0, "R", "farthest target, m (default 10)", 0},
+      {"--min-range-m", CLI_DOUBLE, &o->min_range_m, 0.0, 1e6, 0, "R", "nearest target, m", 0},
+      {"--max-range-m", CLI_DOUBLE, &o->max_range_m, 1e-3, 1e6, 0, "R", "farthest target, m", 0},
       {"--footprint-m", CLI_DOUBLE, &o->footprint_m, 0.0, 1e5, 0, "R",
-       "rover footprint radius no patch may touch, m (default 0.5)", 0},
+       "rover footprint radius no patch may touch, m", 0},
       {"--patch-m", CLI_DOUBLE, &o->patch_m, 1e-3, 1e6, 0, "S",
        "side of the sensed patch, m (default 2; at least 3 cells)", 0},
       {"--stride-cells", CLI_LONG, &o->stride_cells, 1, 64, 0, "N", NULL, 0},
       {"--separation-m", CLI_DOUBLE, &o->separation_m, 0.0, 1e6, 0, "D",
-       "least distance between ranked targets, m (default 1)", 0},
+       "least distance between ranked targets, m", 0},
       {"--sensors", CLI_STRING, &o->sensors, 0, 0, 0, "X,Y[;X,Y..]",
        "where the global map was sensed from, map m, up to 64 (default: the DEM's centre)", 0},
   };
