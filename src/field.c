@@ -311,6 +311,25 @@ static trn_status_t field_run(field_t *f, const trn_field_cfg_t *fcfg)
     return TRN_OK;
 }
 
+/* The run's arguments (what trn_field and trn_field_fast share). */
+static void field_setup(field_t *f, const trn_map_t *map, const trn_kernels_t *k, const trn_vol_f32_t *pg,
+                        const trn_select_cfg_t *scfg, float heading_rad, const trn_window_t *area,
+                        trn_grid_f32_t *out, uint8_t *evaluated, trn_field_stats_t *stats)
+{
+    memset(f, 0, sizeof *f);
+    f->map = map;
+    f->k = k;
+    f->pg = pg;
+    f->scfg = scfg;
+    f->heading = heading_rad;
+    f->area = *area;
+    f->w = out->width;
+    f->h = out->height;
+    f->out = out;
+    f->ev = evaluated;
+    f->st = stats;
+}
+
 trn_status_t trn_field(const trn_map_t *map, const trn_kernels_t *k, const trn_vol_f32_t *pg,
                        const trn_select_cfg_t *scfg, const trn_field_cfg_t *fcfg,
                        float heading_rad, const trn_window_t *area, trn_grid_f32_t *out,
@@ -329,19 +348,8 @@ trn_status_t trn_field(const trn_map_t *map, const trn_kernels_t *k, const trn_v
     if ((s = trn_ws_check(ws, ws_bytes, need)) != TRN_OK) {
         return s;
     }
-    memset(&f, 0, sizeof f);
-    f.map = map;
-    f.k = k;
-    f.pg = pg;
-    f.scfg = scfg;
-    f.heading = heading_rad;
-    f.area = *area;
-    f.w = out->width;
-    f.h = out->height;
-    f.out = out;
-    f.ev = evaluated;
+    field_setup(&f, map, k, pg, scfg, heading_rad, area, out, evaluated, stats);
     (void)field_carve(scfg, map, k, ws, &f.cands, &f.ncap, &f.sws, &f.swsb);
-    f.st = stats;
     f.pre = NULL;
     return field_run(&f, fcfg);
 }
@@ -405,18 +413,7 @@ trn_status_t trn_field_fast(const trn_map_t *map, const trn_kernels_t *k, const 
     if ((s = trn_selpre_init(pre, map, k, pg, scfg, tables, ws_bytes - hb)) != TRN_OK) {
         return s;
     }
-    memset(&f, 0, sizeof f);
-    f.map = map;
-    f.k = k;
-    f.pg = pg;
-    f.scfg = scfg;
-    f.heading = heading_rad;
-    f.area = *area;
-    f.w = out->width;
-    f.h = out->height;
-    f.out = out;
-    f.ev = evaluated;
-    f.st = stats;
+    field_setup(&f, map, k, pg, scfg, heading_rad, area, out, evaluated, stats);
     f.pre = pre;
     return field_run(&f, fcfg);
 }
