@@ -23,6 +23,7 @@
 #include "trn_port/isotp.h"
 
 #define LINE_MAX_CHARS 1024
+#define N_CR_MS_DEFAULT 1000ul /* ISO-TP N_Cr: the receiver's consecutive-frame timeout */
 
 typedef struct {
   unsigned long lines, ours, foreign, fd, error_frames, remote, malformed, bad_msgs;
@@ -43,7 +44,8 @@ static void usage(FILE *out) {
           "  from their ISO-TP frames, a summary line at the end.\n"
           "  LOG '-' reads standard input. Malformed lines: 'LOG:N: reason' on stderr,\n"
           "  exit status 1 at the end. --strict: exit 1 also on invalid messages of\n"
-          "  ours and failed captures. --n-cr-ms: ISO-TP N_Cr timeout (default 1000).\n\n");
+          "  ours and failed captures. --n-cr-ms: ISO-TP N_Cr timeout (default %lu).\n\n",
+          N_CR_MS_DEFAULT);
   cli_exit_status_help("can-decode", out);
 }
 
@@ -179,7 +181,7 @@ static int capture_data(const trn_can_frame_t *f, uint32_t now_ms, counts_t *n) 
 int trn_cmd_can_decode(int argc, char **argv) {
   const char *path = NULL;
   int strict = 0, i, proto_bad = 0;
-  unsigned long n_cr_ms = 1000;
+  unsigned long n_cr_ms = N_CR_MS_DEFAULT;
   FILE *in;
   char line[LINE_MAX_CHARS + 2];
   counts_t n;

@@ -107,18 +107,18 @@ int trn_cmd_experiment(int argc, char **argv) {
       {"--seed", CLI_U64, &seed, 0, 0, 0, "S", "seed of the trials and, unless --terrain-seed, of the terrain", 0},
       {"--dem", CLI_STRING, &dem_path, 0, 0, 0, "FILE", "run on this DEM (projected, metres; at most 1024 x 1024) instead of a generated terrain", 0},
       {"--band", CLI_LONG, &band, 1, 65535, 0, "N", "band of --dem", 0},
-      {"--coverage", CLI_DOUBLE, &k, 0.01, 0.5, 0, "K", "rock coverage k of the terrain (default 0.1, as `trn terrain`)", 0},
+      {"--coverage", CLI_DOUBLE, &k, 0.01, 0.5, 0, "K", "rock coverage k of the terrain (as `trn terrain`)", 0},
       {"--terrain-seed", CLI_U64, &tseed, 0, 0, 0, "S", "seed of the terrain (default: --seed)", 0},
       {"--min-diameter-m", CLI_DOUBLE, &dmin, 0.1, 10.0, 0, "D", "smallest rock of the terrain (default 2 cells, as `trn terrain`)", 0},
-      {"--relief-m", CLI_DOUBLE, &relief, 0.0, 10.0, 0, "A", "RMS of the terrain's smooth background relief (default 0.05, as `trn terrain`)", 0},
-      {"--size-cells", CLI_LONG, &size, 64, 1024, 0, "N", "terrain side, cells of 0.1 m (default 256, as `trn terrain`)", 0},
-      {"--window-m", CLI_DOUBLE, &window, 1e-6, 1e6, 0, "R", "localization window: prior +-R m per axis (default 2 = 20 cells)", 0},
-      {"--prior-error-m", CLI_DOUBLE, &prior, 0.0, 1e6, 0, "E", "prior offset from the truth, uniform in +-E m per axis (default 1 = 10 cells)", 0},
-      {"--grid-spacing-m", CLI_DOUBLE, &spacing, 0.0, 1e6, 0, "G", "spacing of the nine targets without selection (default 2 = 20 cells, one patch)", 0},
-      {"--min-range-m", CLI_DOUBLE, &minr, 1e-6, 1e6, 0, "R", "nearest target (default 1 m = 10 cells)", 0},
-      {"--max-range-m", CLI_DOUBLE, &maxr, 1e-6, 1e6, 0, "R", "farthest target (default 10 m = 100 cells)", 0},
-      {"--patch-m", CLI_DOUBLE, &patch, 1e-6, 1e6, 0, "S", "side of the sensed patch (default 2 m = 21 cells)", 0},
-      {"--footprint-m", CLI_DOUBLE, &foot, 0.0, 1e6, 0, "R", "rover footprint radius no patch may touch (default 0.5 m = 5 cells)", 0},
+      {"--relief-m", CLI_DOUBLE, &relief, 0.0, 10.0, 0, "A", "RMS of the terrain's smooth background relief (as `trn terrain`)", 0},
+      {"--size-cells", CLI_LONG, &size, 64, 1024, 0, "N", "terrain side, cells of 0.1 m (as `trn terrain`)", 0},
+      {"--window-m", CLI_DOUBLE, &window, 1e-6, 1e6, 0, "R", "localization window: prior +-R m per axis (at 0.1 m cells; scaled on a --dem)", 0},
+      {"--prior-error-m", CLI_DOUBLE, &prior, 0.0, 1e6, 0, "E", "prior offset from the truth, uniform in +-E m per axis (at 0.1 m cells; scaled on a --dem)", 0},
+      {"--grid-spacing-m", CLI_DOUBLE, &spacing, 0.0, 1e6, 0, "G", "spacing of the nine targets without selection (one patch at 0.1 m cells; scaled on a --dem)", 0},
+      {"--min-range-m", CLI_DOUBLE, &minr, 1e-6, 1e6, 0, "R", NULL, 0},
+      {"--max-range-m", CLI_DOUBLE, &maxr, 1e-6, 1e6, 0, "R", NULL, 0},
+      {"--patch-m", CLI_DOUBLE, &patch, 1e-6, 1e6, 0, "S", NULL, 0},
+      {"--footprint-m", CLI_DOUBLE, &foot, 0.0, 1e6, 0, "R", NULL, 0},
       {"--success-cells", CLI_DOUBLE, &succ, 0.1, 100.0, 0, "C", "success: error <= C cells", 0},
       {"--sensor", CLI_STRING, &sensor, 0, 0, 0, "prob|dem", "local-map model: prob = sampled from the probability map (the paper's, default); dem = the true DEM with height noise (diagnostic)", 0},
       {"--height-noise-m", CLI_DOUBLE, &hnoise, 0.0, 1.0, 0, "H", "with --sensor dem: Gaussian height noise per cell, m", 0},
@@ -161,6 +161,20 @@ int trn_cmd_experiment(int argc, char **argv) {
   memcpy(opts, own, (EXP_N_OWN) * sizeof own[0]);
   selmap_gerr_opts(&so, opts + EXP_N_OWN);
   mapopt_cli(&so.mo, opts + EXP_N_OWN + SELMAP_N_GERR_OPTS);
+  /* the selection lengths default to the core's (trn_select_cfg_default, in so), scaled by cell / 0.1 m */
+  {
+    static char h[4][112];
+    snprintf(h[0], sizeof h[0], "nearest target (default %g m at 0.1 m cells; scaled on a --dem)", so.min_range_m);
+    snprintf(h[1], sizeof h[1], "farthest target (default %g m at 0.1 m cells; scaled on a --dem)", so.max_range_m);
+    snprintf(h[2], sizeof h[2], "side of the sensed patch (default %g m at 0.1 m cells; scaled on a --dem)",
+             so.patch_m);
+    snprintf(h[3], sizeof h[3], "rover footprint radius no patch may touch (default %g m at 0.1 m cells; scaled on a --dem)",
+             so.footprint_m);
+    cli_find(opts, n_opts, "--min-range-m")->help = h[0];
+    cli_find(opts, n_opts, "--max-range-m")->help = h[1];
+    cli_find(opts, n_opts, "--patch-m")->help = h[2];
+    cli_find(opts, n_opts, "--footprint-m")->help = h[3];
+  }
   cli_find(opts, n_opts, "--map-config")->help = "map configuration: paper (as in the paper, scaled to the cell; default on the generated terrain) "
                     "or auto (from the DEM, docs/method.md 9; default with --dem)";
   cmd.n_opts = n_opts;

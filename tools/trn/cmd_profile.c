@@ -644,10 +644,10 @@ int trn_cmd_profile(int argc, char **argv) {
   const char *budget_path = NULL;
   int json = 0, check = 0, instructions = 0;
   cli_opt_t opts[] = {
-      {"--map-cells", CLI_LONG, &n, 64, 4096, 0, "N", "global map side, cells of 0.1 m (default 256, the main job's)", 0},
+      {"--map-cells", CLI_LONG, &n, 64, 4096, 0, "N", "global map side, cells of 0.1 m (the main job's)", 0},
       {"--local-cells", CLI_LONG, &nl, 16, 512, 0, "N", "local map side, cells", 0},
-      {"--window-cells", CLI_LONG, &win_cells, 1, 1024, 0, "R", "pose window +-R cells around the prior (default 25 = +-2.5 m)", 0},
-      {"--max-range-m", CLI_DOUBLE, &max_range_m, 0.5, 400.0, 0, "M", "farthest candidate target, m (default 10: 7627 candidates with stride 2)", 0},
+      {"--window-cells", CLI_LONG, &win_cells, 1, 1024, 0, "R", "pose window +-R cells around the prior", 0},
+      {"--max-range-m", CLI_DOUBLE, &max_range_m, 0.5, 400.0, 0, "M", "farthest candidate target, m", 0},
       {"--stride-cells", CLI_LONG, &stride, 1, 64, 0, "S", "candidate lattice step, cells", 0},
       {"--runs", CLI_LONG, &runs, 1, MAX_RUNS, 0, "N", "timed runs per stage after one warm-up", 0},
       {"--seed", CLI_U64, &seed, 0, 0, 0, "S", "terrain seed", 0},

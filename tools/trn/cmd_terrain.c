@@ -29,11 +29,11 @@ int trn_cmd_terrain(int argc, char **argv) {
       {"--cell-m", CLI_DOUBLE, &cell, 0.001, 100.0, 0, "C", "cell size, metres", 0},
       {"--coverage", CLI_DOUBLE, &k, 0.01, 0.5, 0, "K", "rock coverage k of F_k(D) = k exp(-q(k) D)", 0},
       {"--seed", CLI_U64, &seed, 0, 0, 0, "S", "random seed", 0},
-      {"--height-ratio", CLI_DOUBLE, &ratio, 0.05, 2.0, 0, "R", "rock height / diameter (default 0.5: hemispheres)", 0},
+      {"--height-ratio", CLI_DOUBLE, &ratio, 0.05, 2.0, 0, "R", "rock height / diameter (0.5: hemispheres)", 0},
       {"--min-diameter-m", CLI_DOUBLE, &dmin, 0.001, 100.0, 0, "D", "smallest rock drawn (default 2 cells)", 0},
       {"--max-diameter-m", CLI_DOUBLE, &dmax, 0.001, 100.0, 0, "D", "largest rock drawn (default ln(1e4)/q(k))", 0},
       {"--relief-m", CLI_DOUBLE, &relief, 0.0, 100.0, 0, "A", "RMS of the smooth background relief", 0},
-      {"--origin", CLI_XY, origin, 0, 0, 0, "X,Y", "map coordinates of the south-west corner (default 0,0)", 0},
+      {"--origin", CLI_XY, origin, 0, 0, 0, "X,Y", "map coordinates of the south-west corner", 0},
       {"--crs", CLI_STRING, &crs, 0, 0, 0, "SRS", "CRS to tag the file with (EPSG:n, IAU_2015:n, WKT, PROJ; default none)", 0},
       {"--json", CLI_FLAG, &json, 0, 0, 0, NULL, "print one JSON object instead of the summary", 0},
   };

@@ -51,11 +51,18 @@ void selmap_opts_default(selmap_opts_t *o, long stride_cells) {
 }
 
 void selmap_gerr_opts(selmap_opts_t *o, cli_opt_t *d) {
+  /* the model's default is the core's (trn_sigma_global_default), printed from it */
+  static char h_m[112], h_k[128];
+  trn_sigma_model_t gm;
+  trn_sigma_global_default(&gm);
+  snprintf(h_m, sizeof h_m, "global map's error at its sensing position, m (eq. 8: S0 + K r^2; default %g)",
+           (double)gm.sigma_min_m);
+  snprintf(h_k, sizeof h_k,
+           "global map's error growth with squared range from the nearest sensing position, 1/m (default %g)",
+           (double)gm.k_per_m);
   const cli_opt_t t[SELMAP_N_GERR_OPTS] = {
-      {"--global-sigma-m", CLI_DOUBLE, &o->gsig_m, 0.0, 1e5, 0, "S0",
-       "global map's error at its sensing position, m (eq. 8: S0 + K r^2; default 0.02)", 0},
-      {"--global-sigma-k", CLI_DOUBLE, &o->gsig_k, 0.0, 100.0, 0, "K",
-       "global map's error growth with squared range from the nearest sensing position, 1/m (default 0.001)", 0},
+      {"--global-sigma-m", CLI_DOUBLE, &o->gsig_m, 0.0, 1e5, 0, "S0", h_m, 0},
+      {"--global-sigma-k", CLI_DOUBLE, &o->gsig_k, 0.0, 100.0, 0, "K", h_k, 0},
       {"--global-error", CLI_STRING, &o->gerr, 0, 0, 0, "FILE",
        "per-cell error raster of the global map, m (e.g. a HiRISE DTM's), the --dem's grid; no-data = the model (default: none)", 0},
   };
@@ -178,13 +185,13 @@ void selmap_opts(selmap_opts_t *o, cli_opt_t *d) {
       {"--heading-deg", CLI_DOUBLE, &o->heading_deg, -360.0, 360.0, 0, "A",
        "rover heading, degrees counter-clockwise from east", 0},
       {"--pan-deg", CLI_XY, o->pan_deg, 0, 0, 0, "MIN,MAX",
-       "bearings the mast can look at, degrees from the heading, CCW positive (default -180,180)", 0},
+       "bearings the mast can look at, degrees from the heading, CCW positive", 0},
       {"--min-range-m", CLI_DOUBLE, &o->min_range_m, 0.0, 1e6, 0, "R", "nearest target, m", 0},
       {"--max-range-m", CLI_DOUBLE, &o->max_range_m, 1e-3, 1e6, 0, "R", "farthest target, m", 0},
       {"--footprint-m", CLI_DOUBLE, &o->footprint_m, 0.0, 1e5, 0, "R",
        "rover footprint radius no patch may touch, m", 0},
       {"--patch-m", CLI_DOUBLE, &o->patch_m, 1e-3, 1e6, 0, "S",
-       "side of the sensed patch, m (default 2; at least 3 cells)", 0},
+       "side of the sensed patch, m (at least 3 cells)", 0},
       {"--stride-cells", CLI_LONG, &o->stride_cells, 1, 64, 0, "N", NULL, 0},
       {"--separation-m", CLI_DOUBLE, &o->separation_m, 0.0, 1e6, 0, "D",
        "least distance between ranked targets, m", 0},
