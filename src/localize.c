@@ -27,6 +27,7 @@ void trn_map_cfg_default(trn_map_cfg_t *cfg)
     cfg->noise_m = 0.01f;
     cfg->noise_k_per_m = 0.004f;
     cfg->match = TRN_MATCH_VOXEL;
+    cfg->max_failure_prob = 1.0f;
 }
 
 static trn_lik_cfg_t lik_of(const trn_map_cfg_t *cfg)
@@ -57,7 +58,8 @@ trn_status_t trn_map_cfg_check(const trn_map_cfg_t *cfg)
         cfg->min_exclusion_cells > TRN_MAX_DIM ||
         (cfg->local_highpass != TRN_LOCAL_HP_BOX && cfg->local_highpass != TRN_LOCAL_HP_MAP) ||
         (cfg->refine != 0 && cfg->refine != 1) || (cfg->match != TRN_MATCH_VOXEL && cfg->match != TRN_MATCH_HEIGHTS) || !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
-        !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f)) {
+        !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f) ||
+        !(cfg->max_failure_prob > 0.0f && cfg->max_failure_prob <= 1.0f)) {
         return TRN_E_ARG;
     }
     return TRN_OK;
@@ -242,6 +244,7 @@ trn_status_t trn_map_cfg_auto(trn_map_cfg_t *cfg, const trn_grid_f32_t *dem, flo
     c.refine = 1;
     c.match = TRN_MATCH_HEIGHTS;
     c.min_exclusion_cells = 1; /* failure: the answer 2 or more cells off (1.5 radial) */
+    c.max_failure_prob = (float)TRN_MAP_MAX_FAILURE_PROB_AUTO;
     if (!(cell_m > 0.0f && cell_m <= 1000.0f) || trn_map_cfg_check(&c) != TRN_OK) {
         return TRN_E_ARG;
     }
@@ -608,6 +611,16 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
     return out->refined && !out->misfit ? TRN_OK : TRN_E_ILLCOND;
 }
 
+/* The acceptance test: an answer otherwise good whose failure probability
+ * is above the map's limit is not a fix (TRN_E_AMBIGUOUS, out filled in). */
+static trn_status_t accept(const trn_map_t *map, trn_status_t st, const trn_loc_result_t *out)
+{
+    if (st == TRN_OK && out->failure_probability > (double)map->cfg.max_failure_prob) {
+        return TRN_E_AMBIGUOUS;
+    }
+    return st;
+}
+
 trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_dem,
                               int32_t rover_x, int32_t rover_y, size_t max_points,
                               const trn_window_t *win, void *ws, size_t ws_bytes,
@@ -640,7 +653,8 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
         return st;
     }
     if (map->cfg.match == TRN_MATCH_HEIGHTS) {
-        return localize_heights(map, local_dem, rover_x, rover_y, win, (double *)(void *)(b + lay.llgrid), out);
+        st = localize_heights(map, local_dem, rover_x, rover_y, win, (double *)(void *)(b + lay.llgrid), out);
+        return accept(map, st, out);
     }
     pts = (trn_point_t *)(void *)(b + lay.pts);
     if ((st = trn_grid_f32_init(&hp, (float *)(void *)(b + lay.hp),
@@ -681,7 +695,7 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
         /* No consistent height match around the voxel optimum: flag it. */
         st = out->refined && !out->misfit ? TRN_OK : TRN_E_ILLCOND;
     }
-    return st;
+    return accept(map, st, out);
 }
 
 /* Layout of trn_localize_dem_heading's workspace: [hp grid | highpass ws |

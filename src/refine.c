@@ -190,47 +190,111 @@ static void accumulate(const trn_grid_f32_t *global, const trn_grid_f32_t *local
     accumulate_rect(global, local, rx, ry, x, y, dz, clip, model2, cfg, 0, 0, local->width, local->height, acc);
 }
 
-/* The "meat" of the cluster-robust (sandwich) covariance: the sum over
- * TRN_REFINE_BLOCK x TRN_REFINE_BLOCK blocks of local cells of the outer
- * product of each block's score (sum of w r J over its inliers). Residuals
- * correlated within a block (the global DEM's interpolation error is smooth
- * over about a cell) add up there instead of averaging out. */
-/* Shift of the estimate (x, y, dz) if the global heights were bilinear
- * instead of bicubic between cell centres: A^-1 sum w J (G_cubic - G_bilinear)
- * over the inliers. The two interpolants bracket how the DEM's surface may
- * run between its samples; their disagreement is a systematic error of the
- * model, common to all points, that no residual statistic sees. */
-static void interp_shift(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
-                         double x, double y, double dz, double model2, const trn_refine_cfg_t *cfg,
-                         const double inv[9], double shift[3])
+/* One Gauss-Newton pass of the bilinear surface at (bx, by, bz) onto the
+ * bicubic model's own heights at the estimate (x, y, dz): normal equations
+ * over the estimate's inliers, weights 1 / (noise + model variance). No
+ * local height enters but through the inlier test, so the shift it leads
+ * to is the model's, free of the data's noise. acc->ss is the weighted sum
+ * of squares at (bx, by) with the best offset (closed form). */
+static void model_pass(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx, int32_t ry, double x,
+                       double y, double dz, double bx, double by, double bz, double model2, const trn_refine_cfg_t *cfg,
+                       accum_t *acc)
 {
-    int32_t i, j;
-    double g[3] = {0.0, 0.0, 0.0};
+    int32_t i, j, p, q;
+    for (p = 0; p < 9; ++p) {
+        acc->a[p] = 0.0;
+    }
+    acc->b[0] = acc->b[1] = acc->b[2] = 0.0;
+    acc->n_in = 0;
+    acc->q = acc->rr = acc->noise2 = 0.0; /* sum w, sum w r0, sum w r0^2 */
     for (j = 0; j < local->height; ++j) {
         for (i = 0; i < local->width; ++i) {
-            double h = (double)TRN_GRID_AT(local, i, j), s3[3], b3[3], px, py, v;
+            double h = (double)TRN_GRID_AT(local, i, j), s3[3], b3[3], px, py, v, w, res, jv[3];
             if (!isfinite(h)) {
                 continue;
             }
             px = (double)(i - rx);
             py = (double)(j - ry);
-            if (!sample(global, x + px, y + py, s3) || !sample_bilinear(global, x + px, y + py, b3)) {
+            if (!sample(global, x + px, y + py, s3) || !sample_bilinear(global, bx + px, by + py, b3)) {
                 continue;
             }
             v = noise_var(cfg, i, j, rx, ry) + model2;
             if (fabs(h - dz - s3[0]) > TRN_REFINE_CLIP * sqrt(v)) {
                 continue;
             }
-            g[0] += s3[1] * (s3[0] - b3[0]) / v;
-            g[1] += s3[2] * (s3[0] - b3[0]) / v;
-            g[2] += (s3[0] - b3[0]) / v;
+            w = 1.0 / v;
+            res = (dz + s3[0]) - b3[0];
+            acc->q += w;
+            acc->rr += w * res;
+            acc->noise2 += w * res * res;
+            res -= bz;
+            jv[0] = b3[1];
+            jv[1] = b3[2];
+            jv[2] = 1.0;
+            for (p = 0; p < 3; ++p) {
+                for (q = 0; q < 3; ++q) {
+                    acc->a[p * 3 + q] += w * jv[p] * jv[q];
+                }
+                acc->b[p] += w * jv[p] * res;
+            }
+            acc->n_in += 1;
         }
     }
-    shift[0] = inv[0] * g[0] + inv[1] * g[1] + inv[2] * g[2];
-    shift[1] = inv[3] * g[0] + inv[4] * g[1] + inv[5] * g[2];
-    shift[2] = inv[6] * g[0] + inv[7] * g[1] + inv[8] * g[2];
+    acc->ss = acc->q > 0.0 ? acc->noise2 - acc->rr * acc->rr / acc->q : 0.0;
 }
 
+/* Shift of the estimate (x, y, dz) had the global heights been bilinear
+ * instead of bicubic between cell centres: the pose where the bilinear
+ * surface best fits the bicubic model's own heights at the estimate, minus
+ * the estimate (model_pass, Gauss-Newton). The two interpolants bracket how
+ * the DEM runs between its samples; their disagreement is a systematic
+ * error of the model, common to all points, that no residual statistic
+ * sees. The bilinear surface has kinks at cell edges, where a plain step
+ * can overshoot and cycle: each step is halved until the sum of squares
+ * drops over the same points, and the search stops when no halving does
+ * (or the bilinear normal matrix is singular). */
+static void interp_shift(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
+                         double x, double y, double dz, double model2, const trn_refine_cfg_t *cfg,
+                         double shift[3])
+{
+    accum_t acc, trial;
+    double bx = x, by = y, bz = dz, bi[9], d[3];
+    int32_t it, h;
+    model_pass(global, local, rx, ry, x, y, dz, bx, by, bz, model2, cfg, &acc);
+    for (it = 0; it < TRN_REFINE_MAX_ITER && inv3(acc.a, bi); ++it) {
+        double step = 1.0;
+        d[0] = bi[0] * acc.b[0] + bi[1] * acc.b[1] + bi[2] * acc.b[2];
+        d[1] = bi[3] * acc.b[0] + bi[4] * acc.b[1] + bi[5] * acc.b[2];
+        d[2] = bi[6] * acc.b[0] + bi[7] * acc.b[1] + bi[8] * acc.b[2];
+        for (h = 0; h < TRN_REFINE_HALVINGS; ++h) {
+            model_pass(global, local, rx, ry, x, y, dz, bx + step * d[0], by + step * d[1], bz + step * d[2], model2,
+                       cfg, &trial);
+            if (trial.n_in == acc.n_in && trial.ss < acc.ss) {
+                break;
+            }
+            step *= 0.5;
+        }
+        if (h == TRN_REFINE_HALVINGS) {
+            break;
+        }
+        bx += step * d[0];
+        by += step * d[1];
+        bz += step * d[2];
+        acc = trial;
+        if (fabs(step * d[0]) < 1e-4 && fabs(step * d[1]) < 1e-4) {
+            break;
+        }
+    }
+    shift[0] = bx - x;
+    shift[1] = by - y;
+    shift[2] = bz - dz;
+}
+
+/* The "meat" of the cluster-robust (sandwich) covariance: the sum over
+ * TRN_REFINE_BLOCK x TRN_REFINE_BLOCK blocks of local cells of the outer
+ * product of each block's score (sum of w r J over its inliers). Residuals
+ * correlated within a block (the global DEM's interpolation error is smooth
+ * over about a cell) add up there instead of averaging out. */
 static void block_meat(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
                        double x, double y, double dz, double model2, const trn_refine_cfg_t *cfg, double meat[9])
 {
@@ -397,7 +461,7 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
         }
         {
             double sh[3];
-            interp_shift(global, local, rover_x, rover_y, x, y, dz, model2, cfg, inv, sh);
+            interp_shift(global, local, rover_x, rover_y, x, y, dz, model2, cfg, sh);
             out->interp_shift[0] = sh[0];
             out->interp_shift[1] = sh[1];
             out->cov_cells[0] += TRN_REFINE_SYS * sh[0] * sh[0];

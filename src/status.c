@@ -22,6 +22,7 @@ const char *trn_strerror(trn_status_t status)
     case TRN_E_IO: return "operating-system call failed";
     case TRN_E_FORMAT: return "malformed message or record";
     case TRN_E_CANCELLED: return "cancelled by the caller";
+    case TRN_E_AMBIGUOUS: return "match ambiguous (failure probability above the acceptance limit)";
     default: return "unknown status";
     }
 }

@@ -691,9 +691,71 @@ static void test_cfg_check_new_fields(void **state)
     b = c; b.noise_k_per_m = 0.0f; assert_int_equal(trn_map_cfg_check(&b), TRN_OK);
     b = c; b.noise_k_per_m = 1000.0f; assert_int_equal(trn_map_cfg_check(&b), TRN_OK);
     b = c; b.noise_k_per_m = 1000.0001f; assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    assert_true(c.max_failure_prob == 1.0f);
+    b = c; b.max_failure_prob = NAN; assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    b = c; b.max_failure_prob = 0.0f; assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    b = c; b.max_failure_prob = -0.05f; assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    b = c; b.max_failure_prob = 1.0001f; assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    b = c; b.max_failure_prob = INFINITY; assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    b = c; b.max_failure_prob = 1e-6f; assert_int_equal(trn_map_cfg_check(&b), TRN_OK);
     /* the map sizing and building refuse the same configurations */
     b = c; b.refine = 2;
     assert_int_equal(trn_map_bytes(&b, 8, 8), 0u);
+}
+
+/* The acceptance test. A DEM that repeats every 3 cells along x (and not
+ * along y): a local map taken exactly from it matches equally well 3 cells
+ * either side, so the failure probability is about 2/3. With auto's limit
+ * (TRN_MAP_MAX_FAILURE_PROB_AUTO) the answer is TRN_E_AMBIGUOUS with
+ * everything filled in; with the limit 1 the same answer is TRN_OK; the
+ * limit is strict (a failure probability equal to it passes). */
+static void test_ambiguous_acceptance(void **state)
+{
+    trn_grid_f32_t g, l;
+    trn_map_cfg_t cfg;
+    nat_t w;
+    trn_loc_result_t amb, ok, edge;
+    trn_status_t st;
+    trn_window_t win = window_at(48, 48, 4);
+    double sh;
+    int x, y;
+    (void)state;
+    for (y = 0; y < GW; ++y) {
+        for (x = 0; x < GW; ++x) {
+            g_data[y * GW + x] = (float)(3.0 * sin(2.0 * PI * x / 3.0) + 4.0 * sin(0.37 * y) + 1.5 * cos(0.61 * y));
+        }
+    }
+    assert_int_equal(trn_grid_f32_init(&g, g_data, GW * GW, GW, GW), TRN_OK);
+    for (y = 0; y < LW; ++y) {
+        for (x = 0; x < LW; ++x) {
+            l_data[y * LW + x] = g_data[(48 - LR + y) * GW + 48 - LR + x] + 2.0f;
+        }
+    }
+    l_data[LR * LW + LR] = NAN;
+    assert_int_equal(trn_grid_f32_init(&l, l_data, LW * LW, LW, LW), TRN_OK);
+    auto_cfg(&cfg, &g, &sh);
+    assert_true(cfg.max_failure_prob == (float)TRN_MAP_MAX_FAILURE_PROB_AUTO);
+    nat_build(&w, &cfg, &g);
+    assert_int_equal(nat_localize(&w, &l, LR, LR, &win, &amb), TRN_E_AMBIGUOUS);
+    nat_free(&w);
+    printf("periodic DEM: answer (%.3f, %.3f), failure probability %.3f\n", amb.x, amb.y, amb.failure_probability);
+    assert_true(amb.failure_probability > 0.5 && amb.failure_probability < 0.8);
+    assert_true(amb.refined == 1 && amb.misfit == 0 && isfinite(amb.cov_m2[0]));
+    assert_true(fabs(amb.y - 48.0) < 1e-3 && fmod(fabs(amb.x - 48.0) + 1e-3, 3.0) < 2e-3);
+    cfg.max_failure_prob = 1.0f;
+    nat_build(&w, &cfg, &g);
+    assert_int_equal(nat_localize(&w, &l, LR, LR, &win, &ok), TRN_OK);
+    nat_free(&w);
+    assert_true(ok.x == amb.x && ok.y == amb.y && ok.failure_probability == amb.failure_probability);
+    assert_true(ok.cov_m2[0] == amb.cov_m2[0] && ok.cov_m2[1] == amb.cov_m2[1]);
+    cfg.max_failure_prob = (float)amb.failure_probability;
+    nat_build(&w, &cfg, &g);
+    st = nat_localize(&w, &l, LR, LR, &win, &edge);
+    assert_int_equal(st, edge.failure_probability > (double)cfg.max_failure_prob ? TRN_E_AMBIGUOUS : TRN_OK);
+    cfg.max_failure_prob = nextafterf((float)amb.failure_probability, 0.0f);
+    w.map.cfg.max_failure_prob = cfg.max_failure_prob;
+    assert_int_equal(trn_localize_dem(&w.map, &l, LR, LR, MAXPTS, &win, w.ws, w.wb, &edge), TRN_E_AMBIGUOUS);
+    nat_free(&w);
 }
 
 /* sigma_H by the documented rule on the public filter: standard deviation
@@ -1273,6 +1335,7 @@ int main(void)
         cmocka_unit_test(test_map_build_heights),
         cmocka_unit_test(test_corrupt_heights),
         cmocka_unit_test(test_localize_dem_statuses),
+        cmocka_unit_test(test_ambiguous_acceptance),
         cmocka_unit_test(test_refine_grid_edges),
         cmocka_unit_test(test_refine_inlier_majority),
         cmocka_unit_test(test_refine_iteration_limits),

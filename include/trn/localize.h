@@ -68,6 +68,11 @@ typedef struct {
                                       s(r) = noise_m + noise_k_per_m r^2 */
     int32_t match;               /**< trn_match_t (trn_localize_dem only; trn_localize_points
                                       always matches voxels) */
+    float max_failure_prob;      /**< acceptance limit, (0, 1]: trn_localize_dem returns
+                                      TRN_E_AMBIGUOUS (result filled in) when an answer's
+                                      failure probability is above it; 1 (the default):
+                                      never. trn_map_cfg_auto sets
+                                      TRN_MAP_MAX_FAILURE_PROB_AUTO */
 } trn_map_cfg_t;
 
 /** A prepared global map. All pointers point into the caller's buffer. */
@@ -113,6 +118,10 @@ typedef struct {
 
 /** Inlier probability a of trn_map_cfg_default (the paper's). */
 #define TRN_MAP_INLIER_PROB_DEFAULT 0.95
+/** trn_map_cfg_auto's acceptance limit on the failure probability: an
+ *  answer is a fix only if the probability that it is more than 1.5 cells
+ *  off is at most 5 % (docs/method.md section 9). */
+#define TRN_MAP_MAX_FAILURE_PROB_AUTO 0.05
 /** High-pass half-width of the tools' and trn_map_cfg_auto's maps, cells. */
 #define TRN_MAP_HIGHPASS_CELLS 10
 
@@ -204,6 +213,10 @@ size_t trn_localize_dem_workspace_bytes(const trn_map_t *map, int32_t width, int
  * @param[in] max_points       largest local occupancy accepted.
  * @retval as trn_localize_points, plus TRN_E_CAPACITY (more than max_points
  *         occupied voxels) and TRN_E_NODATA (local DEM all missing).
+ * @retval TRN_E_AMBIGUOUS an answer that would be TRN_OK, but its failure
+ *         probability is above cfg.max_failure_prob: out is filled in as
+ *         for TRN_OK; it is not a fix (the acceptance test,
+ *         docs/method.md section 9).
  */
 trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_dem,
                               int32_t rover_x, int32_t rover_y, size_t max_points,

@@ -47,6 +47,8 @@ extern "C" {
 #endif
 /** Largest Gauss-Newton iterations. */
 #define TRN_REFINE_MAX_ITER 12
+/** Step halvings tried per iteration of the interpolants' shift. */
+#define TRN_REFINE_HALVINGS 8
 
 /** Height-noise model of the local map: s(r) = noise_m + noise_k_per_m r^2. */
 typedef struct {

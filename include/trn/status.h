@@ -29,7 +29,8 @@ typedef enum {
     TRN_E_BUS = -13,        /**< bus error (bus-off, error-passive, overflow) */
     TRN_E_IO = -14,         /**< an operating-system call failed (port layer only) */
     TRN_E_FORMAT = -15,     /**< malformed message or record */
-    TRN_E_CANCELLED = -16   /**< the caller's progress callback asked to stop */
+    TRN_E_CANCELLED = -16,  /**< the caller's progress callback asked to stop */
+    TRN_E_AMBIGUOUS = -17   /**< a match was found, but its failure probability is above the acceptance limit: not a fix */
 } trn_status_t;
 
 /**

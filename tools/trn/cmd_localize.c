@@ -35,7 +35,7 @@ static void *alloc16(size_t n, void **raw) {
 }
 
 static const char *status_word(trn_status_t st) {
-  return st == TRN_OK ? "ok" : st == TRN_E_ILLCOND ? "ill_conditioned" : "error";
+  return st == TRN_OK ? "ok" : st == TRN_E_ILLCOND ? "ill_conditioned" : st == TRN_E_AMBIGUOUS ? "ambiguous" : "error";
 }
 
 /* What every localization of one run shares: the global map, prepared once. */
@@ -175,7 +175,7 @@ static int localize_one(loc_ctx_t *c, const char *local_path, const double prior
     o->st = trn_localize_dem(&c->map, &lg, rx, ry, max_pts, &win, ws, wb, &o->res);
   }
   o->time_ms = now_ms() - t0;
-  if (o->st != TRN_OK && o->st != TRN_E_ILLCOND) {
+  if (o->st != TRN_OK && o->st != TRN_E_ILLCOND && o->st != TRN_E_AMBIGUOUS) {
     snprintf(err, err_len, "localization failed: %s", trn_strerror(o->st));
     goto done;
   }
@@ -314,7 +314,8 @@ int trn_cmd_localize(int argc, char **argv) {
                    "part of it can be set. Output: x_m, y_m (map), sigma_x_m (east), sigma_y_m (north),\n"
                    "rho (east-north), cov_m2 [var_east, var_north, cov_en], failure_probability,\n"
                    "status (ok | ill_conditioned: no finite covariance, or the height refinement\n"
-                   "found no consistent match: treat as not localized), time_ms (the localization).",
+                   "found no consistent match | ambiguous: failure_probability above\n"
+                   "--max-failure-prob; both: treat as not localized), time_ms (the localization).",
                    all, sizeof all / sizeof all[0]};
   char err[768];
   int rc;

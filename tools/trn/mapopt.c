@@ -20,6 +20,7 @@ void mapopt_init(mapopt_t *m) {
   m->local_hp = NULL;
   m->refine = -1;
   m->match = NULL;
+  m->max_failure_prob = 0.0;
 }
 
 /* The tools' local height noise: 1 cm plus 0.04 % of r^2 / cell (issue 12's
@@ -43,6 +44,8 @@ void mapopt_cli(mapopt_t *m, cli_opt_t *o) {
       {"--local-highpass", CLI_STRING, &m->local_hp, 0, 0, 0, "box|map", "local DEM filter: box (its own, the paper) or map (the map's low-pass; auto) (default: --map-config's)", 0},
       {"--refine", CLI_LONG, &m->refine, 0, 1, 0, "0|1", "refine the pose over heights (default 1 with auto, 0 with paper)", 0},
       {"--match", CLI_STRING, &m->match, 0, 0, 0, "voxel|heights", "what localize matches: voxel occupancy (paper) or heights (auto) (default: --map-config's)", 0},
+      {"--max-failure-prob", CLI_DOUBLE, &m->max_failure_prob, 1e-6, 1.0, 0, "P",
+       "acceptance limit: localize's answer is 'ambiguous', not a fix, when its failure probability is above P (default " MAPOPT_STR(TRN_MAP_MAX_FAILURE_PROB_AUTO) " with auto, 1 = never with paper)", 0},
   };
   memcpy(o, t, sizeof t);
 }
@@ -108,6 +111,7 @@ int mapopt_config(const mapopt_t *m, const float *data, int width, int height, d
   if (m->local_hp != NULL) cfg->local_highpass = strcmp(m->local_hp, "map") == 0 ? TRN_LOCAL_HP_MAP : TRN_LOCAL_HP_BOX;
   if (m->refine >= 0) cfg->refine = (int32_t)m->refine;
   if (m->match != NULL) cfg->match = strcmp(m->match, "heights") == 0 ? TRN_MATCH_HEIGHTS : TRN_MATCH_VOXEL;
+  if (m->max_failure_prob > 0.0) cfg->max_failure_prob = (float)m->max_failure_prob;
   if ((st = trn_map_cfg_check(cfg)) != TRN_OK) {
     snprintf(err, err_len,
              "map configuration rejected (%s): cell %g m, bin %g m, %d bins, high-pass %g m (at least one cell), s %g m",
@@ -133,5 +137,6 @@ void mapopt_json(json_t *j, const trn_map_cfg_t *cfg) {
   json_str(j, "local_highpass", cfg->local_highpass == TRN_LOCAL_HP_MAP ? "map" : "box");
   json_int(j, "refine", cfg->refine);
   json_str(j, "match", cfg->match == TRN_MATCH_HEIGHTS ? "heights" : "voxel");
+  json_num(j, "max_failure_prob", cfg->max_failure_prob);
   json_obj_end(j);
 }
