@@ -296,10 +296,11 @@ static void rep_invalid(report_t *r, const trn_can_frame_t *f) {
   }
   {
     char hex[2 * 8 + 1];
-    for (i = 0; i < f->dlc && i < 8; ++i) {
-      snprintf(hex + 2 * i, 3, "%02X", f->data[i]);
+    size_t k;
+    for (k = 0; k < f->dlc && k < 8u; ++k) {
+      snprintf(hex + 2u * k, 3, "%02X", f->data[k]);
     }
-    hex[2 * i] = '\0';
+    hex[2u * k] = '\0';
     json_bool(&r->j, "valid", 0);
     json_int(&r->j, "dlc", f->dlc);
     json_str(&r->j, "data", hex);
