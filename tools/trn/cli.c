@@ -289,65 +289,28 @@ cli_opt_t *cli_find(cli_opt_t *opts, size_t n, const char *name) {
   return NULL;
 }
 
-/* The first positional entry of cmd not filled yet, or NULL. */
-static cli_opt_t *next_positional(cli_cmd_t *cmd) {
+/* A non-option argument a ("-" included): the next positional entry of cmd
+ * takes it. For a command with positional entries "-x" is an unknown option
+ * unless it comes after `--` (only_pos). */
+static int take_positional(cli_cmd_t *cmd, const char *a, int only_pos) {
+  cli_opt_t *o = NULL;
   size_t k;
+  int has_pos = 0, rc;
   for (k = 0; k < cmd->n_opts; ++k) {
-    if (is_positional(&cmd->opts[k]) && !cmd->opts[k].seen) {
-      return &cmd->opts[k];
+    if (is_positional(&cmd->opts[k])) {
+      has_pos = 1;
+      if (o == NULL && !cmd->opts[k].seen) {
+        o = &cmd->opts[k];
+      }
     }
   }
-  return NULL;
-}
-
-/* A non-option argument a: the next positional entry takes it. */
-static int take_positional(cli_cmd_t *cmd, const char *a) {
-  cli_opt_t *o = next_positional(cmd);
-  int rc;
+  if (has_pos && !only_pos && a[0] == '-' && a[1] != '\0') {
+    return usage_error(cmd, "unknown option", a);
+  }
   if (o == NULL) {
     return usage_error(cmd, "unexpected argument", a);
   }
   rc = set_value(cmd, o, a);
-  if (rc == CLI_OK) {
-    o->seen = 1;
-  }
-  return rc;
-}
-
-/* The option argv[*i] ("--name" or "--name=value"), its value taken from
- * argv[*i + 1] when needed (then *i is advanced). */
-static int take_option(cli_cmd_t *cmd, int argc, char **argv, int *i) {
-  const char *a = argv[*i];
-  const char *eq = strchr(a, '=');
-  const char *val = NULL;
-  size_t name_len = eq != NULL ? (size_t)(eq - a) : strlen(a);
-  cli_opt_t *o = NULL;
-  size_t k;
-  int rc;
-  for (k = 0; k < cmd->n_opts; ++k) {
-    if (strlen(cmd->opts[k].name) == name_len && strncmp(cmd->opts[k].name, a, name_len) == 0) {
-      o = &cmd->opts[k];
-      break;
-    }
-  }
-  if (o == NULL || is_positional(o)) {
-    return usage_error(cmd, "unknown option", a);
-  }
-  if (o->seen) {
-    return usage_error(cmd, "option given twice:", o->name);
-  }
-  if (o->kind == CLI_FLAG) {
-    if (eq != NULL) {
-      return usage_error(cmd, "option takes no value:", o->name);
-    }
-  } else if (eq != NULL) {
-    val = eq + 1;
-  } else if (*i + 1 < argc) {
-    val = argv[++*i];
-  } else {
-    return usage_error(cmd, "missing value for", o->name);
-  }
-  rc = set_value(cmd, o, val);
   if (rc == CLI_OK) {
     o->seen = 1;
   }
@@ -361,8 +324,8 @@ int cli_parse(cli_cmd_t *cmd, int argc, char **argv) {
     cmd->opts[k].seen = 0;
     has_pos |= is_positional(&cmd->opts[k]);
   }
-  /* --help anywhere (before a `--` that ends the options): the usage with
-   * the defaults, before any value is set */
+  /* --help anywhere (before a `--` ending the options of a command with
+   * positional arguments): the usage with the defaults, before any value is set */
   for (i = 1; i < argc && !(has_pos && strcmp(argv[i], "--") == 0); ++i) {
     if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
       cli_usage(cmd, stdout);
@@ -371,24 +334,52 @@ int cli_parse(cli_cmd_t *cmd, int argc, char **argv) {
   }
   for (i = 1; i < argc; ++i) {
     const char *a = argv[i];
+    const char *eq;
+    const char *val = NULL;
+    size_t name_len;
+    cli_opt_t *o = NULL;
     int rc;
     if (has_pos && !only_pos && strcmp(a, "--") == 0) {
-      only_pos = 1;
+      only_pos = 1; /* `--`: the rest are positional arguments */
       continue;
     }
     if (only_pos || strncmp(a, "--", 2) != 0) {
-      /* "-x" is an unknown option for a command taking positional
-       * arguments; "-" (standard input, by convention) is an argument */
-      if (has_pos && !only_pos && a[0] == '-' && a[1] != '\0') {
-        return usage_error(cmd, "unknown option", a);
+      rc = take_positional(cmd, a, only_pos);
+      if (rc != CLI_OK) {
+        return rc;
       }
-      rc = take_positional(cmd, a);
-    } else {
-      rc = take_option(cmd, argc, argv, &i);
+      continue;
     }
+    eq = strchr(a, '=');
+    name_len = eq != NULL ? (size_t)(eq - a) : strlen(a);
+    for (k = 0; k < cmd->n_opts; ++k) {
+      if (strlen(cmd->opts[k].name) == name_len && strncmp(cmd->opts[k].name, a, name_len) == 0) {
+        o = &cmd->opts[k];
+        break;
+      }
+    }
+    if (o == NULL) {
+      return usage_error(cmd, "unknown option", a);
+    }
+    if (o->seen) {
+      return usage_error(cmd, "option given twice:", o->name);
+    }
+    if (o->kind == CLI_FLAG) {
+      if (eq != NULL) {
+        return usage_error(cmd, "option takes no value:", o->name);
+      }
+    } else if (eq != NULL) {
+      val = eq + 1;
+    } else if (i + 1 < argc) {
+      val = argv[++i];
+    } else {
+      return usage_error(cmd, "missing value for", o->name);
+    }
+    rc = set_value(cmd, o, val);
     if (rc != CLI_OK) {
       return rc;
     }
+    o->seen = 1;
   }
   for (k = 0; k < cmd->n_opts; ++k) {
     if (cmd->opts[k].required && !cmd->opts[k].seen) {
