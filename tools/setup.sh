@@ -44,6 +44,8 @@ declare -A PKG_GROUPS=(
   # CAN bus tools: the cantools cross-check of the DBC runs in the project
   # venv (.venv, cantools from PyPI); can-utils to record and replay logs.
   [can]="python3 python3-venv can-utils"
+  # The formatting rule (.clang-format, CTest `format`): clang-format 14.
+  [format]="clang-format"
   # Assurance stages (docs/assurance.md): static analysis (cppcheck + its
   # MISRA addon, clang-tidy), libFuzzer (clang + compiler-rt), coverage (gcovr),
   # the stack tool (python3).
@@ -58,7 +60,7 @@ declare -A PKG_GROUPS=(
   [real]="python3 python3-venv python3-opencv python3-numpy python3-gdal gdal-bin
           python3-matplotlib python-matplotlib-data"
 )
-GROUP_ORDER=(core gpiod2 bench gdal can plot vm assure profile real)
+GROUP_ORDER=(core gpiod2 bench gdal can plot vm assure format profile real)
 
 usage() {
   echo "usage: $0 [group...]   (default: core)"

@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: Apache-2.0
 # tools/test.sh - the project's full check (also what CI runs, via .ci/run).
 #
-#   1. tools/setup.sh core gdal plot profile real    (install what is missing)
+#   1. tools/setup.sh core gdal plot profile real format   (install what is missing)
 #   2. host:          configure, build, ctest (Debug, ASan + UBSan)
 #   3. aarch64:       configure, build, ctest (cross, tests under qemu-aarch64)
 #   4. arm-none-eabi: configure, build (bare-metal Cortex-R5F; prints libtrn.a size)
@@ -68,7 +68,7 @@ ctest_step() {
   tests_failed=$((tests_failed + failed))
 }
 
-step "setup" bash tools/setup.sh core gdal plot profile real
+step "setup" bash tools/setup.sh core gdal plot profile real format
 
 for preset in host aarch64; do
   step "$preset configure" cmake --preset "$preset"

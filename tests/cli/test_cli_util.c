@@ -148,12 +148,79 @@ static void test_option_table(void **state) {
   assert_int_equal(cli_parse(&cmd, 2, novalue), CLI_USAGE);
 }
 
+/* Positional entries (a name without '-'): filled in table order, "-" is an
+ * argument, "-x" an unknown option, "--" ends the options, too many or too
+ * few are usage errors; a table without them rejects any argument. */
+static void test_positional(void **state) {
+  const char *in = NULL, *out = NULL;
+  long n = 1;
+  int flag = 0;
+  cli_opt_t opts[] = {
+      {"--n", CLI_LONG, &n, 1, 10, 0, "N", "n", 0},
+      {"--flag", CLI_FLAG, &flag, 0, 0, 0, NULL, "flag", 0},
+      {"IN", CLI_STRING, &in, 0, 0, 1, NULL, "input", 0},
+      {"OUT", CLI_STRING, &out, 0, 0, 0, NULL, "output", 0},
+  };
+  cli_cmd_t cmd = {"t", "test", NULL, opts, 4};
+  char *both[] = {"t", "a.log", "--n", "3", "b.out", "--flag"};
+  char *stdin_arg[] = {"t", "-"};
+  char *dashdash[] = {"t", "--flag", "--", "--n", "-y"};
+  char *three[] = {"t", "a", "b", "c"};
+  char *none[] = {"t", "--flag"};
+  char *single_dash[] = {"t", "-x", "a"};
+  char *empty[] = {"t", ""};
+  char *by_name[] = {"t", "--IN", "a"};
+  char buf[2048];
+  FILE *f;
+  cli_opt_t plain[] = {{"--n", CLI_LONG, &n, 1, 10, 0, "N", "n", 0}};
+  cli_cmd_t no_pos = {"u", "test", NULL, plain, 1};
+  char *stray[] = {"u", "a"};
+  char *stray_dash[] = {"u", "--"};
+  (void)state;
+  assert_int_equal(cli_parse(&cmd, 6, both), CLI_OK);
+  assert_string_equal(in, "a.log");
+  assert_string_equal(out, "b.out");
+  assert_true(n == 3 && flag == 1 && opts[2].seen && opts[3].seen);
+  out = NULL;
+  assert_int_equal(cli_parse(&cmd, 2, stdin_arg), CLI_OK);
+  assert_string_equal(in, "-");
+  assert_null(out);
+  assert_false(opts[3].seen);
+  assert_int_equal(cli_parse(&cmd, 5, dashdash), CLI_OK);
+  assert_string_equal(in, "--n");
+  assert_string_equal(out, "-y");
+  assert_int_equal(cli_parse(&cmd, 4, three), CLI_USAGE);
+  assert_int_equal(cli_parse(&cmd, 2, none), CLI_USAGE);
+  assert_int_equal(cli_parse(&cmd, 3, single_dash), CLI_USAGE);
+  assert_int_equal(cli_parse(&cmd, 2, empty), CLI_BAD_INPUT);
+  assert_int_equal(cli_parse(&cmd, 3, by_name), CLI_USAGE);
+  assert_ptr_equal(cli_find(opts, 4, "IN"), &opts[2]);
+  assert_int_equal(cli_parse(&no_pos, 2, stray), CLI_USAGE);
+  assert_int_equal(cli_parse(&no_pos, 2, stray_dash), CLI_USAGE);
+  /* usage: options, then the arguments ([OUT]: optional); an arguments list */
+  f = tmpfile();
+  assert_non_null(f);
+  cli_usage(&cmd, f);
+  slurp(f, buf, sizeof buf);
+  fclose(f);
+  assert_non_null(strstr(buf, "usage: trn t [--n N] [--flag] IN [OUT]\n"));
+  assert_non_null(strstr(buf, "arguments:\n  IN "));
+  assert_non_null(strstr(buf, "options:\n  --n N"));
+  f = tmpfile();
+  assert_non_null(f);
+  cli_usage(&no_pos, f);
+  slurp(f, buf, sizeof buf);
+  fclose(f);
+  assert_null(strstr(buf, "arguments:"));
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_parse_double), cmocka_unit_test(test_parse_integers),
       cmocka_unit_test(test_parse_xy),     cmocka_unit_test(test_json),
       cmocka_unit_test(test_exit_status_help),
       cmocka_unit_test(test_option_table),
+      cmocka_unit_test(test_positional),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

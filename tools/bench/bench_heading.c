@@ -108,7 +108,7 @@ int bench_heading_run(const trn_map_t *map, const trn_point_t *pts, size_t n_pts
         }
     }
     r->per_step_ms = sum_med / (double)r->steps;
-    work3 = (unsigned long long)(hr.loc.stats.poses_scored + hr.loc.stats.blocks_bounded);
+    work3 = (unsigned long long)hr.loc.stats.poses_scored + (unsigned long long)hr.loc.stats.blocks_bounded;
     r->ratio = r->heading_ms / sum_med;
     r->wrong = !(hr.loc.ll_best == best_ll && hr.best_step == best_k && hr.loc.ix == bx && hr.loc.iy == by);
     {

@@ -63,7 +63,7 @@ typedef struct {
 /* warm-up (if asked), then up to reps timed calls, stopping after budget_s */
 static int bs_time(bs_fn_t fn, void *ctx, int warm, int reps, double budget_s, bs_t *t)
 {
-    double s[BS_MAX_REPS], start = bs_now();
+    double s[BS_MAX_REPS], start;
     int n = 0;
     if (warm && fn(ctx) != 0) {
         return -1;

@@ -624,6 +624,7 @@ static int run_localize(void *p)
 
 typedef struct {
     int32_t n;
+    int wrong;                /* a wrong answer was seen */
     double chamfer_vs_stream; /* median trn_chamfer3d / median SIMD streaming passes */
     double chamfer_vs_scan;   /* median trn_chamfer3d / median scalar scan passes */
     double floor_vs_stream;   /* median relaxation floor / median SIMD streaming passes */
@@ -631,7 +632,6 @@ typedef struct {
     double search_speedup[N_WINDOWS]; /* median exhaustive / median branch-and-bound */
     bench_select_result_t sel;/* landmark selection rows */
     bench_heading_result_t head; /* the (x, y, heading) search row */
-    int wrong;                /* a wrong answer was seen */
 } size_result_t;
 
 /* One global map size: its memory (freed in one place) and shared state. */
@@ -744,9 +744,9 @@ static int world_init(world_t *w, const opts_t *o, int32_t n)
         (st = trn_grid_f32_init(&w->ghp, w->hp, w->cells, n, n)) != TRN_OK ||
         (st = trn_vol_u8_init(&w->vocc, w->occ, w->nvox, n, n, w->nz)) != TRN_OK ||
         (st = trn_vol_u8_init(&w->vdist, w->dist, w->nvox, n, n, w->nz)) != TRN_OK ||
-        (st = trn_grid_f32_init(&w->glocal, w->loc, LOCAL_CELLS * LOCAL_CELLS, LOCAL_CELLS,
+        (st = trn_grid_f32_init(&w->glocal, w->loc, (size_t)LOCAL_CELLS * LOCAL_CELLS, LOCAL_CELLS,
                                 LOCAL_CELLS)) != TRN_OK ||
-        (st = trn_grid_f32_init(&w->glhp, w->lhp, LOCAL_CELLS * LOCAL_CELLS, LOCAL_CELLS,
+        (st = trn_grid_f32_init(&w->glhp, w->lhp, (size_t)LOCAL_CELLS * LOCAL_CELLS, LOCAL_CELLS,
                                 LOCAL_CELLS)) != TRN_OK) {
         return fail("grid setup", st);
     }

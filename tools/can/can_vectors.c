@@ -36,7 +36,9 @@ static void sig(const char *name, long v, int last)
 static int mast_cmd(const trn_mast_cmd_t *m)
 {
     trn_can_frame_t f;
-    if (trn_can_mast_cmd_encode(m, &f) != TRN_OK) return 1;
+    if (trn_can_mast_cmd_encode(m, &f) != TRN_OK) {
+        return 1;
+    }
     begin("MAST_CMD", &f);
     sig("pan_cmd", m->pan_100urad, 0);
     sig("tilt_cmd", m->tilt_100urad, 0);
@@ -54,12 +56,18 @@ static int mast_status(const trn_mast_status_t *m)
                                       "flt_overtemp", "flt_cmd_invalid"};
     trn_can_frame_t f;
     int b;
-    if (trn_can_mast_status_encode(m, &f) != TRN_OK) return 1;
+    if (trn_can_mast_status_encode(m, &f) != TRN_OK) {
+        return 1;
+    }
     begin("MAST_STATUS", &f);
     sig("pan", m->pan_100urad, 0);
     sig("tilt", m->tilt_100urad, 0);
-    for (b = 0; b < 6; ++b) sig(st[b], (m->state >> b) & 1, 0);
-    for (b = 0; b < 6; ++b) sig(fl[b], (m->faults >> b) & 1, 0);
+    for (b = 0; b < 6; ++b) {
+        sig(st[b], (m->state >> b) & 1, 0);
+    }
+    for (b = 0; b < 6; ++b) {
+        sig(fl[b], (m->faults >> b) & 1, 0);
+    }
     sig("cmd_seq_ack", m->cmd_seq_ack, 0);
     sig("counter", m->counter, 1);
     return 0;
@@ -68,7 +76,9 @@ static int mast_status(const trn_mast_status_t *m)
 static int capture_cmd(const trn_capture_cmd_t *m)
 {
     trn_can_frame_t f;
-    if (trn_can_capture_cmd_encode(m, &f) != TRN_OK) return 1;
+    if (trn_can_capture_cmd_encode(m, &f) != TRN_OK) {
+        return 1;
+    }
     begin("CAPTURE_CMD", &f);
     sig("capture_id", m->capture_id, 0);
     sig("max_points", m->max_points, 1);
@@ -78,7 +88,9 @@ static int capture_cmd(const trn_capture_cmd_t *m)
 static int heartbeat(uint32_t id, const trn_heartbeat_t *m)
 {
     trn_can_frame_t f;
-    if (trn_can_heartbeat_encode(id, m, &f) != TRN_OK) return 1;
+    if (trn_can_heartbeat_encode(id, m, &f) != TRN_OK) {
+        return 1;
+    }
     begin(id == TRN_CAN_ID_MAST_HB ? "MAST_HB" : "STEREO_HB", &f);
     sig("state", m->state, 0);
     sig("counter", m->counter, 0);
@@ -91,7 +103,9 @@ static int flow_control(uint8_t fs, uint8_t bs, uint8_t stmin)
     trn_can_frame_t f;
     memset(&f, 0, sizeof f);
     f.id = TRN_CAN_ID_CAPTURE_FC;
-    if (trn_isotp_encode_fc(fs, bs, stmin, f.data, &f.dlc) != TRN_OK) return 1;
+    if (trn_isotp_encode_fc(fs, bs, stmin, f.data, &f.dlc) != TRN_OK) {
+        return 1;
+    }
     begin("CAPTURE_FC", &f);
     sig("flow_status", fs, 0);
     sig("pci_type", 3, 0);
@@ -117,7 +131,9 @@ int main(int argc, char **argv)
                                         {-1, 0, 0x15, 0x2A, 1, 128}};
         const trn_capture_cmd_t k[2] = {{0, 0}, {65535, 65535}};
         const trn_heartbeat_t h[2] = {{0, 0, 0}, {3, 255, 65535}};
-        for (i = 0; i < 3; ++i) bad |= mast_cmd(&c[i]) | mast_status(&s[i]);
+        for (i = 0; i < 3; ++i) {
+            bad |= mast_cmd(&c[i]) | mast_status(&s[i]);
+        }
         for (i = 0; i < 2; ++i) {
             bad |= capture_cmd(&k[i]);
             bad |= heartbeat(TRN_CAN_ID_MAST_HB, &h[i]) | heartbeat(TRN_CAN_ID_STEREO_HB, &h[i]);

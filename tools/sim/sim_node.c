@@ -394,7 +394,7 @@ static int read_trigger(const char *path)
     return c == '1' ? 1 : (c == '0' ? 0 : -1);
 }
 
-trn_status_t sim_run(const sim_cfg_t *cfg, volatile sig_atomic_t *stop, sim_stats_t *stats)
+trn_status_t sim_run(const sim_cfg_t *cfg, const volatile sig_atomic_t *stop, sim_stats_t *stats)
 {
     static sim_state_t s;
     sim_stats_t local;
@@ -463,7 +463,7 @@ trn_status_t sim_run(const sim_cfg_t *cfg, volatile sig_atomic_t *stop, sim_stat
         }
         if (el >= next_hb) {
             trn_heartbeat_t hb;
-            hb.state = (uint8_t)(s.faults & (uint8_t)~TRN_MAST_FLT_CMD_INVALID ? TRN_NODE_FAULT
+            hb.state = (uint8_t)((s.faults & (uint8_t)~TRN_MAST_FLT_CMD_INVALID) != 0u ? TRN_NODE_FAULT
                                  : s.moving ? TRN_NODE_BUSY : TRN_NODE_READY);
             hb.counter = s.mast_hb_counter;
             hb.uptime_s = (uint16_t)(el / 1000u);

@@ -97,7 +97,7 @@ const char *sim_fault_name(sim_fault_t f);
  * @param[out] stats counters (may be NULL).
  * @retval TRN_OK, TRN_E_NULL, TRN_E_ARG (configuration), TRN_E_BUS / TRN_E_IO (socket)
  */
-trn_status_t sim_run(const sim_cfg_t *cfg, volatile sig_atomic_t *stop, sim_stats_t *stats);
+trn_status_t sim_run(const sim_cfg_t *cfg, const volatile sig_atomic_t *stop, sim_stats_t *stats);
 
 #ifdef __cplusplus
 }

@@ -133,7 +133,8 @@ trn_status_t sim_render_rows(const sim_dem_t *dem, const sim_camera_t *cam, cons
                 dc[k] /= norm;
             }
             for (k = 0; k < 3; ++k) {
-                dm[k] = (double)R[3 * k] * dc[0] + (double)R[3 * k + 1] * dc[1] + (double)R[3 * k + 2] * dc[2];
+                const size_t row = (size_t)3 * (size_t)k;
+                dm[k] = (double)R[row] * dc[0] + (double)R[row + 1u] * dc[1] + (double)R[row + 2u] * dc[2];
             }
             /* march: above the surface at r0, first sample at or below at r1 */
             r0 = (double)cam->min_range_m;

@@ -8,6 +8,7 @@
  * Terrain: tools/support/synth (rocks on a rolling background), size x size
  * cells of --cell metres from (0, 0); the rover stands at --pose.
  * Runs until --run-ms or SIGINT/SIGTERM, then prints its counters. */
+#include <errno.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -30,6 +31,22 @@ static int usage(void)
                     "               [--pose X,Y,HEADING] [--run-ms MS] [--trigger VALUE_FILE]\n"
                     "               [--fault none|drop|corrupt|silent|stuck-pan|bus-off] [--fault-arg N]\n");
     return 2;
+}
+
+/* "X,Y,HEADING": three finite floats and nothing else; 1 ok. */
+static int parse_pose(const char *s, float v[3])
+{
+    int k;
+    for (k = 0; k < 3; ++k) {
+        char *end = NULL;
+        errno = 0;
+        v[k] = strtof(s, &end);
+        if (end == s || errno == ERANGE || *end != (k < 2 ? ',' : '\0')) {
+            return 0;
+        }
+        s = end + 1;
+    }
+    return 1;
 }
 
 int main(int argc, char **argv)
@@ -64,9 +81,13 @@ int main(int argc, char **argv)
         } else if (strcmp(a, "--cell") == 0) {
             cell = strtod(v, NULL);
         } else if (strcmp(a, "--pose") == 0) {
-            if (sscanf(v, "%f,%f,%f", &cfg.pose.x_m, &cfg.pose.y_m, &cfg.pose.heading_rad) != 3) {
+            float pose[3];
+            if (!parse_pose(v, pose)) {
                 return usage();
             }
+            cfg.pose.x_m = pose[0];
+            cfg.pose.y_m = pose[1];
+            cfg.pose.heading_rad = pose[2];
         } else if (strcmp(a, "--run-ms") == 0) {
             cfg.run_ms = (uint32_t)strtoul(v, NULL, 0);
         } else if (strcmp(a, "--trigger") == 0) {

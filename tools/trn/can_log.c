@@ -5,9 +5,15 @@
 #include <string.h>
 
 static int hexval(char c) {
-  if (c >= '0' && c <= '9') return c - '0';
-  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
-  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+  if (c >= '0' && c <= '9') {
+    return c - '0';
+  }
+  if (c >= 'a' && c <= 'f') {
+    return c - 'a' + 10;
+  }
+  if (c >= 'A' && c <= 'F') {
+    return c - 'A' + 10;
+  }
   return -1;
 }
 
@@ -26,11 +32,17 @@ static const char *parse_data(const char *p, trn_can_frame_t *f) {
       continue;
     }
     hi = hexval(p[0]);
-    if (hi < 0) return "bad hex digit in data";
+    if (hi < 0) {
+      return "bad hex digit in data";
+    }
     lo = hexval(p[1]);
-    if (lo < 0) return (p[1] == '\0' || p[1] == ' ' || p[1] == '\n' || p[1] == '\r') ? "odd number of hex digits in data"
-                                                                                      : "bad hex digit in data";
-    if (n >= 8u) return "more than 8 data bytes (classic CAN)";
+    if (lo < 0) {
+      return (p[1] == '\0' || p[1] == ' ' || p[1] == '\n' || p[1] == '\r') ? "odd number of hex digits in data"
+                                                                           : "bad hex digit in data";
+    }
+    if (n >= 8u) {
+      return "more than 8 data bytes (classic CAN)";
+    }
     f->data[n++] = (uint8_t)(hi * 16 + lo);
     p += 2;
   }
@@ -48,8 +60,12 @@ void can_log_parse(const char *line, can_log_line_t *out) {
 
   memset(out, 0, sizeof *out);
   out->kind = CAN_LOG_SKIP;
-  while (*p == ' ' || *p == '\t') ++p;
-  if (*p == '\0' || *p == '\n' || *p == '\r' || *p == '#') return;
+  while (*p == ' ' || *p == '\t') {
+    ++p;
+  }
+  if (*p == '\0' || *p == '\n' || *p == '\r' || *p == '#') {
+    return;
+  }
 
   /* (sec.frac) */
   if (*p != '(') { malformed(out, "expected '(' and a timestamp"); return; }
@@ -62,7 +78,9 @@ void can_log_parse(const char *line, can_log_line_t *out) {
   if (ndig == 0 || *p != '.') { malformed(out, "timestamp is not sec.usec"); return; }
   ++p;
   while (*p >= '0' && *p <= '9') {
-    if (frac < 6) usec = usec * 10u + (uint32_t)(*p - '0');
+    if (frac < 6) {
+      usec = usec * 10u + (uint32_t)(*p - '0');
+    }
     ++frac;
     ++p;
   }
@@ -74,18 +92,24 @@ void can_log_parse(const char *line, can_log_line_t *out) {
   if (*p != ')') { malformed(out, "expected ')' after the timestamp"); return; }
   ++p;
   if (*p != ' ' && *p != '\t') { malformed(out, "expected a space after the timestamp"); return; }
-  while (*p == ' ' || *p == '\t') ++p;
+  while (*p == ' ' || *p == '\t') {
+    ++p;
+  }
 
   /* interface */
   q = p;
-  while (*q != '\0' && *q != ' ' && *q != '\t' && *q != '\n' && *q != '\r') ++q;
+  while (*q != '\0' && *q != ' ' && *q != '\t' && *q != '\n' && *q != '\r') {
+    ++q;
+  }
   len = (size_t)(q - p);
   if (len == 0) { malformed(out, "missing interface name"); return; }
   if (len > 16) { malformed(out, "interface name longer than 16 characters"); return; }
   memcpy(out->ifname, p, len);
   out->ifname[len] = '\0';
   p = q;
-  while (*p == ' ' || *p == '\t') ++p;
+  while (*p == ' ' || *p == '\t') {
+    ++p;
+  }
 
   /* ID#... */
   while (hexval(*p) >= 0) {
@@ -114,7 +138,9 @@ void can_log_parse(const char *line, can_log_line_t *out) {
     if (hexval(p[1]) < 0) { malformed(out, "CAN FD frame without its flags digit"); return; }
     out->kind = (out->kind == CAN_LOG_ERROR) ? CAN_LOG_ERROR : CAN_LOG_FD;
     p += 2;
-    while (hexval(*p) >= 0 || *p == '.') ++p;
+    while (hexval(*p) >= 0 || *p == '.') {
+      ++p;
+    }
   } else if (*p == 'R' || *p == 'r') {
     out->frame.flags |= TRN_CAN_FLAG_RTR;
     ++p;
@@ -125,14 +151,24 @@ void can_log_parse(const char *line, can_log_line_t *out) {
   } else {
     const char *why = parse_data(p, &out->frame);
     if (why != NULL) { malformed(out, why); return; }
-    while (hexval(*p) >= 0 || *p == '.') ++p;
+    while (hexval(*p) >= 0 || *p == '.') {
+      ++p;
+    }
   }
   /* optional direction flag of newer candump versions, then the end */
-  while (*p == ' ' || *p == '\t') ++p;
-  if ((*p == 'R' || *p == 'T') && (p[1] == '\0' || p[1] == '\n' || p[1] == '\r' || p[1] == ' ')) ++p;
-  while (*p == ' ' || *p == '\t' || *p == '\r' || *p == '\n') ++p;
+  while (*p == ' ' || *p == '\t') {
+    ++p;
+  }
+  if ((*p == 'R' || *p == 'T') && (p[1] == '\0' || p[1] == '\n' || p[1] == '\r' || p[1] == ' ')) {
+    ++p;
+  }
+  while (*p == ' ' || *p == '\t' || *p == '\r' || *p == '\n') {
+    ++p;
+  }
   if (*p != '\0') { malformed(out, "unexpected characters after the frame"); return; }
   out->sec = sec;
   out->usec = usec;
-  if (out->kind == CAN_LOG_SKIP) out->kind = CAN_LOG_FRAME;
+  if (out->kind == CAN_LOG_SKIP) {
+    out->kind = CAN_LOG_FRAME;
+  }
 }

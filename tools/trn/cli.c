@@ -140,22 +140,49 @@ static void default_text(const cli_opt_t *o, char *buf, size_t n) {
   }
 }
 
+/* 1 if o is a positional argument ("LOG"), not an option ("--out"). */
+static int is_positional(const cli_opt_t *o) {
+  return o->name[0] != '-';
+}
+
+static void usage_line(const cli_opt_t *o, FILE *out) {
+  char head[64], range[64], dflt[128];
+  snprintf(head, sizeof head, "%s%s%s", o->name, o->metavar ? " " : "", o->metavar ? o->metavar : "");
+  range_text(o, range, sizeof range);
+  default_text(o, dflt, sizeof dflt);
+  fprintf(out, "  %-22s %s%s%s\n", head, o->help, dflt, range);
+}
+
 void cli_usage(const cli_cmd_t *cmd, FILE *out) {
   size_t i;
+  int pass, any_pos = 0;
   fprintf(out, "usage: trn %s", cmd->name);
-  for (i = 0; i < cmd->n_opts; ++i) {
-    const cli_opt_t *o = &cmd->opts[i];
-    fprintf(out, " %s%s%s%s%s", o->required ? "" : "[", o->name, o->metavar ? " " : "",
-            o->metavar ? o->metavar : "", o->required ? "" : "]");
+  for (pass = 0; pass < 2; ++pass) { /* options first, then positional arguments */
+    for (i = 0; i < cmd->n_opts; ++i) {
+      const cli_opt_t *o = &cmd->opts[i];
+      if (is_positional(o) != pass) {
+        continue;
+      }
+      any_pos |= pass;
+      fprintf(out, " %s%s%s%s%s", o->required ? "" : "[", o->name, o->metavar ? " " : "",
+              o->metavar ? o->metavar : "", o->required ? "" : "]");
+    }
   }
-  fprintf(out, "\n\n%s\n\noptions:\n", cmd->summary);
+  fprintf(out, "\n\n%s\n\n", cmd->summary);
+  if (any_pos) {
+    fprintf(out, "arguments:\n");
+    for (i = 0; i < cmd->n_opts; ++i) {
+      if (is_positional(&cmd->opts[i])) {
+        usage_line(&cmd->opts[i], out);
+      }
+    }
+    fputc('\n', out);
+  }
+  fprintf(out, "options:\n");
   for (i = 0; i < cmd->n_opts; ++i) {
-    const cli_opt_t *o = &cmd->opts[i];
-    char head[64], range[64], dflt[128];
-    snprintf(head, sizeof head, "%s%s%s", o->name, o->metavar ? " " : "", o->metavar ? o->metavar : "");
-    range_text(o, range, sizeof range);
-    default_text(o, dflt, sizeof dflt);
-    fprintf(out, "  %-22s %s%s%s\n", head, o->help, dflt, range);
+    if (!is_positional(&cmd->opts[i])) {
+      usage_line(&cmd->opts[i], out);
+    }
   }
   fprintf(out, "  %-22s %s\n", "--help", "this text");
   if (cmd->details != NULL) {
@@ -262,14 +289,44 @@ cli_opt_t *cli_find(cli_opt_t *opts, size_t n, const char *name) {
   return NULL;
 }
 
+/* A non-option argument a ("-" included): the next positional entry of cmd
+ * takes it. For a command with positional entries "-x" is an unknown option
+ * unless it comes after `--` (only_pos). */
+static int take_positional(cli_cmd_t *cmd, const char *a, int only_pos) {
+  cli_opt_t *o = NULL;
+  size_t k;
+  int has_pos = 0, rc;
+  for (k = 0; k < cmd->n_opts; ++k) {
+    if (is_positional(&cmd->opts[k])) {
+      has_pos = 1;
+      if (o == NULL && !cmd->opts[k].seen) {
+        o = &cmd->opts[k];
+      }
+    }
+  }
+  if (has_pos && !only_pos && a[0] == '-' && a[1] != '\0') {
+    return usage_error(cmd, "unknown option", a);
+  }
+  if (o == NULL) {
+    return usage_error(cmd, "unexpected argument", a);
+  }
+  rc = set_value(cmd, o, a);
+  if (rc == CLI_OK) {
+    o->seen = 1;
+  }
+  return rc;
+}
+
 int cli_parse(cli_cmd_t *cmd, int argc, char **argv) {
-  int i;
+  int i, has_pos = 0, only_pos = 0;
   size_t k;
   for (k = 0; k < cmd->n_opts; ++k) {
     cmd->opts[k].seen = 0;
+    has_pos |= is_positional(&cmd->opts[k]);
   }
-  /* --help anywhere: the usage with the defaults, before any value is set */
-  for (i = 1; i < argc; ++i) {
+  /* --help anywhere (before a `--` ending the options of a command with
+   * positional arguments): the usage with the defaults, before any value is set */
+  for (i = 1; i < argc && !(has_pos && strcmp(argv[i], "--") == 0); ++i) {
     if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
       cli_usage(cmd, stdout);
       return CLI_HELP;
@@ -282,8 +339,16 @@ int cli_parse(cli_cmd_t *cmd, int argc, char **argv) {
     size_t name_len;
     cli_opt_t *o = NULL;
     int rc;
-    if (strncmp(a, "--", 2) != 0) {
-      return usage_error(cmd, "unexpected argument", a);
+    if (has_pos && !only_pos && strcmp(a, "--") == 0) {
+      only_pos = 1; /* `--`: the rest are positional arguments */
+      continue;
+    }
+    if (only_pos || strncmp(a, "--", 2) != 0) {
+      rc = take_positional(cmd, a, only_pos);
+      if (rc != CLI_OK) {
+        return rc;
+      }
+      continue;
     }
     eq = strchr(a, '=');
     name_len = eq != NULL ? (size_t)(eq - a) : strlen(a);
@@ -318,7 +383,8 @@ int cli_parse(cli_cmd_t *cmd, int argc, char **argv) {
   }
   for (k = 0; k < cmd->n_opts; ++k) {
     if (cmd->opts[k].required && !cmd->opts[k].seen) {
-      return usage_error(cmd, "missing required option", cmd->opts[k].name);
+      return usage_error(cmd, is_positional(&cmd->opts[k]) ? "missing argument" : "missing required option",
+                         cmd->opts[k].name);
     }
   }
   return CLI_OK;

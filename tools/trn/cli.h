@@ -39,8 +39,14 @@ typedef enum {
   CLI_XY      /* dst is double[2], "X,Y" both finite (range not checked) */
 } cli_kind_t;
 
+/* An entry whose name does not start with '-' ("LOG") is a positional
+ * argument: cli_parse fills such entries in table order from the arguments
+ * that are not options ("-" included), with the same kinds and checks as an
+ * option's value; `required` makes it mandatory, and `--` ends the options
+ * (only for a command with positional entries). A command without them
+ * rejects every non-option argument as before ("unexpected argument"). */
 typedef struct {
-  const char *name;    /* "--out" */
+  const char *name;    /* "--out", or "LOG" for a positional argument */
   cli_kind_t kind;
   void *dst;
   double lo, hi;       /* range of CLI_LONG / CLI_DOUBLE (inclusive) */

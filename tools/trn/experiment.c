@@ -655,8 +655,11 @@ static int build_world(world_t *w, const exp_params_t *p, exp_result_t *out, voi
   gm.sigma_min_m = (float)(p->global_sigma_m >= 0.0 ? p->global_sigma_m : (double)gm.sigma_min_m * f);
   gm.k_per_m = (float)(p->global_sigma_k >= 0.0 ? p->global_sigma_k : (double)gm.k_per_m / f);
   out->global_sigma = gm;
-  centre.x_cells = (float)(nx / 2);
-  centre.y_cells = (float)(ny / 2);
+  {
+    const int mid_x = nx / 2, mid_y = ny / 2; /* the centre cell (integer division intended) */
+    centre.x_cells = (float)mid_x;
+    centre.y_cells = (float)mid_y;
+  }
   if (p->global_error != NULL) {
     trn_grid_f32_t eg;
     st = trn_grid_f32_init(&eg, (float *)p->global_error, (size_t)nx * (size_t)ny, nx, ny);

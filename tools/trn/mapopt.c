@@ -103,15 +103,33 @@ int mapopt_config(const mapopt_t *m, const float *data, int width, int height, d
     cfg->terrain.highpass_half_m = (float)((double)TRN_MAP_HIGHPASS_CELLS * cell_m);
     cfg->sigma_m = (float)cell_m;
   }
-  if (m->zbin_m > 0.0) cfg->terrain.zbin_m = (float)m->zbin_m;
-  if (m->nz > 0) cfg->terrain.nz = (int32_t)m->nz;
-  if (m->highpass_m > 0.0) cfg->terrain.highpass_half_m = (float)m->highpass_m;
-  if (m->sigma_m > 0.0) cfg->sigma_m = (float)m->sigma_m;
-  if (m->inlier_prob > 0.0) cfg->inlier_prob = (float)m->inlier_prob;
-  if (m->local_hp != NULL) cfg->local_highpass = strcmp(m->local_hp, "map") == 0 ? TRN_LOCAL_HP_MAP : TRN_LOCAL_HP_BOX;
-  if (m->refine >= 0) cfg->refine = (int32_t)m->refine;
-  if (m->match != NULL) cfg->match = strcmp(m->match, "heights") == 0 ? TRN_MATCH_HEIGHTS : TRN_MATCH_VOXEL;
-  if (m->max_failure_prob > 0.0) cfg->max_failure_prob = (float)m->max_failure_prob;
+  if (m->zbin_m > 0.0) {
+    cfg->terrain.zbin_m = (float)m->zbin_m;
+  }
+  if (m->nz > 0) {
+    cfg->terrain.nz = (int32_t)m->nz;
+  }
+  if (m->highpass_m > 0.0) {
+    cfg->terrain.highpass_half_m = (float)m->highpass_m;
+  }
+  if (m->sigma_m > 0.0) {
+    cfg->sigma_m = (float)m->sigma_m;
+  }
+  if (m->inlier_prob > 0.0) {
+    cfg->inlier_prob = (float)m->inlier_prob;
+  }
+  if (m->local_hp != NULL) {
+    cfg->local_highpass = strcmp(m->local_hp, "map") == 0 ? TRN_LOCAL_HP_MAP : TRN_LOCAL_HP_BOX;
+  }
+  if (m->refine >= 0) {
+    cfg->refine = (int32_t)m->refine;
+  }
+  if (m->match != NULL) {
+    cfg->match = strcmp(m->match, "heights") == 0 ? TRN_MATCH_HEIGHTS : TRN_MATCH_VOXEL;
+  }
+  if (m->max_failure_prob > 0.0) {
+    cfg->max_failure_prob = (float)m->max_failure_prob;
+  }
   if ((st = trn_map_cfg_check(cfg)) != TRN_OK) {
     snprintf(err, err_len,
              "map configuration rejected (%s): cell %g m, bin %g m, %d bins, high-pass %g m (at least one cell), s %g m",

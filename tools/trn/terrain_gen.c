@@ -137,10 +137,18 @@ static void render_rock(const tg_params_t *p, const tg_rock_t *k, float *rock_h)
   long r0 = (long)floor((k->y_m - rad) / p->cell_m - 0.5);
   long r1 = (long)ceil((k->y_m + rad) / p->cell_m - 0.5);
   long rr, cc;
-  if (c0 < 0) c0 = 0;
-  if (r0 < 0) r0 = 0;
-  if (c1 > p->width - 1) c1 = p->width - 1;
-  if (r1 > p->height - 1) r1 = p->height - 1;
+  if (c0 < 0) {
+    c0 = 0;
+  }
+  if (r0 < 0) {
+    r0 = 0;
+  }
+  if (c1 > p->width - 1) {
+    c1 = p->width - 1;
+  }
+  if (r1 > p->height - 1) {
+    r1 = p->height - 1;
+  }
   for (rr = r0; rr <= r1; ++rr) {
     double dy = ((double)rr + 0.5) * p->cell_m - k->y_m;
     for (cc = c0; cc <= c1; ++cc) {
