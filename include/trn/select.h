@@ -74,9 +74,9 @@ typedef struct {
 } trn_select_cfg_t;
 
 /** Largest sigma_heading_rad (0.5 rad, 28.6 deg): the heading's term is the
- * first-order (small-angle) lever arm; beyond this a 1-sigma turn moves a
- * target by a chord more than 4 % shorter than r * dtheta, and a 2-sigma
- * turn puts a 2 m patch 5 m from where the mast pointed (method.md 4). */
+ * first-order (small-angle) lever arm r * dtheta; at this sigma a 2-sigma
+ * turn already moves a target by a chord 4 % shorter than that and points a
+ * 10 m target's patch about 10 m off (method.md 4). */
 #define TRN_SELECT_MAX_SIGMA_HEADING_RAD 0.5f
 
 /** The rover: position (global cells) and heading (rad, grid frame). */
