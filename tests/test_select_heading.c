@@ -29,7 +29,8 @@
 #define CELL 0.1
 #define CELLM ((double)(float)CELL) /* the map's cell_m, as the core sees it */
 
-static synth_rock_t g_rocks[200];
+static synth_rock_t g_rocks[400];
+static synth_terrain_t g_t; /* the last world's terrain (heights anywhere) */
 
 static void small_cfg(trn_select_cfg_t *c)
 {
@@ -57,6 +58,7 @@ static void make_world(selworld_t *w, int n, size_t nrocks, uint64_t seed, const
         t.n_rocks = nfixed;
     }
     synth_render(&t, dem, n, n, 0.0, 0.0, CELL);
+    g_t = t;
     trn_sigma_global_default(&gm);
     assert_int_equal(selworld_init(w, n, dem, &gm, &s, 1), TRN_OK);
     free(dem);
@@ -256,6 +258,111 @@ static void test_best_is_argmin(void **state)
     selworld_free(&w);
 }
 
+/* The model against the matcher itself: the patch of a ranked target is
+ * sensed with the heading off by dtheta (its local DEM rendered from the
+ * terrain at the rover-relative offsets turned by dtheta, grown by the
+ * high-pass reach, high-passed, the patch's voxels kept) and localized by
+ * trn_localize_points (x and y). The position error should be r dtheta
+ * across the line of sight and nothing along it. The patch centre stands in
+ * for the structure's centroid (method.md 4), so a lenient bound per case and
+ * a tighter one on the mean ratio; the numbers are printed. */
+#define HP_M 10 /* the map's high-pass half-width, cells (trn_map_cfg_default at 0.1 m) */
+static trn_point_t g_pts[20000];
+
+static void sensed_turned(const selworld_t *w, int rx, int ry, int ox, int oy, int half, double dth,
+                          size_t *np)
+{
+    const int side = 2 * (half + HP_M) + 1;
+    float *dem = malloc(sizeof(float) * side * side), *hp = malloc(sizeof(float) * side * side);
+    const size_t hb = trn_highpass_workspace_bytes(side, side);
+    void *hws = selworld_alloc(hb);
+    trn_grid_f32_t dg, hg;
+    const double c = cos(dth), sn = sin(dth);
+    int i, j;
+    for (j = 0; j < side; ++j) {
+        for (i = 0; i < side; ++i) {
+            const double a = (double)(ox - half - HP_M + i), b = (double)(oy - half - HP_M + j);
+            const double mx = a * c - b * sn, my = a * sn + b * c;
+            dem[j * side + i] = (float)synth_height(&g_t, ((double)rx + mx) * CELL, ((double)ry + my) * CELL);
+        }
+    }
+    assert_int_equal(trn_grid_f32_init(&dg, dem, (size_t)side * side, side, side), TRN_OK);
+    assert_int_equal(trn_grid_f32_init(&hg, hp, (size_t)side * side, side, side), TRN_OK);
+    assert_int_equal(trn_highpass(&dg, &w->cfg.terrain, &hg, hws, hb), TRN_OK);
+    for (j = 0; j < side; ++j) { /* keep the patch: the margin only fed the filter */
+        for (i = 0; i < side; ++i) {
+            if (i < HP_M || j < HP_M || i >= side - HP_M || j >= side - HP_M) {
+                hp[j * side + i] = NAN;
+            }
+        }
+    }
+    assert_int_equal(trn_occupancy_points(&hg, &w->cfg.terrain, half + HP_M - ox, half + HP_M - oy,
+                                          g_pts, sizeof g_pts / sizeof g_pts[0], np), TRN_OK);
+    free(dem);
+    free(hp);
+    free(hws);
+}
+
+static void test_lever_arm_measured(void **state)
+{
+    static const double dth[] = {0.05, -0.05};
+    selworld_t w;
+    trn_select_cfg_t cfg;
+    trn_rover_t rv = {{64.0f, 64.0f}, 0.0f};
+    const trn_window_t win = {56, 56, 72, 72};
+    sel_t a;
+    size_t k, q, n = 0u, lb;
+    double sum_ratio = 0.0, sum_along = 0.0, sum_res2 = 0.0;
+    void *lws;
+    (void)state;
+    trn_select_cfg_default(&cfg);
+    cfg.min_range_m = 1.5f;
+    cfg.max_range_m = 4.0f;
+    cfg.min_separation_m = 1.0f;
+    make_world(&w, 128, 150, 17, NULL, 0u);
+    assert_int_equal(run_select(&w, &cfg, &rv, &a), TRN_OK);
+    lb = trn_localize_workspace_bytes(&w.map, &win);
+    lws = selworld_alloc(lb);
+    for (k = 0; k < a.res.n_ranked; ++k) {
+        const trn_candidate_t *c = &a.c[a.ranked[k]];
+        const int ox = c->x - 64, oy = c->y - 64;
+        const double r = hypot((double)ox, (double)oy); /* cells */
+        const double tx = -(double)oy / r, ty = (double)ox / r;
+        for (q = 0; q < 2; ++q) {
+            trn_loc_result_t res;
+            size_t np;
+            double ex, ey, across, along;
+            sensed_turned(&w, 64, 64, ox, oy, a.res.patch_cells / 2, dth[q], &np);
+            if (trn_localize_points(&w.map, g_pts, np, &win, lws, lb, &res) != TRN_OK) {
+                continue; /* no finite fit: nothing to compare */
+            }
+            ex = res.x - 64.0;
+            ey = res.y - 64.0;
+            across = ex * tx + ey * ty;
+            along = (ex * (double)ox + ey * (double)oy) / r;
+            printf("  target %.2f m, fit %.1f mm, dtheta %+.2f rad: error across %+.2f cells "
+                   "(model %+.2f), along %+.2f cells\n", r * CELLM, 1e3 * c->uncertainty_m,
+                   dth[q], across, r * dth[q], along);
+            /* the terrain seen at offsets turned by dtheta: the matcher moves
+             * the rover by r dtheta across the line of sight */
+            assert_true(fabs(across - r * dth[q]) <= 0.5 * r * fabs(dth[q]) + 0.5);
+            assert_true(fabs(along) <= 1.0);
+            sum_ratio += across / (r * dth[q]);
+            sum_along += fabs(along);
+            sum_res2 += (across - r * dth[q]) * (across - r * dth[q]);
+            ++n;
+        }
+    }
+    assert_true(n >= 8u);
+    printf("  %zu cases: mean (error across) / (r dtheta) %.3f, RMS (error across - r dtheta) "
+           "%.2f cells, mean |error along| %.2f cells\n", n, sum_ratio / (double)n,
+           sqrt(sum_res2 / (double)n), sum_along / (double)n);
+    assert_true(fabs(sum_ratio / (double)n - 1.0) <= 0.2);
+    free(lws);
+    sel_free(&a);
+    selworld_free(&w);
+}
+
 /* Constructed: on flat ground, a cluster of three rocks 1.8 m west of the
  * rover and one rock 0.8 m east. With the heading known the cluster wins
  * (more structure: 75.5 against 116.5 mm); with a heading sigma of 0.1 rad
@@ -449,6 +556,7 @@ int main(void)
         cmocka_unit_test(test_zero_is_the_paper),
         cmocka_unit_test(test_added_term),
         cmocka_unit_test(test_best_is_argmin),
+        cmocka_unit_test(test_lever_arm_measured),
         cmocka_unit_test(test_nearer_preferred),
         cmocka_unit_test(test_field_equal),
         cmocka_unit_test(test_bad_sigma),
