@@ -44,8 +44,8 @@ static void small_cfg(trn_select_cfg_t *c)
 }
 
 /* Seeded rocks (nrocks > 0) or the given ones on flat ground. */
-static void make_world(selworld_t *w, int n, size_t nrocks, uint64_t seed, const synth_rock_t *fixed,
-                       size_t nfixed)
+static void make_world(selworld_t *w, int n, size_t nrocks, uint64_t seed,
+                       const synth_rock_t *fixed, size_t nfixed)
 {
     synth_terrain_t t;
     float *dem = malloc(sizeof(float) * n * n);
@@ -187,8 +187,10 @@ static void test_added_term(void **state)
         assert_true(fabs(q->uncertainty_m * q->uncertainty_m -
                          (p->uncertainty_m * p->uncertainty_m + s * s * r * r)) <=
                     1e-12 * q->uncertainty_m * q->uncertainty_m);
-        assert_true(fabs(q->sigma_x_m * q->sigma_x_m - q->cov_m2[0]) <= 1e-15 + 1e-12 * q->cov_m2[0]);
-        assert_true(fabs(q->sigma_y_m * q->sigma_y_m - q->cov_m2[1]) <= 1e-15 + 1e-12 * q->cov_m2[1]);
+        assert_true(fabs(q->sigma_x_m * q->sigma_x_m - q->cov_m2[0]) <=
+                    1e-15 + 1e-12 * q->cov_m2[0]);
+        assert_true(fabs(q->sigma_y_m * q->sigma_y_m - q->cov_m2[1]) <=
+                    1e-15 + 1e-12 * q->cov_m2[1]);
         assert_true(fabs(q->rho * q->sigma_x_m * q->sigma_y_m - q->cov_m2[2]) <= 1e-15);
         assert_true(q->rho > -1.0 && q->rho < 1.0);
         assert_true(fabs(q->heading_m - s * (double)q->range_m) <= 1e-15);
@@ -283,7 +285,8 @@ static void sensed_turned(const selworld_t *w, int rx, int ry, int ox, int oy, i
         for (i = 0; i < side; ++i) {
             const double a = (double)(ox - half - HP_M + i), b = (double)(oy - half - HP_M + j);
             const double mx = a * c - b * sn, my = a * sn + b * c;
-            dem[j * side + i] = (float)synth_height(&g_t, ((double)rx + mx) * CELL, ((double)ry + my) * CELL);
+            dem[j * side + i] =
+                (float)synth_height(&g_t, ((double)rx + mx) * CELL, ((double)ry + my) * CELL);
         }
     }
     assert_int_equal(trn_grid_f32_init(&dg, dem, (size_t)side * side, side, side), TRN_OK);

@@ -91,7 +91,8 @@ typedef struct {
     float range_m;         /**< distance from the rover, m */
     float bearing_rad;     /**< relative to the heading, (-pi, pi] */
     double ll[9];          /**< E[ln L(d)], nats, ll[(dy + 1) * 3 + (dx + 1)] */
-    double sigma_x_m, sigma_y_m, rho; /**< eq. 6 fit (with the heading's term); +inf sigmas when uninformative */
+    double sigma_x_m, sigma_y_m, rho; /**< eq. 6 fit (with the heading's term);
+                                           +inf sigmas when uninformative */
     double cov_m2[3];      /**< var_x, var_y, cov_xy, m^2 (with the heading's term) */
     double uncertainty_m;  /**< sqrt(sigma_x^2 + sigma_y^2), m; +inf when uninformative */
     double heading_m;      /**< the heading's part, sigma_heading_rad * range, m
