@@ -26,6 +26,7 @@ void trn_select_cfg_default(trn_select_cfg_t *cfg)
     cfg->stride_cells = 2;
     cfg->min_separation_m = 1.0f;
     trn_sigma_local_default(&cfg->local_sigma);
+    cfg->sigma_heading_rad = 0.0f;
 }
 
 /* patch_m in whole cells (nearest, so 2.0 m / 0.1f m is 20, not 19), then
@@ -59,6 +60,8 @@ trn_status_t trn_select_cfg_check(const trn_select_cfg_t *cfg, float cell_m)
         !(cfg->footprint_radius_m >= 0.0f && cfg->footprint_radius_m <= 1.0e5f) ||
         !(cfg->patch_m > 0.0f && cfg->patch_m <= 1.0e6f) ||
         !(cfg->min_separation_m >= 0.0f && cfg->min_separation_m <= 1.0e6f) ||
+        !(cfg->sigma_heading_rad >= 0.0f &&
+          cfg->sigma_heading_rad <= TRN_SELECT_MAX_SIGMA_HEADING_RAD) ||
         cfg->stride_cells < 1 || cfg->stride_cells > 64) {
         return TRN_E_ARG;
     }
@@ -232,6 +235,21 @@ static int64_t window_sum(const int64_t *sat, size_t w1, const trn_window_t *roi
     return sat[y1 * w1 + x1] - sat[y0 * w1 + x1] - sat[y1 * w1 + x0] + sat[y0 * w1 + x0];
 }
 
+/* The heading's lever arm (select.h, method.md 4): the fit's covariance
+ * (cells^2) in m^2 plus s_h^2 r^2 t t^T, t the unit tangent at the target,
+ * written without a square root or division from the rover-to-target offset
+ * (dx, dy) in cells: sh2c2 = s_h^2 c^2 times [dy^2, -dx dy; -dx dy, dx^2].
+ * Returns the scalar sqrt(var_x + var_y). One function for trn_select and
+ * the ground path, so both give the same bits. */
+static double sel_heading_cov(const trn_peak_t *pk, double cell, double sh2c2, double dx,
+                              double dy, double cov[3])
+{
+    cov[0] = pk->var_x * cell * cell + sh2c2 * (dy * dy);
+    cov[1] = pk->var_y * cell * cell + sh2c2 * (dx * dx);
+    cov[2] = pk->cov_xy * cell * cell - sh2c2 * (dx * dy);
+    return sqrt(cov[0] + cov[1]);
+}
+
 trn_status_t trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_vol_f32_t *pg,
                         const trn_select_cfg_t *cfg, const trn_rover_t *rover,
                         trn_candidate_t *cands, size_t capacity, size_t *ranked,
@@ -245,7 +263,7 @@ trn_status_t trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_
     sel_layout_t lay;
     size_t need, nc = 0u, i, ninf = 0u, nr = 0u, lw, w1;
     int32_t i_x, i_y, d, side_w, side_h, lmax = 0;
-    double scale, sep2_cells;
+    double scale, sep2_cells, sh2c2;
 
     if (map == NULL || k == NULL || pg == NULL || cfg == NULL || rover == NULL ||
         cands == NULL || ranked == NULL || res == NULL || ws == NULL || pg->data == NULL ||
@@ -364,19 +382,30 @@ trn_status_t trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_
         }
     }
 
-    /* 4. eq. 6 per candidate */
+    /* 4. eq. 6 per candidate, plus the heading's lever arm when it is uncertain */
+    sh2c2 = (double)cfg->sigma_heading_rad * (double)cfg->sigma_heading_rad * g.cell * g.cell;
     for (i = 0; i < nc; ++i) {
         trn_peak_t pk;
         trn_candidate_t *c = &cands[i];
         if (trn_peak_fit(c->ll, &pk) == TRN_OK) {
             c->informative = 1;
-            c->sigma_x_m = pk.sigma_x * g.cell;
-            c->sigma_y_m = pk.sigma_y * g.cell;
-            c->rho = pk.rho;
-            c->cov_m2[0] = pk.var_x * g.cell * g.cell;
-            c->cov_m2[1] = pk.var_y * g.cell * g.cell;
-            c->cov_m2[2] = pk.cov_xy * g.cell * g.cell;
-            c->uncertainty_m = sqrt(c->sigma_x_m * c->sigma_x_m + c->sigma_y_m * c->sigma_y_m);
+            if (sh2c2 > 0.0) {
+                c->uncertainty_m = sel_heading_cov(&pk, g.cell, sh2c2, (double)c->x - g.rxf,
+                                                   (double)c->y - g.ryf, c->cov_m2);
+                c->sigma_x_m = sqrt(c->cov_m2[0]);
+                c->sigma_y_m = sqrt(c->cov_m2[1]);
+                c->rho = c->cov_m2[2] / (c->sigma_x_m * c->sigma_y_m);
+                c->heading_m = (double)cfg->sigma_heading_rad * (double)c->range_m;
+            } else { /* the paper's prediction, bit for bit */
+                c->sigma_x_m = pk.sigma_x * g.cell;
+                c->sigma_y_m = pk.sigma_y * g.cell;
+                c->rho = pk.rho;
+                c->cov_m2[0] = pk.var_x * g.cell * g.cell;
+                c->cov_m2[1] = pk.var_y * g.cell * g.cell;
+                c->cov_m2[2] = pk.cov_xy * g.cell * g.cell;
+                c->uncertainty_m =
+                    sqrt(c->sigma_x_m * c->sigma_x_m + c->sigma_y_m * c->sigma_y_m);
+            }
             ++ninf;
         } else {
             c->informative = 0;
@@ -826,8 +855,11 @@ static void pre_eq9_slice(const trn_selpre_t *s, const trn_window_t *roi, int32_
  * mean); trace(-H) = 4 s0 / 3 - sxx - syy from the same sums trn_peak_fit
  * forms. The bound is taken 1e-6 below itself, far beyond the rounding of
  * either computation, so a skipped candidate is never the lowest or a tie. A
- * fit that would fail (not informative) is never the lowest either. */
-static int pre_cannot_beat(const double ll[9], double cell_m, double best)
+ * fit that would fail (not informative) is never the lowest either. With an
+ * uncertain heading the candidate's scalar^2 is that trace plus its heading
+ * term head_m2 = s_h^2 r^2 (sel_heading_cov: the trace of s_h^2 r^2 t t^T),
+ * so the bound adds it (0 with a known heading). */
+static int pre_cannot_beat(const double ll[9], double cell_m, double head_m2, double best)
 {
     double s0 = 0.0, sxx = 0.0, syy = 0.0, tr;
     int x, y;
@@ -843,7 +875,7 @@ static int pre_cannot_beat(const double ll[9], double cell_m, double best)
     if (!(tr > 0.0) || !isfinite(tr)) {
         return 0; /* no bound: fit it */
     }
-    return 4.0 / tr * cell_m * cell_m * (1.0 - 1.0e-6) > best * best;
+    return (4.0 / tr * cell_m * cell_m + head_m2) * (1.0 - 1.0e-6) > best * best;
 }
 
 /* Region rows in order: the nine C_d of the row (from the nonzero P voxels of
@@ -856,6 +888,8 @@ static int pre_cannot_beat(const double ll[9], double cell_m, double best)
 static void pre_windows(const trn_selpre_t *s, const trn_window_t *roi, const geom_t *g,
                         size_t nc, double *best, int *found)
 {
+    const double sh2c2 =
+        (double)s->cfg->sigma_heading_rad * (double)s->cfg->sigma_heading_rad * g->cell * g->cell;
     const int32_t w = roi->x1 - roi->x0 + 1, h = roi->y1 - roi->y0 + 1;
     const int32_t ph = 2 * g->half + 1;
     const size_t wz = (size_t)w, w1 = wz + 1u, rowsz = 9u * wz;
@@ -933,17 +967,21 @@ static void pre_windows(const trn_selpre_t *s, const trn_window_t *roi, const ge
         for (; ci < nc && s->cxy[2u * ci + 1u] + g->half == gy; ++ci) {
             const size_t x0 = (size_t)(s->cxy[2u * ci] - g->half - roi->x0);
             const size_t x1 = (size_t)(s->cxy[2u * ci] + g->half - roi->x0) + 1u;
-            double ll[9];
+            /* the rover-to-target offset as trn_select forms it (c->x - g.rxf) */
+            const double ox = (double)s->cxy[2u * ci] - g->rxf;
+            const double oy = (double)s->cxy[2u * ci + 1u] - g->ryf;
+            double ll[9], cov[3];
             trn_peak_t pk;
             for (d = 0; d < 9; ++d) {
                 ll[d] = (double)(pre[(size_t)d * w1 + x1] - pre[(size_t)d * w1 + x0]) * scale;
             }
-            if (*found && pre_cannot_beat(ll, g->cell, *best)) {
+            if (*found && pre_cannot_beat(ll, g->cell, sh2c2 * (ox * ox + oy * oy), *best)) {
                 continue;
             }
             if (trn_peak_fit(ll, &pk) == TRN_OK) {
                 const double sx = pk.sigma_x * g->cell, sy = pk.sigma_y * g->cell;
-                const double u = sqrt(sx * sx + sy * sy);
+                const double u = sh2c2 > 0.0 ? sel_heading_cov(&pk, g->cell, sh2c2, ox, oy, cov)
+                                             : sqrt(sx * sx + sy * sy);
                 if (!*found || u < *best) {
                     *best = u;
                     *found = 1;

@@ -28,6 +28,19 @@
  * values (trn_peak_fit) gives sigma_x, sigma_y, rho; the scalar to minimise is
  * sqrt(sigma_x^2 + sigma_y^2) in metres. A candidate whose fit is
  * ill-conditioned is uninformative: infinite uncertainty, informative = 0.
+ *
+ * Uncertain heading (beyond the paper; method.md 4, "The heading's lever
+ * arm"): with sigma_heading_rad = s_h > 0 the matcher, which searches x and y
+ * with the heading taken as known, places a target at range r off by
+ * r * dtheta along the tangent t (perpendicular to the line of sight) when
+ * the heading is off by dtheta. That error is common to every point of the
+ * patch (a rigid turn, not noise that averages), independent of the
+ * matching error, so it adds to the fit's covariance:
+ *   cov = cov_fit + s_h^2 r^2 t t^T = cov_fit + s_h^2 c^2 [dy^2, -dx dy; -dx dy, dx^2],
+ * (dx, dy) the rover-to-target offset in cells of c metres, and the scalar
+ * becomes sqrt(sigma_x^2 + sigma_y^2 + s_h^2 r^2). Targets are compared on
+ * it, so with an uncertain heading nearer targets are preferred. With
+ * s_h = 0 every value is the paper's prediction bit for bit.
  */
 #ifndef TRN_SELECT_H
 #define TRN_SELECT_H
@@ -55,7 +68,16 @@ typedef struct {
     int32_t stride_cells;     /**< candidate lattice step, 1..64 */
     float min_separation_m;   /**< least distance between ranked targets, m, [0, 1e6] */
     trn_sigma_model_t local_sigma; /**< eq. 9 error model of the new local map */
+    float sigma_heading_rad;  /**< standard deviation of the rover's heading, rad,
+                                   [0, TRN_SELECT_MAX_SIGMA_HEADING_RAD]; 0 (the default):
+                                   the heading is known, the paper's prediction exactly */
 } trn_select_cfg_t;
+
+/** Largest sigma_heading_rad (0.5 rad, 28.6 deg): the heading's term is the
+ * first-order (small-angle) lever arm r * dtheta; at this sigma a 2-sigma
+ * turn already moves a target by a chord 4 % shorter than that and points a
+ * 10 m target's patch about 10 m off (method.md 4). */
+#define TRN_SELECT_MAX_SIGMA_HEADING_RAD 0.5f
 
 /** The rover: position (global cells) and heading (rad, grid frame). */
 typedef struct {
@@ -69,9 +91,13 @@ typedef struct {
     float range_m;         /**< distance from the rover, m */
     float bearing_rad;     /**< relative to the heading, (-pi, pi] */
     double ll[9];          /**< E[ln L(d)], nats, ll[(dy + 1) * 3 + (dx + 1)] */
-    double sigma_x_m, sigma_y_m, rho; /**< eq. 6 fit; +inf sigmas when uninformative */
-    double cov_m2[3];      /**< var_x, var_y, cov_xy, m^2 */
+    double sigma_x_m, sigma_y_m, rho; /**< eq. 6 fit (with the heading's term);
+                                           +inf sigmas when uninformative */
+    double cov_m2[3];      /**< var_x, var_y, cov_xy, m^2 (with the heading's term) */
     double uncertainty_m;  /**< sqrt(sigma_x^2 + sigma_y^2), m; +inf when uninformative */
+    double heading_m;      /**< the heading's part, sigma_heading_rad * range, m
+                                (0 with a known heading); the fit's own sigmas are
+                                sqrt(var - its term) (file comment) */
     int32_t informative;   /**< 1 finite fit, 0 ill-conditioned */
 } trn_candidate_t;
 
@@ -87,13 +113,14 @@ typedef struct {
 
 /** @brief Defaults (method.md 4): range 1-10 m, full pan (+-pi), footprint
  * 0.5 m, 2 m patch (21 cells at 0.1 m), stride 2 cells, separation 1 m (half
- * a patch), local error trn_sigma_local_default.
+ * a patch), local error trn_sigma_local_default, heading known (sigma 0).
  * @param[out] cfg the defaults; NULL is ignored. */
 void trn_select_cfg_default(trn_select_cfg_t *cfg);
 
 /** @brief Check a configuration for cells of cell_m (patch >= 3 cells, reach
  * <= TRN_MAX_DIM cells). @param[in] cfg, cell_m the rules and the map's cell (m).
- * @retval TRN_OK, TRN_E_NULL, TRN_E_ARG (a value NaN or out of range). */
+ * @retval TRN_OK, TRN_E_NULL, TRN_E_ARG (a value NaN or out of range, also
+ *         sigma_heading_rad NaN, negative or above TRN_SELECT_MAX_SIGMA_HEADING_RAD). */
 trn_status_t trn_select_cfg_check(const trn_select_cfg_t *cfg, float cell_m);
 
 /** @brief Largest number of candidates of one rover position (array size); 0 if invalid.

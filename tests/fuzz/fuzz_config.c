@@ -136,6 +136,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         sc.stride_cells = fz_i32(&f);
         sc.min_separation_m = fz_f32(&f);
         sc.local_sigma = sm;
+        sc.sigma_heading_rad = 0.0f; /* read at the end (appended) */
         cell = fz_f32(&f);
         st = trn_select_cfg_check(&sc, cell);
         FZ_CHECK(st == TRN_OK || st == TRN_E_ARG);
@@ -157,6 +158,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         FZ_CHECK(st == TRN_OK || st == TRN_E_ARG);
         if (st == TRN_OK) {
             FZ_CHECK(mg.pan_min_rad <= mg.pan_max_rad && mg.tilt_min_rad <= mg.tilt_max_rad);
+        }
+        /* the selection's heading sigma (appended after the mast's geometry) */
+        sc.sigma_heading_rad = fz_f32(&f);
+        st = trn_select_cfg_check(&sc, cell);
+        FZ_CHECK(st == TRN_OK || st == TRN_E_ARG);
+        if (st == TRN_OK) {
+            FZ_CHECK(sc.sigma_heading_rad >= 0.0f &&
+                     sc.sigma_heading_rad <= TRN_SELECT_MAX_SIGMA_HEADING_RAD);
         }
     }
     return 0;
