@@ -255,21 +255,24 @@ static void model_pass(const trn_grid_f32_t *global, const trn_grid_f32_t *local
  * (or the bilinear normal matrix is singular). */
 static void interp_shift(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
                          double x, double y, double dz, double model2, const trn_refine_cfg_t *cfg,
-                         double shift[3])
+                         accum_t *work, double bi[9], double shift[3])
 {
-    accum_t acc, trial;
-    double bx = x, by = y, bz = dz, bi[9], d[3];
+    /* work and bi are the caller's, dead by now: the stack stays within
+     * TRN_STACK_LIMIT_BYTES when this is inlined */
+    accum_t trial;
+    accum_t *acc = work;
+    double bx = x, by = y, bz = dz, d[3];
     int32_t it, h;
-    model_pass(global, local, rx, ry, x, y, dz, bx, by, bz, model2, cfg, &acc);
-    for (it = 0; it < TRN_REFINE_MAX_ITER && inv3(acc.a, bi); ++it) {
+    model_pass(global, local, rx, ry, x, y, dz, bx, by, bz, model2, cfg, acc);
+    for (it = 0; it < TRN_REFINE_MAX_ITER && inv3(acc->a, bi); ++it) {
         double step = 1.0;
-        d[0] = bi[0] * acc.b[0] + bi[1] * acc.b[1] + bi[2] * acc.b[2];
-        d[1] = bi[3] * acc.b[0] + bi[4] * acc.b[1] + bi[5] * acc.b[2];
-        d[2] = bi[6] * acc.b[0] + bi[7] * acc.b[1] + bi[8] * acc.b[2];
+        d[0] = bi[0] * acc->b[0] + bi[1] * acc->b[1] + bi[2] * acc->b[2];
+        d[1] = bi[3] * acc->b[0] + bi[4] * acc->b[1] + bi[5] * acc->b[2];
+        d[2] = bi[6] * acc->b[0] + bi[7] * acc->b[1] + bi[8] * acc->b[2];
         for (h = 0; h < TRN_REFINE_HALVINGS; ++h) {
             model_pass(global, local, rx, ry, x, y, dz, bx + step * d[0], by + step * d[1], bz + step * d[2], model2,
                        cfg, &trial);
-            if (trial.n_in == acc.n_in && trial.ss < acc.ss) {
+            if (trial.n_in == acc->n_in && trial.ss < acc->ss) {
                 break;
             }
             step *= 0.5;
@@ -280,7 +283,7 @@ static void interp_shift(const trn_grid_f32_t *global, const trn_grid_f32_t *loc
         bx += step * d[0];
         by += step * d[1];
         bz += step * d[2];
-        acc = trial;
+        *acc = trial;
         if (fabs(step * d[0]) < 1e-4 && fabs(step * d[1]) < 1e-4) {
             break;
         }
@@ -461,7 +464,8 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
         }
         {
             double sh[3];
-            interp_shift(global, local, rover_x, rover_y, x, y, dz, model2, cfg, sh);
+            out->n_used = acc.n_in;
+            interp_shift(global, local, rover_x, rover_y, x, y, dz, model2, cfg, &acc, inv, sh);
             out->interp_shift[0] = sh[0];
             out->interp_shift[1] = sh[1];
             out->cov_cells[0] += TRN_REFINE_SYS * sh[0] * sh[0];
@@ -469,7 +473,6 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
             out->cov_cells[2] += TRN_REFINE_SYS * sh[0] * sh[1];
         }
     }
-    out->n_used = acc.n_in;
     return TRN_OK;
 }
 
