@@ -12,7 +12,10 @@
  * library) could call them; files they are asked to write (--out ...) are
  * written by run. Progress, where a command has any, goes through the
  * optional callback in its params (NULL: none). Results own their memory:
- * free them with the matching *_result_free, also after a failed run. */
+ * free them with the matching *_result_free, also after a failed run.
+ * `trn profile` keeps its three steps private to cmd_profile.c: its result is
+ * the stages' buffers, and --instructions re-runs the executable itself under
+ * callgrind, which only the command line can do. */
 #ifndef TRN_TOOLS_CMD_RUN_H
 #define TRN_TOOLS_CMD_RUN_H
 
