@@ -21,7 +21,7 @@
 /* The map configuration from the options (exp_params_t.map_cfg); ctx: the result. */
 static int map_cfg_cb(void *ctx, const float *dem, int width, int height, double cell_m, trn_map_cfg_t *cfg,
                       char *err, size_t err_len) {
-  experiment_result_t *r = ctx;
+  cmd_experiment_result_t *r = ctx;
   return mapopt_config(r->mo, dem, width, height, cell_m, cfg, &r->sigma_h, err, err_len);
 }
 
@@ -77,7 +77,7 @@ static void print_arm(const char *name, const exp_arm_t *a) {
          a->st.mean_ci[0], a->st.mean_ci[1]);
 }
 
-void experiment_params_default(experiment_params_t *p) {
+void cmd_experiment_params_default(cmd_experiment_params_t *p) {
   exp_params_t e;
   memset(p, 0, sizeof *p);
   exp_params_default(&e);
@@ -98,7 +98,7 @@ void experiment_params_default(experiment_params_t *p) {
 }
 
 /* The usage rules between options: the terrain's options without --dem, --global-error with it. */
-static int experiment_usage(experiment_params_t *p, cli_opt_t *opts, size_t n_opts) {
+static int experiment_usage(cmd_experiment_params_t *p, cli_opt_t *opts, size_t n_opts) {
   static const char *const synth[] = {"--coverage", "--terrain-seed", "--min-diameter-m", "--relief-m", "--size-cells"};
   size_t i;
   if (p->dem_path != NULL) {
@@ -124,7 +124,7 @@ static int experiment_usage(experiment_params_t *p, cli_opt_t *opts, size_t n_op
 }
 
 /* argv -> p. Returns CLI_OK, CLI_HELP (usage printed) or the usage / bad input status (message printed). */
-static int experiment_parse(int argc, char **argv, experiment_params_t *p) {
+static int experiment_parse(int argc, char **argv, cmd_experiment_params_t *p) {
   char h[4][112];
 #define EXP_N_OWN 20
   cli_opt_t own[EXP_N_OWN] = {
@@ -187,7 +187,7 @@ static int experiment_parse(int argc, char **argv, experiment_params_t *p) {
 }
 
 /* --dem and --global-error into r, the experiment's DEM fields of r->p. */
-static int experiment_dem(const experiment_params_t *p, experiment_result_t *r, char *err, size_t err_len) {
+static int experiment_dem(const cmd_experiment_params_t *p, cmd_experiment_result_t *r, char *err, size_t err_len) {
   char why[768];
   size_t i;
   if (dem_read(p->dem_path, (int)p->band, 1024, &r->dem, why, sizeof why) != 0) {
@@ -210,7 +210,7 @@ static int experiment_dem(const experiment_params_t *p, experiment_result_t *r, 
 }
 
 /* The experiment's parameters (r->p) from the options; lengths scaled by r->f unless given. */
-static void experiment_fill(const experiment_params_t *p, experiment_result_t *r) {
+static void experiment_fill(const cmd_experiment_params_t *p, cmd_experiment_result_t *r) {
   exp_params_t *e = &r->p;
   e->trials = p->trials;
   e->seed = p->seed;
@@ -236,7 +236,7 @@ static void experiment_fill(const experiment_params_t *p, experiment_result_t *r
   e->map_cfg_ctx = r;
 }
 
-int experiment_run(const experiment_params_t *p, experiment_result_t *r, char *err, size_t err_len) {
+int cmd_experiment_run(const cmd_experiment_params_t *p, cmd_experiment_result_t *r, char *err, size_t err_len) {
   struct timespec t0, t1;
   const char *why;
   int rc;
@@ -279,12 +279,12 @@ int experiment_run(const experiment_params_t *p, experiment_result_t *r, char *e
   return CLI_OK;
 }
 
-void experiment_result_free(experiment_result_t *r) {
+void cmd_experiment_result_free(cmd_experiment_result_t *r) {
   dem_free(&r->dem);
   dem_free(&r->gerr);
 }
 
-static void experiment_json_terrain(json_t *j, const experiment_params_t *p, const experiment_result_t *r) {
+static void experiment_json_terrain(json_t *j, const cmd_experiment_params_t *p, const cmd_experiment_result_t *r) {
   json_obj(j, "terrain");
   if (p->dem_path != NULL) {
     json_str(j, "dem", p->dem_path);
@@ -305,7 +305,7 @@ static void experiment_json_terrain(json_t *j, const experiment_params_t *p, con
   json_obj_end(j);
 }
 
-static void experiment_json_parameters(json_t *j, const experiment_result_t *r) {
+static void experiment_json_parameters(json_t *j, const cmd_experiment_result_t *r) {
   const exp_params_t *e = &r->p;
   const exp_result_t *x = &r->r;
   json_obj(j, "parameters");
@@ -330,7 +330,7 @@ static void experiment_json_parameters(json_t *j, const experiment_result_t *r) 
   json_obj_end(j);
 }
 
-static void experiment_report_json(const experiment_params_t *p, const experiment_result_t *r) {
+static void experiment_report_json(const cmd_experiment_params_t *p, const cmd_experiment_result_t *r) {
   selmap_opts_t g = p->so;
   json_t j;
   json_begin(&j, stdout);
@@ -349,7 +349,7 @@ static void experiment_report_json(const experiment_params_t *p, const experimen
   json_end(&j);
 }
 
-static void experiment_report_text(const experiment_params_t *p, const experiment_result_t *r) {
+static void experiment_report_text(const cmd_experiment_params_t *p, const cmd_experiment_result_t *r) {
   const exp_params_t *e = &r->p;
   const exp_result_t *x = &r->r;
   if (p->dem_path != NULL) {
@@ -383,13 +383,13 @@ static void experiment_report_text(const experiment_params_t *p, const experimen
 }
 
 int trn_cmd_experiment(int argc, char **argv) {
-  experiment_params_t p;
-  experiment_result_t r;
+  cmd_experiment_params_t p;
+  cmd_experiment_result_t r;
   progress_lazy_t prog;
   char err[CMD_ERR_LEN];
   int rc;
 
-  experiment_params_default(&p);
+  cmd_experiment_params_default(&p);
   rc = experiment_parse(argc, argv, &p);
   if (rc != CLI_OK) {
     return rc == CLI_HELP ? 0 : rc;
@@ -397,7 +397,7 @@ int trn_cmd_experiment(int argc, char **argv) {
   progress_lazy_init(&prog, "experiment");
   p.progress = on_progress;
   p.progress_ctx = &prog;
-  rc = experiment_run(&p, &r, err, sizeof err);
+  rc = cmd_experiment_run(&p, &r, err, sizeof err);
   progress_lazy_end(&prog);
   if (rc != CLI_OK) {
     cli_fail("experiment", "%s", err);
@@ -406,6 +406,6 @@ int trn_cmd_experiment(int argc, char **argv) {
   } else {
     experiment_report_text(&p, &r);
   }
-  experiment_result_free(&r);
+  cmd_experiment_result_free(&r);
   return rc;
 }

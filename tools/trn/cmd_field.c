@@ -33,7 +33,7 @@
 typedef struct {
   int active; /* stderr is a terminal */
   long count, shown;
-  const field_result_t *r; /* its coarse_positions: the coarse lattice's size */
+  const cmd_field_result_t *r; /* its coarse_positions: the coarse lattice's size */
 } field_prog_t;
 
 static void prog_draw(field_prog_t *g) {
@@ -93,7 +93,7 @@ static int cmpf(const void *a, const void *b) {
 
 static long lattice_count(long n, long step) { return (n - 1 + step - 1) / step + 1; }
 
-void field_params_default(field_params_t *p) {
+void cmd_field_params_default(cmd_field_params_t *p) {
   trn_field_cfg_t fcfg;
   memset(p, 0, sizeof *p);
   /* the defaults are the core's (trn_field_cfg_default), printed by --help from these */
@@ -105,7 +105,7 @@ void field_params_default(field_params_t *p) {
 }
 
 /* argv -> p. Returns CLI_OK, CLI_HELP (usage printed) or the usage / bad input status (message printed). */
-static int field_parse(int argc, char **argv, field_params_t *p) {
+static int field_parse(int argc, char **argv, cmd_field_params_t *p) {
   cli_opt_t opts[7 + SELMAP_N_OPTS + 2];
   cli_cmd_t cmd = {"field",
                    "Sensor uncertainty field: the predicted uncertainty of the best landmark from every rover\n"
@@ -142,7 +142,7 @@ static int field_parse(int argc, char **argv, field_params_t *p) {
 }
 
 /* The options that need no DEM; box: --area-m's numbers. */
-static int field_check(const field_params_t *p, double box[4], char *err, size_t err_len) {
+static int field_check(const cmd_field_params_t *p, double box[4], char *err, size_t err_len) {
   if ((p->coarse & (p->coarse - 1)) != 0) {
     snprintf(err, err_len, "--coarse-step-cells %ld is not a power of two", p->coarse);
     return CLI_BAD_INPUT;
@@ -160,7 +160,8 @@ static int field_check(const field_params_t *p, double box[4], char *err, size_t
 
 /* r->area, aw, ah: the whole DEM, or the cells whose centres lie in the box
  * (west/east -> columns, north/south -> rows). */
-static int field_area(const field_params_t *p, const double box[4], field_result_t *r, char *err, size_t err_len) {
+static int field_area(const cmd_field_params_t *p, const double box[4], cmd_field_result_t *r, char *err,
+                      size_t err_len) {
   const dem_t *d = &r->w.dem;
   double c0, c1, r0, r1;
   if (p->area_text == NULL) {
@@ -195,7 +196,7 @@ static int field_area(const field_params_t *p, const double box[4], field_result
 }
 
 /* The core over the area into fbuf (aw x ah) and ev; r->stats, wsb, secs. */
-static int field_compute(const field_params_t *p, field_result_t *r, float *fbuf, uint8_t *ev, char *err,
+static int field_compute(const cmd_field_params_t *p, cmd_field_result_t *r, float *fbuf, uint8_t *ev, char *err,
                          size_t err_len) {
   const selmap_t *w = &r->w;
   size_t n = r->aw * r->ah;
@@ -249,7 +250,7 @@ static int field_compute(const field_params_t *p, field_result_t *r, float *fbuf
 }
 
 /* The area's values (fbuf) or evaluated mask (ev, as 1 / 0) on the DEM's grid, NaN elsewhere, to path. */
-static int field_write(const field_result_t *r, const char *path, const char *opt, const float *fbuf,
+static int field_write(const cmd_field_result_t *r, const char *path, const char *opt, const float *fbuf,
                        const uint8_t *ev, char *err, size_t err_len) {
   const dem_t *d = &r->w.dem;
   char why[768];
@@ -279,7 +280,7 @@ static int field_write(const field_result_t *r, const char *path, const char *op
 }
 
 /* Summary: minimum (the core's), median of the finite values (fbuf reordered), infinite count. */
-static void field_summary(field_result_t *r, float *fbuf) {
+static void field_summary(cmd_field_result_t *r, float *fbuf) {
   size_t n = r->aw * r->ah, nf = 0, i;
   r->vmed = NAN;
   r->n_inf = 0;
@@ -298,7 +299,7 @@ static void field_summary(field_result_t *r, float *fbuf) {
   r->vmin = r->stats.best_m;
 }
 
-int field_run(const field_params_t *p, field_result_t *r, char *err, size_t err_len) {
+int cmd_field_run(const cmd_field_params_t *p, cmd_field_result_t *r, char *err, size_t err_len) {
   double box[4];
   float *fbuf = NULL;
   uint8_t *ev = NULL;
@@ -333,9 +334,9 @@ int field_run(const field_params_t *p, field_result_t *r, char *err, size_t err_
   return rc;
 }
 
-void field_result_free(field_result_t *r) { selmap_free(&r->w); }
+void cmd_field_result_free(cmd_field_result_t *r) { selmap_free(&r->w); }
 
-static void field_report_json(const field_params_t *p, const field_result_t *r) {
+static void field_report_json(const cmd_field_params_t *p, const cmd_field_result_t *r) {
   const dem_t *d = &r->w.dem;
   double ax0, ay0, ax1, ay1;
   json_t j;
@@ -370,7 +371,7 @@ static void field_report_json(const field_params_t *p, const field_result_t *r) 
   json_end(&j);
 }
 
-static void field_report_text(const field_params_t *p, const field_result_t *r) {
+static void field_report_text(const cmd_field_params_t *p, const cmd_field_result_t *r) {
   const trn_field_stats_t *s = &r->stats;
   printf("wrote %s: field over %zu x %zu rover positions of %g m\n", p->out, r->aw, r->ah, r->w.dem.cell_m);
   printf("evaluated    %u of %u positions (%.1fx fewer), %.1f s\n", s->evaluations, s->cells,
@@ -385,13 +386,13 @@ static void field_report_text(const field_params_t *p, const field_result_t *r) 
 }
 
 int trn_cmd_field(int argc, char **argv) {
-  field_params_t p;
-  field_result_t r;
+  cmd_field_params_t p;
+  cmd_field_result_t r;
   field_prog_t prog = {0, 0, 0, NULL};
   char err[CMD_ERR_LEN];
   int rc;
 
-  field_params_default(&p);
+  cmd_field_params_default(&p);
   rc = field_parse(argc, argv, &p);
   if (rc != CLI_OK) {
     return rc == CLI_HELP ? 0 : rc;
@@ -400,7 +401,7 @@ int trn_cmd_field(int argc, char **argv) {
   prog.r = &r;
   p.progress = field_progress;
   p.progress_user = &prog;
-  rc = field_run(&p, &r, err, sizeof err);
+  rc = cmd_field_run(&p, &r, err, sizeof err);
   if (prog.active && r.coarse_positions > 0) {
     prog_draw(&prog);
     fputc('\n', stderr);
@@ -412,6 +413,6 @@ int trn_cmd_field(int argc, char **argv) {
   } else {
     field_report_text(&p, &r);
   }
-  field_result_free(&r);
+  cmd_field_result_free(&r);
   return rc;
 }

@@ -48,8 +48,8 @@ static double now_ms(void) {
 /* The (x, y, heading) search of one case (the local DEM lg, rover cell rx, ry):
  * o->res from its position part, the heading and the 3 x 3 covariance in
  * (east m, north m, heading deg). Returns the core's status. */
-static trn_status_t localize_heading(const loc_ctx_t *c, const trn_grid_f32_t *lg, int rx, int ry, size_t max_pts,
-                                     const trn_window_t *win, loc_out_t *o) {
+static trn_status_t localize_heading(const cmd_localize_ctx_t *c, const trn_grid_f32_t *lg, int rx, int ry,
+                                     size_t max_pts, const trn_window_t *win, cmd_localize_out_t *o) {
   const double deg = 180.0 / 3.14159265358979323846;
   const trn_heading_cfg_t hc = {c->heading_deg / deg, c->heading_win_deg / deg, 0.0};
   const double sgn[3] = {1.0, -1.0, deg}; /* core rows point south: flip north terms; radians to degrees */
@@ -74,7 +74,7 @@ static trn_status_t localize_heading(const loc_ctx_t *c, const trn_grid_f32_t *l
 }
 
 /* The local DEM l against the context: sizes and the cell size. 0, or -1 with the reason. */
-static int check_local(const loc_ctx_t *c, const dem_t *l, char *err, size_t err_len) {
+static int check_local(const cmd_localize_ctx_t *c, const dem_t *l, char *err, size_t err_len) {
   double cell = c->g.cell_m;
   if (l->width > c->max_local || l->height > c->max_local) {
     snprintf(err, err_len, "--local is %d x %d cells, larger than --max-local-cells %ld", l->width, l->height,
@@ -97,8 +97,9 @@ static int check_local(const loc_ctx_t *c, const dem_t *l, char *err, size_t err
 /* The rover's nearest local cell (rx, ry), the offset (dx_m, dy_m) of its
  * centre from the rover, and the window of its poses around prior, clipped to
  * the map (o->radius). 0, or -1 with the reason. */
-static int case_window(const loc_ctx_t *c, const dem_t *l, const double prior[2], double window_m, int *rx, int *ry,
-                       double *dx_m, double *dy_m, trn_window_t *win, loc_out_t *o, char *err, size_t err_len) {
+static int case_window(const cmd_localize_ctx_t *c, const dem_t *l, const double prior[2], double window_m, int *rx,
+                       int *ry, double *dx_m, double *dy_m, trn_window_t *win, cmd_localize_out_t *o, char *err,
+                       size_t err_len) {
   double cell = c->g.cell_m, rcol, rrow, pc, pr;
   int pcol, prow;
   /* The rover (0, 0 in the rover frame) in the local grid. */
@@ -140,7 +141,7 @@ static int case_window(const loc_ctx_t *c, const dem_t *l, const double prior[2]
 
 /* Pose (global cells, y = row = south) -> rover position (map, y north); the
  * core's row axis points south: flip the correlation's sign (no -0). */
-static void case_to_map(const loc_ctx_t *c, double dx_m, double dy_m, loc_out_t *o) {
+static void case_to_map(const cmd_localize_ctx_t *c, double dx_m, double dy_m, cmd_localize_out_t *o) {
   double ex, ey;
   dem_cell_to_map(c->g.gt, o->res.x, o->res.y, &ex, &ey);
   o->x_m = ex - dx_m;
@@ -151,8 +152,8 @@ static void case_to_map(const loc_ctx_t *c, double dx_m, double dy_m, loc_out_t 
   o->cov_en[2] = o->res.cov_m2[2] != 0.0 ? -o->res.cov_m2[2] : 0.0;
 }
 
-int localize_run(const loc_ctx_t *c, const char *local_path, const double prior[2], double window_m, loc_out_t *o,
-                 char *err, size_t err_len) {
+int cmd_localize_run(const cmd_localize_ctx_t *c, const char *local_path, const double prior[2], double window_m,
+                     cmd_localize_out_t *o, char *err, size_t err_len) {
   dem_t l;
   double dx_m, dy_m, t0;
   int rx, ry, rc = CLI_BAD_INPUT;
@@ -199,8 +200,8 @@ done:
   return rc;
 }
 
-static void print_json(const loc_ctx_t *c, const char *local, const double prior[2], double window_m,
-                       const loc_out_t *o, int batch) {
+static void print_json(const cmd_localize_ctx_t *c, const char *local, const double prior[2], double window_m,
+                       const cmd_localize_out_t *o, int batch) {
   json_t j;
   json_begin(&j, stdout);
   json_num(&j, "x_m", o->x_m);
@@ -249,7 +250,7 @@ static void print_json(const loc_ctx_t *c, const char *local, const double prior
  * lines and lines starting with # are skipped. A case that cannot be
  * localized prints {"status": "error", "error": ...} and the run goes on;
  * a malformed line stops it (exit 1). */
-static int run_batch(const loc_ctx_t *c, const char *path, double window_m) {
+static int run_batch(const cmd_localize_ctx_t *c, const char *path, double window_m) {
   FILE *f = fopen(path, "r");
   char line[4096], local[4096], err[CMD_ERR_LEN];
   long lineno = 0;
@@ -259,7 +260,7 @@ static int run_batch(const loc_ctx_t *c, const char *path, double window_m) {
   while (fgets(line, sizeof line, f) != NULL) {
     double prior[2], w = window_m;
     int nf;
-    loc_out_t o;
+    cmd_localize_out_t o;
     char extra[8];
     ++lineno;
     if (line[0] == '#' || strspn(line, " \t\r\n") == strlen(line)) {
@@ -270,7 +271,7 @@ static int run_batch(const loc_ctx_t *c, const char *path, double window_m) {
       fclose(f);
       return cli_fail("localize", "--batch %s line %ld: expected 'LOCAL PRIOR_X PRIOR_Y [WINDOW_M]'", path, lineno);
     }
-    if (localize_run(c, local, prior, w, &o, err, sizeof err) != CLI_OK) {
+    if (cmd_localize_run(c, local, prior, w, &o, err, sizeof err) != CLI_OK) {
       json_t j;
       json_begin(&j, stdout);
       json_str(&j, "status", "error");
@@ -285,7 +286,7 @@ static int run_batch(const loc_ctx_t *c, const char *path, double window_m) {
   return 0;
 }
 
-void localize_params_default(localize_params_t *p) {
+void cmd_localize_params_default(cmd_localize_params_t *p) {
   memset(p, 0, sizeof *p);
   p->window_m = 2.5;
   p->band = 1;
@@ -296,7 +297,7 @@ void localize_params_default(localize_params_t *p) {
 
 /* argv -> p, with the choice between --local/--prior and --batch checked.
  * Returns CLI_OK, CLI_HELP (usage printed) or the usage / bad input status (message printed). */
-static int localize_parse(int argc, char **argv, localize_params_t *p) {
+static int localize_parse(int argc, char **argv, cmd_localize_params_t *p) {
   cli_opt_t opts[10 + MAPOPT_N] = {
       {"--dem", CLI_STRING, &p->dem_path, 0, 0, 1, "FILE", "global DEM (any GDAL raster; map frame)", 0},
       {"--local", CLI_STRING, &p->local_path, 0, 0, 0, "FILE", "local DEM in the rover frame (rover at 0,0; x east, y north)", 0},
@@ -343,7 +344,7 @@ static int localize_parse(int argc, char **argv, localize_params_t *p) {
   return CLI_OK;
 }
 
-int localize_prepare(const localize_params_t *p, loc_ctx_t *c, char *err, size_t err_len) {
+int cmd_localize_prepare(const cmd_localize_params_t *p, cmd_localize_ctx_t *c, char *err, size_t err_len) {
   char why[768];
   trn_grid_f32_t gg;
   trn_status_t st;
@@ -388,13 +389,14 @@ int localize_prepare(const localize_params_t *p, loc_ctx_t *c, char *err, size_t
   return CLI_OK;
 }
 
-void localize_ctx_free(loc_ctx_t *c) {
+void cmd_localize_ctx_free(cmd_localize_ctx_t *c) {
   free(c->mraw);
   c->mraw = NULL;
   dem_free(&c->g);
 }
 
-static void localize_report_text(const loc_ctx_t *c, const localize_params_t *p, const loc_out_t *o) {
+static void localize_report_text(const cmd_localize_ctx_t *c, const cmd_localize_params_t *p,
+                                 const cmd_localize_out_t *o) {
   const trn_map_cfg_t *cfg = &c->cfg;
   printf("estimate     x = %.3f m   y = %.3f m   status: %s\n", o->x_m, o->y_m, status_word(o->st));
   printf("prior        x = %.3f m   y = %.3f m   (window +-%g m = %ld cells)\n", p->prior[0], p->prior[1],
@@ -417,22 +419,22 @@ static void localize_report_text(const loc_ctx_t *c, const localize_params_t *p,
 }
 
 int trn_cmd_localize(int argc, char **argv) {
-  localize_params_t p;
-  loc_ctx_t c;
-  loc_out_t o;
+  cmd_localize_params_t p;
+  cmd_localize_ctx_t c;
+  cmd_localize_out_t o;
   char err[CMD_ERR_LEN];
   int rc;
 
-  localize_params_default(&p);
+  cmd_localize_params_default(&p);
   rc = localize_parse(argc, argv, &p);
   if (rc != CLI_OK) {
     return rc == CLI_HELP ? 0 : rc;
   }
-  rc = localize_prepare(&p, &c, err, sizeof err);
+  rc = cmd_localize_prepare(&p, &c, err, sizeof err);
   if (rc == CLI_OK && p.batch_path != NULL) {
     rc = run_batch(&c, p.batch_path, p.window_m);
   } else if (rc == CLI_OK) {
-    rc = localize_run(&c, p.local_path, p.prior, p.window_m, &o, err, sizeof err);
+    rc = cmd_localize_run(&c, p.local_path, p.prior, p.window_m, &o, err, sizeof err);
     if (rc == CLI_OK && p.json) {
       print_json(&c, p.local_path, p.prior, p.window_m, &o, 0);
     } else if (rc == CLI_OK) {
@@ -442,6 +444,6 @@ int trn_cmd_localize(int argc, char **argv) {
   if (rc != CLI_OK && p.batch_path == NULL) {
     cli_fail("localize", "%s", err);
   }
-  localize_ctx_free(&c);
+  cmd_localize_ctx_free(&c);
   return rc;
 }

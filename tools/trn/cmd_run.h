@@ -46,17 +46,17 @@ typedef struct {
   int json;                /* report as JSON */
   cmd_progress_fn progress;
   void *progress_ctx;
-} terrain_params_t;
+} cmd_terrain_params_t;
 
 typedef struct {
   tg_params_t p;           /* the generator's parameters as run */
   size_t n_rocks;
   double area_fraction;    /* realised rock area of the rocks centred on the map */
   double model_fraction;   /* F_k(Dmin) - F_k(Dmax) */
-} terrain_result_t;
+} cmd_terrain_result_t;
 
-void terrain_params_default(terrain_params_t *p);
-int terrain_run(const terrain_params_t *p, terrain_result_t *r, char *err, size_t err_len);
+void cmd_terrain_params_default(cmd_terrain_params_t *p);
+int cmd_terrain_run(const cmd_terrain_params_t *p, cmd_terrain_result_t *r, char *err, size_t err_len);
 
 /* ---- trn select ------------------------------------------------------- */
 typedef struct {
@@ -65,19 +65,19 @@ typedef struct {
   long next_best;
   int json;
   selmap_opts_t so;
-} select_params_t;
+} cmd_select_params_t;
 
 typedef struct {
   selmap_t w;                     /* the prepared DEM */
   trn_candidate_t *cands;
   size_t *ranked;
   trn_select_result_t res;        /* cands[res.best]: the target; ranked[1..n_ranked): next best */
-} select_result_t;
+} cmd_select_result_t;
 
-void select_params_default(select_params_t *p);
+void cmd_select_params_default(cmd_select_params_t *p);
 /* CLI_OK, CLI_BAD_INPUT, or CLI_NO_RESULT (no informative target). */
-int select_run(const select_params_t *p, select_result_t *r, char *err, size_t err_len);
-void select_result_free(select_result_t *r);
+int cmd_select_run(const cmd_select_params_t *p, cmd_select_result_t *r, char *err, size_t err_len);
+void cmd_select_result_free(cmd_select_result_t *r);
 
 /* ---- trn field -------------------------------------------------------- */
 typedef struct {
@@ -90,7 +90,7 @@ typedef struct {
   selmap_opts_t so;
   trn_field_progress_fn_t progress; /* the core's callback (may be NULL) */
   void *progress_user;
-} field_params_t;
+} cmd_field_params_t;
 
 typedef struct {
   selmap_t w;                   /* the prepared DEM */
@@ -102,12 +102,12 @@ typedef struct {
   double secs;                  /* the core's wall time */
   double bx, by, vmin, vmed;    /* best position (map metres), its and the median uncertainty */
   long n_inf;                   /* positions with no informative target */
-} field_result_t;
+} cmd_field_result_t;
 
-void field_params_default(field_params_t *p);
+void cmd_field_params_default(cmd_field_params_t *p);
 /* CLI_OK, CLI_BAD_INPUT, or CLI_NO_RESULT (no informative target anywhere). */
-int field_run(const field_params_t *p, field_result_t *r, char *err, size_t err_len);
-void field_result_free(field_result_t *r);
+int cmd_field_run(const cmd_field_params_t *p, cmd_field_result_t *r, char *err, size_t err_len);
+void cmd_field_result_free(cmd_field_result_t *r);
 
 /* ---- trn localize ----------------------------------------------------- */
 typedef struct {
@@ -120,7 +120,7 @@ typedef struct {
   double heading_deg, heading_win_deg; /* centre and half-window, degrees counterclockwise */
   int json;
   mapopt_t mo;
-} localize_params_t;
+} cmd_localize_params_t;
 
 /* What every localization of one run shares: the global map, prepared once. */
 typedef struct {
@@ -131,7 +131,7 @@ typedef struct {
   long local_band, max_local;
   int heading;
   double heading_deg, heading_win_deg;
-} loc_ctx_t;
+} cmd_localize_ctx_t;
 
 /* The result of one case in map terms. */
 typedef struct {
@@ -140,16 +140,16 @@ typedef struct {
   long radius;              /* the window, cells */
   trn_loc_result_t res;
   trn_status_t st;
-} loc_out_t;
+} cmd_localize_out_t;
 
-void localize_params_default(localize_params_t *p);
-/* Read the global DEM and prepare the map into c (free with localize_ctx_free). */
-int localize_prepare(const localize_params_t *p, loc_ctx_t *c, char *err, size_t err_len);
+void cmd_localize_params_default(cmd_localize_params_t *p);
+/* Read the global DEM and prepare the map into c (free with cmd_localize_ctx_free). */
+int cmd_localize_prepare(const cmd_localize_params_t *p, cmd_localize_ctx_t *c, char *err, size_t err_len);
 /* One case: the local DEM at local_path around prior (map metres) within
  * +-window_m. CLI_OK or CLI_BAD_INPUT. */
-int localize_run(const loc_ctx_t *c, const char *local_path, const double prior[2], double window_m, loc_out_t *o,
-                 char *err, size_t err_len);
-void localize_ctx_free(loc_ctx_t *c);
+int cmd_localize_run(const cmd_localize_ctx_t *c, const char *local_path, const double prior[2], double window_m,
+                     cmd_localize_out_t *o, char *err, size_t err_len);
+void cmd_localize_ctx_free(cmd_localize_ctx_t *c);
 
 /* ---- trn experiment --------------------------------------------------- */
 typedef struct {
@@ -164,7 +164,7 @@ typedef struct {
   selmap_opts_t so;         /* the global map's error options and the map configuration */
   exp_progress_fn progress; /* trials done (may be NULL) */
   void *progress_ctx;
-} experiment_params_t;
+} cmd_experiment_params_t;
 
 typedef struct {
   exp_params_t p;           /* the experiment as run */
@@ -176,10 +176,10 @@ typedef struct {
   double gain;              /* 1 - mean error with / without selection */
   const mapopt_t *mo;       /* the map configuration's options (map_cfg callback) */
   double sigma_h;           /* the DEM's high-passed height spread (auto), else NaN */
-} experiment_result_t;
+} cmd_experiment_result_t;
 
-void experiment_params_default(experiment_params_t *p);
-int experiment_run(const experiment_params_t *p, experiment_result_t *r, char *err, size_t err_len);
-void experiment_result_free(experiment_result_t *r);
+void cmd_experiment_params_default(cmd_experiment_params_t *p);
+int cmd_experiment_run(const cmd_experiment_params_t *p, cmd_experiment_result_t *r, char *err, size_t err_len);
+void cmd_experiment_result_free(cmd_experiment_result_t *r);
 
 #endif

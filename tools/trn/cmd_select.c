@@ -37,14 +37,14 @@ static void target_json(json_t *j, const selmap_t *w, const trn_candidate_t *c) 
   json_num(j, "uncertainty_m", c->uncertainty_m);
 }
 
-void select_params_default(select_params_t *p) {
+void cmd_select_params_default(cmd_select_params_t *p) {
   memset(p, 0, sizeof *p);
   p->next_best = 5;
   selmap_opts_default(&p->so, 1);
 }
 
 /* argv -> p. Returns CLI_OK, CLI_HELP (usage printed) or the usage / bad input status (message printed). */
-static int select_parse(int argc, char **argv, select_params_t *p) {
+static int select_parse(int argc, char **argv, cmd_select_params_t *p) {
   cli_opt_t opts[4 + SELMAP_N_OPTS + 1];
   cli_cmd_t cmd = {"select",
                    "Select the landmark to sense next: predicted localization uncertainty of every candidate\n"
@@ -77,7 +77,7 @@ static int select_parse(int argc, char **argv, select_params_t *p) {
 }
 
 /* --out-map: each candidate's uncertainty at its centre cell, +inf where ill-conditioned, NaN elsewhere. */
-static int write_out_map(const select_params_t *p, const select_result_t *r, char *err, size_t err_len) {
+static int write_out_map(const cmd_select_params_t *p, const cmd_select_result_t *r, char *err, size_t err_len) {
   char why[768];
   const dem_t *d = &r->w.dem;
   size_t n = (size_t)d->width * (size_t)d->height, i;
@@ -103,7 +103,7 @@ static int write_out_map(const select_params_t *p, const select_result_t *r, cha
 }
 
 /* The selection from the rover's sub-cell position on the prepared DEM r->w. */
-static int select_on_map(const select_params_t *p, select_result_t *r, char *err, size_t err_len) {
+static int select_on_map(const cmd_select_params_t *p, cmd_select_result_t *r, char *err, size_t err_len) {
   const selmap_t *w = &r->w;
   const selmap_opts_t *so = &p->so;
   double rc_f, rr_f;
@@ -146,7 +146,7 @@ static int select_on_map(const select_params_t *p, select_result_t *r, char *err
   return CLI_OK;
 }
 
-int select_run(const select_params_t *p, select_result_t *r, char *err, size_t err_len) {
+int cmd_select_run(const cmd_select_params_t *p, cmd_select_result_t *r, char *err, size_t err_len) {
   const dem_t *d = &r->w.dem;
   int rcol, rrow, rc;
 
@@ -166,7 +166,7 @@ int select_run(const select_params_t *p, select_result_t *r, char *err, size_t e
   return rc;
 }
 
-void select_result_free(select_result_t *r) {
+void cmd_select_result_free(cmd_select_result_t *r) {
   free(r->cands);
   free(r->ranked);
   r->cands = NULL;
@@ -174,7 +174,7 @@ void select_result_free(select_result_t *r) {
   selmap_free(&r->w);
 }
 
-static void select_report_json(const select_params_t *p, const select_result_t *r) {
+static void select_report_json(const cmd_select_params_t *p, const cmd_select_result_t *r) {
   const trn_candidate_t *b = &r->cands[r->res.best];
   const selmap_t *w = &r->w;
   double tx, ty;
@@ -227,7 +227,7 @@ static void select_report_json(const select_params_t *p, const select_result_t *
   json_end(&j);
 }
 
-static void select_report_text(const select_params_t *p, const select_result_t *r) {
+static void select_report_text(const cmd_select_params_t *p, const cmd_select_result_t *r) {
   const trn_candidate_t *b = &r->cands[r->res.best];
   const selmap_t *w = &r->w;
   double x, y;
@@ -253,17 +253,17 @@ static void select_report_text(const select_params_t *p, const select_result_t *
 }
 
 int trn_cmd_select(int argc, char **argv) {
-  select_params_t p;
-  select_result_t r;
+  cmd_select_params_t p;
+  cmd_select_result_t r;
   char err[CMD_ERR_LEN];
   int rc;
 
-  select_params_default(&p);
+  cmd_select_params_default(&p);
   rc = select_parse(argc, argv, &p);
   if (rc != CLI_OK) {
     return rc == CLI_HELP ? 0 : rc;
   }
-  rc = select_run(&p, &r, err, sizeof err);
+  rc = cmd_select_run(&p, &r, err, sizeof err);
   if (rc != CLI_OK) {
     cli_fail("select", "%s", err);
   } else if (p.json) {
@@ -271,6 +271,6 @@ int trn_cmd_select(int argc, char **argv) {
   } else {
     select_report_text(&p, &r);
   }
-  select_result_free(&r);
+  cmd_select_result_free(&r);
   return rc;
 }

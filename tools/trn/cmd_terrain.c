@@ -13,7 +13,7 @@
 #include "terrain_gen.h"
 #include "trn/trn_config.h"
 
-void terrain_params_default(terrain_params_t *p) {
+void cmd_terrain_params_default(cmd_terrain_params_t *p) {
   memset(p, 0, sizeof *p);
   p->size = 256;
   p->cell = 0.1;
@@ -24,7 +24,7 @@ void terrain_params_default(terrain_params_t *p) {
 }
 
 /* argv -> p. Returns CLI_OK, CLI_HELP (usage printed) or the usage / bad input status (message printed). */
-static int terrain_parse(int argc, char **argv, terrain_params_t *p) {
+static int terrain_parse(int argc, char **argv, cmd_terrain_params_t *p) {
   cli_opt_t opts[] = {
       {"--out", CLI_STRING, &p->out, 0, 0, 1, "FILE.tif", "GeoTIFF to write", 0},
       {"--size-cells", CLI_LONG, &p->size, 8, TRN_MAX_DIM, 0, "N", "map side, cells", 0},
@@ -48,7 +48,7 @@ static int terrain_parse(int argc, char **argv, terrain_params_t *p) {
 }
 
 /* The generator's parameters from p; NULL, or the reason they are refused. */
-static const char *terrain_gen_params(const terrain_params_t *p, tg_params_t *g, char *err, size_t err_len) {
+static const char *terrain_gen_params(const cmd_terrain_params_t *p, tg_params_t *g, char *err, size_t err_len) {
   const char *why;
   tg_default(g, (int)p->size, (int)p->size, p->cell);
   g->coverage_k = p->k;
@@ -70,7 +70,7 @@ static const char *terrain_gen_params(const terrain_params_t *p, tg_params_t *g,
 }
 
 /* Realised rock area: rocks centred on the map. */
-static double rock_area(const terrain_params_t *p, const tg_rock_t *rocks, size_t n) {
+static double rock_area(const cmd_terrain_params_t *p, const tg_rock_t *rocks, size_t n) {
   double ext = (double)p->size * p->cell, area_in = 0.0;
   size_t i;
   for (i = 0; i < n; ++i) {
@@ -81,7 +81,7 @@ static double rock_area(const terrain_params_t *p, const tg_rock_t *rocks, size_
   return area_in / (ext * ext);
 }
 
-int terrain_run(const terrain_params_t *p, terrain_result_t *r, char *err, size_t err_len) {
+int cmd_terrain_run(const cmd_terrain_params_t *p, cmd_terrain_result_t *r, char *err, size_t err_len) {
   tg_rock_t *rocks = NULL;
   size_t n, n2;
   float *dem = NULL;
@@ -133,7 +133,7 @@ done:
   return rc;
 }
 
-static void terrain_report(const terrain_params_t *p, const terrain_result_t *r) {
+static void terrain_report(const cmd_terrain_params_t *p, const cmd_terrain_result_t *r) {
   if (p->json) {
     json_t j;
     json_begin(&j, stdout);
@@ -166,13 +166,13 @@ static void terrain_report(const terrain_params_t *p, const terrain_result_t *r)
 }
 
 int trn_cmd_terrain(int argc, char **argv) {
-  terrain_params_t p;
-  terrain_result_t r;
+  cmd_terrain_params_t p;
+  cmd_terrain_result_t r;
   progress_lazy_t prog;
   char err[CMD_ERR_LEN];
   int rc;
 
-  terrain_params_default(&p);
+  cmd_terrain_params_default(&p);
   rc = terrain_parse(argc, argv, &p);
   if (rc != CLI_OK) {
     return rc == CLI_HELP ? 0 : rc;
@@ -180,7 +180,7 @@ int trn_cmd_terrain(int argc, char **argv) {
   progress_lazy_init(&prog, "terrain");
   p.progress = progress_lazy_update;
   p.progress_ctx = &prog;
-  rc = terrain_run(&p, &r, err, sizeof err);
+  rc = cmd_terrain_run(&p, &r, err, sizeof err);
   progress_lazy_end(&prog);
   if (rc != CLI_OK) {
     cli_fail("terrain", "%s", err);
