@@ -347,65 +347,56 @@ static int run_field_block(void *p)
     return 0;
 }
 
-int bench_select_run(const trn_map_t *map, int32_t n, int repeats, bench_select_result_t *r)
+/* Eq. 8: trn_prob_global_map against the naive scatter (and OpenCV's
+ * separable filter when built with it); pc's buffers and *kidx are the
+ * caller's to free. 0, or nonzero when the setup failed. */
+static int bench_pmap(pmap_ctx_t *pc, const trn_kernels_t *k, const trn_map_t *map, int32_t n, int repeats,
+                      uint8_t **kidx, bench_select_result_t *r)
 {
-    static trn_kernels_t k;
-    pmap_ctx_t pc;
-    sel_ctx_t sc;
-    field_ctx_t fc;
-    bs_t t_p, t_pn, t_s, t_sn, t_f, t_fb;
+    bs_t t_p, t_pn;
     const size_t nvox = (size_t)map->dist.nx * map->dist.ny * map->dist.nz;
     trn_window_t whole;
-    uint8_t *kidx;
     int32_t jmax = 0;
     size_t i;
     double worst = 0.0;
     char note[200];
-    int rc = 3;
 
-    memset(r, 0, sizeof *r);
-    memset(&pc, 0, sizeof pc);
-    memset(&sc, 0, sizeof sc);
-    memset(&fc, 0, sizeof fc);
-    if (trn_kernels_build(&k, TRN_KERNEL_SIGMA0_DEFAULT_CELLS) != TRN_OK) {
-        return 3;
-    }
-    pc.map = map;
-    pc.k = &k;
-    trn_sigma_global_default(&pc.gm);
-    pc.s.x_cells = (float)n / 2.0f;
-    pc.s.y_cells = (float)n / 2.0f;
-    pc.pg.nx = map->dist.nx;
-    pc.pg.ny = map->dist.ny;
-    pc.pg.nz = map->dist.nz;
-    pc.pg.data = (float *)bs_alloc(nvox * sizeof(float));
-    pc.wsb = trn_prob_global_workspace_bytes(n, n);
-    pc.ws = bs_alloc(pc.wsb);
-    pc.naive = (double *)malloc(nvox * sizeof(double));
-    kidx = (uint8_t *)malloc((size_t)n * n);
-    pc.kidx = kidx;
+    pc->map = map;
+    pc->k = k;
+    trn_sigma_global_default(&pc->gm);
+    pc->s.x_cells = (float)n / 2.0f;
+    pc->s.y_cells = (float)n / 2.0f;
+    pc->pg.nx = map->dist.nx;
+    pc->pg.ny = map->dist.ny;
+    pc->pg.nz = map->dist.nz;
+    pc->pg.data = (float *)bs_alloc(nvox * sizeof(float));
+    pc->wsb = trn_prob_global_workspace_bytes(n, n);
+    pc->ws = bs_alloc(pc->wsb);
+    pc->naive = (double *)malloc(nvox * sizeof(double));
+    *kidx = (uint8_t *)malloc((size_t)n * n);
+    pc->kidx = *kidx;
     whole.x0 = 0;
     whole.y0 = 0;
     whole.x1 = n - 1;
     whole.y1 = n - 1;
-    if (pc.pg.data == NULL || pc.ws == NULL || pc.naive == NULL || kidx == NULL ||
-        trn_spread_kernel_map(&k, &pc.gm, map->cfg.terrain.cell_m, &pc.s, 1, &whole, kidx,
+    if (pc->pg.data == NULL || pc->ws == NULL || pc->naive == NULL || *kidx == NULL ||
+        trn_spread_kernel_map(k, &pc->gm, map->cfg.terrain.cell_m, &pc->s, 1, &whole, *kidx,
                               (size_t)n * n) != TRN_OK) {
-        goto out;
+        return 1;
     }
     for (i = 0; i < (size_t)n * n; ++i) {
-        jmax = kidx[i] > jmax ? kidx[i] : jmax;
+        jmax = (*kidx)[i] > jmax ? (*kidx)[i] : jmax;
     }
     printf("\n");
-    if (bs_time(run_pmap, &pc, 1, repeats, 0.0, &t_p) != 0 ||
-        bs_time(run_pmap_naive, &pc, 0, repeats, 3.0, &t_pn) != 0) {
-        goto out;
+    if (bs_time(run_pmap, pc, 1, repeats, 0.0, &t_p) != 0 ||
+        bs_time(run_pmap_naive, pc, 0, repeats, 3.0, &t_pn) != 0) {
+        return 1;
     }
     for (i = 0; i < nvox; ++i) {
-        worst = fmax(worst, fabs((double)pc.pg.data[i] - pc.naive[i]));
+        worst = fmax(worst, fabs((double)pc->pg.data[i] - pc->naive[i]));
     }
     snprintf(note, sizeof note, "eq. 8, sensor at the centre, kernels 0..%d (sigma up to %.2f "
-             "cells)", (int)jmax, (double)k.sigma_cells[jmax]);
+             "cells)", (int)jmax, (double)k->sigma_cells[jmax]);
     bs_row(n, "pmap: trn_prob_global_map", &t_p, note);
     snprintf(note, sizeof note, "direct 2-D scatter; max |separable - direct| %.3g", worst);
     bs_row(n, "pmap: naive position-variant 2-D scatter", &t_pn, note);
@@ -415,14 +406,14 @@ int bench_select_run(const trn_map_t *map, int32_t n, int repeats, bench_select_
     bs_ratio("naive 2-D / trn_prob_global_map", t_pn.med, t_p.med, NULL);
 #ifdef TRN_HAVE_OPENCV
     {
-        const int32_t rad = k.radius[jmax];
+        const int32_t rad = k->radius[jmax];
         bench_cv_sep_t *cv = bench_cv_sep_create(map->dist.data, 1, n, n, map->dist.nz,
-                                                 k.taps[jmax] + (TRN_KERNEL_MAX_RADIUS - rad),
+                                                 k->taps[jmax] + (TRN_KERNEL_MAX_RADIUS - rad),
                                                  2 * rad + 1);
         bs_t t_cv;
         if (cv == NULL || bs_time(run_cv_sep, cv, 1, repeats, 0.0, &t_cv) != 0) {
             bench_cv_sep_destroy(cv);
-            goto out;
+            return 1;
         }
         g_bs_sink += bench_cv_sep_checksum(cv);
         bench_cv_sep_destroy(cv);
@@ -434,161 +425,198 @@ int bench_select_run(const trn_map_t *map, int32_t n, int repeats, bench_select_
                  "(target >= 1 at 512)");
     }
 #endif
+    return 0;
+}
 
-    /* all candidates of one rover position, default (paper-like) rules */
-    sc.map = map;
-    sc.k = &k;
-    sc.pg = &pc.pg;
-    trn_select_cfg_default(&sc.cfg);
-    sc.rv.pos.x_cells = (float)n / 2.0f + 3.3f;
-    sc.rv.pos.y_cells = (float)n / 2.0f - 7.6f;
-    sc.rv.heading_rad = 0.4f;
-    sc.cap = trn_select_max_candidates(&sc.cfg, map->cfg.terrain.cell_m);
-    sc.wsb = trn_select_workspace_bytes(&sc.cfg, map, &k);
-    sc.c = (trn_candidate_t *)malloc(sc.cap * sizeof *sc.c);
-    sc.ws = bs_alloc(sc.wsb);
-    if (sc.c == NULL || sc.ws == NULL || bs_time(run_select, &sc, 1, repeats, 0.0, &t_s) != 0) {
-        goto out;
-    }
-    sc.lwsb = trn_prob_local_workspace_bytes(&k, &sc.res.roi);
-    sc.lws = bs_alloc(sc.lwsb);
-    sc.p.data = (float *)malloc(sizeof(float) * (size_t)(sc.res.roi.x1 - sc.res.roi.x0 + 1) *
-                                (size_t)(sc.res.roi.y1 - sc.res.roi.y0 + 1) * map->dist.nz);
-    if (sc.lws == NULL || sc.p.data == NULL ||
-        bs_time(run_select_naive, &sc, 0, repeats, 3.0, &t_sn) != 0) {
-        goto out;
-    }
-    {
-        const int same = sc.res.n_informative > 0 &&
-                         (sc.naive_best_i == sc.res.best ||
-                          fabs(sc.naive_best - sc.c[sc.res.best].uncertainty_m) <=
-                              1e-6 * sc.naive_best);
-        snprintf(note, sizeof note, "%zu candidates (%zu informative), region %dx%d; best (%d, %d) "
-                 "%.4f m", sc.res.n_candidates, sc.res.n_informative,
-                 (int)(sc.res.roi.x1 - sc.res.roi.x0 + 1), (int)(sc.res.roi.y1 - sc.res.roi.y0 + 1),
-                 sc.res.n_informative ? (int)sc.c[sc.res.best].x : -1,
-                 sc.res.n_informative ? (int)sc.c[sc.res.best].y : -1,
-                 sc.res.n_informative ? sc.c[sc.res.best].uncertainty_m : HUGE_VAL);
-        bs_row(n, "select: trn_select, all candidates", &t_s, note);
-        snprintf(note, sizeof note, "per-patch sums; same best: %s", same ? "yes" : "NO");
-        bs_row(n, "select: naive per-candidate sums", &t_sn, note);
-        if (!same) {
-            r->wrong = 1;
-        }
-        r->select_ms = t_s.med;
-        r->select_naive_ms = t_sn.med;
-        bs_ratio("naive / trn_select", t_sn.med, t_s.med, "(target: trn_select < 20 ms at 512)");
-    }
+/* All candidates of one rover position, default (paper-like) rules:
+ * trn_select against the naive per-candidate sums; sc's buffers are the
+ * caller's to free. 0, or nonzero when the setup failed. */
+static int bench_sel(sel_ctx_t *sc, const trn_kernels_t *k, const trn_map_t *map, const trn_vol_f32_t *pg,
+                     int32_t n, int repeats, bench_select_result_t *r)
+{
+    bs_t t_s, t_sn;
+    char note[200];
+    int same;
 
-    /* the field, small reach, whole map */
-    fc.map = map;
-    fc.k = &k;
-    fc.pg = &pc.pg;
-    trn_select_cfg_default(&fc.scfg);
-    fc.scfg.min_range_m = 0.5f;
-    fc.scfg.max_range_m = 2.0f;
-    fc.scfg.footprint_radius_m = 0.3f;
-    fc.scfg.patch_m = 0.9f;
-    fc.scfg.min_separation_m = 0.45f;
-    trn_field_cfg_default(&fc.fcfg);
-    fc.area = whole;
-    fc.block.x0 = n / 2 - 16;
-    fc.block.y0 = n / 2 - 16;
-    fc.block.x1 = n / 2 + 15;
-    fc.block.y1 = n / 2 + 15;
-    fc.ev = (uint8_t *)malloc((size_t)n * n);
-    fc.g.data = (float *)malloc(sizeof(float) * (size_t)n * n);
-    fc.g.width = n;
-    fc.g.height = n;
-    fc.g.stride = n;
-    fc.cap = trn_select_max_candidates(&fc.scfg, map->cfg.terrain.cell_m);
-    fc.c = (trn_candidate_t *)malloc(fc.cap * sizeof *fc.c);
-    fc.swsb = trn_select_workspace_bytes(&fc.scfg, map, &k);
-    fc.sws = bs_alloc(fc.swsb);
-    {
-        bs_t t_ff;
-        size_t wso, wsn;
-        int same = 0;
-        if (fc.ev == NULL || fc.g.data == NULL || fc.c == NULL || fc.sws == NULL ||
-            field_pair(&fc, repeats < 3 ? repeats : 3, 20.0, &t_f, &t_ff, &wso, &wsn, &same) != 0 ||
-            bs_time(run_field_block, &fc, 0, repeats < 3 ? repeats : 3, 10.0, &t_fb) != 0) {
-            free(fc.ev);
-            free(fc.g.data);
-            free(fc.c);
-            free(fc.sws);
-            goto out;
-        }
-        r->field_ms = t_f.med;
-        r->field_fast_ms = t_ff.med;
-        r->field_evals = fc.st.evaluations;
-        r->field_cells = fc.st.cells;
-        r->field_naive_est_ms = t_fb.med * (double)n * (double)n / (32.0 * 32.0);
-        snprintf(note, sizeof note, "reach 0.5-2 m, 0.9 m patches; %u evaluations of %u cells "
-                 "(%.1fx fewer); min %.4f m at (%d, %d)", fc.st.evaluations, fc.st.cells,
-                 (double)fc.st.cells / fc.st.evaluations, fc.st.best_m, (int)fc.st.best_x,
-                 (int)fc.st.best_y);
-        bs_row(n, "field: trn_field, whole map", &t_f, note);
-        snprintf(note, sizeof note, "brute force on a 32x32 block: %.3f ms per position; whole map "
-                 "estimated %.0f ms", t_fb.med / 1024.0, r->field_naive_est_ms);
-        bs_row(n, "field: brute force, 32x32 block", &t_fb, note);
-        snprintf(note, sizeof note, "same field as trn_field: %s; workspace %.1f MB (trn_field "
-                 "%.2f MB)", same ? "yes" : "NO", (double)wsn / 1048576.0,
-                 (double)wso / 1048576.0);
-        bs_row(n, "field: trn_field_fast (ground path), whole map", &t_ff, note);
-        if (!same) {
-            r->wrong = 1;
-        }
-        bs_ratio("brute force (estimated) / trn_field", r->field_naive_est_ms, t_f.med, NULL);
-        bs_ratio("trn_field / trn_field_fast", t_f.med, t_ff.med, NULL);
+    sc->map = map;
+    sc->k = k;
+    sc->pg = pg;
+    trn_select_cfg_default(&sc->cfg);
+    sc->rv.pos.x_cells = (float)n / 2.0f + 3.3f;
+    sc->rv.pos.y_cells = (float)n / 2.0f - 7.6f;
+    sc->rv.heading_rad = 0.4f;
+    sc->cap = trn_select_max_candidates(&sc->cfg, map->cfg.terrain.cell_m);
+    sc->wsb = trn_select_workspace_bytes(&sc->cfg, map, k);
+    sc->c = (trn_candidate_t *)malloc(sc->cap * sizeof *sc->c);
+    sc->ws = bs_alloc(sc->wsb);
+    if (sc->c == NULL || sc->ws == NULL || bs_time(run_select, sc, 1, repeats, 0.0, &t_s) != 0) {
+        return 1;
     }
-    /* the paper's defaults, as `trn field` runs them, on a 64 x 64 area */
-    {
-        bs_t t_fo, t_fn;
-        size_t wso, wsn;
-        int same = 0;
-        trn_select_cfg_default(&fc.scfg);
-        trn_field_cfg_default(&fc.fcfg);
-        fc.area.x0 = n / 2 - 32;
-        fc.area.y0 = n / 2 - 32;
-        fc.area.x1 = n / 2 + 31;
-        fc.area.y1 = n / 2 + 31;
-        fc.g.width = 64;
-        fc.g.height = 64;
-        fc.g.stride = 64;
-        if (field_pair(&fc, 1, 0.0, &t_fo, &t_fn, &wso, &wsn, &same) != 0) {
-            free(fc.ev);
-            free(fc.g.data);
-            free(fc.c);
-            free(fc.sws);
-            goto out;
-        }
-        r->fpaper_ms = t_fo.med;
-        r->fpaper_fast_ms = t_fn.med;
-        r->fpaper_evals = fc.st.evaluations;
-        r->fpaper_ws = wso;
-        r->fpaper_fast_ws = wsn;
-        snprintf(note, sizeof note, "1-10 m, 2 m patches, stride 2, coarse 16: %u evaluations of "
-                 "4096 cells (%.2f ms each); workspace %.2f MB", fc.st.evaluations,
-                 t_fo.med / fc.st.evaluations, (double)wso / 1048576.0);
-        bs_row(n, "field (paper): trn_field, 64x64 area", &t_fo, note);
-        snprintf(note, sizeof note, "same field: %s (%.2f ms each); workspace %.1f MB",
-                 same ? "yes" : "NO", t_fn.med / fc.st.evaluations, (double)wsn / 1048576.0);
-        bs_row(n, "field (paper): trn_field_fast, 64x64 area", &t_fn, note);
-        if (!same) {
-            r->wrong = 1;
-        }
-        bs_ratio("trn_field / trn_field_fast (paper defaults)", t_fo.med, t_fn.med,
-                 "(target >= 10x)");
+    sc->lwsb = trn_prob_local_workspace_bytes(k, &sc->res.roi);
+    sc->lws = bs_alloc(sc->lwsb);
+    sc->p.data = (float *)malloc(sizeof(float) * (size_t)(sc->res.roi.x1 - sc->res.roi.x0 + 1) *
+                                 (size_t)(sc->res.roi.y1 - sc->res.roi.y0 + 1) * map->dist.nz);
+    if (sc->lws == NULL || sc->p.data == NULL ||
+        bs_time(run_select_naive, sc, 0, repeats, 3.0, &t_sn) != 0) {
+        return 1;
+    }
+    same = sc->res.n_informative > 0 &&
+           (sc->naive_best_i == sc->res.best ||
+            fabs(sc->naive_best - sc->c[sc->res.best].uncertainty_m) <= 1e-6 * sc->naive_best);
+    snprintf(note, sizeof note, "%zu candidates (%zu informative), region %dx%d; best (%d, %d) "
+             "%.4f m", sc->res.n_candidates, sc->res.n_informative,
+             (int)(sc->res.roi.x1 - sc->res.roi.x0 + 1), (int)(sc->res.roi.y1 - sc->res.roi.y0 + 1),
+             sc->res.n_informative ? (int)sc->c[sc->res.best].x : -1,
+             sc->res.n_informative ? (int)sc->c[sc->res.best].y : -1,
+             sc->res.n_informative ? sc->c[sc->res.best].uncertainty_m : HUGE_VAL);
+    bs_row(n, "select: trn_select, all candidates", &t_s, note);
+    snprintf(note, sizeof note, "per-patch sums; same best: %s", same ? "yes" : "NO");
+    bs_row(n, "select: naive per-candidate sums", &t_sn, note);
+    if (!same) {
+        r->wrong = 1;
+    }
+    r->select_ms = t_s.med;
+    r->select_naive_ms = t_sn.med;
+    bs_ratio("naive / trn_select", t_sn.med, t_s.med, "(target: trn_select < 20 ms at 512)");
+    return 0;
+}
+
+/* The field, small reach, whole map: trn_field, brute force on a block and
+ * trn_field_fast; fc's buffers (allocated here) are the caller's to free.
+ * 0, or nonzero when the setup failed. */
+static int bench_field_whole(field_ctx_t *fc, const trn_kernels_t *k, const trn_map_t *map,
+                             const trn_vol_f32_t *pg, int32_t n, int repeats, bench_select_result_t *r)
+{
+    bs_t t_f, t_fb, t_ff;
+    size_t wso, wsn;
+    int same = 0;
+    char note[200];
+
+    fc->map = map;
+    fc->k = k;
+    fc->pg = pg;
+    trn_select_cfg_default(&fc->scfg);
+    fc->scfg.min_range_m = 0.5f;
+    fc->scfg.max_range_m = 2.0f;
+    fc->scfg.footprint_radius_m = 0.3f;
+    fc->scfg.patch_m = 0.9f;
+    fc->scfg.min_separation_m = 0.45f;
+    trn_field_cfg_default(&fc->fcfg);
+    fc->area.x0 = 0;
+    fc->area.y0 = 0;
+    fc->area.x1 = n - 1;
+    fc->area.y1 = n - 1;
+    fc->block.x0 = n / 2 - 16;
+    fc->block.y0 = n / 2 - 16;
+    fc->block.x1 = n / 2 + 15;
+    fc->block.y1 = n / 2 + 15;
+    fc->ev = (uint8_t *)malloc((size_t)n * n);
+    fc->g.data = (float *)malloc(sizeof(float) * (size_t)n * n);
+    fc->g.width = n;
+    fc->g.height = n;
+    fc->g.stride = n;
+    fc->cap = trn_select_max_candidates(&fc->scfg, map->cfg.terrain.cell_m);
+    fc->c = (trn_candidate_t *)malloc(fc->cap * sizeof *fc->c);
+    fc->swsb = trn_select_workspace_bytes(&fc->scfg, map, k);
+    fc->sws = bs_alloc(fc->swsb);
+    if (fc->ev == NULL || fc->g.data == NULL || fc->c == NULL || fc->sws == NULL ||
+        field_pair(fc, repeats < 3 ? repeats : 3, 20.0, &t_f, &t_ff, &wso, &wsn, &same) != 0 ||
+        bs_time(run_field_block, fc, 0, repeats < 3 ? repeats : 3, 10.0, &t_fb) != 0) {
+        return 1;
+    }
+    r->field_ms = t_f.med;
+    r->field_fast_ms = t_ff.med;
+    r->field_evals = fc->st.evaluations;
+    r->field_cells = fc->st.cells;
+    r->field_naive_est_ms = t_fb.med * (double)n * (double)n / (32.0 * 32.0);
+    snprintf(note, sizeof note, "reach 0.5-2 m, 0.9 m patches; %u evaluations of %u cells "
+             "(%.1fx fewer); min %.4f m at (%d, %d)", fc->st.evaluations, fc->st.cells,
+             (double)fc->st.cells / fc->st.evaluations, fc->st.best_m, (int)fc->st.best_x,
+             (int)fc->st.best_y);
+    bs_row(n, "field: trn_field, whole map", &t_f, note);
+    snprintf(note, sizeof note, "brute force on a 32x32 block: %.3f ms per position; whole map "
+             "estimated %.0f ms", t_fb.med / 1024.0, r->field_naive_est_ms);
+    bs_row(n, "field: brute force, 32x32 block", &t_fb, note);
+    snprintf(note, sizeof note, "same field as trn_field: %s; workspace %.1f MB (trn_field "
+             "%.2f MB)", same ? "yes" : "NO", (double)wsn / 1048576.0,
+             (double)wso / 1048576.0);
+    bs_row(n, "field: trn_field_fast (ground path), whole map", &t_ff, note);
+    if (!same) {
+        r->wrong = 1;
+    }
+    bs_ratio("brute force (estimated) / trn_field", r->field_naive_est_ms, t_f.med, NULL);
+    bs_ratio("trn_field / trn_field_fast", t_f.med, t_ff.med, NULL);
+    return 0;
+}
+
+/* The paper's defaults, as `trn field` runs them, on a 64 x 64 area (fc's
+ * buffers from bench_field_whole). 0, or nonzero when the setup failed. */
+static int bench_field_paper(field_ctx_t *fc, int32_t n, bench_select_result_t *r)
+{
+    bs_t t_fo, t_fn;
+    size_t wso, wsn;
+    int same = 0;
+    char note[200];
+
+    trn_select_cfg_default(&fc->scfg);
+    trn_field_cfg_default(&fc->fcfg);
+    fc->area.x0 = n / 2 - 32;
+    fc->area.y0 = n / 2 - 32;
+    fc->area.x1 = n / 2 + 31;
+    fc->area.y1 = n / 2 + 31;
+    fc->g.width = 64;
+    fc->g.height = 64;
+    fc->g.stride = 64;
+    if (field_pair(fc, 1, 0.0, &t_fo, &t_fn, &wso, &wsn, &same) != 0) {
+        return 1;
+    }
+    r->fpaper_ms = t_fo.med;
+    r->fpaper_fast_ms = t_fn.med;
+    r->fpaper_evals = fc->st.evaluations;
+    r->fpaper_ws = wso;
+    r->fpaper_fast_ws = wsn;
+    snprintf(note, sizeof note, "1-10 m, 2 m patches, stride 2, coarse 16: %u evaluations of "
+             "4096 cells (%.2f ms each); workspace %.2f MB", fc->st.evaluations,
+             t_fo.med / fc->st.evaluations, (double)wso / 1048576.0);
+    bs_row(n, "field (paper): trn_field, 64x64 area", &t_fo, note);
+    snprintf(note, sizeof note, "same field: %s (%.2f ms each); workspace %.1f MB",
+             same ? "yes" : "NO", t_fn.med / fc->st.evaluations, (double)wsn / 1048576.0);
+    bs_row(n, "field (paper): trn_field_fast, 64x64 area", &t_fn, note);
+    if (!same) {
+        r->wrong = 1;
+    }
+    bs_ratio("trn_field / trn_field_fast (paper defaults)", t_fo.med, t_fn.med,
+             "(target >= 10x)");
+    return 0;
+}
+
+int bench_select_run(const trn_map_t *map, int32_t n, int repeats, bench_select_result_t *r)
+{
+    static trn_kernels_t k;
+    pmap_ctx_t pc;
+    sel_ctx_t sc;
+    field_ctx_t fc;
+    uint8_t *kidx = NULL;
+    int rc = 3;
+
+    memset(r, 0, sizeof *r);
+    memset(&pc, 0, sizeof pc);
+    memset(&sc, 0, sizeof sc);
+    memset(&fc, 0, sizeof fc);
+    if (trn_kernels_build(&k, TRN_KERNEL_SIGMA0_DEFAULT_CELLS) != TRN_OK) {
+        return 3;
+    }
+    if (bench_pmap(&pc, &k, map, n, repeats, &kidx, r) == 0 && bench_sel(&sc, &k, map, &pc.pg, n, repeats, r) == 0 &&
+        bench_field_whole(&fc, &k, map, &pc.pg, n, repeats, r) == 0 && bench_field_paper(&fc, n, r) == 0) {
+        rc = 0;
+    }
+    if (rc != 0) {
+        fprintf(stderr, "trn_bench: landmark-selection benchmark setup failed\n");
     }
     free(fc.ev);
     free(fc.g.data);
     free(fc.c);
     free(fc.sws);
-    rc = 0;
-out:
-    if (rc != 0) {
-        fprintf(stderr, "trn_bench: landmark-selection benchmark setup failed\n");
-    }
     free(pc.pg.data);
     free(pc.ws);
     free(pc.naive);

@@ -783,34 +783,21 @@ static int bench_occupancy(world_t *w, const opts_t *o)
 }
 
 /* trn_chamfer3d against the streaming passes, Dijkstra and OpenCV. */
-static int bench_chamfer(world_t *w, const opts_t *o, size_result_t *r)
+/* The memory-bound references of the chamfer transform: two streaming
+ * passes (SIMD), the relaxation alone (the floor), a scalar scan. 0 or 3. */
+static int chamfer_refs(world_t *w, const opts_t *o, timing_t *t_rows, timing_t *t_floor, timing_t *t_scan)
 {
     const int32_t n = w->n;
-    chamfer_ctx_t cc;
     stream_ctx_t sc;
-    dijkstra_ctx_t dc;
-    timing_t t_scan = {0}, t_rows = {0}, t_dij = {0}, t_floor = {0};
-    char note[160];
-    int same;
-
-    cc.occ = &w->vocc;
-    cc.dist = &w->vdist;
-    cc.cap = w->cfg.cap;
-    if (time_fn(run_chamfer, &cc, 1, o->repeats, 0.0, &w->t_ch) != 0) {
-        return fail("trn_chamfer3d", trn_chamfer3d(cc.occ, cc.dist, cc.cap));
-    }
-    snprintf(note, sizeof note, "3-D 3-4-5, cap %u, %.2f ns/voxel", (unsigned)w->cfg.cap,
-             w->t_ch.med_ms * 1e6 / (double)w->nvox);
-    print_row(n, "chamfer: trn_chamfer3d (occ -> dist)", &w->t_ch, note);
 
     sc.occ = w->occ;
     sc.v = w->scratch;
     sc.n = w->nvox;
     sc.nx = (size_t)n;
     sc.cap = w->cfg.cap;
-    (void)time_fn(run_stream_rows, &sc, 1, o->repeats, 0.0, &t_rows);
+    (void)time_fn(run_stream_rows, &sc, 1, o->repeats, 0.0, t_rows);
     g_sink += sum_u8(w->scratch, w->nvox);
-    print_row(n, "chamfer: streaming 2 passes, SIMD (target ref)", &t_rows,
+    print_row(n, "chamfer: streaming 2 passes, SIMD (target ref)", t_rows,
               "v[i]=min(v[i],v[i-+nx]+1): memory-bound floor");
     {
         floor_ctx_t fc;
@@ -826,15 +813,25 @@ static int bench_chamfer(world_t *w, const opts_t *o, size_result_t *r)
         fc.nz = (size_t)w->nz;
         fc.cap = w->cfg.cap;
         fc.scratch = fscratch;
-        (void)time_fn(run_relax_floor, &fc, 1, o->repeats, 0.0, &t_floor);
+        (void)time_fn(run_relax_floor, &fc, 1, o->repeats, 0.0, t_floor);
         free(fscratch);
-        print_row(n, "chamfer: relaxation only, 2 passes (floor)", &t_floor,
+        print_row(n, "chamfer: relaxation only, 2 passes (floor)", t_floor,
                   "no in-row steps, wrong distances: timing only");
     }
-    (void)time_fn(run_stream_scan, &sc, 1, o->repeats, 0.0, &t_scan);
+    (void)time_fn(run_stream_scan, &sc, 1, o->repeats, 0.0, t_scan);
     g_sink += sum_u8(w->scratch, w->nvox);
-    print_row(n, "chamfer: streaming 2 passes, scalar scan (info)", &t_scan,
+    print_row(n, "chamfer: streaming 2 passes, scalar scan (info)", t_scan,
               "v[i]=min(v[i],v[i-+1]+1): latency-bound chain");
+    return 0;
+}
+
+/* The naive oracle (Dijkstra) against trn_chamfer3d's answer in w->dist. */
+static void chamfer_oracle(world_t *w, const opts_t *o, size_result_t *r, timing_t *t_dij)
+{
+    const int32_t n = w->n;
+    dijkstra_ctx_t dc;
+    char note[160];
+    int same;
 
     /* The naive oracle: slow, so no warm-up and a time budget. */
     dc.occ = w->occ;
@@ -843,16 +840,39 @@ static int bench_chamfer(world_t *w, const opts_t *o, size_result_t *r)
     dc.ny = (int)n;
     dc.nz = (int)w->nz;
     dc.cap = w->cfg.cap;
-    (void)time_fn(run_dijkstra, &dc, 0, o->repeats, NAIVE_BUDGET_S, &t_dij);
+    (void)time_fn(run_dijkstra, &dc, 0, o->repeats, NAIVE_BUDGET_S, t_dij);
     same = memcmp(w->scratch, w->dist, w->nvox) == 0;
     snprintf(note, sizeof note, "no warm-up%s; same answer: %s",
-             t_dij.reps < o->repeats ? ", stopped after " NAIVE_BUDGET_TXT : "",
+             t_dij->reps < o->repeats ? ", stopped after " NAIVE_BUDGET_TXT : "",
              same ? "yes" : "NO");
-    print_row(n, "chamfer: naive Dijkstra (ref_chamfer3d_dijkstra)", &t_dij, note);
+    print_row(n, "chamfer: naive Dijkstra (ref_chamfer3d_dijkstra)", t_dij, note);
     if (!same) {
         fprintf(stderr, "trn_bench: trn_chamfer3d differs from the Dijkstra oracle\n");
         r->wrong = 1;
     }
+}
+
+static int bench_chamfer(world_t *w, const opts_t *o, size_result_t *r)
+{
+    const int32_t n = w->n;
+    chamfer_ctx_t cc;
+    timing_t t_scan = {0}, t_rows = {0}, t_dij = {0}, t_floor = {0};
+    char note[160];
+
+    cc.occ = &w->vocc;
+    cc.dist = &w->vdist;
+    cc.cap = w->cfg.cap;
+    if (time_fn(run_chamfer, &cc, 1, o->repeats, 0.0, &w->t_ch) != 0) {
+        return fail("trn_chamfer3d", trn_chamfer3d(cc.occ, cc.dist, cc.cap));
+    }
+    snprintf(note, sizeof note, "3-D 3-4-5, cap %u, %.2f ns/voxel", (unsigned)w->cfg.cap,
+             w->t_ch.med_ms * 1e6 / (double)w->nvox);
+    print_row(n, "chamfer: trn_chamfer3d (occ -> dist)", &w->t_ch, note);
+
+    if (chamfer_refs(w, o, &t_rows, &t_floor, &t_scan) != 0) {
+        return 3;
+    }
+    chamfer_oracle(w, o, r, &t_dij);
 
 #ifdef TRN_HAVE_OPENCV
     {
@@ -1010,17 +1030,97 @@ static int bench_local(world_t *w, const opts_t *o)
 }
 
 /* Exhaustive vs branch-and-bound and one trn_localize_dem, window k. */
+/* Exhaustive search against branch-and-bound over the window of half-side
+ * W (entry k of k_windows); r->search_speedup[k]. 0 or 3. */
+static int window_search(world_t *w, const opts_t *o, int k, int32_t W, search_ctx_t *ex, search_ctx_t *bb,
+                         timing_t *t_ex, timing_t *t_bb, size_result_t *r)
+{
+    const int32_t n = w->n;
+    int same;
+    char name[64], note[160];
+
+    if (time_fn(run_exhaustive, ex, 1, o->repeats, 0.0, t_ex) != 0) {
+        fprintf(stderr, "trn_bench: trn_search_exhaustive failed\n");
+        return 3;
+    }
+    snprintf(note, sizeof note, "%llu poses scored (%dx%d window%s)",
+             (unsigned long long)ex->stats.poses_scored, (int)(2 * W + 1), (int)(2 * W + 1),
+             W < k_windows[k] ? ", clamped to fit the map" : "");
+    snprintf(name, sizeof name, "search +-%d: trn_search_exhaustive", (int)W);
+    print_row(n, name, t_ex, note);
+    if (time_fn(run_bb, bb, 1, o->repeats, 0.0, t_bb) != 0) {
+        fprintf(stderr, "trn_bench: trn_search_bb failed\n");
+        return 3;
+    }
+    same = ex->best.x == bb->best.x && ex->best.y == bb->best.y && ex->best.score == bb->best.score;
+    snprintf(note, sizeof note, "%llu poses scored, %llu blocks bounded; same answer: %s",
+             (unsigned long long)bb->stats.poses_scored,
+             (unsigned long long)bb->stats.blocks_bounded, same ? "yes" : "NO");
+    snprintf(name, sizeof name, "search +-%d: trn_search_bb", (int)W);
+    print_row(n, name, t_bb, note);
+    if (!same) {
+        fprintf(stderr,
+                "trn_bench: branch-and-bound (%d, %d, %lld) != exhaustive (%d, %d, %lld)\n",
+                (int)bb->best.x, (int)bb->best.y, (long long)bb->best.score, (int)ex->best.x,
+                (int)ex->best.y, (long long)ex->best.score);
+        r->wrong = 1;
+    }
+    r->search_speedup[k] = t_ex->med_ms / t_bb->med_ms;
+    return 0;
+}
+
+/* The parts of trn_localize_dem (lo, timed t_loc): the local map's
+ * high-pass and points, the best-pose search (t_bb), the second search for
+ * the competing hypothesis outside the exclusion zone and the fit's 8 extra
+ * scores. 0 or 3. */
+static int window_parts(world_t *w, const opts_t *o, const search_ctx_t *bb, const loc_ctx_t *lo,
+                        const timing_t *t_bb, const timing_t *t_loc)
+{
+    const int32_t n = w->n;
+    search_ctx_t sec, b9 = *bb;
+    trn_exclusion_t exz;
+    timing_t t_sec, t_s9;
+    char note[160];
+
+    /* its parts: the second search trn_localize_points runs (the competing
+     * hypothesis, outside the exclusion zone) and the fit's 8 extra scores */
+    sec = *bb;
+    exz.cx = lo->res.ix;
+    exz.cy = lo->res.iy;
+    exz.radius = lo->res.exclusion_cells;
+    sec.ex = &exz;
+    if (time_fn(run_bb, &sec, 1, o->repeats, 0.0, &t_sec) != 0 ||
+        time_fn(run_score9, &b9, 1, o->repeats, 0.0, &t_s9) != 0) {
+        fprintf(stderr, "trn_bench: localization parts failed\n");
+        return 3;
+    }
+    snprintf(note, sizeof note, "%.0f %%", 100.0 * w->t_lhp.med_ms / t_loc->med_ms);
+    print_row(n, "localize:   trn_highpass (64x64 local)", &w->t_lhp, note);
+    snprintf(note, sizeof note, "%.0f %%", 100.0 * w->t_pts.med_ms / t_loc->med_ms);
+    print_row(n, "localize:   trn_occupancy_points", &w->t_pts, note);
+    snprintf(note, sizeof note, "%.0f %% (search row above)", 100.0 * t_bb->med_ms / t_loc->med_ms);
+    print_row(n, "localize:   trn_search_bb, best pose", t_bb, note);
+    snprintf(note, sizeof note,
+             "%.0f %%; exclusion radius %d, %llu poses scored, %llu blocks bounded",
+             100.0 * t_sec.med_ms / t_loc->med_ms, (int)exz.radius,
+             (unsigned long long)sec.stats.poses_scored,
+             (unsigned long long)sec.stats.blocks_bounded);
+    print_row(n, "localize:   trn_search_bb, second peak", &t_sec, note);
+    snprintf(note, sizeof note, "%.0f %%", 100.0 * t_s9.med_ms / t_loc->med_ms);
+    print_row(n, "localize:   8 x trn_score_pose (eq. 6 fit)", &t_s9, note);
+    return 0;
+}
+
 static int bench_window(world_t *w, const opts_t *o, int k, size_result_t *r)
 {
     const int32_t n = w->n, half = LOCAL_CELLS / 2;
     const int32_t W = k_windows[k] < w->wfit ? k_windows[k] : w->wfit;
     trn_window_t win;
-    search_ctx_t ex, bb, sec;
-    trn_exclusion_t exz;
+    search_ctx_t ex, bb;
     loc_ctx_t lo;
-    timing_t t_ex, t_bb, t_loc, t_sec, t_s9;
+    timing_t t_ex, t_bb, t_loc;
     size_t wb, lwb;
-    int same, loc_same;
+    int loc_same;
     char name[64], note[160];
 
     r->win[k] = W;
@@ -1049,33 +1149,9 @@ static int bench_window(world_t *w, const opts_t *o, int k, size_result_t *r)
     bb.wsb = wb;
 
     printf("\n");
-    if (time_fn(run_exhaustive, &ex, 1, o->repeats, 0.0, &t_ex) != 0) {
-        fprintf(stderr, "trn_bench: trn_search_exhaustive failed\n");
+    if (window_search(w, o, k, W, &ex, &bb, &t_ex, &t_bb, r) != 0) {
         return 3;
     }
-    snprintf(note, sizeof note, "%llu poses scored (%dx%d window%s)",
-             (unsigned long long)ex.stats.poses_scored, (int)(2 * W + 1), (int)(2 * W + 1),
-             W < k_windows[k] ? ", clamped to fit the map" : "");
-    snprintf(name, sizeof name, "search +-%d: trn_search_exhaustive", (int)W);
-    print_row(n, name, &t_ex, note);
-    if (time_fn(run_bb, &bb, 1, o->repeats, 0.0, &t_bb) != 0) {
-        fprintf(stderr, "trn_bench: trn_search_bb failed\n");
-        return 3;
-    }
-    same = ex.best.x == bb.best.x && ex.best.y == bb.best.y && ex.best.score == bb.best.score;
-    snprintf(note, sizeof note, "%llu poses scored, %llu blocks bounded; same answer: %s",
-             (unsigned long long)bb.stats.poses_scored,
-             (unsigned long long)bb.stats.blocks_bounded, same ? "yes" : "NO");
-    snprintf(name, sizeof name, "search +-%d: trn_search_bb", (int)W);
-    print_row(n, name, &t_bb, note);
-    if (!same) {
-        fprintf(stderr,
-                "trn_bench: branch-and-bound (%d, %d, %lld) != exhaustive (%d, %d, %lld)\n",
-                (int)bb.best.x, (int)bb.best.y, (long long)bb.best.score, (int)ex.best.x,
-                (int)ex.best.y, (long long)ex.best.score);
-        r->wrong = 1;
-    }
-    r->search_speedup[k] = t_ex.med_ms / t_bb.med_ms;
 
     /* the whole localization: the same points are made inside it */
     lo.map = &w->mc.map;
@@ -1102,32 +1178,9 @@ static int bench_window(world_t *w, const opts_t *o, int k, size_result_t *r)
         r->wrong = 1;
     }
 
-    /* its parts: the second search trn_localize_points runs (the competing
-     * hypothesis, outside the exclusion zone) and the fit's 8 extra scores */
-    sec = bb;
-    exz.cx = lo.res.ix;
-    exz.cy = lo.res.iy;
-    exz.radius = lo.res.exclusion_cells;
-    sec.ex = &exz;
-    if (time_fn(run_bb, &sec, 1, o->repeats, 0.0, &t_sec) != 0 ||
-        time_fn(run_score9, &bb, 1, o->repeats, 0.0, &t_s9) != 0) {
-        fprintf(stderr, "trn_bench: localization parts failed\n");
+    if (window_parts(w, o, &bb, &lo, &t_bb, &t_loc) != 0) {
         return 3;
     }
-    snprintf(note, sizeof note, "%.0f %%", 100.0 * w->t_lhp.med_ms / t_loc.med_ms);
-    print_row(n, "localize:   trn_highpass (64x64 local)", &w->t_lhp, note);
-    snprintf(note, sizeof note, "%.0f %%", 100.0 * w->t_pts.med_ms / t_loc.med_ms);
-    print_row(n, "localize:   trn_occupancy_points", &w->t_pts, note);
-    snprintf(note, sizeof note, "%.0f %% (search row above)", 100.0 * t_bb.med_ms / t_loc.med_ms);
-    print_row(n, "localize:   trn_search_bb, best pose", &t_bb, note);
-    snprintf(note, sizeof note,
-             "%.0f %%; exclusion radius %d, %llu poses scored, %llu blocks bounded",
-             100.0 * t_sec.med_ms / t_loc.med_ms, (int)exz.radius,
-             (unsigned long long)sec.stats.poses_scored,
-             (unsigned long long)sec.stats.blocks_bounded);
-    print_row(n, "localize:   trn_search_bb, second peak", &t_sec, note);
-    snprintf(note, sizeof note, "%.0f %%", 100.0 * t_s9.med_ms / t_loc.med_ms);
-    print_row(n, "localize:   8 x trn_score_pose (eq. 6 fit)", &t_s9, note);
     snprintf(name, sizeof name, "exhaustive / branch-and-bound, +-%d", (int)W);
     print_ratio(name, &t_ex, &t_bb, "(target >= 10)");
     return 0;

@@ -394,6 +394,109 @@ static int read_trigger(const char *path)
     return c == '1' ? 1 : (c == '0' ? 0 : -1);
 }
 
+/* The mast's status every SIM_STATUS_MS and both nodes' heartbeats every
+ * SIM_HB_MS (el: ms since the start). */
+static void send_periodic(const sim_cfg_t *cfg, sim_state_t *s, trn_lcan_t *can, uint32_t el,
+                          uint32_t *next_status, uint32_t *next_hb)
+{
+    trn_can_frame_t pf;
+    if (el >= *next_status) {
+        trn_mast_status_t ms = make_status(cfg, s);
+        s->last_status = ms;
+        if (!s->off_bus && trn_can_mast_status_encode(&ms, &pf) == TRN_OK && send_proto(can, s, &pf)) {
+            ++s->status_counter;
+        }
+        *next_status += SIM_STATUS_MS;
+    }
+    if (el >= *next_hb) {
+        trn_heartbeat_t hb;
+        hb.state = (uint8_t)((s->faults & (uint8_t)~TRN_MAST_FLT_CMD_INVALID) != 0u ? TRN_NODE_FAULT
+                             : s->moving ? TRN_NODE_BUSY : TRN_NODE_READY);
+        hb.counter = s->mast_hb_counter;
+        hb.uptime_s = (uint16_t)(el / 1000u);
+        if (!s->off_bus && trn_can_heartbeat_encode(TRN_CAN_ID_MAST_HB, &hb, &pf) == TRN_OK &&
+            send_proto(can, s, &pf)) {
+            ++s->mast_hb_counter;
+        }
+        hb.state = (uint8_t)(s->sending ? TRN_NODE_BUSY : TRN_NODE_READY);
+        hb.counter = s->stereo_hb_counter;
+        if (!s->off_bus && trn_can_heartbeat_encode(TRN_CAN_ID_STEREO_HB, &hb, &pf) == TRN_OK &&
+            send_proto(can, s, &pf)) {
+            ++s->stereo_hb_counter;
+        }
+        *next_hb += SIM_HB_MS;
+    }
+}
+
+/* The trigger line: a rising edge latches the mast's pose for the capture. */
+static void poll_trigger(const sim_cfg_t *cfg, sim_state_t *s, uint32_t now_ms, sim_stats_t *stats)
+{
+    int v = read_trigger(cfg->trigger_path);
+    if (v == 1 && s->trig_level == 0) {
+        ++stats->triggers;
+        s->trig_pending = 1;
+        s->trig_status = make_status(cfg, s);
+        s->trig_ms = now_ms;
+        s->trig_pan = s->pan;
+        s->trig_tilt = s->tilt;
+    }
+    if (v >= 0) {
+        s->trig_level = v;
+    }
+}
+
+/* One received frame: a mast command, a capture command or a flow control. */
+static void on_frame(const sim_cfg_t *cfg, sim_state_t *s, trn_lcan_t *can, const trn_lcan_frame_t *f,
+                     uint32_t now_ms, sim_stats_t *stats)
+{
+    trn_can_frame_t pf;
+    memset(&pf, 0, sizeof pf);
+    pf.id = f->id;
+    pf.dlc = f->len;
+    pf.flags = f->extended ? TRN_CAN_FLAG_EXT : 0u;
+    memcpy(pf.data, f->data, 8u);
+    if (s->off_bus) {
+        return;
+    }
+    switch (trn_can_classify(&pf)) {
+    case TRN_CAN_MSG_MAST_CMD: {
+        trn_mast_cmd_t m;
+        if (trn_can_mast_cmd_decode(&pf, &m) == TRN_OK) {
+            on_mast_cmd(cfg, s, &m, now_ms, stats);
+        } else {
+            s->faults |= TRN_MAST_FLT_CMD_INVALID;
+        }
+        break;
+    }
+    case TRN_CAN_MSG_CAPTURE_CMD: {
+        trn_capture_cmd_t m;
+        if (trn_can_capture_cmd_decode(&pf, &m) == TRN_OK) {
+            on_capture_cmd(cfg, s, &m, can, now_ms, stats);
+        }
+        break;
+    }
+    case TRN_CAN_MSG_CAPTURE_FC: {
+        trn_isotp_tx_result_t res;
+        ++stats->fc_received;
+        if (trn_isotp_tx_fc(&s->tx, pf.data, pf.dlc, (uint32_t)now_us64(), &res) != TRN_OK &&
+            (res.events & TRN_ISOTP_TX_EV_ERROR) && res.error != TRN_ISOTP_TX_ERR_UNEXPECTED_FC) {
+            s->sending = 0;
+            ++stats->tx_errors;
+        }
+        break;
+    }
+    default:
+        break;
+    }
+}
+
+static int sim_cfg_ok(const sim_cfg_t *cfg)
+{
+    return !(cfg->dem.heights == NULL || trn_mast_geom_check(&cfg->geom) != TRN_OK || !(cfg->rate_rad_s > 0.0f) ||
+             !(cfg->tol_rad > 0.0f) || cfg->seg_payload == 0u || cfg->seg_payload > TRN_CAP_SEG_PAYLOAD_MAX ||
+             (size_t)cfg->cam.cols * (size_t)cfg->cam.rows > SIM_RENDER_MAX || cfg->fault >= SIM_FAULT_COUNT);
+}
+
 trn_status_t sim_run(const sim_cfg_t *cfg, const volatile sig_atomic_t *stop, sim_stats_t *stats)
 {
     static sim_state_t s;
@@ -414,9 +517,7 @@ trn_status_t sim_run(const sim_cfg_t *cfg, const volatile sig_atomic_t *stop, si
         stats = &local;
     }
     memset(stats, 0, sizeof *stats);
-    if (cfg->dem.heights == NULL || trn_mast_geom_check(&cfg->geom) != TRN_OK || !(cfg->rate_rad_s > 0.0f) ||
-        !(cfg->tol_rad > 0.0f) || cfg->seg_payload == 0u || cfg->seg_payload > TRN_CAP_SEG_PAYLOAD_MAX ||
-        (size_t)cfg->cam.cols * (size_t)cfg->cam.rows > SIM_RENDER_MAX || cfg->fault >= SIM_FAULT_COUNT) {
+    if (!sim_cfg_ok(cfg)) {
         return TRN_E_ARG;
     }
     memset(&s, 0, sizeof s);
@@ -442,7 +543,6 @@ trn_status_t sim_run(const sim_cfg_t *cfg, const volatile sig_atomic_t *stop, si
         uint64_t t = now_us64();
         uint32_t el = (uint32_t)((t - t0) / 1000u), now_ms = (uint32_t)(t / 1000u);
         trn_lcan_frame_t f;
-        trn_can_frame_t pf;
         int32_t wait;
         int again;
         if ((stop != NULL && *stop) || (cfg->run_ms > 0u && el >= cfg->run_ms)) {
@@ -453,45 +553,9 @@ trn_status_t sim_run(const sim_cfg_t *cfg, const volatile sig_atomic_t *stop, si
         }
         slew(cfg, &s, (float)(t - t_prev) * 1e-6f, now_ms);
         t_prev = t;
-        if (el >= next_status) {
-            trn_mast_status_t ms = make_status(cfg, &s);
-            s.last_status = ms;
-            if (!s.off_bus && trn_can_mast_status_encode(&ms, &pf) == TRN_OK && send_proto(&can, &s, &pf)) {
-                ++s.status_counter;
-            }
-            next_status += SIM_STATUS_MS;
-        }
-        if (el >= next_hb) {
-            trn_heartbeat_t hb;
-            hb.state = (uint8_t)((s.faults & (uint8_t)~TRN_MAST_FLT_CMD_INVALID) != 0u ? TRN_NODE_FAULT
-                                 : s.moving ? TRN_NODE_BUSY : TRN_NODE_READY);
-            hb.counter = s.mast_hb_counter;
-            hb.uptime_s = (uint16_t)(el / 1000u);
-            if (!s.off_bus && trn_can_heartbeat_encode(TRN_CAN_ID_MAST_HB, &hb, &pf) == TRN_OK &&
-                send_proto(&can, &s, &pf)) {
-                ++s.mast_hb_counter;
-            }
-            hb.state = (uint8_t)(s.sending ? TRN_NODE_BUSY : TRN_NODE_READY);
-            hb.counter = s.stereo_hb_counter;
-            if (!s.off_bus && trn_can_heartbeat_encode(TRN_CAN_ID_STEREO_HB, &hb, &pf) == TRN_OK &&
-                send_proto(&can, &s, &pf)) {
-                ++s.stereo_hb_counter;
-            }
-            next_hb += SIM_HB_MS;
-        }
+        send_periodic(cfg, &s, &can, el, &next_status, &next_hb);
         if (cfg->trigger_path != NULL) {
-            int v = read_trigger(cfg->trigger_path);
-            if (v == 1 && s.trig_level == 0) {
-                ++stats->triggers;
-                s.trig_pending = 1;
-                s.trig_status = make_status(cfg, &s);
-                s.trig_ms = now_ms;
-                s.trig_pan = s.pan;
-                s.trig_tilt = s.tilt;
-            }
-            if (v >= 0) {
-                s.trig_level = v;
-            }
+            poll_trigger(cfg, &s, now_ms, stats);
         }
         if (s.rendering) {
             render_step(cfg, &s, &rng, stats);
@@ -503,46 +567,8 @@ trn_status_t sim_run(const sim_cfg_t *cfg, const volatile sig_atomic_t *stop, si
             wait = nd > el ? (int32_t)(nd - el) : 0;
         }
         st = trn_lcan_recv(&can, &f, wait);
-        if (st != TRN_OK) {
-            continue;
-        }
-        memset(&pf, 0, sizeof pf);
-        pf.id = f.id;
-        pf.dlc = f.len;
-        pf.flags = f.extended ? TRN_CAN_FLAG_EXT : 0u;
-        memcpy(pf.data, f.data, 8u);
-        if (s.off_bus) {
-            continue;
-        }
-        switch (trn_can_classify(&pf)) {
-        case TRN_CAN_MSG_MAST_CMD: {
-            trn_mast_cmd_t m;
-            if (trn_can_mast_cmd_decode(&pf, &m) == TRN_OK) {
-                on_mast_cmd(cfg, &s, &m, now_ms, stats);
-            } else {
-                s.faults |= TRN_MAST_FLT_CMD_INVALID;
-            }
-            break;
-        }
-        case TRN_CAN_MSG_CAPTURE_CMD: {
-            trn_capture_cmd_t m;
-            if (trn_can_capture_cmd_decode(&pf, &m) == TRN_OK) {
-                on_capture_cmd(cfg, &s, &m, &can, now_ms, stats);
-            }
-            break;
-        }
-        case TRN_CAN_MSG_CAPTURE_FC: {
-            trn_isotp_tx_result_t res;
-            ++stats->fc_received;
-            if (trn_isotp_tx_fc(&s.tx, pf.data, pf.dlc, (uint32_t)now_us64(), &res) != TRN_OK &&
-                (res.events & TRN_ISOTP_TX_EV_ERROR) && res.error != TRN_ISOTP_TX_ERR_UNEXPECTED_FC) {
-                s.sending = 0;
-                ++stats->tx_errors;
-            }
-            break;
-        }
-        default:
-            break;
+        if (st == TRN_OK) {
+            on_frame(cfg, &s, &can, &f, now_ms, stats);
         }
     }
     (void)trn_lcan_close(&can);

@@ -81,6 +81,72 @@ trn_status_t sim_dem_height(const sim_dem_t *dem, float x_m, float y_m, float *h
     return TRN_OK;
 }
 
+/* The camera and its pose usable (finite, within the limits). */
+static int camera_ok(const sim_camera_t *cam, const trn_rigid_t *cam_to_map)
+{
+    int32_t k;
+    if (!finite_f(cam->hfov_rad) || !finite_f(cam->vfov_rad) || cam->hfov_rad <= 0.0f ||
+        cam->hfov_rad >= 3.0f || cam->vfov_rad <= 0.0f || cam->vfov_rad >= 3.0f || cam->cols < 1 ||
+        cam->rows < 1 || cam->cols > SIM_MAX_RAYS_SIDE || cam->rows > SIM_MAX_RAYS_SIDE ||
+        !finite_f(cam->min_range_m) || !finite_f(cam->max_range_m) || cam->min_range_m < 0.0f ||
+        cam->max_range_m <= cam->min_range_m || !finite_f(cam->noise_k_per_m) ||
+        cam->noise_k_per_m < 0.0f) {
+        return 0;
+    }
+    for (k = 0; k < 9; ++k) {
+        if (!finite_f(cam_to_map->r[k])) {
+            return 0;
+        }
+    }
+    return finite_f(cam_to_map->t.x) && finite_f(cam_to_map->t.y) && finite_f(cam_to_map->t.z);
+}
+
+/* March the ray of map direction dm from the camera in nsteps steps of step
+ * metres, then bisect: the range of its first hit in *range. 0: no hit (it
+ * starts off the DEM or under the ground, leaves the DEM, or reaches the
+ * maximum range). */
+static int cast_ray(const sim_dem_t *dem, const sim_camera_t *cam, const trn_rigid_t *cam_to_map,
+                    const double dm[3], int32_t nsteps, double step, double *range)
+{
+    double r0, r1, h = 0.0;
+    int found = 0, s;
+    /* march: above the surface at r0, first sample at or below at r1 */
+    r0 = (double)cam->min_range_m;
+    if (!dem_h(dem, (double)cam_to_map->t.x + r0 * dm[0], (double)cam_to_map->t.y + r0 * dm[1], &h) ||
+        (double)cam_to_map->t.z + r0 * dm[2] <= h) {
+        return 0; /* starts off the DEM or under the ground */
+    }
+    r1 = r0;
+    for (s = 1; s <= nsteps; ++s) {
+        r1 = (double)cam->min_range_m + step * (double)s;
+        if (r1 > (double)cam->max_range_m) {
+            r1 = (double)cam->max_range_m;
+        }
+        if (!dem_h(dem, (double)cam_to_map->t.x + r1 * dm[0], (double)cam_to_map->t.y + r1 * dm[1], &h)) {
+            break; /* left the DEM */
+        }
+        if ((double)cam_to_map->t.z + r1 * dm[2] <= h) {
+            found = 1;
+            break;
+        }
+        r0 = r1;
+    }
+    if (!found) {
+        return 0;
+    }
+    for (s = 0; s < SIM_BISECTIONS; ++s) {
+        double rm = 0.5 * (r0 + r1);
+        (void)dem_h(dem, (double)cam_to_map->t.x + rm * dm[0], (double)cam_to_map->t.y + rm * dm[1], &h);
+        if ((double)cam_to_map->t.z + rm * dm[2] <= h) {
+            r1 = rm;
+        } else {
+            r0 = rm;
+        }
+    }
+    *range = 0.5 * (r0 + r1);
+    return 1;
+}
+
 trn_status_t sim_render_rows(const sim_dem_t *dem, const sim_camera_t *cam, const trn_rigid_t *cam_to_map,
                              sim_rng_t *rng, int32_t row0, int32_t row1, trn_vec3f_t *out, size_t capacity,
                              size_t *n)
@@ -94,20 +160,7 @@ trn_status_t sim_render_rows(const sim_dem_t *dem, const sim_camera_t *cam, cons
         return TRN_E_NULL;
     }
     cnt = *n;
-    if (!dem_ok(dem) || !finite_f(cam->hfov_rad) || !finite_f(cam->vfov_rad) || cam->hfov_rad <= 0.0f ||
-        cam->hfov_rad >= 3.0f || cam->vfov_rad <= 0.0f || cam->vfov_rad >= 3.0f || cam->cols < 1 ||
-        cam->rows < 1 || cam->cols > SIM_MAX_RAYS_SIDE || cam->rows > SIM_MAX_RAYS_SIDE ||
-        !finite_f(cam->min_range_m) || !finite_f(cam->max_range_m) || cam->min_range_m < 0.0f ||
-        cam->max_range_m <= cam->min_range_m || !finite_f(cam->noise_k_per_m) ||
-        cam->noise_k_per_m < 0.0f) {
-        return TRN_E_ARG;
-    }
-    for (k = 0; k < 9; ++k) {
-        if (!finite_f(cam_to_map->r[k])) {
-            return TRN_E_ARG;
-        }
-    }
-    if (!finite_f(cam_to_map->t.x) || !finite_f(cam_to_map->t.y) || !finite_f(cam_to_map->t.z)) {
+    if (!dem_ok(dem) || !camera_ok(cam, cam_to_map)) {
         return TRN_E_ARG;
     }
     if (row0 < 0 || row1 < row0 || row1 > cam->rows || cnt > capacity) {
@@ -123,8 +176,7 @@ trn_status_t sim_render_rows(const sim_dem_t *dem, const sim_camera_t *cam, cons
     R = cam_to_map->r;
     for (j = row0; j < row1; ++j) {
         for (i = 0; i < cam->cols; ++i) {
-            double dc[3], dm[3], norm, r0, r1, rr, h = 0.0;
-            int found = 0, s;
+            double dc[3], dm[3], norm, rr = 0.0;
             dc[0] = tx * (2.0 * ((double)i + 0.5) / (double)cam->cols - 1.0);
             dc[1] = ty * (2.0 * ((double)j + 0.5) / (double)cam->rows - 1.0);
             dc[2] = 1.0;
@@ -136,40 +188,9 @@ trn_status_t sim_render_rows(const sim_dem_t *dem, const sim_camera_t *cam, cons
                 const size_t row = (size_t)3 * (size_t)k;
                 dm[k] = (double)R[row] * dc[0] + (double)R[row + 1u] * dc[1] + (double)R[row + 2u] * dc[2];
             }
-            /* march: above the surface at r0, first sample at or below at r1 */
-            r0 = (double)cam->min_range_m;
-            if (!dem_h(dem, (double)cam_to_map->t.x + r0 * dm[0], (double)cam_to_map->t.y + r0 * dm[1], &h) ||
-                (double)cam_to_map->t.z + r0 * dm[2] <= h) {
-                continue; /* starts off the DEM or under the ground */
-            }
-            r1 = r0;
-            for (s = 1; s <= nsteps; ++s) {
-                r1 = (double)cam->min_range_m + step * (double)s;
-                if (r1 > (double)cam->max_range_m) {
-                    r1 = (double)cam->max_range_m;
-                }
-                if (!dem_h(dem, (double)cam_to_map->t.x + r1 * dm[0], (double)cam_to_map->t.y + r1 * dm[1], &h)) {
-                    break; /* left the DEM */
-                }
-                if ((double)cam_to_map->t.z + r1 * dm[2] <= h) {
-                    found = 1;
-                    break;
-                }
-                r0 = r1;
-            }
-            if (!found) {
+            if (!cast_ray(dem, cam, cam_to_map, dm, nsteps, step, &rr)) {
                 continue;
             }
-            for (s = 0; s < SIM_BISECTIONS; ++s) {
-                double rm = 0.5 * (r0 + r1);
-                (void)dem_h(dem, (double)cam_to_map->t.x + rm * dm[0], (double)cam_to_map->t.y + rm * dm[1], &h);
-                if ((double)cam_to_map->t.z + rm * dm[2] <= h) {
-                    r1 = rm;
-                } else {
-                    r0 = rm;
-                }
-            }
-            rr = 0.5 * (r0 + r1);
             if (cam->noise_k_per_m > 0.0f) {
                 rr += (double)cam->noise_k_per_m * rr * rr * sim_rng_normal(rng);
             }

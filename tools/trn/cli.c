@@ -553,3 +553,24 @@ void progress_end(progress_t *p) {
   fputc('\n', stderr);
   fflush(stderr);
 }
+
+void progress_lazy_init(progress_lazy_t *p, const char *label) {
+  p->label = label;
+  p->begun = 0;
+}
+
+void progress_lazy_update(void *ctx, long done, long total) {
+  progress_lazy_t *p = ctx;
+  if (!p->begun) {
+    progress_begin(&p->bar, p->label, total);
+    p->begun = 1;
+  }
+  p->bar.total = total > 0 ? total : 1;
+  progress_update(&p->bar, done);
+}
+
+void progress_lazy_end(progress_lazy_t *p) {
+  if (p->begun) {
+    progress_end(&p->bar);
+  }
+}

@@ -129,4 +129,19 @@ void progress_begin(progress_t *p, const char *label, long total);
 void progress_update(progress_t *p, long done);
 void progress_end(progress_t *p);
 
+/* A bar begun on its first update: the progress callback handed to a
+ * command's run (cmd_run.h), so nothing is drawn when the run fails before
+ * its work starts. progress_lazy_update(ctx = progress_lazy_t *, done, total)
+ * begins it with label and total, then updates; progress_lazy_end ends it if
+ * it was begun. */
+typedef struct {
+  progress_t bar;
+  const char *label;
+  int begun;
+} progress_lazy_t;
+
+void progress_lazy_init(progress_lazy_t *p, const char *label);
+void progress_lazy_update(void *ctx, long done, long total);
+void progress_lazy_end(progress_lazy_t *p);
+
 #endif /* TRN_CLI_H */

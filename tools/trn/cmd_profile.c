@@ -297,17 +297,14 @@ static void stage_bytes(const world_t *w, stage_t s, size_t *scratch, size_t *to
   *total = sc + out;
 }
 
-static int world_init(world_t *w, char *err, size_t err_len) {
+/* The terrain, the rover's local map in its own grid, and the pose window. */
+static int world_terrain(world_t *w, char *err, size_t err_len) {
   const double cell = 0.1;
   synth_terrain_t t;
   synth_rock_t *rocks;
-  size_t nrocks, cells;
-  trn_status_t st;
-  double cx, cy;
+  size_t nrocks, cells = (size_t)w->n * (size_t)w->n;
   int32_t px, py, half;
 
-  trn_map_cfg_default(&w->cfg);
-  cells = (size_t)w->n * (size_t)w->n;
   /* The main job's rock field (tools/trn_demo.c): 15 % cover, radii 5-30 cm. */
   nrocks = (size_t)((double)w->n * (double)w->n * cell * cell * 0.15 / (PI * 0.15 * 0.15));
   rocks = malloc(sizeof *rocks * (nrocks + 1));
@@ -341,8 +338,14 @@ static int world_init(world_t *w, char *err, size_t err_len) {
   w->win.y0 = py - (int32_t)w->win_cells;
   w->win.x1 = px + (int32_t)w->win_cells;
   w->win.y1 = py + (int32_t)w->win_cells;
+  return 0;
+}
 
-  /* highpass_occupancy + chamfer buffers */
+/* highpass_occupancy + chamfer buffers, and the map. */
+static int world_map(world_t *w, char *err, size_t err_len) {
+  size_t cells = (size_t)w->n * (size_t)w->n;
+  trn_status_t st;
+
   w->hp_ws_bytes = trn_highpass_workspace_bytes((int32_t)w->n, (int32_t)w->n);
   w->hp_ws = alloc16(w->hp_ws_bytes);
   w->hp_data = alloc16(cells * sizeof(float));
@@ -360,7 +363,6 @@ static int world_init(world_t *w, char *err, size_t err_len) {
     snprintf(err, err_len, "volume sizes rejected by the core");
     return 1;
   }
-  /* the map */
   w->map_bytes = trn_map_bytes(&w->cfg, (int32_t)w->n, (int32_t)w->n);
   w->mapbuf = alloc16(w->map_bytes);
   if (w->map_bytes == 0 || w->mapbuf == NULL) {
@@ -371,15 +373,20 @@ static int world_init(world_t *w, char *err, size_t err_len) {
     snprintf(err, err_len, "map build failed: %s", trn_strerror(st));
     return 1;
   }
-  /* probability map */
+  return 0;
+}
+
+/* The kernels, the probability map's buffers and the selection's. */
+static int world_select(world_t *w, char *err, size_t err_len) {
+  size_t cells = (size_t)w->n * (size_t)w->n;
+  trn_status_t st;
+
   if ((st = trn_kernels_build(&w->k, TRN_KERNEL_SIGMA0_DEFAULT_CELLS)) != TRN_OK) {
     snprintf(err, err_len, "kernels: %s", trn_strerror(st));
     return 1;
   }
-  cx = (double)w->n / 2.0;
-  cy = (double)w->n / 2.0;
-  w->sensor.x_cells = (float)cx;
-  w->sensor.y_cells = (float)cy;
+  w->sensor.x_cells = (float)((double)w->n / 2.0);
+  w->sensor.y_cells = (float)((double)w->n / 2.0);
   w->pg_data = alloc16(cells * (size_t)w->cfg.terrain.nz * sizeof(float));
   w->pg_ws_bytes = trn_prob_global_workspace_bytes((int32_t)w->n, (int32_t)w->n);
   w->pg_ws = alloc16(w->pg_ws_bytes);
@@ -391,7 +398,6 @@ static int world_init(world_t *w, char *err, size_t err_len) {
   w->pg.nx = (int32_t)w->n;
   w->pg.ny = (int32_t)w->n;
   w->pg.nz = w->cfg.terrain.nz;
-  /* select */
   trn_select_cfg_default(&w->scfg);
   w->scfg.max_range_m = (float)w->max_range_m;
   if (w->scfg.min_range_m > w->scfg.max_range_m) {
@@ -413,7 +419,11 @@ static int world_init(world_t *w, char *err, size_t err_len) {
     snprintf(err, err_len, "cannot allocate the selection workspace (%zu bytes)", w->sel_ws_bytes);
     return 1;
   }
-  /* local map, search, localize */
+  return 0;
+}
+
+/* The local map's buffers, the search's and the localization's workspaces. */
+static int world_local(world_t *w, char *err, size_t err_len) {
   w->lhp_ws_bytes = trn_highpass_workspace_bytes((int32_t)w->nl, (int32_t)w->nl);
   w->lhp_ws = alloc16(w->lhp_ws_bytes);
   w->lhp_data = alloc16((size_t)w->nl * (size_t)w->nl * sizeof(float));
@@ -432,6 +442,15 @@ static int world_init(world_t *w, char *err, size_t err_len) {
   w->loc_ws = alloc16(w->loc_ws_bytes);
   if (w->bb_ws_bytes == 0 || w->bb_ws == NULL || w->loc_ws_bytes == 0 || w->loc_ws == NULL) {
     snprintf(err, err_len, "cannot size or allocate the search workspace");
+    return 1;
+  }
+  return 0;
+}
+
+static int world_init(world_t *w, char *err, size_t err_len) {
+  trn_map_cfg_default(&w->cfg);
+  if (world_terrain(w, err, err_len) != 0 || world_map(w, err, err_len) != 0 ||
+      world_select(w, err, err_len) != 0 || world_local(w, err, err_len) != 0) {
     return 1;
   }
   return 0;
@@ -523,52 +542,33 @@ static int read_dump(const char *path, char *name, size_t name_len, unsigned lon
   return have_name && have_total;
 }
 
-/* Run ourselves under callgrind and fill ir[] per stage. */
-static int count_instructions(int argc, char **argv, unsigned long long *ir, int *have, char *err,
-                              size_t err_len) {
-  char dir[] = "/tmp/trn-profile-cg.XXXXXX";
-  char out[600], logp[600], exe[4096];
+/* Run `valgrind --tool=callgrind ... exe argv` with stdout to /dev/null,
+ * stderr to logp and the dumps to out; wait for it. 0, or 1 with the reason. */
+static int spawn_callgrind(const char *exe, int argc, char **argv, const char *out, const char *logp, char *err,
+                           size_t err_len) {
+  char a0[] = "valgrind", a1[] = "--tool=callgrind", a2[] = "--collect-atstart=no", a3[] = "-q", a4[700];
+  char exe_copy[4096];
   char **av;
   pid_t pid;
-  int wst = 0, i, found = 0;
-  ssize_t n;
+  int wst = 0, i;
 
-  for (i = 0; i < ST_COUNT; ++i) {
-    have[i] = 0;
-    ir[i] = 0;
-  }
-  n = readlink("/proc/self/exe", exe, sizeof exe - 1);
-  if (n <= 0) {
-    snprintf(err, err_len, "--instructions: cannot find our own executable (/proc/self/exe)");
-    return 1;
-  }
-  exe[n] = '\0';
-  if (mkdtemp(dir) == NULL) {
-    snprintf(err, err_len, "--instructions: cannot make a temporary directory: %s", strerror(errno));
-    return 1;
-  }
-  snprintf(out, sizeof out, "%s/cg.out", dir);
-  snprintf(logp, sizeof logp, "%s/valgrind.log", dir);
   av = calloc((size_t)argc + 8u, sizeof *av);
   if (av == NULL) {
     snprintf(err, err_len, "out of memory");
     return 1;
   }
-  {
-    static char a0[] = "valgrind", a1[] = "--tool=callgrind", a2[] = "--collect-atstart=no", a3[] = "-q";
-    static char a4[700];
-    snprintf(a4, sizeof a4, "--callgrind-out-file=%s", out);
-    av[0] = a0;
-    av[1] = a1;
-    av[2] = a2;
-    av[3] = a3;
-    av[4] = a4;
-    av[5] = exe;
-    for (i = 0; i < argc; ++i) {
-      av[6 + i] = argv[i]; /* argv[0] is "profile" */
-    }
-    av[6 + argc] = NULL;
+  snprintf(a4, sizeof a4, "--callgrind-out-file=%s", out);
+  snprintf(exe_copy, sizeof exe_copy, "%s", exe);
+  av[0] = a0;
+  av[1] = a1;
+  av[2] = a2;
+  av[3] = a3;
+  av[4] = a4;
+  av[5] = exe_copy;
+  for (i = 0; i < argc; ++i) {
+    av[6 + i] = argv[i]; /* argv[0] is "profile" */
   }
+  av[6 + argc] = NULL;
   fflush(stdout);
   fflush(stderr);
   pid = fork();
@@ -607,7 +607,14 @@ static int count_instructions(int argc, char **argv, unsigned long long *ir, int
     }
     return 1;
   }
-  /* Dumps are out.1, out.2, ...; the final one at exit is `out` itself (empty: nothing collected). */
+  return 0;
+}
+
+/* The dumps out.1, out.2, ... (the final one at exit is `out` itself, empty:
+ * nothing collected) into ir[] and have[]; every file removed. Returns the
+ * number of stages found. */
+static int collect_dumps(const char *out, unsigned long long *ir, int *have) {
+  int i, found = 0;
   for (i = 1; i <= ST_COUNT + 4; ++i) {
     char p[700], name[256];
     unsigned long long v = 0;
@@ -625,6 +632,37 @@ static int count_instructions(int argc, char **argv, unsigned long long *ir, int
     unlink(p);
   }
   unlink(out);
+  return found;
+}
+
+/* Run ourselves under callgrind and fill ir[] per stage. */
+static int count_instructions(int argc, char **argv, unsigned long long *ir, int *have, char *err,
+                              size_t err_len) {
+  char dir[] = "/tmp/trn-profile-cg.XXXXXX";
+  char out[600], logp[600], exe[4096];
+  int i, found;
+  ssize_t n;
+
+  for (i = 0; i < ST_COUNT; ++i) {
+    have[i] = 0;
+    ir[i] = 0;
+  }
+  n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+  if (n <= 0) {
+    snprintf(err, err_len, "--instructions: cannot find our own executable (/proc/self/exe)");
+    return 1;
+  }
+  exe[n] = '\0';
+  if (mkdtemp(dir) == NULL) {
+    snprintf(err, err_len, "--instructions: cannot make a temporary directory: %s", strerror(errno));
+    return 1;
+  }
+  snprintf(out, sizeof out, "%s/cg.out", dir);
+  snprintf(logp, sizeof logp, "%s/valgrind.log", dir);
+  if (spawn_callgrind(exe, argc, argv, out, logp, err, err_len) != 0) {
+    return 1;
+  }
+  found = collect_dumps(out, ir, have);
   unlink(logp);
   rmdir(dir);
   if (found != ST_COUNT) {
@@ -637,24 +675,52 @@ static int count_instructions(int argc, char **argv, unsigned long long *ir, int
 
 /* ---- the command --------------------------------------------------------- */
 
-int trn_cmd_profile(int argc, char **argv) {
-  long n = 256, nl = 64, win_cells = 25, stride = 2, runs = 7;
-  double max_range_m = 10.0;
-  uint64_t seed = 1;
-  const char *budget_path = NULL;
-  int json = 0, check = 0, instructions = 0;
+/* ---- parse, run, report ----------------------------------------------------- */
+typedef struct {
+  long n, nl, win_cells, stride, runs; /* map and local sides, window, lattice step, timed runs */
+  double max_range_m;
+  uint64_t seed;
+  const char *budget_path;  /* budget file, or NULL */
+  int json, check, instructions;
+  int argc;                 /* --instructions: the command line re-run under callgrind */
+  char **argv;
+} profile_params_t;
+
+/* The timings of a run (world_t above holds the stages' inputs and outputs). */
+typedef struct {
+  world_t w;
+  pb_budget_t budget;
+  double med[ST_COUNT], mx[ST_COUNT];
+  unsigned long long ir[ST_COUNT];
+  int have_ir[ST_COUNT];
+  int over;                 /* stages over budget */
+} profile_result_t;
+
+static void profile_params_default(profile_params_t *p) {
+  memset(p, 0, sizeof *p);
+  p->n = 256;
+  p->nl = 64;
+  p->win_cells = 25;
+  p->stride = 2;
+  p->runs = 7;
+  p->max_range_m = 10.0;
+  p->seed = 1;
+}
+
+/* argv -> p. Returns CLI_OK, CLI_HELP (usage printed) or the usage / bad input status (message printed). */
+static int profile_parse(int argc, char **argv, profile_params_t *p) {
   cli_opt_t opts[] = {
-      {"--map-cells", CLI_LONG, &n, 64, 4096, 0, "N", "global map side, cells of 0.1 m (the main job's)", 0},
-      {"--local-cells", CLI_LONG, &nl, 16, 512, 0, "N", "local map side, cells", 0},
-      {"--window-cells", CLI_LONG, &win_cells, 1, 1024, 0, "R", "pose window +-R cells around the prior", 0},
-      {"--max-range-m", CLI_DOUBLE, &max_range_m, 0.5, 400.0, 0, "M", "farthest candidate target, m", 0},
-      {"--stride-cells", CLI_LONG, &stride, 1, 64, 0, "S", "candidate lattice step, cells", 0},
-      {"--runs", CLI_LONG, &runs, 1, MAX_RUNS, 0, "N", "timed runs per stage after one warm-up", 0},
-      {"--seed", CLI_U64, &seed, 0, 0, 0, "S", "terrain seed", 0},
-      {"--budget", CLI_STRING, &budget_path, 0, 0, 0, "FILE", "target budget per stage and host-to-target scale (README) (default: none)", 0},
-      {"--check", CLI_FLAG, &check, 0, 0, 0, NULL, "exit 3 if a stage's worst target time is over its budget", 0},
-      {"--instructions", CLI_FLAG, &instructions, 0, 0, 0, NULL, "also count instructions per stage (valgrind --tool=callgrind)", 0},
-      {"--json", CLI_FLAG, &json, 0, 0, 0, NULL, "print one JSON object instead of the table", 0},
+      {"--map-cells", CLI_LONG, &p->n, 64, 4096, 0, "N", "global map side, cells of 0.1 m (the main job's)", 0},
+      {"--local-cells", CLI_LONG, &p->nl, 16, 512, 0, "N", "local map side, cells", 0},
+      {"--window-cells", CLI_LONG, &p->win_cells, 1, 1024, 0, "R", "pose window +-R cells around the prior", 0},
+      {"--max-range-m", CLI_DOUBLE, &p->max_range_m, 0.5, 400.0, 0, "M", "farthest candidate target, m", 0},
+      {"--stride-cells", CLI_LONG, &p->stride, 1, 64, 0, "S", "candidate lattice step, cells", 0},
+      {"--runs", CLI_LONG, &p->runs, 1, MAX_RUNS, 0, "N", "timed runs per stage after one warm-up", 0},
+      {"--seed", CLI_U64, &p->seed, 0, 0, 0, "S", "terrain seed", 0},
+      {"--budget", CLI_STRING, &p->budget_path, 0, 0, 0, "FILE", "target budget per stage and host-to-target scale (README) (default: none)", 0},
+      {"--check", CLI_FLAG, &p->check, 0, 0, 0, NULL, "exit 3 if a stage's worst target time is over its budget", 0},
+      {"--instructions", CLI_FLAG, &p->instructions, 0, 0, 0, NULL, "also count instructions per stage (valgrind --tool=callgrind)", 0},
+      {"--json", CLI_FLAG, &p->json, 0, 0, 0, NULL, "print one JSON object instead of the table", 0},
   };
   cli_cmd_t cmd = {
       "profile",
@@ -666,179 +732,246 @@ int trn_cmd_profile(int argc, char **argv) {
       "budget; a share above 1 is over budget. Exit status: 0, 1 bad input, 2 usage, 3 over budget\n"
       "with --check.",
       opts, sizeof opts / sizeof opts[0]};
-  world_t w;
-  pb_budget_t budget;
-  char err[1024];
-  double *t = NULL;
-  double med[ST_COUNT], mx[ST_COUNT];
-  unsigned long long ir[ST_COUNT];
-  int have_ir[ST_COUNT];
-  int rc, s, over = 0, child;
-  const char *cg_env;
-
-  rc = cli_parse(&cmd, argc, argv);
-  if (rc == CLI_HELP) {
-    return 0;
-  }
+  int rc = cli_parse(&cmd, argc, argv);
   if (rc != CLI_OK) {
     return rc;
   }
-  if (check && budget_path == NULL) {
+  if (p->check && p->budget_path == NULL) {
     fprintf(stderr, "trn profile: --check needs --budget FILE (try --help)\n");
     return CLI_USAGE;
   }
-  if (nl / 2 + win_cells + 8 > n / 2) {
-    return cli_fail(cmd.name, "--map-cells %ld too small for --local-cells %ld and --window-cells %ld "
-                              "(need map/2 >= local/2 + window + 8)", n, nl, win_cells);
-  }
-  cg_env = getenv(CG_ENV);
-  child = cg_env != NULL && cg_env[0] != '\0';
-  if (budget_path != NULL && !child &&
-      pb_load(budget_path, k_names, ST_COUNT, &budget, err, sizeof err) != 0) {
-    return cli_fail(cmd.name, "%s", err);
-  }
-  memset(&w, 0, sizeof w);
-  w.n = n;
-  w.nl = nl;
-  w.win_cells = win_cells;
-  w.max_range_m = max_range_m;
-  w.stride = stride;
-  w.seed = seed;
-  if (world_init(&w, err, sizeof err) != 0 || world_prime(&w, err, sizeof err) != 0) {
-    world_free(&w);
-    return cli_fail(cmd.name, "%s", err);
-  }
-  if (child) {
-    rc = callgrind_child(&w);
-    world_free(&w);
-    return rc;
-  }
+  p->argc = argc;
+  p->argv = argv;
+  return CLI_OK;
+}
 
-  t = malloc(sizeof *t * (size_t)runs);
+/* The sizes no stage can run with. */
+static int profile_check(const profile_params_t *p, char *err, size_t err_len) {
+  if (p->nl / 2 + p->win_cells + 8 > p->n / 2) {
+    snprintf(err, err_len, "--map-cells %ld too small for --local-cells %ld and --window-cells %ld "
+                           "(need map/2 >= local/2 + window + 8)", p->n, p->nl, p->win_cells);
+    return CLI_BAD_INPUT;
+  }
+  return CLI_OK;
+}
+
+/* The stages' inputs and buffers, each stage run once (free w with world_free, also on failure). */
+static int profile_world(const profile_params_t *p, world_t *w, char *err, size_t err_len) {
+  memset(w, 0, sizeof *w);
+  w->n = p->n;
+  w->nl = p->nl;
+  w->win_cells = p->win_cells;
+  w->max_range_m = p->max_range_m;
+  w->stride = p->stride;
+  w->seed = p->seed;
+  if (world_init(w, err, err_len) != 0 || world_prime(w, err, err_len) != 0) {
+    return CLI_BAD_INPUT;
+  }
+  return CLI_OK;
+}
+
+/* Each stage: one warm-up, then p->runs timed runs; median and max into r. */
+static int profile_time(const profile_params_t *p, profile_result_t *r, char *err, size_t err_len) {
+  double *t = malloc(sizeof *t * (size_t)p->runs);
+  long runs = p->runs;
+  int s;
   if (t == NULL) {
-    world_free(&w);
-    return cli_fail(cmd.name, "out of memory");
+    snprintf(err, err_len, "out of memory");
+    return CLI_BAD_INPUT;
   }
   for (s = 0; s < ST_COUNT; ++s) {
-    long r;
-    trn_status_t st = run_stage(&w, (stage_t)s); /* warm-up */
-    for (r = 0; r < runs && st == TRN_OK; ++r) {
+    long k;
+    trn_status_t st = run_stage(&r->w, (stage_t)s); /* warm-up */
+    for (k = 0; k < runs && st == TRN_OK; ++k) {
       double t0 = now_ms();
-      st = run_stage(&w, (stage_t)s);
-      t[r] = now_ms() - t0;
+      st = run_stage(&r->w, (stage_t)s);
+      t[k] = now_ms() - t0;
     }
     if (st != TRN_OK) {
       free(t);
-      world_free(&w);
-      return cli_fail(cmd.name, "stage %s failed: %s", k_names[s], trn_strerror(st));
+      snprintf(err, err_len, "stage %s failed: %s", k_names[s], trn_strerror(st));
+      return CLI_BAD_INPUT;
     }
     qsort(t, (size_t)runs, sizeof *t, cmp_double);
-    med[s] = runs % 2 ? t[runs / 2] : 0.5 * (t[runs / 2 - 1] + t[runs / 2]);
-    mx[s] = t[runs - 1];
+    r->med[s] = runs % 2 ? t[runs / 2] : 0.5 * (t[runs / 2 - 1] + t[runs / 2]);
+    r->mx[s] = t[runs - 1];
   }
   free(t);
-  if (instructions && count_instructions(argc, argv, ir, have_ir, err, sizeof err) != 0) {
-    world_free(&w);
-    return cli_fail(cmd.name, "%s", err);
-  }
-  if (!instructions) {
-    for (s = 0; s < ST_COUNT; ++s) {
-      have_ir[s] = 0;
-    }
-  }
-  for (s = 0; s < ST_COUNT && budget_path != NULL; ++s) {
-    if (budget.budget_ms[s] > 0.0 && mx[s] * budget.scale > budget.budget_ms[s]) {
-      ++over;
-    }
-  }
+  return CLI_OK;
+}
 
-  if (json) {
-    json_t j;
-    json_begin(&j, stdout);
-    json_obj(&j, "config");
-    json_int(&j, "map_cells", n);
-    json_int(&j, "local_cells", nl);
-    json_int(&j, "window_cells", win_cells);
-    json_int(&j, "poses", (2 * win_cells + 1) * (2 * win_cells + 1));
-    json_num(&j, "max_range_m", max_range_m);
-    json_int(&j, "stride_cells", stride);
-    json_int(&j, "candidates", (long long)w.sel.n_candidates);
-    json_int(&j, "local_points", (long long)w.n_pts);
-    json_int(&j, "runs", runs);
-    json_int(&j, "seed", (long long)seed);
-    json_num(&j, "cell_m", 0.1);
-    json_int(&j, "height_bins", w.cfg.terrain.nz);
-    json_int(&j, "stack_limit_bytes", TRN_STACK_LIMIT_BYTES);
+/* Times, instruction counts (--instructions) and budget shares (--budget) of every stage. */
+static int profile_run(const profile_params_t *p, profile_result_t *r, char *err, size_t err_len) {
+  int s, rc;
+
+  memset(r, 0, sizeof *r);
+  if ((rc = profile_check(p, err, err_len)) != CLI_OK) {
+    return rc;
+  }
+  if (p->budget_path != NULL && pb_load(p->budget_path, k_names, ST_COUNT, &r->budget, err, err_len) != 0) {
+    return CLI_BAD_INPUT;
+  }
+  if ((rc = profile_world(p, &r->w, err, err_len)) != CLI_OK || (rc = profile_time(p, r, err, err_len)) != CLI_OK) {
+    return rc;
+  }
+  if (p->instructions && count_instructions(p->argc, p->argv, r->ir, r->have_ir, err, err_len) != 0) {
+    return CLI_BAD_INPUT;
+  }
+  for (s = 0; s < ST_COUNT && p->budget_path != NULL; ++s) {
+    if (r->budget.budget_ms[s] > 0.0 && r->mx[s] * r->budget.scale > r->budget.budget_ms[s]) {
+      ++r->over;
+    }
+  }
+  return CLI_OK;
+}
+
+/* The child under callgrind (TRN_PROFILE_CALLGRIND_OUT set): the world, then each stage counted once. */
+static int profile_child(const profile_params_t *p) {
+  world_t w;
+  char err[1024];
+  int rc = profile_check(p, err, sizeof err);
+  if (rc != CLI_OK) {
+    return cli_fail("profile", "%s", err);
+  }
+  if (profile_world(p, &w, err, sizeof err) != CLI_OK) {
+    world_free(&w);
+    return cli_fail("profile", "%s", err);
+  }
+  rc = callgrind_child(&w);
+  world_free(&w);
+  return rc;
+}
+
+static void profile_json_stage(json_t *j, const profile_params_t *p, const profile_result_t *r, int s) {
+  const pb_budget_t *b = &r->budget;
+  size_t sc, tot;
+  stage_bytes(&r->w, (stage_t)s, &sc, &tot);
+  json_obj(j, k_names[s]);
+  json_str(j, "what", k_what[s]);
+  json_str(j, "functions", k_funcs[s]);
+  json_num(j, "wall_ms", r->med[s]);
+  json_num(j, "wall_max_ms", r->mx[s]);
+  json_int(j, "workspace_bytes", (long long)tot);
+  json_int(j, "scratch_bytes", (long long)sc);
+  if (r->have_ir[s]) {
+    json_int(j, "instructions", (long long)r->ir[s]);
+  }
+  if (p->budget_path != NULL && b->budget_ms[s] > 0.0) {
+    json_num(j, "budget_ms", b->budget_ms[s]);
+    json_num(j, "target_ms", r->med[s] * b->scale);
+    json_num(j, "target_max_ms", r->mx[s] * b->scale);
+    json_num(j, "share", r->mx[s] * b->scale / b->budget_ms[s]);
+    json_bool(j, "over", r->mx[s] * b->scale > b->budget_ms[s]);
+  }
+  json_obj_end(j);
+}
+
+static void profile_report_json(const profile_params_t *p, const profile_result_t *r) {
+  json_t j;
+  int s;
+  json_begin(&j, stdout);
+  json_obj(&j, "config");
+  json_int(&j, "map_cells", p->n);
+  json_int(&j, "local_cells", p->nl);
+  json_int(&j, "window_cells", p->win_cells);
+  json_int(&j, "poses", (2 * p->win_cells + 1) * (2 * p->win_cells + 1));
+  json_num(&j, "max_range_m", p->max_range_m);
+  json_int(&j, "stride_cells", p->stride);
+  json_int(&j, "candidates", (long long)r->w.sel.n_candidates);
+  json_int(&j, "local_points", (long long)r->w.n_pts);
+  json_int(&j, "runs", p->runs);
+  json_int(&j, "seed", (long long)p->seed);
+  json_num(&j, "cell_m", 0.1);
+  json_int(&j, "height_bins", r->w.cfg.terrain.nz);
+  json_int(&j, "stack_limit_bytes", TRN_STACK_LIMIT_BYTES);
+  json_obj_end(&j);
+  if (p->budget_path != NULL) {
+    json_obj(&j, "budget");
+    json_str(&j, "file", p->budget_path);
+    json_num(&j, "scale", r->budget.scale);
+    json_int(&j, "over_budget", r->over);
     json_obj_end(&j);
-    if (budget_path != NULL) {
-      json_obj(&j, "budget");
-      json_str(&j, "file", budget_path);
-      json_num(&j, "scale", budget.scale);
-      json_int(&j, "over_budget", over);
-      json_obj_end(&j);
+  }
+  json_obj(&j, "stages");
+  for (s = 0; s < ST_COUNT; ++s) {
+    profile_json_stage(&j, p, r, s);
+  }
+  json_obj_end(&j);
+  json_end(&j);
+}
+
+static void profile_report_text(const profile_params_t *p, const profile_result_t *r) {
+  const pb_budget_t *b = &r->budget;
+  int s;
+  printf("profile   map %ld x %ld cells of 0.1 m, %d bins; local %ld x %ld (%zu points); window +-%ld cells "
+         "(%ld poses); %zu candidates (range <= %g m, stride %ld); seed %llu; %ld runs\n",
+         p->n, p->n, (int)r->w.cfg.terrain.nz, p->nl, p->nl, r->w.n_pts, p->win_cells,
+         (2 * p->win_cells + 1) * (2 * p->win_cells + 1), r->w.sel.n_candidates, p->max_range_m, p->stride,
+         (unsigned long long)p->seed, p->runs);
+  if (p->budget_path != NULL) {
+    printf("budget    %s, scale %g (target ms = host ms x scale; share = worst target / budget)\n",
+           p->budget_path, b->scale);
+  }
+  printf("\n%-19s %10s %10s %13s %15s", "stage", "median ms", "max ms", "workspace B", "instructions");
+  if (p->budget_path != NULL) {
+    printf(" %11s %11s %7s", "target max", "budget ms", "share");
+  }
+  printf("\n");
+  for (s = 0; s < ST_COUNT; ++s) {
+    size_t sc, tot;
+    char irs[32] = "-";
+    stage_bytes(&r->w, (stage_t)s, &sc, &tot);
+    if (r->have_ir[s]) {
+      snprintf(irs, sizeof irs, "%llu", r->ir[s]);
     }
-    json_obj(&j, "stages");
-    for (s = 0; s < ST_COUNT; ++s) {
-      size_t sc, tot;
-      stage_bytes(&w, (stage_t)s, &sc, &tot);
-      json_obj(&j, k_names[s]);
-      json_str(&j, "what", k_what[s]);
-      json_str(&j, "functions", k_funcs[s]);
-      json_num(&j, "wall_ms", med[s]);
-      json_num(&j, "wall_max_ms", mx[s]);
-      json_int(&j, "workspace_bytes", (long long)tot);
-      json_int(&j, "scratch_bytes", (long long)sc);
-      if (have_ir[s]) {
-        json_int(&j, "instructions", (long long)ir[s]);
+    printf("%-19s %10.3f %10.3f %13zu %15s", k_names[s], r->med[s], r->mx[s], tot, irs);
+    if (p->budget_path != NULL) {
+      if (b->budget_ms[s] > 0.0) {
+        double share = r->mx[s] * b->scale / b->budget_ms[s];
+        printf(" %11.1f %11.1f %6.0f%%%s", r->mx[s] * b->scale, b->budget_ms[s], 100.0 * share,
+               share > 1.0 ? "  OVER BUDGET" : "");
+      } else {
+        printf(" %11.1f %11s %7s", r->mx[s] * b->scale, "-", "-");
       }
-      if (budget_path != NULL && budget.budget_ms[s] > 0.0) {
-        json_num(&j, "budget_ms", budget.budget_ms[s]);
-        json_num(&j, "target_ms", med[s] * budget.scale);
-        json_num(&j, "target_max_ms", mx[s] * budget.scale);
-        json_num(&j, "share", mx[s] * budget.scale / budget.budget_ms[s]);
-        json_bool(&j, "over", mx[s] * budget.scale > budget.budget_ms[s]);
-      }
-      json_obj_end(&j);
-    }
-    json_obj_end(&j);
-    json_end(&j);
-  } else {
-    printf("profile   map %ld x %ld cells of 0.1 m, %d bins; local %ld x %ld (%zu points); window +-%ld cells "
-           "(%ld poses); %zu candidates (range <= %g m, stride %ld); seed %llu; %ld runs\n",
-           n, n, (int)w.cfg.terrain.nz, nl, nl, w.n_pts, win_cells, (2 * win_cells + 1) * (2 * win_cells + 1),
-           w.sel.n_candidates, max_range_m, stride, (unsigned long long)seed, runs);
-    if (budget_path != NULL) {
-      printf("budget    %s, scale %g (target ms = host ms x scale; share = worst target / budget)\n",
-             budget_path, budget.scale);
-    }
-    printf("\n%-19s %10s %10s %13s %15s", "stage", "median ms", "max ms", "workspace B", "instructions");
-    if (budget_path != NULL) {
-      printf(" %11s %11s %7s", "target max", "budget ms", "share");
     }
     printf("\n");
-    for (s = 0; s < ST_COUNT; ++s) {
-      size_t sc, tot;
-      char irs[32] = "-";
-      stage_bytes(&w, (stage_t)s, &sc, &tot);
-      if (have_ir[s]) {
-        snprintf(irs, sizeof irs, "%llu", ir[s]);
-      }
-      printf("%-19s %10.3f %10.3f %13zu %15s", k_names[s], med[s], mx[s], tot, irs);
-      if (budget_path != NULL) {
-        if (budget.budget_ms[s] > 0.0) {
-          double share = mx[s] * budget.scale / budget.budget_ms[s];
-          printf(" %11.1f %11.1f %6.0f%%%s", mx[s] * budget.scale, budget.budget_ms[s], 100.0 * share,
-                 share > 1.0 ? "  OVER BUDGET" : "");
-        } else {
-          printf(" %11.1f %11s %7s", mx[s] * budget.scale, "-", "-");
-        }
-      }
-      printf("\n");
-    }
-    if (budget_path != NULL) {
-      printf("\n%d stage(s) over budget\n", over);
-    }
   }
-  world_free(&w);
-  return check && over > 0 ? EXIT_OVER_BUDGET : 0;
+  if (p->budget_path != NULL) {
+    printf("\n%d stage(s) over budget\n", r->over);
+  }
+}
+
+int trn_cmd_profile(int argc, char **argv) {
+  profile_params_t p;
+  profile_result_t *r;
+  char err[1024];
+  const char *cg_env = getenv(CG_ENV);
+  int rc;
+
+  profile_params_default(&p);
+  rc = profile_parse(argc, argv, &p);
+  if (rc != CLI_OK) {
+    return rc == CLI_HELP ? 0 : rc;
+  }
+  if (cg_env != NULL && cg_env[0] != '\0') {
+    return profile_child(&p);
+  }
+  r = malloc(sizeof *r);
+  if (r == NULL) {
+    return cli_fail("profile", "out of memory");
+  }
+  rc = profile_run(&p, r, err, sizeof err);
+  if (rc != CLI_OK) {
+    cli_fail("profile", "%s", err);
+  } else if (p.json) {
+    profile_report_json(&p, r);
+  } else {
+    profile_report_text(&p, r);
+  }
+  world_free(&r->w);
+  if (rc == CLI_OK && p.check && r->over > 0) {
+    rc = EXIT_OVER_BUDGET;
+  }
+  free(r);
+  return rc;
 }

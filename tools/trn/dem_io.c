@@ -260,160 +260,114 @@ static int band_height_scale(GDALRasterBandH b, int band, const char *path, doub
   return 0;
 }
 
-int dem_read(const char *path, int band, int max_dim, dem_t *dem, char *err, size_t err_len) {
+/* Open path as a raster and check band, size and geotransform (north-up up
+ * to flips, nonzero finite pixel size). The dataset, or NULL with the reason. */
+static GDALDatasetH open_checked(const char *path, int band, int max_dim, int *w, int *h, double gt[6], char *err,
+                                 size_t err_len) {
   GDALDatasetH ds;
-  GDALRasterBandH b;
-  OGRSpatialReferenceH msrs = NULL;
-  double gt[6];
-  int w, h, nbands, has_nodata = 0, mask_flags, r, c;
-  double nodata, vert_to_m, zscale, zoffset, zunit;
-  const char *wkt;
-  size_t n;
-  float *data;
-  double cell, rel;
+  int nbands;
 
-  memset(dem, 0, sizeof *dem);
-  gdal_init();
   CPLErrorReset();
   ds = GDALOpenEx(path, GDAL_OF_RASTER | GDAL_OF_READONLY, NULL, NULL, NULL);
   if (ds == NULL) {
     set_err(err, err_len, "cannot read '%s' as a raster: %s", path, last_gdal_msg());
-    return -1;
+    return NULL;
   }
   nbands = GDALGetRasterCount(ds);
+  *w = GDALGetRasterXSize(ds);
+  *h = GDALGetRasterYSize(ds);
   if (band < 1 || band > nbands) {
     set_err(err, err_len, "'%s' has %d band%s, no band %d", path, nbands, nbands == 1 ? "" : "s", band);
-    GDALClose(ds);
-    return -1;
-  }
-  w = GDALGetRasterXSize(ds);
-  h = GDALGetRasterYSize(ds);
-  if (w < 1 || h < 1) {
-    set_err(err, err_len, "'%s' is %d x %d cells: it has no cells", path, w, h);
-    GDALClose(ds);
-    return -1;
-  }
-  if (w > max_dim || h > max_dim) {
+  } else if (*w < 1 || *h < 1) {
+    set_err(err, err_len, "'%s' is %d x %d cells: it has no cells", path, *w, *h);
+  } else if (*w > max_dim || *h > max_dim) {
     set_err(err, err_len,
             "'%s' is %d x %d cells; the maximum side is %d cells: cut the area you need with gdal_translate "
             "-srcwin XOFF YOFF XSIZE YSIZE IN.tif OUT.tif, or coarsen it with gdalwarp -tr CELL CELL "
             "-r bilinear IN.tif OUT.tif",
-            path, w, h, max_dim);
-    GDALClose(ds);
-    return -1;
-  }
-  if (GDALGetGeoTransform(ds, gt) != CE_None) {
+            path, *w, *h, max_dim);
+  } else if (GDALGetGeoTransform(ds, gt) != CE_None) {
     set_err(err, err_len, "'%s' has no geotransform (cell size and position unknown)", path);
-    GDALClose(ds);
-    return -1;
-  }
-  if (gt[2] != 0.0 || gt[4] != 0.0) {
+  } else if (gt[2] != 0.0 || gt[4] != 0.0) {
     set_err(err, err_len, "'%s' has a rotated geotransform (terms %g, %g); resample it north-up first",
             path, gt[2], gt[4]);
-    GDALClose(ds);
-    return -1;
-  }
-  if (!(isfinite(gt[1]) && isfinite(gt[5]) && gt[1] != 0.0 && gt[5] != 0.0)) {
+  } else if (!(isfinite(gt[1]) && isfinite(gt[5]) && gt[1] != 0.0 && gt[5] != 0.0)) {
     set_err(err, err_len, "'%s' has a degenerate geotransform (pixel size %g x %g)", path, gt[1], gt[5]);
-    GDALClose(ds);
-    return -1;
+  } else {
+    return ds;
   }
-  if (crs_to_metres(ds, path, gt, &msrs, &vert_to_m, err, err_len) != 0) {
-    GDALClose(ds);
-    return -1;
-  }
-  cell = fabs(gt[1]);
-  rel = fabs(fabs(gt[5]) - cell) / cell;
-  if (rel > 1e-6) {
-    set_err(err, err_len, "'%s' has non-square cells (%g x %g m); resample it to square cells first",
-            path, cell, fabs(gt[5]));
-    if (msrs != NULL) {
-      OSRDestroySpatialReference(msrs);
-    }
-    GDALClose(ds);
-    return -1;
-  }
-  b = GDALGetRasterBand(ds, band);
-  if (band_height_scale(b, band, path, vert_to_m, &zscale, &zoffset, &zunit, err, err_len) != 0) {
-    if (msrs != NULL) {
-      OSRDestroySpatialReference(msrs);
-    }
-    GDALClose(ds);
-    return -1;
-  }
+  GDALClose(ds);
+  return NULL;
+}
 
-  n = (size_t)w * (size_t)h;
-  data = malloc(n * sizeof *data);
+/* Band b (w x h) as float32, cells its mask marks invalid as NaN. The
+ * heights (free them), or NULL with the reason. */
+static float *read_band(GDALRasterBandH b, int band, const char *path, int w, int h, char *err, size_t err_len) {
+  size_t n = (size_t)w * (size_t)h;
+  float *data = malloc(n * sizeof *data);
+  int mask_flags;
+  unsigned char *m;
+
   if (data == NULL) {
     set_err(err, err_len, "out of memory for a %d x %d DEM", w, h);
-    if (msrs != NULL) {
-      OSRDestroySpatialReference(msrs);
-    }
-    GDALClose(ds);
-    return -1;
+    return NULL;
   }
   if (GDALRasterIO(b, GF_Read, 0, 0, w, h, data, w, h, GDT_Float32, 0, 0) != CE_None) {
     set_err(err, err_len, "cannot read band %d of '%s': %s", band, path, last_gdal_msg());
     free(data);
-    if (msrs != NULL) {
-      OSRDestroySpatialReference(msrs);
-    }
-    GDALClose(ds);
-    return -1;
+    return NULL;
   }
-
-  /* Not seen: no-data value, mask, non-finite, |value| >= DEM_NOT_SEEN_ABS. */
-  nodata = GDALGetRasterNoDataValue(b, &has_nodata);
   mask_flags = GDALGetMaskFlags(b);
-  if (!(mask_flags & GMF_ALL_VALID) && !(mask_flags & GMF_NODATA)) {
-    unsigned char *m = malloc(n);
-    if (m == NULL) {
-      set_err(err, err_len, "out of memory for a %d x %d mask", w, h);
-      free(data);
-      if (msrs != NULL) {
-        OSRDestroySpatialReference(msrs);
-      }
-      GDALClose(ds);
-      return -1;
-    }
-    if (GDALRasterIO(GDALGetMaskBand(b), GF_Read, 0, 0, w, h, m, w, h, GDT_Byte, 0, 0) != CE_None) {
-      set_err(err, err_len, "cannot read the mask of band %d of '%s': %s", band, path, last_gdal_msg());
-      free(m);
-      free(data);
-      if (msrs != NULL) {
-        OSRDestroySpatialReference(msrs);
-      }
-      GDALClose(ds);
-      return -1;
-    }
-    for (size_t i = 0; i < n; ++i) {
-      if (m[i] == 0) {
-        data[i] = NAN;
-      }
-    }
+  if ((mask_flags & GMF_ALL_VALID) || (mask_flags & GMF_NODATA)) {
+    return data;
+  }
+  m = malloc(n);
+  if (m == NULL) {
+    set_err(err, err_len, "out of memory for a %d x %d mask", w, h);
+    free(data);
+    return NULL;
+  }
+  if (GDALRasterIO(GDALGetMaskBand(b), GF_Read, 0, 0, w, h, m, w, h, GDT_Byte, 0, 0) != CE_None) {
+    set_err(err, err_len, "cannot read the mask of band %d of '%s': %s", band, path, last_gdal_msg());
     free(m);
+    free(data);
+    return NULL;
   }
-  {
-    /* The band is read as float32, so compare with the no-data value as
-     * float32 (a double no-data value is rounded the same way the heights
-     * are). A NaN no-data value needs no comparison. The tests run on the
-     * stored values (a no-data value or an ISIS special pixel is a stored
-     * value), then once more on the heights in metres. */
-    int use_nd = has_nodata && isfinite(nodata) && fabs(nodata) <= 3.4e38;
-    float nd = use_nd ? (float)nodata : 0.0f;
-    int convert = zscale != 1.0 || zoffset != 0.0 || zunit != 1.0;
-    for (size_t i = 0; i < n; ++i) {
-      float v = data[i];
-      if (!isfinite(v) || fabsf(v) >= (float)DEM_NOT_SEEN_ABS || (use_nd && v == nd)) {
-        data[i] = NAN;
-      } else if (convert) {
-        double z = ((double)v * zscale + zoffset) * zunit;
-        data[i] = (isfinite(z) && fabs(z) < DEM_NOT_SEEN_ABS) ? (float)z : NAN;
-      }
+  for (size_t i = 0; i < n; ++i) {
+    if (m[i] == 0) {
+      data[i] = NAN;
     }
   }
+  free(m);
+  return data;
+}
 
-  /* Normalise to north-up, west-to-east. */
+/* Not seen: no-data value, non-finite, |value| >= DEM_NOT_SEEN_ABS; the
+ * others converted to metres. The band is read as float32, so compare with
+ * the no-data value as float32 (a double no-data value is rounded the same
+ * way the heights are). A NaN no-data value needs no comparison. The tests
+ * run on the stored values (a no-data value or an ISIS special pixel is a
+ * stored value), then once more on the heights in metres. */
+static void heights_to_m(float *data, size_t n, GDALRasterBandH b, double zscale, double zoffset, double zunit) {
+  int has_nodata = 0;
+  double nodata = GDALGetRasterNoDataValue(b, &has_nodata);
+  int use_nd = has_nodata && isfinite(nodata) && fabs(nodata) <= 3.4e38;
+  float nd = use_nd ? (float)nodata : 0.0f;
+  int convert = zscale != 1.0 || zoffset != 0.0 || zunit != 1.0;
+  for (size_t i = 0; i < n; ++i) {
+    float v = data[i];
+    if (!isfinite(v) || fabsf(v) >= (float)DEM_NOT_SEEN_ABS || (use_nd && v == nd)) {
+      data[i] = NAN;
+    } else if (convert) {
+      double z = ((double)v * zscale + zoffset) * zunit;
+      data[i] = (isfinite(z) && fabs(z) < DEM_NOT_SEEN_ABS) ? (float)z : NAN;
+    }
+  }
+}
+
+/* Normalise to north-up, west-to-east. */
+static void north_up(float *data, int w, int h, double gt[6]) {
+  int r, c;
   if (gt[5] > 0.0) {
     for (r = 0; r < h / 2; ++r) {
       float *a = data + (size_t)r * (size_t)w;
@@ -439,10 +393,15 @@ int dem_read(const char *path, int band, int max_dim, dem_t *dem, char *err, siz
     gt[0] = gt[0] + (double)w * gt[1];
     gt[1] = -gt[1];
   }
+}
 
-  /* The CRS handed on: the file's own, or its metre version after a unit
-   * conversion (horizontal only when the heights were converted too, so no
-   * vertical CRS claims a unit the heights no longer have). */
+/* The CRS handed on (WKT to free, or NULL): the file's own, or its metre
+ * version msrs after a unit conversion (horizontal only when the heights were
+ * converted too, so no vertical CRS claims a unit the heights no longer
+ * have). Destroys msrs. */
+static char *handed_wkt(GDALDatasetH ds, OGRSpatialReferenceH msrs, double zunit, double vert_to_m) {
+  char *out = NULL;
+  const char *wkt;
   if (msrs == NULL && zunit != 1.0 && vert_to_m > 0.0) {
     OGRSpatialReferenceH srs = GDALGetSpatialRef(ds);
     msrs = srs != NULL ? OSRClone(srs) : NULL;
@@ -454,16 +413,58 @@ int dem_read(const char *path, int band, int max_dim, dem_t *dem, char *err, siz
   if (msrs != NULL) {
     char *mwkt = NULL;
     if (OSRExportToWkt(msrs, &mwkt) == OGRERR_NONE && mwkt != NULL && *mwkt != '\0') {
-      dem->srs_wkt = dup_string(mwkt);
+      out = dup_string(mwkt);
     }
     CPLFree(mwkt);
     OSRDestroySpatialReference(msrs);
   } else {
     wkt = GDALGetProjectionRef(ds);
     if (wkt != NULL && *wkt != '\0') {
-      dem->srs_wkt = dup_string(wkt);
+      out = dup_string(wkt);
     }
   }
+  return out;
+}
+
+int dem_read(const char *path, int band, int max_dim, dem_t *dem, char *err, size_t err_len) {
+  GDALDatasetH ds;
+  GDALRasterBandH b;
+  OGRSpatialReferenceH msrs = NULL;
+  double gt[6];
+  int w, h;
+  double vert_to_m, zscale, zoffset, zunit;
+  float *data;
+  double cell;
+
+  memset(dem, 0, sizeof *dem);
+  gdal_init();
+  ds = open_checked(path, band, max_dim, &w, &h, gt, err, err_len);
+  if (ds == NULL) {
+    return -1;
+  }
+  if (crs_to_metres(ds, path, gt, &msrs, &vert_to_m, err, err_len) != 0) {
+    GDALClose(ds);
+    return -1;
+  }
+  cell = fabs(gt[1]);
+  b = GDALGetRasterBand(ds, band);
+  data = NULL;
+  if (fabs(fabs(gt[5]) - cell) / cell > 1e-6) {
+    set_err(err, err_len, "'%s' has non-square cells (%g x %g m); resample it to square cells first",
+            path, cell, fabs(gt[5]));
+  } else if (band_height_scale(b, band, path, vert_to_m, &zscale, &zoffset, &zunit, err, err_len) == 0) {
+    data = read_band(b, band, path, w, h, err, err_len);
+  }
+  if (data == NULL) {
+    if (msrs != NULL) {
+      OSRDestroySpatialReference(msrs);
+    }
+    GDALClose(ds);
+    return -1;
+  }
+  heights_to_m(data, (size_t)w * (size_t)h, b, zscale, zoffset, zunit);
+  north_up(data, w, h, gt);
+  dem->srs_wkt = handed_wkt(ds, msrs, zunit, vert_to_m);
   GDALClose(ds);
 
   dem->data = data;

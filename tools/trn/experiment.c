@@ -535,77 +535,88 @@ static void tally(exp_arm_t *a, const sense_t *s, double success_m, double cell,
   }
 }
 
-static int build_world(world_t *w, const exp_params_t *p, exp_result_t *out, void **raw, char *err,
-                       size_t err_len) {
-  float *dem;
-  size_t nvox, mb, wb, i;
-  trn_map_cfg_t cfg;
-  trn_grid_f32_t g;
-  trn_sigma_model_t gm;
-  trn_xy_t centre;
-  trn_window_t pr, lw;
-  trn_status_t st;
-  void *gws, *graw = NULL, *mbuf;
-  const double f = p->cell_m / 0.1; /* the paper's 0.1 m cells: ranges scale with the cell */
-  int nx, ny;
+/* The generated terrain (`trn terrain` with the experiment's parameters)
+ * into a new nx x ny heights array (*dem). 0, or -1 with the reason. */
+static int gen_terrain(const exp_params_t *p, exp_result_t *out, float **dem, char *err, size_t err_len) {
+  tg_params_t tp;
+  const char *why;
+  tg_rock_t *rocks;
+  size_t nr;
+  int n = p->size_cells;
 
+  tg_default(&tp, n, n, p->cell_m);
+  tp.coverage_k = p->coverage_k;
+  tp.d_max_m = tg_auto_d_max(p->coverage_k);
+  tp.seed = p->terrain_seed;
+  tp.relief_m = p->relief_m;
+  if (p->d_min_m > 0.0) {
+    tp.d_min_m = p->d_min_m;
+  }
+  if (tp.d_max_m < tp.d_min_m) {
+    snprintf(err, err_len, "smallest rock diameter %g m is above the largest %g m", tp.d_min_m, tp.d_max_m);
+    return -1;
+  }
+  if ((why = tg_check(&tp)) != NULL) {
+    snprintf(err, err_len, "terrain: %s", why);
+    return -1;
+  }
+  nr = tg_draw_rocks(&tp, NULL, 0);
+  rocks = malloc((nr + 1) * sizeof *rocks);
+  *dem = malloc((size_t)n * (size_t)n * sizeof **dem);
+  if (rocks == NULL || *dem == NULL) {
+    free(rocks);
+    free(*dem);
+    *dem = NULL;
+    snprintf(err, err_len, "out of memory for the terrain");
+    return -1;
+  }
+  tg_draw_rocks(&tp, rocks, nr);
+  tg_render(&tp, rocks, nr, *dem, NULL, NULL);
+  free(rocks);
+  out->rocks = nr;
+  out->d_min_m = tp.d_min_m;
+  return 0;
+}
+
+/* The heights: a copy of the given DEM or the generated terrain (w->dem,
+ * kept for the DEM sensor and the no-data test; freed by exp_run). */
+static int world_heights(world_t *w, const exp_params_t *p, exp_result_t *out, char *err, size_t err_len) {
+  float *dem = NULL;
+  size_t i;
   if (p->dem != NULL) {
-    nx = p->dem_width;
-    ny = p->dem_height;
-    dem = malloc((size_t)nx * (size_t)ny * sizeof *dem);
+    w->nx = p->dem_width;
+    w->ny = p->dem_height;
+    dem = malloc((size_t)w->nx * (size_t)w->ny * sizeof *dem);
     if (dem == NULL) {
       snprintf(err, err_len, "out of memory for the DEM");
       return -1;
     }
-    memcpy(dem, p->dem, (size_t)nx * (size_t)ny * sizeof *dem);
-    for (i = 0; i < (size_t)nx * (size_t)ny; ++i) {
+    memcpy(dem, p->dem, (size_t)w->nx * (size_t)w->ny * sizeof *dem);
+    for (i = 0; i < (size_t)w->nx * (size_t)w->ny; ++i) {
       w->has_nodata |= !isfinite(dem[i]);
     }
   } else {
-    tg_params_t tp;
-    const char *why;
-    tg_rock_t *rocks;
-    size_t nr;
-    nx = ny = p->size_cells;
-    tg_default(&tp, nx, ny, p->cell_m);
-    tp.coverage_k = p->coverage_k;
-    tp.d_max_m = tg_auto_d_max(p->coverage_k);
-    tp.seed = p->terrain_seed;
-    tp.relief_m = p->relief_m;
-    if (p->d_min_m > 0.0) {
-      tp.d_min_m = p->d_min_m;
-    }
-    if (tp.d_max_m < tp.d_min_m) {
-      snprintf(err, err_len, "smallest rock diameter %g m is above the largest %g m", tp.d_min_m, tp.d_max_m);
+    w->nx = w->ny = p->size_cells;
+    if (gen_terrain(p, out, &dem, err, err_len) != 0) {
       return -1;
     }
-    if ((why = tg_check(&tp)) != NULL) {
-      snprintf(err, err_len, "terrain: %s", why);
-      return -1;
-    }
-    nr = tg_draw_rocks(&tp, NULL, 0);
-    rocks = malloc((nr + 1) * sizeof *rocks);
-    dem = malloc((size_t)nx * (size_t)ny * sizeof *dem);
-    if (rocks == NULL || dem == NULL) {
-      free(rocks);
-      free(dem);
-      snprintf(err, err_len, "out of memory for the terrain");
-      return -1;
-    }
-    tg_draw_rocks(&tp, rocks, nr);
-    tg_render(&tp, rocks, nr, dem, NULL, NULL);
-    free(rocks);
-    out->rocks = nr;
-    out->d_min_m = tp.d_min_m;
   }
-  w->nx = nx;
-  w->ny = ny;
-  w->dem = dem; /* kept for the DEM sensor and the no-data test; freed by exp_run */
+  w->dem = dem;
   w->cellf = (float)p->cell_m;
+  return 0;
+}
 
-  /* The map configuration: the caller's, or the paper's scaled to the cell. */
+/* The map (configuration: the caller's, or the paper's scaled to the cell) and the kernels. */
+static int world_map(world_t *w, const exp_params_t *p, exp_result_t *out, void **raw, char *err, size_t err_len) {
+  trn_map_cfg_t cfg;
+  trn_grid_f32_t g;
+  trn_status_t st;
+  size_t mb;
+  void *mbuf;
+  int nx = w->nx, ny = w->ny;
+
   if (p->map_cfg != NULL) {
-    if (p->map_cfg(p->map_cfg_ctx, dem, nx, ny, p->cell_m, &cfg, err, err_len) != 0) {
+    if (p->map_cfg(p->map_cfg_ctx, w->dem, nx, ny, p->cell_m, &cfg, err, err_len) != 0) {
       return -1;
     }
   } else {
@@ -616,7 +627,7 @@ static int build_world(world_t *w, const exp_params_t *p, exp_result_t *out, voi
     cfg.sigma_m = w->cellf;
   }
   out->map_cfg = cfg;
-  if (trn_grid_f32_init(&g, dem, (size_t)nx * (size_t)ny, nx, ny) != TRN_OK) {
+  if (trn_grid_f32_init(&g, w->dem, (size_t)nx * (size_t)ny, nx, ny) != TRN_OK) {
     snprintf(err, err_len, "map of %d x %d cells rejected by the core", nx, ny);
     return -1;
   }
@@ -636,10 +647,21 @@ static int build_world(world_t *w, const exp_params_t *p, exp_result_t *out, voi
     snprintf(err, err_len, "trn_kernels_build: %s", trn_strerror(st));
     return -1;
   }
-  /* Eq. 8: one sensing position of the global map, at the map's centre;
-   * the error model's constant scales with the cell, its r^2 term inversely
-   * (the same sigma in cells at the same range in cells as at 0.1 m). */
-  nvox = (size_t)nx * (size_t)ny * (size_t)w->map.dist.nz;
+  return 0;
+}
+
+/* Eq. 8: one sensing position of the global map, at the map's centre; the
+ * error model's constant scales with the cell, its r^2 term inversely (the
+ * same sigma in cells at the same range in cells as at 0.1 m). */
+static int world_prob(world_t *w, const exp_params_t *p, exp_result_t *out, void **raw, char *err, size_t err_len) {
+  const double f = p->cell_m / 0.1;
+  int nx = w->nx, ny = w->ny;
+  size_t nvox = (size_t)nx * (size_t)ny * (size_t)w->map.dist.nz, wb;
+  trn_sigma_model_t gm;
+  trn_xy_t centre;
+  trn_status_t st;
+  void *gws, *graw = NULL;
+
   w->pg.data = alloc16(nvox * sizeof(float), &raw[1]);
   w->pg.nx = nx;
   w->pg.ny = ny;
@@ -674,6 +696,14 @@ static int build_world(world_t *w, const exp_params_t *p, exp_result_t *out, voi
     snprintf(err, err_len, "probability map (eq. 8): %s", trn_strerror(st));
     return -1;
   }
+  return 0;
+}
+
+/* The selection rules (lengths scaled by the cell unless given) and the experiment's lengths in cells. */
+static int world_rules(world_t *w, const exp_params_t *p, exp_result_t *out, char *err, size_t err_len) {
+  const double f = p->cell_m / 0.1; /* the paper's 0.1 m cells: ranges scale with the cell */
+  trn_status_t st;
+  int pc;
 
   trn_select_cfg_default(&w->scfg);
   w->scfg.min_range_m = (float)(p->min_range_m > 0.0 ? p->min_range_m : (double)w->scfg.min_range_m * f);
@@ -693,14 +723,18 @@ static int build_world(world_t *w, const exp_params_t *p, exp_result_t *out, voi
              (double)w->scfg.footprint_radius_m, trn_strerror(st));
     return -1;
   }
-  {
-    int pc = (int)floor((double)w->scfg.patch_m / (double)w->cellf + 0.5);
-    pc = pc % 2 == 0 ? pc + 1 : pc;
-    w->half = pc / 2;
-  }
+  pc = (int)floor((double)w->scfg.patch_m / (double)w->cellf + 0.5);
+  pc = pc % 2 == 0 ? pc + 1 : pc;
+  w->half = pc / 2;
   w->win_cells = (int)ceil(p->window_m / p->cell_m - 1e-9);
   w->prior_cells = (int)floor(p->prior_error_m / p->cell_m + 1e-9);
   w->grid_cells = (int)floor(p->grid_spacing_m / p->cell_m + 0.5);
+  return 0;
+}
+
+/* The selection, local probability, localization and sensor workspaces. */
+static int world_buffers(world_t *w, const exp_params_t *p, void **raw, char *err, size_t err_len) {
+  trn_window_t pr, lw;
   w->cap = trn_select_max_candidates(&w->scfg, w->cellf);
   w->cands = malloc((w->cap + 1) * sizeof *w->cands);
   w->sws_b = trn_select_workspace_bytes(&w->scfg, &w->map, &w->k);
@@ -711,8 +745,8 @@ static int build_world(world_t *w, const exp_params_t *p, exp_result_t *out, voi
   w->pws = alloc16(w->pws_b, &raw[3]);
   /* Sized for the largest window; grown per call if a window needs more. */
   lw.x0 = lw.y0 = 0;
-  lw.x1 = 2 * w->win_cells < nx - 1 ? 2 * w->win_cells : nx - 1;
-  lw.y1 = 2 * w->win_cells < ny - 1 ? 2 * w->win_cells : ny - 1;
+  lw.x1 = 2 * w->win_cells < w->nx - 1 ? 2 * w->win_cells : w->nx - 1;
+  lw.y1 = 2 * w->win_cells < w->ny - 1 ? 2 * w->win_cells : w->ny - 1;
   w->lws_b = trn_localize_workspace_bytes(&w->map, &lw);
   w->lws = alloc16(w->lws_b, &w->lws_raw);
   w->pvol = alloc16((size_t)(2 * w->half + 1) * (size_t)(2 * w->half + 1) * (size_t)w->pg.nz * sizeof(float),
@@ -740,14 +774,23 @@ static int build_world(world_t *w, const exp_params_t *p, exp_result_t *out, voi
       return -1;
     }
   }
-  {
-    const int need = 2 * w->grid_cells + 2 * w->half + 3;
-    if (nx < need || ny < need) {
-      snprintf(err, err_len, "the map (%d x %d cells) is too small for the experiment: nine %d-cell patches %d cells "
-               "apart need at least %d x %d cells (a larger DEM, or smaller --grid-spacing-m / --patch-m)",
-               nx, ny, 2 * w->half + 1, w->grid_cells, need, need);
-      return -1;
-    }
+  return 0;
+}
+
+static int build_world(world_t *w, const exp_params_t *p, exp_result_t *out, void **raw, char *err,
+                       size_t err_len) {
+  int need;
+  if (world_heights(w, p, out, err, err_len) != 0 || world_map(w, p, out, raw, err, err_len) != 0 ||
+      world_prob(w, p, out, raw, err, err_len) != 0 || world_rules(w, p, out, err, err_len) != 0 ||
+      world_buffers(w, p, raw, err, err_len) != 0) {
+    return -1;
+  }
+  need = 2 * w->grid_cells + 2 * w->half + 3;
+  if (w->nx < need || w->ny < need) {
+    snprintf(err, err_len, "the map (%d x %d cells) is too small for the experiment: nine %d-cell patches %d cells "
+             "apart need at least %d x %d cells (a larger DEM, or smaller --grid-spacing-m / --patch-m)",
+             w->nx, w->ny, 2 * w->half + 1, w->grid_cells, need, need);
+    return -1;
   }
   out->patch_cells = 2 * w->half + 1;
   out->grid_cells = w->grid_cells;
@@ -757,130 +800,139 @@ static int build_world(world_t *w, const exp_params_t *p, exp_result_t *out, voi
   return 0;
 }
 
-int exp_run(const exp_params_t *p, exp_result_t *out, exp_progress_fn progress, void *ctx, char *err,
-            size_t err_len) {
-  world_t w;
-  void *raw[7] = {NULL, NULL, NULL, NULL, NULL, NULL, NULL};
-  long *mw = NULL, *kw = NULL, *mo = NULL, *ko = NULL, t;
-  double *ew = NULL, *e2w = NULL, *eo = NULL, *e2o = NULL, sum_trav = 0.0;
-  const char *why;
-  int rc = -1, i;
-  size_t nt;
+/* Per trial (cluster) counts of each arm: localizations m, successes k,
+ * error sums e and e2 of the successes (exp_cluster_stats). */
+typedef struct {
+  long *mw, *kw, *mo, *ko;
+  double *ew, *e2w, *eo, *e2o;
+} clusters_t;
 
-  memset(out, 0, sizeof *out);
-  memset(&w, 0, sizeof w);
-  w.p = p;
-  if ((why = exp_params_check(p)) != NULL) {
-    snprintf(err, err_len, "%s", why);
+static int clusters_alloc(clusters_t *c, size_t nt) {
+  c->mw = calloc(nt, sizeof *c->mw);
+  c->kw = calloc(nt, sizeof *c->kw);
+  c->mo = calloc(nt, sizeof *c->mo);
+  c->ko = calloc(nt, sizeof *c->ko);
+  c->ew = calloc(nt, sizeof *c->ew);
+  c->e2w = calloc(nt, sizeof *c->e2w);
+  c->eo = calloc(nt, sizeof *c->eo);
+  c->e2o = calloc(nt, sizeof *c->e2o);
+  return c->mw && c->kw && c->mo && c->ko && c->ew && c->e2w && c->eo && c->e2o;
+}
+
+static void clusters_free(clusters_t *c) {
+  free(c->mw);
+  free(c->kw);
+  free(c->mo);
+  free(c->ko);
+  free(c->ew);
+  free(c->e2w);
+  free(c->eo);
+  free(c->e2o);
+}
+
+/* One trial's draw: start S, finish F, prior P = F + O, the midpoint M of S and P (cells). */
+typedef struct {
+  int sx, sy, fx, fy, px, py, mx, my, ox, oy;
+} trial_t;
+
+/* 1-2: start, finish, prior; the nine fixed targets must be sensible. 1 if
+ * a draw was accepted within EXP_MAX_DRAWS. */
+static int draw_trial(const world_t *w, exp_rng_t *r, exp_result_t *out, trial_t *d) {
+  long k;
+  int accepted = 0;
+  for (k = 0; k < EXP_MAX_DRAWS && !accepted; ++k) {
+    int gx, gy;
+    out->draws++;
+    d->sx = (int)exp_rng_range(r, 0, w->nx - 1);
+    d->sy = (int)exp_rng_range(r, 0, w->ny - 1);
+    d->fx = (int)exp_rng_range(r, 0, w->nx - 1);
+    d->fy = (int)exp_rng_range(r, 0, w->ny - 1);
+    d->ox = (int)exp_rng_range(r, -w->prior_cells, w->prior_cells);
+    d->oy = (int)exp_rng_range(r, -w->prior_cells, w->prior_cells);
+    d->px = d->fx + d->ox;
+    d->py = d->fy + d->oy;
+    if (d->px < 0 || d->py < 0 || d->px > w->nx - 1 || d->py > w->ny - 1 ||
+        (w->has_nodata && !isfinite(w->dem[(size_t)d->fy * (size_t)w->nx + (size_t)d->fx]))) {
+      continue;
+    }
+    d->mx = (d->sx + d->px) / 2;
+    d->my = (d->sy + d->py) / 2;
+    accepted = 1;
+    for (gy = -1; gy <= 1 && accepted; ++gy) {
+      for (gx = -1; gx <= 1 && accepted; ++gx) {
+        int tx = d->mx + gx * w->grid_cells, ty = d->my + gy * w->grid_cells;
+        accepted = target_ok(w, tx, ty, d->px, d->py) && patch_inside(w, tx - d->ox, ty - d->oy);
+      }
+    }
+  }
+  return accepted;
+}
+
+/* 3-5: with selection, from the prior: trn_select's best target, sensed
+ * shifted by the prior's error, localized. 0, or -1 with the reason. */
+static int trial_with(world_t *w, const trial_t *d, long t, exp_rng_t *r, exp_result_t *out, clusters_t *c,
+                      char *err, size_t err_len) {
+  const exp_params_t *p = w->p;
+  trn_rover_t rover;
+  trn_select_result_t sres;
+  size_t ranked = 0;
+  trn_status_t st;
+  sense_t s;
+  const trn_candidate_t *cand;
+
+  rover.pos.x_cells = (float)d->px;
+  rover.pos.y_cells = (float)d->py;
+  rover.heading_rad =
+      (d->sx == d->px && d->sy == d->py) ? 0.0f : (float)atan2((double)(d->py - d->sy), (double)(d->px - d->sx));
+  st = trn_select(&w->map, &w->k, &w->pg, &w->scfg, &rover, w->cands, w->cap, &ranked, 1, &sres, w->sws, w->sws_b);
+  c->mw[t] = 1;
+  if (st == TRN_E_NOTARGET) {
+    out->with.no_target++;
+    out->with.localizations++;
+    return 0;
+  }
+  if (st != TRN_OK) {
+    snprintf(err, err_len, "trial %ld: trn_select: %s", t, trn_strerror(st));
     return -1;
   }
-  nt = (size_t)p->trials;
-  mw = calloc(nt, sizeof *mw);
-  kw = calloc(nt, sizeof *kw);
-  mo = calloc(nt, sizeof *mo);
-  ko = calloc(nt, sizeof *ko);
-  ew = calloc(nt, sizeof *ew);
-  e2w = calloc(nt, sizeof *e2w);
-  eo = calloc(nt, sizeof *eo);
-  e2o = calloc(nt, sizeof *e2o);
-  if (!mw || !kw || !mo || !ko || !ew || !e2w || !eo || !e2o) {
-    snprintf(err, err_len, "out of memory for %ld trials", p->trials);
-    goto done;
+  cand = &w->cands[ranked];
+  if (sres.patch_cells != 2 * w->half + 1) {
+    snprintf(err, err_len, "internal error: patch of %d cells, trn_select used %d", 2 * w->half + 1,
+             (int)sres.patch_cells);
+    return -1;
   }
-  if (build_world(&w, p, out, raw, err, err_len) != 0) {
-    goto done;
+  out->with.mean_range_m += (double)cand->range_m;
+  if (sense_and_localize(w, cand->x - d->ox, cand->y - d->oy, d->fx, d->fy, d->px, d->py, r, &s, err, err_len) !=
+      0) {
+    return -1;
   }
+  tally(&out->with, &s, p->success_cells * p->cell_m, p->cell_m, &c->kw[t], &c->ew[t], &c->e2w[t]);
+  return 0;
+}
 
-  for (t = 0; t < p->trials; ++t) {
-    exp_rng_t r;
-    long d;
-    int sx = 0, sy = 0, fx = 0, fy = 0, px = 0, py = 0, mx = 0, my = 0, ox = 0, oy = 0, accepted = 0;
-    trn_rover_t rover;
-    trn_select_result_t sres;
-    size_t ranked = 0;
-    trn_status_t st;
-    sense_t s;
-    exp_rng_seed(&r, p->seed, (uint64_t)t);
-
-    /* 1-2: start, finish, prior; the nine fixed targets must be sensible. */
-    for (d = 0; d < EXP_MAX_DRAWS && !accepted; ++d) {
-      int gx, gy;
-      out->draws++;
-      sx = (int)exp_rng_range(&r, 0, w.nx - 1);
-      sy = (int)exp_rng_range(&r, 0, w.ny - 1);
-      fx = (int)exp_rng_range(&r, 0, w.nx - 1);
-      fy = (int)exp_rng_range(&r, 0, w.ny - 1);
-      ox = (int)exp_rng_range(&r, -w.prior_cells, w.prior_cells);
-      oy = (int)exp_rng_range(&r, -w.prior_cells, w.prior_cells);
-      px = fx + ox;
-      py = fy + oy;
-      if (px < 0 || py < 0 || px > w.nx - 1 || py > w.ny - 1 ||
-          (w.has_nodata && !isfinite(w.dem[(size_t)fy * (size_t)w.nx + (size_t)fx]))) {
-        continue;
-      }
-      mx = (sx + px) / 2;
-      my = (sy + py) / 2;
-      accepted = 1;
-      for (gy = -1; gy <= 1 && accepted; ++gy) {
-        for (gx = -1; gx <= 1 && accepted; ++gx) {
-          int tx = mx + gx * w.grid_cells, ty = my + gy * w.grid_cells;
-          accepted = target_ok(&w, tx, ty, px, py) && patch_inside(&w, tx - ox, ty - oy);
-        }
-      }
+/* Without selection: the nine fixed targets around the midpoint, each its own localization. */
+static int trial_without(world_t *w, const trial_t *d, long t, exp_rng_t *r, exp_result_t *out, clusters_t *c,
+                         char *err, size_t err_len) {
+  const exp_params_t *p = w->p;
+  sense_t s;
+  int i;
+  c->mo[t] = 9;
+  for (i = 0; i < 9; ++i) {
+    int tx = d->mx + (i % 3 - 1) * w->grid_cells, ty = d->my + (i / 3 - 1) * w->grid_cells;
+    out->without.mean_range_m +=
+        sqrt((double)(tx - d->px) * (tx - d->px) + (double)(ty - d->py) * (ty - d->py)) * p->cell_m;
+    if (sense_and_localize(w, tx - d->ox, ty - d->oy, d->fx, d->fy, d->px, d->py, r, &s, err, err_len) != 0) {
+      return -1;
     }
-    if (!accepted) {
-      snprintf(err, err_len, "trial %ld: no start/finish pair with all nine fixed targets in reach after %ld draws "
-                             "(map too small for the sensor's reach%s?)", t, (long)EXP_MAX_DRAWS,
-               w.has_nodata ? ", or too much of it no-data" : "");
-      goto done;
-    }
-    sum_trav += sqrt((double)(sx - fx) * (sx - fx) + (double)(sy - fy) * (sy - fy)) * p->cell_m;
-
-    /* 3: with selection, from the prior. */
-    rover.pos.x_cells = (float)px;
-    rover.pos.y_cells = (float)py;
-    rover.heading_rad = (sx == px && sy == py) ? 0.0f : (float)atan2((double)(py - sy), (double)(px - sx));
-    st = trn_select(&w.map, &w.k, &w.pg, &w.scfg, &rover, w.cands, w.cap, &ranked, 1, &sres, w.sws, w.sws_b);
-    mw[t] = 1;
-    if (st == TRN_E_NOTARGET) {
-      out->with.no_target++;
-      out->with.localizations++;
-    } else if (st != TRN_OK) {
-      snprintf(err, err_len, "trial %ld: trn_select: %s", t, trn_strerror(st));
-      goto done;
-    } else {
-      const trn_candidate_t *c = &w.cands[ranked];
-      if (sres.patch_cells != 2 * w.half + 1) {
-        snprintf(err, err_len, "internal error: patch of %d cells, trn_select used %d", 2 * w.half + 1,
-                 (int)sres.patch_cells);
-        goto done;
-      }
-      out->with.mean_range_m += (double)c->range_m;
-      /* 4-5: the patch seen is shifted by the prior's error. */
-      if (sense_and_localize(&w, c->x - ox, c->y - oy, fx, fy, px, py, &r, &s, err, err_len) != 0) {
-        goto done;
-      }
-      tally(&out->with, &s, p->success_cells * p->cell_m, p->cell_m, &kw[t], &ew[t], &e2w[t]);
-    }
-
-    /* Without selection: the nine fixed targets, each its own localization. */
-    mo[t] = 9;
-    for (i = 0; i < 9; ++i) {
-      int tx = mx + (i % 3 - 1) * w.grid_cells, ty = my + (i / 3 - 1) * w.grid_cells;
-      out->without.mean_range_m += sqrt((double)(tx - px) * (tx - px) + (double)(ty - py) * (ty - py)) * p->cell_m;
-      if (sense_and_localize(&w, tx - ox, ty - oy, fx, fy, px, py, &r, &s, err, err_len) != 0) {
-        goto done;
-      }
-      tally(&out->without, &s, p->success_cells * p->cell_m, p->cell_m, &ko[t], &eo[t], &e2o[t]);
-    }
-    if (progress != NULL && progress(ctx, t + 1, p->trials) != 0) {
-      snprintf(err, err_len, "cancelled after %ld of %ld trials", t + 1, p->trials);
-      goto done;
-    }
+    tally(&out->without, &s, p->success_cells * p->cell_m, p->cell_m, &c->ko[t], &c->eo[t], &c->e2o[t]);
   }
+  return 0;
+}
 
-  exp_cluster_stats(mw, kw, ew, e2w, p->trials, &out->with.st);
-  exp_cluster_stats(mo, ko, eo, e2o, p->trials, &out->without.st);
+/* The arms' statistics and means from the per-trial counts. */
+static void exp_summarise(const exp_params_t *p, const clusters_t *c, double sum_trav, exp_result_t *out) {
+  exp_cluster_stats(c->mw, c->kw, c->ew, c->e2w, p->trials, &out->with.st);
+  exp_cluster_stats(c->mo, c->ko, c->eo, c->e2o, p->trials, &out->without.st);
   if (out->with.localizations - out->with.no_target > 0) {
     out->with.mean_range_m /= (double)(out->with.localizations - out->with.no_target);
   }
@@ -888,6 +940,55 @@ int exp_run(const exp_params_t *p, exp_result_t *out, exp_progress_fn progress, 
   out->without.mean_range_m /= (double)out->without.localizations;
   out->without.mean_points /= (double)out->without.localizations;
   out->mean_traverse_m = sum_trav / (double)p->trials;
+}
+
+int exp_run(const exp_params_t *p, exp_result_t *out, exp_progress_fn progress, void *ctx, char *err,
+            size_t err_len) {
+  world_t w;
+  void *raw[7] = {NULL, NULL, NULL, NULL, NULL, NULL, NULL};
+  clusters_t c;
+  long t;
+  double sum_trav = 0.0;
+  const char *why;
+  int rc = -1, i;
+
+  memset(out, 0, sizeof *out);
+  memset(&w, 0, sizeof w);
+  memset(&c, 0, sizeof c);
+  w.p = p;
+  if ((why = exp_params_check(p)) != NULL) {
+    snprintf(err, err_len, "%s", why);
+    return -1;
+  }
+  if (!clusters_alloc(&c, (size_t)p->trials)) {
+    snprintf(err, err_len, "out of memory for %ld trials", p->trials);
+    goto done;
+  }
+  if (build_world(&w, p, out, raw, err, err_len) != 0) {
+    goto done;
+  }
+  for (t = 0; t < p->trials; ++t) {
+    exp_rng_t r;
+    trial_t d;
+    memset(&d, 0, sizeof d);
+    exp_rng_seed(&r, p->seed, (uint64_t)t);
+    if (!draw_trial(&w, &r, out, &d)) {
+      snprintf(err, err_len, "trial %ld: no start/finish pair with all nine fixed targets in reach after %ld draws "
+                             "(map too small for the sensor's reach%s?)", t, (long)EXP_MAX_DRAWS,
+               w.has_nodata ? ", or too much of it no-data" : "");
+      goto done;
+    }
+    sum_trav += sqrt((double)(d.sx - d.fx) * (d.sx - d.fx) + (double)(d.sy - d.fy) * (d.sy - d.fy)) * p->cell_m;
+    if (trial_with(&w, &d, t, &r, out, &c, err, err_len) != 0 ||
+        trial_without(&w, &d, t, &r, out, &c, err, err_len) != 0) {
+      goto done;
+    }
+    if (progress != NULL && progress(ctx, t + 1, p->trials) != 0) {
+      snprintf(err, err_len, "cancelled after %ld of %ld trials", t + 1, p->trials);
+      goto done;
+    }
+  }
+  exp_summarise(p, &c, sum_trav, out);
   rc = 0;
 
 done:
@@ -900,13 +1001,6 @@ done:
   free(w.lws_raw);
   free(w.cands);
   free(w.pts);
-  free(mw);
-  free(kw);
-  free(mo);
-  free(ko);
-  free(ew);
-  free(e2w);
-  free(eo);
-  free(e2o);
+  clusters_free(&c);
   return rc;
 }

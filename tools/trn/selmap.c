@@ -249,37 +249,28 @@ static int parse_sensors(const char *text, double out[][2], size_t cap, size_t *
   return 1;
 }
 
-int selmap_prepare(selmap_t *w, const char *cmd, const char *dem_path, const selmap_opts_t *o) {
-  char err[768];
-  double cell, col, row;
-  size_t i, mb;
-  trn_grid_f32_t gg;
-  trn_status_t st;
-  void *mbuf;
-  trn_select_cfg_t *c = &w->scfg;
-
-  memset(w, 0, sizeof *w);
-  /* Options that need no DEM first: cheap mistakes fail fast. */
+/* Options that need no DEM: cheap mistakes fail fast. */
+static int check_opts(selmap_t *w, const selmap_opts_t *o, char *err, size_t err_len) {
   if (o->pan_deg[0] < -180.0 || o->pan_deg[1] > 180.0 || o->pan_deg[0] > o->pan_deg[1]) {
-    return cli_fail(cmd, "--pan-deg %g,%g: want -180 <= MIN <= MAX <= 180", o->pan_deg[0], o->pan_deg[1]);
+    snprintf(err, err_len, "--pan-deg %g,%g: want -180 <= MIN <= MAX <= 180", o->pan_deg[0], o->pan_deg[1]);
+    return -1;
   }
   if (o->min_range_m > o->max_range_m) {
-    return cli_fail(cmd, "--min-range-m %g is above --max-range-m %g", o->min_range_m, o->max_range_m);
+    snprintf(err, err_len, "--min-range-m %g is above --max-range-m %g", o->min_range_m, o->max_range_m);
+    return -1;
   }
   if (o->sensors != NULL &&
-      !parse_sensors(o->sensors, w->sensors_m, TRN_SPREAD_MAX_SENSORS, &w->n_sensors, err, sizeof err)) {
-    return cli_fail(cmd, "%s", err);
+      !parse_sensors(o->sensors, w->sensors_m, TRN_SPREAD_MAX_SENSORS, &w->n_sensors, err, err_len)) {
+    return -1;
   }
-  if (dem_read(dem_path, (int)o->band, TRN_MAX_DIM, &w->dem, err, sizeof err) != 0) {
-    return cli_fail(cmd, "--dem: %s", err);
-  }
-  cell = w->dem.cell_m;
-  if (cell > 1000.0) {
-    cli_fail(cmd, "cell size %g m is above the 1000 m the core accepts", cell);
-    goto fail;
-  }
+  return 0;
+}
 
-  /* Selection rules in the grid frame. */
+/* Selection rules in the grid frame. */
+static int select_rules(selmap_t *w, const selmap_opts_t *o, double cell, char *err, size_t err_len) {
+  trn_select_cfg_t *c = &w->scfg;
+  trn_status_t st;
+
   trn_select_cfg_default(c);
   c->min_range_m = (float)o->min_range_m;
   c->max_range_m = (float)o->max_range_m;
@@ -291,43 +282,59 @@ int selmap_prepare(selmap_t *w, const char *cmd, const char *dem_path, const sel
   c->min_separation_m = (float)o->separation_m;
   if ((st = trn_select_cfg_check(c, (float)cell)) != TRN_OK) {
     if (o->patch_m / cell < 2.5) {
-      cli_fail(cmd, "--patch-m %g is %.1f cells of %g m; at least 3 cells are needed", o->patch_m,
+      snprintf(err, err_len, "--patch-m %g is %.1f cells of %g m; at least 3 cells are needed", o->patch_m,
                o->patch_m / cell, cell);
     } else {
-      cli_fail(cmd, "selection rules rejected for %g m cells (range up to %g m = %.0f cells, at most %d): %s",
-               cell, o->max_range_m, o->max_range_m / cell, TRN_MAX_DIM, trn_strerror(st));
+      snprintf(err, err_len,
+               "selection rules rejected for %g m cells (range up to %g m = %.0f cells, at most %d): %s", cell,
+               o->max_range_m, o->max_range_m / cell, TRN_MAX_DIM, trn_strerror(st));
     }
-    goto fail;
+    return -1;
   }
   w->heading_grid_rad = (float)(-o->heading_deg * PI / 180.0);
+  return 0;
+}
 
-  /* Map configuration (mapopt.h; default SELMAP_MAP_CONFIG_DEFAULT). */
-  if (mapopt_config(&o->mo, w->dem.data, w->dem.width, w->dem.height, cell, &w->cfg, &w->sigma_h, err,
-                    sizeof err) != 0) {
-    cli_fail(cmd, "--dem: %s", err);
-    goto fail;
+/* The map (configuration from o->mo; default SELMAP_MAP_CONFIG_DEFAULT) and the kernels. */
+static int build_map(selmap_t *w, const selmap_opts_t *o, char *err, size_t err_len) {
+  char why[768];
+  size_t mb;
+  trn_grid_f32_t gg;
+  trn_status_t st;
+  void *mbuf;
+
+  if (mapopt_config(&o->mo, w->dem.data, w->dem.width, w->dem.height, w->dem.cell_m, &w->cfg, &w->sigma_h, why,
+                    sizeof why) != 0) {
+    snprintf(err, err_len, "--dem: %s", why);
+    return -1;
   }
   if (trn_grid_f32_init(&gg, w->dem.data, (size_t)w->dem.width * (size_t)w->dem.height, w->dem.width,
                         w->dem.height) != TRN_OK) {
-    cli_fail(cmd, "DEM size %d x %d rejected by the core", w->dem.width, w->dem.height);
-    goto fail;
+    snprintf(err, err_len, "DEM size %d x %d rejected by the core", w->dem.width, w->dem.height);
+    return -1;
   }
   mb = trn_map_bytes(&w->cfg, w->dem.width, w->dem.height);
   mbuf = mb > 0 ? selmap_alloc16(mb, &w->mraw) : NULL;
   if (mbuf == NULL) {
-    cli_fail(cmd, "cannot allocate %zu bytes for the prepared map", mb);
-    goto fail;
+    snprintf(err, err_len, "cannot allocate %zu bytes for the prepared map", mb);
+    return -1;
   }
   if ((st = trn_map_build(&w->map, &w->cfg, &gg, mbuf, mb)) != TRN_OK) {
-    cli_fail(cmd, "--dem: cannot prepare the map: %s", trn_strerror(st));
-    goto fail;
+    snprintf(err, err_len, "--dem: cannot prepare the map: %s", trn_strerror(st));
+    return -1;
   }
   if ((st = trn_kernels_build(&w->k, TRN_KERNEL_SIGMA0_DEFAULT_CELLS)) != TRN_OK) {
-    cli_fail(cmd, "kernels: %s", trn_strerror(st));
-    goto fail;
+    snprintf(err, err_len, "kernels: %s", trn_strerror(st));
+    return -1;
   }
+  return 0;
+}
 
-  /* Sensing positions of the global map: given, or the DEM's centre. */
+/* Sensing positions of the global map in cells: given, or the DEM's centre. */
+static int sensor_cells(selmap_t *w, char *err, size_t err_len) {
+  double col, row;
+  size_t i;
+
   if (w->n_sensors == 0) {
     dem_cell_to_map(w->dem.gt, 0.5 * (w->dem.width - 1), 0.5 * (w->dem.height - 1), &w->sensors_m[0][0],
                     &w->sensors_m[0][1]);
@@ -336,18 +343,38 @@ int selmap_prepare(selmap_t *w, const char *cmd, const char *dem_path, const sel
   for (i = 0; i < w->n_sensors; ++i) {
     dem_map_to_cell(w->dem.gt, w->sensors_m[i][0], w->sensors_m[i][1], &col, &row);
     if (fabs(col) > 1e6 || fabs(row) > 1e6) {
-      cli_fail(cmd, "--sensors: %.3f,%.3f is %.0f cells from the map (at most 1e6)", w->sensors_m[i][0],
+      snprintf(err, err_len, "--sensors: %.3f,%.3f is %.0f cells from the map (at most 1e6)", w->sensors_m[i][0],
                w->sensors_m[i][1], fmax(fabs(col), fabs(row)));
-      goto fail;
+      return -1;
     }
     w->sensors[i].x_cells = (float)col;
     w->sensors[i].y_cells = (float)row;
   }
+  return 0;
+}
 
+int selmap_prepare(selmap_t *w, const char *dem_path, const selmap_opts_t *o, char *err, size_t err_len) {
+  char why[768];
+
+  memset(w, 0, sizeof *w);
+  if (check_opts(w, o, err, err_len) != 0) {
+    return CLI_BAD_INPUT;
+  }
+  if (dem_read(dem_path, (int)o->band, TRN_MAX_DIM, &w->dem, why, sizeof why) != 0) {
+    snprintf(err, err_len, "--dem: %s", why);
+    return CLI_BAD_INPUT;
+  }
+  if (w->dem.cell_m > 1000.0) {
+    snprintf(err, err_len, "cell size %g m is above the 1000 m the core accepts", w->dem.cell_m);
+    goto fail;
+  }
+  if (select_rules(w, o, w->dem.cell_m, err, err_len) != 0 || build_map(w, o, err, err_len) != 0 ||
+      sensor_cells(w, err, err_len) != 0) {
+    goto fail;
+  }
   /* Eq. 8: the model, or the error raster with the model where it has no data. */
   if (selmap_prob_global(o, &w->dem, &w->k, w->sensors, w->n_sensors, &w->map, &w->pg, &w->pgraw, err,
-                         sizeof err) != 0) {
-    cli_fail(cmd, "%s", err);
+                         err_len) != 0) {
     goto fail;
   }
   return 0;

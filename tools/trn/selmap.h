@@ -100,9 +100,10 @@ typedef struct {
 
 /* Read the DEM, check the options, build the map (configuration from
  * o->mo, mapopt_config), the kernels and P_G (eq. 8) from the sensing
- * positions and the global error model or raster. On failure prints `trn <cmd>: reason` and returns CLI_BAD_INPUT
- * (w is freed); 0 on success. */
-int selmap_prepare(selmap_t *w, const char *cmd, const char *dem_path, const selmap_opts_t *o);
+ * positions and the global error model or raster. Prints nothing: on failure
+ * returns CLI_BAD_INPUT with the one-line reason in err (w is freed); 0 on
+ * success. */
+int selmap_prepare(selmap_t *w, const char *dem_path, const selmap_opts_t *o, char *err, size_t err_len);
 
 void selmap_free(selmap_t *w);
 
