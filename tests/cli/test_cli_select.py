@@ -159,6 +159,29 @@ for name, r, ok in (("east", east, lambda x, y: x - rover[0] >= 0.5 * math.hypot
 check(east.get("candidates", 0) + west.get("candidates", 0) < 2 * sel.get("candidates", 0),
       "pan limits reduce the candidates")
 
+# the heading's lever arm (--heading-sigma-deg, docs/method.md 4): 0 is the
+# default bit for bit; with D degrees each target's heading_m is D rad x its
+# range, inside its uncertainty; the chosen target is no farther than with 0
+h0 = run_json("select", "--dem", g_tif, "--rover", f"{rover[0]},{rover[1]}", *SMALL, "--heading-sigma-deg", "0",
+              "--json")
+check(all(h0.get(k) == sel.get(k) for k in ("target", "sigma_x_m", "sigma_y_m", "rho", "uncertainty_m")),
+      "--heading-sigma-deg 0 gives the default's target and covariance")
+check(h0.get("heading_sigma_deg") == 0 and h0.get("heading_m") == 0, "heading_sigma_deg 0, heading_m 0 in the JSON")
+h3 = run_json("select", "--dem", g_tif, "--rover", f"{rover[0]},{rover[1]}", *SMALL, "--heading-sigma-deg", "3",
+              "--next-best", "4", "--json")
+if "target" in h3 and "target" in sel:
+    s3 = math.radians(3.0)
+    check(abs(h3["heading_m"] - s3 * h3["target"]["range_m"]) < 1e-6,
+          f"heading_m {h3['heading_m']} = 3 deg x range {h3['target']['range_m']}")
+    check(all(abs(q["heading_m"] - s3 * q["range_m"]) < 1e-6 for q in h3["next_best"]), "next_best heading_m")
+    check(h3["uncertainty_m"] >= h3["heading_m"] - 1e-12, "the heading's part is inside the total")
+    check(h3["uncertainty_m"] > sel["uncertainty_m"], "an uncertain heading predicts a larger uncertainty")
+    check(h3["target"]["range_m"] <= sel["target"]["range_m"] + 1e-9,
+          f"an uncertain heading picks a target no farther ({h3['target']['range_m']:.2f} against "
+          f"{sel['target']['range_m']:.2f} m)")
+for bad, why in (("-1", "out of range"), ("29", "out of range"), ("nan", "not a finite number")):
+    expect_error(1, why, "select", "--dem", g_tif, "--rover", f"{rover[0]},{rover[1]}", "--heading-sigma-deg", bad)
+
 # second GDAL format (ESRI ASCII grid), same answer
 g_asc = p("global.asc")
 gdal.Translate(g_asc, g_tif, format="AAIGrid")

@@ -367,6 +367,7 @@ static void field_report_json(const cmd_field_params_t *p, const cmd_field_resul
   json_num(&j, "seconds", r->secs);
   json_str(&j, "algorithm", p->reference ? "trn_field" : "trn_field_fast");
   json_int(&j, "workspace_bytes", (long long)r->wsb);
+  json_num(&j, "heading_sigma_deg", p->so.heading_sigma_deg);
   selmap_json_config(&j, &p->so, &r->w.cfg, r->w.sigma_h);
   json_end(&j);
 }

@@ -35,6 +35,7 @@ static void target_json(json_t *j, const selmap_t *w, const trn_candidate_t *c) 
   json_num(j, "sigma_y_m", c->sigma_y_m);
   json_num(j, "rho", selmap_rho_en(c->rho));
   json_num(j, "uncertainty_m", c->uncertainty_m);
+  json_num(j, "heading_m", c->heading_m);
 }
 
 void cmd_select_params_default(cmd_select_params_t *p) {
@@ -192,6 +193,7 @@ static void select_report_json(const cmd_select_params_t *p, const cmd_select_re
   json_num(&j, "sigma_y_m", b->sigma_y_m);
   json_num(&j, "rho", selmap_rho_en(b->rho));
   json_num(&j, "uncertainty_m", b->uncertainty_m);
+  json_num(&j, "heading_m", b->heading_m);
   json_obj(&j, "rover");
   json_num(&j, "x_m", p->rover_m[0]);
   json_num(&j, "y_m", p->rover_m[1]);
@@ -223,6 +225,7 @@ static void select_report_json(const cmd_select_params_t *p, const cmd_select_re
   if (p->out_map != NULL) {
     json_str(&j, "out_map", p->out_map);
   }
+  json_num(&j, "heading_sigma_deg", p->so.heading_sigma_deg);
   selmap_json_config(&j, &p->so, &w->cfg, w->sigma_h);
   json_end(&j);
 }

@@ -184,6 +184,11 @@ void selmap_opts(selmap_opts_t *o, cli_opt_t *d) {
       {"--band", CLI_LONG, &o->band, 1, 65535, 0, "N", "band of --dem", 0},
       {"--heading-deg", CLI_DOUBLE, &o->heading_deg, -360.0, 360.0, 0, "A",
        "rover heading, degrees counter-clockwise from east", 0},
+      {"--heading-sigma-deg", CLI_DOUBLE, &o->heading_sigma_deg, 0.0, (double)TRN_SELECT_MAX_SIGMA_HEADING_RAD * 180.0 / PI,
+       0, "D",
+       "the heading's uncertainty (1 sigma), degrees: each target's predicted covariance adds (D r)^2 across its line "
+       "of sight, so nearer targets win as it grows (docs/method.md 4)",
+       0},
       {"--pan-deg", CLI_XY, o->pan_deg, 0, 0, 0, "MIN,MAX",
        "bearings the mast can look at, degrees from the heading, CCW positive", 0},
       {"--min-range-m", CLI_DOUBLE, &o->min_range_m, 0.0, 1e6, 0, "R", "nearest target, m", 0},
@@ -280,6 +285,7 @@ static int select_rules(selmap_t *w, const selmap_opts_t *o, double cell, char *
   c->patch_m = (float)o->patch_m;
   c->stride_cells = (int32_t)o->stride_cells;
   c->min_separation_m = (float)o->separation_m;
+  c->sigma_heading_rad = (float)(o->heading_sigma_deg * PI / 180.0);
   if ((st = trn_select_cfg_check(c, (float)cell)) != TRN_OK) {
     if (o->patch_m / cell < 2.5) {
       snprintf(err, err_len, "--patch-m %g is %.1f cells of %g m; at least 3 cells are needed", o->patch_m,

@@ -32,6 +32,7 @@
 typedef struct {
   long band;
   double heading_deg;  /* map frame, CCW from east */
+  double heading_sigma_deg; /* the heading's 1-sigma uncertainty, degrees (trn_select_cfg_t.sigma_heading_rad) */
   double pan_deg[2];   /* min,max relative to the heading, map frame */
   double min_range_m, max_range_m, footprint_m, patch_m, separation_m;
   long stride_cells;
@@ -42,9 +43,9 @@ typedef struct {
   const char *gerr;    /* per-cell error raster (m, the DEM's grid), or NULL */
 } selmap_opts_t;
 
-/* The selection options (10), the global map's error model (3), the map
+/* The selection options (11), the global map's error model (3), the map
  * configuration (MAPOPT_N), in that order. */
-#define SELMAP_N_SEL_OPTS 10
+#define SELMAP_N_SEL_OPTS 11
 #define SELMAP_N_GERR_OPTS 3
 #define SELMAP_N_OPTS (SELMAP_N_SEL_OPTS + SELMAP_N_GERR_OPTS + MAPOPT_N)
 
