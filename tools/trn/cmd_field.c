@@ -69,7 +69,7 @@ static int parse_box(const char *s, double v[4]) {
   if (strlen(s) >= sizeof buf) {
     return 0;
   }
-  strcpy(buf, s);
+  memcpy(buf, s, strlen(s) + 1u);
   for (i = 0; i < 4; ++i) {
     c = strchr(p, ',');
     if ((c == NULL) != (i == 3)) {
@@ -176,10 +176,10 @@ static int field_area(const cmd_field_params_t *p, const double box[4], cmd_fiel
     r0 = ceil(r0 - 1e-9);
     c1 = floor(c1 + 1e-9);
     r1 = floor(r1 + 1e-9);
-    if (c0 < 0) c0 = 0;
-    if (r0 < 0) r0 = 0;
-    if (c1 > d->width - 1) c1 = d->width - 1;
-    if (r1 > d->height - 1) r1 = d->height - 1;
+    c0 = c0 < 0 ? 0 : c0;
+    r0 = r0 < 0 ? 0 : r0;
+    c1 = c1 > d->width - 1 ? d->width - 1 : c1;
+    r1 = r1 > d->height - 1 ? d->height - 1 : r1;
     if (c0 > c1 || r0 > r1) {
       snprintf(err, err_len, "--area-m %s holds no cell centre of the map (x %.3f..%.3f, y %.3f..%.3f)",
                p->area_text, d->gt[0], d->gt[0] + d->width * d->cell_m, d->gt[3] - d->height * d->cell_m, d->gt[3]);
@@ -190,8 +190,8 @@ static int field_area(const cmd_field_params_t *p, const double box[4], cmd_fiel
     r->area.x1 = (int32_t)c1;
     r->area.y1 = (int32_t)r1;
   }
-  r->aw = (size_t)(r->area.x1 - r->area.x0 + 1);
-  r->ah = (size_t)(r->area.y1 - r->area.y0 + 1);
+  r->aw = (size_t)r->area.x1 - (size_t)r->area.x0 + 1u; /* the area lies on the map: x0 <= x1, both >= 0 */
+  r->ah = (size_t)r->area.y1 - (size_t)r->area.y0 + 1u;
   return CLI_OK;
 }
 

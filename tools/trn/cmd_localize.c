@@ -11,6 +11,7 @@
  * rover's map position is that point minus the cell centre's offset from the
  * rover. */
 #define _POSIX_C_SOURCE 200112L /* clock_gettime */
+#include <errno.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -246,6 +247,45 @@ static void print_json(const cmd_localize_ctx_t *c, const char *local, const dou
   json_end(&j);
 }
 
+/* The fields of a --batch line, "LOCAL PRIOR_X PRIOR_Y [WINDOW_M]": the path
+ * into local (at most cap - 1 characters), the numbers by strtod (a number
+ * out of range or not finite makes the line bad). Returns how many fields
+ * were read, 5 if there are more than four, 0 for a bad one. */
+static int batch_fields(const char *line, char *local, size_t cap, double prior[2], double *w) {
+  const char *p = line + strspn(line, " \t\r\n");
+  size_t len = strcspn(p, " \t\r\n");
+  double *dst[3];
+  int n;
+  dst[0] = &prior[0];
+  dst[1] = &prior[1];
+  dst[2] = w;
+  if (len == 0 || len >= cap) {
+    return 0;
+  }
+  memcpy(local, p, len);
+  local[len] = '\0';
+  p += len;
+  for (n = 1; n < 5; ++n) {
+    char *end;
+    double v;
+    p += strspn(p, " \t\r\n");
+    if (*p == '\0') {
+      return n;
+    }
+    if (n == 4) {
+      return 5;
+    }
+    errno = 0;
+    v = strtod(p, &end);
+    if (end == p || errno == ERANGE || !isfinite(v) || (*end != '\0' && strchr(" \t\r\n", *end) == NULL)) {
+      return 0;
+    }
+    *dst[n - 1] = v;
+    p = end;
+  }
+  return n;
+}
+
 /* --batch: one case per line, "LOCAL PRIOR_X PRIOR_Y [WINDOW_M]"; blank
  * lines and lines starting with # are skipped. A case that cannot be
  * localized prints {"status": "error", "error": ...} and the run goes on;
@@ -261,12 +301,11 @@ static int run_batch(const cmd_localize_ctx_t *c, const char *path, double windo
     double prior[2], w = window_m;
     int nf;
     cmd_localize_out_t o;
-    char extra[8];
     ++lineno;
     if (line[0] == '#' || strspn(line, " \t\r\n") == strlen(line)) {
       continue;
     }
-    nf = sscanf(line, "%4095s %lf %lf %lf %7s", local, &prior[0], &prior[1], &w, extra);
+    nf = batch_fields(line, local, sizeof local, prior, &w);
     if (nf < 3 || nf > 4 || !isfinite(prior[0]) || !isfinite(prior[1]) || !(w >= 0.0 && w <= 1e6)) {
       fclose(f);
       return cli_fail("localize", "--batch %s line %ld: expected 'LOCAL PRIOR_X PRIOR_Y [WINDOW_M]'", path, lineno);

@@ -303,7 +303,7 @@ static int world_terrain(world_t *w, char *err, size_t err_len) {
   synth_terrain_t t;
   synth_rock_t *rocks;
   size_t nrocks, cells = (size_t)w->n * (size_t)w->n;
-  int32_t px, py, half;
+  int32_t px, py, half, mid;
 
   /* The main job's rock field (tools/trn_demo.c): 15 % cover, radii 5-30 cm. */
   nrocks = (size_t)((double)w->n * (double)w->n * cell * cell * 0.15 / (PI * 0.15 * 0.15));
@@ -319,8 +319,9 @@ static int world_terrain(world_t *w, char *err, size_t err_len) {
   synth_render(&t, w->dem, (int)w->n, (int)w->n, 0.0, 0.0, cell);
   /* The rover a fraction of a cell off the map centre; its local map in its own grid. */
   half = (int32_t)(w->nl / 2);
-  w->truth_x = (double)(w->n / 2) + 0.3;
-  w->truth_y = (double)(w->n / 2) - 0.2;
+  mid = (int32_t)(w->n / 2); /* the integer centre cell */
+  w->truth_x = (double)mid + 0.3;
+  w->truth_y = (double)mid - 0.2;
   synth_render(&t, w->loc, (int)w->nl, (int)w->nl, (w->truth_x - half) * cell, (w->truth_y - half) * cell,
                cell);
   free(rocks);
