@@ -126,16 +126,22 @@ def _argv(cmd, opts):
     return argv
 
 
-def _key(argv, per_call):
-    """What a preparation depends on: every option except the per-call ones."""
+def _key(argv, per_call, defaults=None):
+    """What a preparation depends on: every option except the per-call ones,
+    with the defaults that differ between commands (select's stride 1,
+    field's 2) written out, so select and field share a map only when it is
+    the same."""
     out, i = [], 1
+    seen = set()
     while i < len(argv):
         name = argv[i]
         has_value = i + 1 < len(argv) and not argv[i + 1].startswith("--")
         val = argv[i + 1] if has_value else ""
         if name not in per_call:
             out.append(name + "\x1f" + val)
+            seen.add(name)
         i += 2 if has_value else 1
+    out += [name + "\x1f" + val for name, val in (defaults or {}).items() if name not in seen]
     return "\x1e".join(sorted(out))
 
 
@@ -149,8 +155,7 @@ def _gdal():
         from osgeo import gdal, osr
     except ImportError as e:  # pragma: no cover - Debian's python3-gdal is a requirement
         raise TrnError("bad_input", f"arrays need GDAL's Python bindings (Debian python3-gdal): {e}") from e
-    gdal.UseExceptions()
-    return gdal, osr
+    return gdal, osr  # the caller's exception settings are left alone: return codes checked
 
 
 def _geotransform(transform):
@@ -185,26 +190,31 @@ class _VsiFile:
         a = _check_array(heights)
         gt = _geotransform(transform)
         self.path = f"/vsimem/trn_py/{os.getpid()}_{next(_vsi_ids)}.tif"
-        ds = gdal.GetDriverByName("GTiff").Create(self.path, a.shape[1], a.shape[0], 1, gdal.GDT_Float32)
-        ds.SetGeoTransform(gt)
+        wkt = None
         if crs is not None:
             srs = osr.SpatialReference()
             try:
-                srs.SetFromUserInput(str(crs) if not isinstance(crs, int) else f"EPSG:{crs}")
-            except RuntimeError as e:
-                gdal.Unlink(self.path)
-                raise TrnError("bad_input", f"crs {crs!r}: {e}") from e
-            ds.SetProjection(srs.ExportToWkt())
+                bad = srs.SetFromUserInput(str(crs) if not isinstance(crs, int) else f"EPSG:{crs}") != 0
+            except RuntimeError:
+                bad = True
+            if bad:
+                raise TrnError("bad_input", f"crs {crs!r}: not a CRS GDAL knows (EPSG:n, WKT, PROJ)")
+            wkt = srs.ExportToWkt()
+        ds = gdal.GetDriverByName("GTiff").Create(self.path, a.shape[1], a.shape[0], 1, gdal.GDT_Float32)
+        if ds is None:
+            raise TrnError("bad_input", f"cannot create the in-memory raster {self.path}")
+        ds.SetGeoTransform(gt)
+        if wkt is not None:
+            ds.SetProjection(wkt)
         band = ds.GetRasterBand(1)
         if nodata is not None:
             band.SetNoDataValue(float(nodata))
         band.WriteArray(a)
         ds = None
-        self._unlink = gdal.Unlink
 
     def __del__(self):
         try:
-            self._unlink(self.path)
+            _unlink(self.path)
         except Exception:  # pragma: no cover - interpreter shutdown
             pass
 
@@ -221,12 +231,19 @@ def _raster_source(src, transform, crs, nodata, what):
     return f.path, f
 
 
-def _read_vsi(path):
+def _unlink(path):
+    """Remove a /vsimem/ file if it is there, whatever the caller's GDAL exception setting."""
     gdal, _ = _gdal()
-    ds = gdal.Open(path)
-    a = ds.GetRasterBand(1).ReadAsArray()
-    ds = None
-    gdal.Unlink(path)
+    try:
+        if gdal.VSIStatL(path) is not None:
+            gdal.Unlink(path)
+    except RuntimeError:  # pragma: no cover
+        pass
+
+
+def _read_vsi(path):
+    a = _read_file(path)
+    _unlink(path)
     return a
 
 
@@ -274,10 +291,10 @@ class Map:
     def __exit__(self, *exc):
         self.close()
 
-    def _call(self, fn, argv, per_call, extra=()):
+    def _call(self, fn, argv, per_call, extra=(), defaults=None):
         if not self._h:
             raise TrnError("bad_input", "the Map is closed")
-        key = _key(argv, per_call).encode()
+        key = _key(argv, per_call, defaults).encode()
         cargv = (ctypes.c_char_p * len(argv))(*[a.encode() for a in argv])
         out = ctypes.c_void_p()
         err = ctypes.create_string_buffer(_ERR_LEN)
@@ -309,7 +326,7 @@ class Map:
         patch_m, stride_cells, sensors, next_best, out_map ...). Returns the
         dict of `trn select --json`."""
         argv = _argv("select", {"dem": self.path, "band": self.band, "rover": rover, **options})
-        return self._call(_lib.trn_py_select, argv, _SELECT_PER_CALL)
+        return self._call(_lib.trn_py_select, argv, _SELECT_PER_CALL, defaults={"--stride-cells": "1"})
 
     def field(self, area=None, progress=None, **options):
         """The sensor uncertainty field over area (x0, y0, x1, y1 map metres;
@@ -345,11 +362,11 @@ class Map:
 
         cb = _PROGRESS_FN(on_progress) if progress is not None else _PROGRESS_FN()
         try:
-            r = self._call(_lib.trn_py_field, argv, _FIELD_PER_CALL, (cb, None))
+            r = self._call(_lib.trn_py_field, argv, _FIELD_PER_CALL, (cb, None), defaults={"--stride-cells": "2"})
         except TrnError as e:
             for p in (out, ev):
                 if str(p).startswith("/vsimem/"):
-                    _gdal()[0].Unlink(str(p))
+                    _unlink(str(p))
             if state["error"] is not None:
                 raise state["error"] from None
             if state["cancelled"]:
