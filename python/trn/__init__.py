@@ -191,7 +191,7 @@ class _VsiFile:
         gt = _geotransform(transform)
         self.path = f"/vsimem/trn_py/{os.getpid()}_{next(_vsi_ids)}.tif"
         wkt = None
-        if crs is not None:
+        if crs is not None and crs != "":  # "": GDAL's GetProjection() of a file without one
             srs = osr.SpatialReference()
             try:
                 bad = srs.SetFromUserInput(str(crs) if not isinstance(crs, int) else f"EPSG:{crs}") != 0
