@@ -8,8 +8,9 @@
  * declared here print nothing and never exit: each returns an exit status of
  * cli.h (CLI_OK, CLI_BAD_INPUT, CLI_NO_RESULT) and, when it is not CLI_OK,
  * the one-line reason in err (what `trn <cmd>: <reason>` prints). They take
- * plain structs and keep no global state, so a binding (ctypes over a shared
- * library) could call them; files they are asked to write (--out ...) are
+ * plain structs and keep no global state, so a binding calls them (the
+ * Python package: python/trn_py.c, libtrn_run.so; docs/modules/python.md);
+ * files they are asked to write (--out ...) are
  * written by run. Progress, where a command has any, goes through the
  * optional callback in its params (NULL: none). Results own their memory:
  * free them with the matching *_result_free, also after a failed run.
