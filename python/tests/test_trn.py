@@ -49,6 +49,22 @@ def test_localize_equals_cli(cli, dems, gmap):
     assert abs(want["x_m"] - dems["truth"][0]) < 0.05 and abs(want["y_m"] - dems["truth"][1]) < 0.05
 
 
+class AffineLike:
+    """What rasterio's affine.Affine offers: to_gdal()."""
+
+    def __init__(self, gt):
+        self.gt = gt
+
+    def to_gdal(self):
+        return self.gt
+
+
+def test_affine_transform(dems, gmap):
+    a, gt, wkt = read(dems["global"])
+    assert trn.Map(a, transform=AffineLike(gt), crs=wkt).select(rover=ROVER) == gmap.select(rover=ROVER)
+    assert trn.Map(a, transform=gt, crs=32611).select(rover=ROVER) == gmap.select(rover=ROVER)
+
+
 def test_localize_options_equal_cli(cli, dems, gmap):
     """Map options through keywords, and the prepared map re-made when they change."""
     a, gt, _ = read(dems["local"])
@@ -80,6 +96,14 @@ def test_select_out_map(cli, dems, gmap, tmp_path):
     assert r["out_map"] == str(out)
     cand, _, _ = read(out)
     assert np.nanmin(cand) == pytest.approx(r["uncertainty_m"])
+    cli_out = tmp_path / "cli_cand.tif"
+    want = cli.json("select", "--dem", dems["global"], "--rover", "1003.25,2003.25", "--out-map", cli_out)
+    same(r, want, skip=("out_map",))
+    mem = gmap.select(rover=ROVER, candidate_map=True)
+    same(mem, want, skip=("out_map", "candidate_map"))
+    assert "out_map" not in mem
+    np.testing.assert_array_equal(mem["candidate_map"], read(cli_out)[0])
+    assert np.isposinf(mem["candidate_map"]).sum() == want["candidates"] - want["informative"]
 
 
 def test_field_equals_cli(cli, dems, gmap, tmp_path):

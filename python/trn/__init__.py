@@ -320,13 +320,29 @@ class Map:
         del keep
         return r
 
-    def select(self, rover, **options):
+    def select(self, rover, candidate_map=False, **options):
         """The landmark to sense next from rover (x, y map metres). Options:
         those of `trn select` (heading_deg, pan_deg, min_range_m, max_range_m,
         patch_m, stride_cells, sensors, next_best, out_map ...). Returns the
-        dict of `trn select --json`."""
+        dict of `trn select --json`; with candidate_map=True also
+        "candidate_map", every candidate's predicted uncertainty on the map's
+        grid (metres, float32; +inf: ill-conditioned, NaN: not a candidate;
+        what out_map writes)."""
+        vsi = None
+        if candidate_map and options.get("out_map") is None:
+            vsi = f"/vsimem/trn_py/{os.getpid()}_{next(_vsi_ids)}_candidates.tif"
+            options["out_map"] = vsi
         argv = _argv("select", {"dem": self.path, "band": self.band, "rover": rover, **options})
-        return self._call(_lib.trn_py_select, argv, _SELECT_PER_CALL, defaults={"--stride-cells": "1"})
+        try:
+            r = self._call(_lib.trn_py_select, argv, _SELECT_PER_CALL, defaults={"--stride-cells": "1"})
+            if candidate_map:
+                r["candidate_map"] = _read_file(options["out_map"])
+        finally:
+            if vsi is not None:
+                _unlink(vsi)
+        if vsi is not None:
+            del r["out_map"]  # as the command line without --out-map
+        return r
 
     def field(self, area=None, progress=None, **options):
         """The sensor uncertainty field over area (x0, y0, x1, y1 map metres;
