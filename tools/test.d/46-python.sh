@@ -23,6 +23,8 @@ VENV=$ROOT/.venv
 PY=$VENV/bin/python
 SKBUILD="scikit-build-core==1.1.2"
 fail() { echo "46-python: $*" >&2; exit 1; }
+# the wheel's CMake build: two jobs at most (cmake --build reads this)
+export CMAKE_BUILD_PARALLEL_LEVEL=${CMAKE_BUILD_PARALLEL_LEVEL:-2}
 
 bash tools/setup.sh python
 if ! "$PY" -c 'import numpy, pytest; from osgeo import gdal' 2>/dev/null; then
