@@ -262,3 +262,26 @@ def test_threads_on_separate_maps(dems):
     for t in ths:
         t.join()
     assert out == [want, want]
+
+
+def test_parse_messages_in_threads(dems):
+    """The parsers' messages are caught per call even when threads fail at once."""
+    got = {}
+
+    def run(i):
+        m = trn.Map(dems["global"])
+        msgs = set()
+        for _ in range(30):
+            try:
+                m.select(rover=ROVER, **{f"bogus_{i}": 1})
+            except trn.TrnError as e:
+                msgs.add((e.status, e.message))
+        got[i] = msgs
+
+    ths = [threading.Thread(target=run, args=(i,)) for i in range(4)]
+    for t in ths:
+        t.start()
+    for t in ths:
+        t.join()
+    for i in range(4):
+        assert got[i] == {("usage", f"unknown option '--bogus-{i}' (trn select --help)")}
