@@ -266,6 +266,10 @@ class Map:
     north), gt a GDAL geotransform (x0, dx, 0, y0, 0, -dy) or an
     affine.Affine, crs anything OSR reads ("EPSG:32611", WKT, an EPSG number)
     or None (metres). NaN heights (and nodata) mean "not seen".
+
+    The DEM is read and prepared at the first call that needs it (so a
+    missing file or a geographic CRS is reported by that call, as the command
+    line reports it), then kept until close() or collection.
     """
 
     def __init__(self, source, transform=None, crs=None, nodata=None, band=1):
