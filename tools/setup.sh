@@ -53,6 +53,13 @@ declare -A PKG_GROUPS=(
   # `trn profile --instructions`: callgrind and its client-request header
   # (valgrind/callgrind.h), and the CTest profile_instructions.
   [profile]="valgrind"
+  # The Python package (python/, tools/test.d/46-python.sh): the project venv
+  # (.venv, --system-site-packages) from Debian's python3 with its numpy, GDAL
+  # bindings, pytest and matplotlib (the README's planner example); GDAL's C
+  # API and CMake for the package's build by scikit-build-core (from PyPI,
+  # pip-installed into .venv: Debian 12 has no package of it).
+  [python]="python3 python3-venv python3-numpy python3-gdal python3-pytest python3-matplotlib
+            libgdal-dev gdal-bin cmake ninja-build gcc"
   # Real-terrain benchmark (tools/real/): the OpenCV peer (cv2.matchTemplate),
   # numpy, GDAL (gdalwarp to UTM, GeoTIFF I/O) and the figures; python3-venv
   # for the project venv (.venv) used only by DEMs shipped on PyPI alone;
@@ -60,7 +67,7 @@ declare -A PKG_GROUPS=(
   [real]="python3 python3-venv python3-opencv python3-numpy python3-gdal gdal-bin
           python3-matplotlib python-matplotlib-data"
 )
-GROUP_ORDER=(core gpiod2 bench gdal can plot vm assure format profile real)
+GROUP_ORDER=(core gpiod2 bench gdal can plot vm assure format profile real python)
 
 usage() {
   echo "usage: $0 [group...]   (default: core)"

@@ -15,12 +15,14 @@ venv=$root/.venv
 
 if ! "$venv/bin/python" -c 'import cantools' 2>/dev/null; then
   if [ ! -x "$venv/bin/python" ]; then
-    # a fresh machine may lack python3 or its venv module (Debian's
-    # python3-venv): tools/setup.sh group `can` installs them
-    if ! python3 -m venv "$venv" >/dev/null 2>&1; then
+    # the one project venv, as every tool makes it: Debian's python3 with its
+    # site packages (numpy, GDAL), so the Python stage does not remake it.
+    # A fresh machine may lack python3's venv module (Debian's python3-venv):
+    # tools/setup.sh group `can` installs it
+    if ! /usr/bin/python3 -m venv --system-site-packages "$venv" >/dev/null 2>&1; then
       rm -rf "$venv"
       bash "$root/tools/setup.sh" can
-      python3 -m venv "$venv"
+      /usr/bin/python3 -m venv --system-site-packages "$venv"
     fi
   fi
   "$venv/bin/python" -m pip install --quiet cantools

@@ -91,18 +91,26 @@ int cli_parse_xy(const char *s, double *x, double *y) {
 /* errors and usage                                                           */
 /* ------------------------------------------------------------------------ */
 
+/* Where the one-line errors go: stderr unless a binding redirected them. */
+static FILE *cli_msg_stream = NULL;
+
+void cli_set_message_stream(FILE *f) { cli_msg_stream = f; }
+
+FILE *cli_message_stream(void) { return cli_msg_stream != NULL ? cli_msg_stream : stderr; }
+
 int cli_fail(const char *cmd, const char *fmt, ...) {
   va_list ap;
-  fprintf(stderr, "trn %s: ", cmd);
+  FILE *out = cli_message_stream();
+  fprintf(out, "trn %s: ", cmd);
   va_start(ap, fmt);
-  vfprintf(stderr, fmt, ap);
+  vfprintf(out, fmt, ap);
   va_end(ap);
-  fputc('\n', stderr);
+  fputc('\n', out);
   return CLI_BAD_INPUT;
 }
 
 static int usage_error(const cli_cmd_t *cmd, const char *what, const char *arg) {
-  fprintf(stderr, "trn %s: %s '%s' (trn %s --help)\n", cmd->name, what, arg, cmd->name);
+  fprintf(cli_message_stream(), "trn %s: %s '%s' (trn %s --help)\n", cmd->name, what, arg, cmd->name);
   return CLI_USAGE;
 }
 

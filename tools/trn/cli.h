@@ -81,7 +81,15 @@ void cli_usage(const cli_cmd_t *cmd, FILE *out);
  * every status of the tool (`trn --help`). */
 void cli_exit_status_help(const char *cmd, FILE *out);
 
-/* Print `trn <cmd>: <reason>` (one line) on stderr; returns CLI_BAD_INPUT. */
+/* The stream of the one-line error messages (cli_fail, cli_parse's usage
+ * errors, a command's own parse errors): stderr, unless set. A binding calling
+ * a command's parse in-process sets its own stream (NULL: back to stderr); the
+ * setting is process-wide, so such a caller serialises its parses. */
+void cli_set_message_stream(FILE *f);
+FILE *cli_message_stream(void);
+
+/* Print `trn <cmd>: <reason>` (one line) on cli_message_stream() (stderr);
+ * returns CLI_BAD_INPUT. */
 int cli_fail(const char *cmd, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 2, 3)))

@@ -104,8 +104,7 @@ void cmd_field_params_default(cmd_field_params_t *p) {
   selmap_opts_default(&p->so, 2);
 }
 
-/* argv -> p. Returns CLI_OK, CLI_HELP (usage printed) or the usage / bad input status (message printed). */
-static int field_parse(int argc, char **argv, cmd_field_params_t *p) {
+int cmd_field_parse(int argc, char **argv, cmd_field_params_t *p) {
   cli_opt_t opts[7 + SELMAP_N_OPTS + 2];
   cli_cmd_t cmd = {"field",
                    "Sensor uncertainty field: the predicted uncertainty of the best landmark from every rover\n"
@@ -299,21 +298,13 @@ static void field_summary(cmd_field_result_t *r, float *fbuf) {
   r->vmin = r->stats.best_m;
 }
 
-int cmd_field_run(const cmd_field_params_t *p, cmd_field_result_t *r, char *err, size_t err_len) {
-  double box[4];
+/* The area (box: --area-m's numbers), the field and its files on the prepared r->w. */
+static int field_run_on(const cmd_field_params_t *p, const double box[4], cmd_field_result_t *r, char *err,
+                        size_t err_len) {
   float *fbuf = NULL;
   uint8_t *ev = NULL;
   int rc;
 
-  memset(r, 0, sizeof *r);
-  r->bx = r->by = r->vmed = NAN;
-  r->vmin = INFINITY;
-  if ((rc = field_check(p, box, err, err_len)) != CLI_OK) {
-    return rc;
-  }
-  if (selmap_prepare(&r->w, p->dem_path, &p->so, err, err_len) != 0) {
-    return CLI_BAD_INPUT;
-  }
   if ((rc = field_area(p, box, r, err, err_len)) != CLI_OK) {
     return rc;
   }
@@ -334,13 +325,42 @@ int cmd_field_run(const cmd_field_params_t *p, cmd_field_result_t *r, char *err,
   return rc;
 }
 
+/* r reset: no position yet; the options that need no DEM checked (box: --area-m's numbers). */
+static int field_start(const cmd_field_params_t *p, double box[4], cmd_field_result_t *r, char *err,
+                       size_t err_len) {
+  memset(r, 0, sizeof *r);
+  r->bx = r->by = r->vmed = NAN;
+  r->vmin = INFINITY;
+  return field_check(p, box, err, err_len);
+}
+
+int cmd_field_run(const cmd_field_params_t *p, cmd_field_result_t *r, char *err, size_t err_len) {
+  double box[4];
+  int rc = field_start(p, box, r, err, err_len);
+  if (rc != CLI_OK) {
+    return rc;
+  }
+  if (selmap_prepare(&r->w, p->dem_path, &p->so, err, err_len) != 0) {
+    return CLI_BAD_INPUT;
+  }
+  return field_run_on(p, box, r, err, err_len);
+}
+
+int cmd_field_run_prepared(const cmd_field_params_t *p, const selmap_t *w, cmd_field_result_t *r, char *err,
+                           size_t err_len) {
+  double box[4];
+  int rc = field_start(p, box, r, err, err_len);
+  r->w = *w;
+  return rc != CLI_OK ? rc : field_run_on(p, box, r, err, err_len);
+}
+
 void cmd_field_result_free(cmd_field_result_t *r) { selmap_free(&r->w); }
 
-static void field_report_json(const cmd_field_params_t *p, const cmd_field_result_t *r) {
+void cmd_field_report_json(FILE *out, const cmd_field_params_t *p, const cmd_field_result_t *r) {
   const dem_t *d = &r->w.dem;
   double ax0, ay0, ax1, ay1;
   json_t j;
-  json_begin(&j, stdout);
+  json_begin(&j, out);
   json_str(&j, "file", p->out);
   json_int(&j, "width", (long long)r->aw);
   json_int(&j, "height", (long long)r->ah);
@@ -394,7 +414,7 @@ int trn_cmd_field(int argc, char **argv) {
   int rc;
 
   cmd_field_params_default(&p);
-  rc = field_parse(argc, argv, &p);
+  rc = cmd_field_parse(argc, argv, &p);
   if (rc != CLI_OK) {
     return rc == CLI_HELP ? 0 : rc;
   }
@@ -410,7 +430,7 @@ int trn_cmd_field(int argc, char **argv) {
   if (rc != CLI_OK) {
     cli_fail("field", "%s", err);
   } else if (p.json) {
-    field_report_json(&p, &r);
+    cmd_field_report_json(stdout, &p, &r);
   } else {
     field_report_text(&p, &r);
   }

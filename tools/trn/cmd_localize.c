@@ -201,10 +201,10 @@ done:
   return rc;
 }
 
-static void print_json(const cmd_localize_ctx_t *c, const char *local, const double prior[2], double window_m,
-                       const cmd_localize_out_t *o, int batch) {
+void cmd_localize_report_json(FILE *out, const cmd_localize_ctx_t *c, const char *local, const double prior[2],
+                              double window_m, const cmd_localize_out_t *o, int batch) {
   json_t j;
-  json_begin(&j, stdout);
+  json_begin(&j, out);
   json_num(&j, "x_m", o->x_m);
   json_num(&j, "y_m", o->y_m);
   json_num(&j, "sigma_x_m", o->res.sigma_x_m);
@@ -319,7 +319,7 @@ static int run_batch(const cmd_localize_ctx_t *c, const char *path, double windo
       json_end(&j);
       continue;
     }
-    print_json(c, local, prior, w, &o, 1);
+    cmd_localize_report_json(stdout, c, local, prior, w, &o, 1);
   }
   fclose(f);
   return 0;
@@ -334,9 +334,7 @@ void cmd_localize_params_default(cmd_localize_params_t *p) {
   mapopt_init(&p->mo);
 }
 
-/* argv -> p, with the choice between --local/--prior and --batch checked.
- * Returns CLI_OK, CLI_HELP (usage printed) or the usage / bad input status (message printed). */
-static int localize_parse(int argc, char **argv, cmd_localize_params_t *p) {
+int cmd_localize_parse(int argc, char **argv, cmd_localize_params_t *p) {
   cli_opt_t opts[10 + MAPOPT_N] = {
       {"--dem", CLI_STRING, &p->dem_path, 0, 0, 1, "FILE", "global DEM (any GDAL raster; map frame)", 0},
       {"--local", CLI_STRING, &p->local_path, 0, 0, 0, "FILE", "local DEM in the rover frame (rover at 0,0; x east, y north)", 0},
@@ -374,11 +372,11 @@ static int localize_parse(int argc, char **argv, cmd_localize_params_t *p) {
   p->have_prior = cli_find(all, n_all, "--prior")->seen;
   p->heading = cli_find(all, n_all, "--heading-deg")->seen || cli_find(all, n_all, "--heading-window-deg")->seen;
   if (p->batch_path == NULL && (p->local_path == NULL || !p->have_prior)) {
-    fprintf(stderr, "trn localize: give --local FILE and --prior X,Y, or --batch LIST (see --help)\n");
+    fprintf(cli_message_stream(), "trn localize: give --local FILE and --prior X,Y, or --batch LIST (see --help)\n");
     return CLI_USAGE;
   }
   if (p->batch_path != NULL && (p->local_path != NULL || p->have_prior)) {
-    fprintf(stderr, "trn localize: --batch replaces --local and --prior; give one or the other (see --help)\n");
+    fprintf(cli_message_stream(), "trn localize: --batch replaces --local and --prior; give one or the other (see --help)\n");
     return CLI_USAGE;
   }
   return CLI_OK;
@@ -466,7 +464,7 @@ int trn_cmd_localize(int argc, char **argv) {
   int rc;
 
   cmd_localize_params_default(&p);
-  rc = localize_parse(argc, argv, &p);
+  rc = cmd_localize_parse(argc, argv, &p);
   if (rc != CLI_OK) {
     return rc == CLI_HELP ? 0 : rc;
   }
@@ -476,7 +474,7 @@ int trn_cmd_localize(int argc, char **argv) {
   } else if (rc == CLI_OK) {
     rc = cmd_localize_run(&c, p.local_path, p.prior, p.window_m, &o, err, sizeof err);
     if (rc == CLI_OK && p.json) {
-      print_json(&c, p.local_path, p.prior, p.window_m, &o, 0);
+      cmd_localize_report_json(stdout, &c, p.local_path, p.prior, p.window_m, &o, 0);
     } else if (rc == CLI_OK) {
       localize_report_text(&c, &p, &o);
     }

@@ -8,8 +8,9 @@
  * declared here print nothing and never exit: each returns an exit status of
  * cli.h (CLI_OK, CLI_BAD_INPUT, CLI_NO_RESULT) and, when it is not CLI_OK,
  * the one-line reason in err (what `trn <cmd>: <reason>` prints). They take
- * plain structs and keep no global state, so a binding (ctypes over a shared
- * library) could call them; files they are asked to write (--out ...) are
+ * plain structs and keep no global state, so a binding calls them (the
+ * Python package: python/trn_py.c, libtrn_run.so; docs/modules/python.md);
+ * files they are asked to write (--out ...) are
  * written by run. Progress, where a command has any, goes through the
  * optional callback in its params (NULL: none). Results own their memory:
  * free them with the matching *_result_free, also after a failed run.
@@ -21,6 +22,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include "dem_io.h"
 #include "experiment.h"
@@ -77,7 +79,14 @@ typedef struct {
 void cmd_select_params_default(cmd_select_params_t *p);
 /* CLI_OK, CLI_BAD_INPUT, or CLI_NO_RESULT (no informative target). */
 int cmd_select_run(const cmd_select_params_t *p, cmd_select_result_t *r, char *err, size_t err_len);
-void cmd_select_result_free(cmd_select_result_t *r);
+/* As cmd_select_run on a DEM prepared once (selmap_prepare with p->dem_path
+ * and p->so, kept by the caller between runs): r->w is a shallow copy of *w,
+ * so release r with cmd_select_result_release (never *_free, which would free
+ * the caller's map). */
+int cmd_select_run_prepared(const cmd_select_params_t *p, const selmap_t *w, cmd_select_result_t *r, char *err,
+                            size_t err_len);
+void cmd_select_result_release(cmd_select_result_t *r); /* the candidates, not the map */
+void cmd_select_result_free(cmd_select_result_t *r);    /* the candidates and the map */
 
 /* ---- trn field -------------------------------------------------------- */
 typedef struct {
@@ -107,6 +116,12 @@ typedef struct {
 void cmd_field_params_default(cmd_field_params_t *p);
 /* CLI_OK, CLI_BAD_INPUT, or CLI_NO_RESULT (no informative target anywhere). */
 int cmd_field_run(const cmd_field_params_t *p, cmd_field_result_t *r, char *err, size_t err_len);
+/* As cmd_field_run on a DEM prepared once (selmap_prepare with p->dem_path and
+ * p->so, kept by the caller): r->w is a shallow copy of *w; r owns nothing
+ * else, so it needs no freeing (never cmd_field_result_free: the map is the
+ * caller's). */
+int cmd_field_run_prepared(const cmd_field_params_t *p, const selmap_t *w, cmd_field_result_t *r, char *err,
+                           size_t err_len);
 void cmd_field_result_free(cmd_field_result_t *r);
 
 /* ---- trn localize ----------------------------------------------------- */
@@ -181,5 +196,21 @@ typedef struct {
 void cmd_experiment_params_default(cmd_experiment_params_t *p);
 int cmd_experiment_run(const cmd_experiment_params_t *p, cmd_experiment_result_t *r, char *err, size_t err_len);
 void cmd_experiment_result_free(cmd_experiment_result_t *r);
+
+/* ---- parse and JSON report, for a binding --------------------------- */
+/* argv (argv[0] the command's name) -> p, defaults set first by the caller
+ * (*_params_default). Returns CLI_OK, CLI_HELP (usage printed on stdout) or
+ * the usage / bad input status with its message on cli_message_stream(). The
+ * strings of p point into argv. localize also checks --local/--prior against
+ * --batch. */
+int cmd_localize_parse(int argc, char **argv, cmd_localize_params_t *p);
+int cmd_select_parse(int argc, char **argv, cmd_select_params_t *p);
+int cmd_field_parse(int argc, char **argv, cmd_field_params_t *p);
+/* The JSON object of `trn <cmd> --json` (one line) on out. localize: batch
+ * selects the --batch line's form ("local" instead of the map configuration). */
+void cmd_localize_report_json(FILE *out, const cmd_localize_ctx_t *c, const char *local, const double prior[2],
+                              double window_m, const cmd_localize_out_t *o, int batch);
+void cmd_select_report_json(FILE *out, const cmd_select_params_t *p, const cmd_select_result_t *r);
+void cmd_field_report_json(FILE *out, const cmd_field_params_t *p, const cmd_field_result_t *r);
 
 #endif

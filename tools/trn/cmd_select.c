@@ -44,8 +44,7 @@ void cmd_select_params_default(cmd_select_params_t *p) {
   selmap_opts_default(&p->so, 1);
 }
 
-/* argv -> p. Returns CLI_OK, CLI_HELP (usage printed) or the usage / bad input status (message printed). */
-static int select_parse(int argc, char **argv, cmd_select_params_t *p) {
+int cmd_select_parse(int argc, char **argv, cmd_select_params_t *p) {
   cli_opt_t opts[4 + SELMAP_N_OPTS + 1];
   cli_cmd_t cmd = {"select",
                    "Select the landmark to sense next: predicted localization uncertainty of every candidate\n"
@@ -147,14 +146,11 @@ static int select_on_map(const cmd_select_params_t *p, cmd_select_result_t *r, c
   return CLI_OK;
 }
 
-int cmd_select_run(const cmd_select_params_t *p, cmd_select_result_t *r, char *err, size_t err_len) {
+/* The rover's position, the selection and --out-map on the prepared r->w. */
+static int select_run_on(const cmd_select_params_t *p, cmd_select_result_t *r, char *err, size_t err_len) {
   const dem_t *d = &r->w.dem;
   int rcol, rrow, rc;
 
-  memset(r, 0, sizeof *r);
-  if (selmap_prepare(&r->w, p->dem_path, &p->so, err, err_len) != 0) {
-    return CLI_BAD_INPUT;
-  }
   if (!dem_cell_of(d, p->rover_m[0], p->rover_m[1], &rcol, &rrow)) {
     snprintf(err, err_len, "--rover %.3f,%.3f is off the map (x %.3f..%.3f, y %.3f..%.3f)", p->rover_m[0],
              p->rover_m[1], d->gt[0], d->gt[0] + d->width * d->cell_m, d->gt[3] - d->height * d->cell_m, d->gt[3]);
@@ -167,21 +163,40 @@ int cmd_select_run(const cmd_select_params_t *p, cmd_select_result_t *r, char *e
   return rc;
 }
 
-void cmd_select_result_free(cmd_select_result_t *r) {
+int cmd_select_run(const cmd_select_params_t *p, cmd_select_result_t *r, char *err, size_t err_len) {
+  memset(r, 0, sizeof *r);
+  if (selmap_prepare(&r->w, p->dem_path, &p->so, err, err_len) != 0) {
+    return CLI_BAD_INPUT;
+  }
+  return select_run_on(p, r, err, err_len);
+}
+
+int cmd_select_run_prepared(const cmd_select_params_t *p, const selmap_t *w, cmd_select_result_t *r, char *err,
+                            size_t err_len) {
+  memset(r, 0, sizeof *r);
+  r->w = *w;
+  return select_run_on(p, r, err, err_len);
+}
+
+void cmd_select_result_release(cmd_select_result_t *r) {
   free(r->cands);
   free(r->ranked);
   r->cands = NULL;
   r->ranked = NULL;
+}
+
+void cmd_select_result_free(cmd_select_result_t *r) {
+  cmd_select_result_release(r);
   selmap_free(&r->w);
 }
 
-static void select_report_json(const cmd_select_params_t *p, const cmd_select_result_t *r) {
+void cmd_select_report_json(FILE *out, const cmd_select_params_t *p, const cmd_select_result_t *r) {
   const trn_candidate_t *b = &r->cands[r->res.best];
   const selmap_t *w = &r->w;
   double tx, ty;
   size_t i;
   json_t j;
-  json_begin(&j, stdout);
+  json_begin(&j, out);
   dem_cell_to_map(w->dem.gt, (double)b->x, (double)b->y, &tx, &ty);
   json_obj(&j, "target");
   json_num(&j, "x_m", selmap_um(tx));
@@ -262,7 +277,7 @@ int trn_cmd_select(int argc, char **argv) {
   int rc;
 
   cmd_select_params_default(&p);
-  rc = select_parse(argc, argv, &p);
+  rc = cmd_select_parse(argc, argv, &p);
   if (rc != CLI_OK) {
     return rc == CLI_HELP ? 0 : rc;
   }
@@ -270,7 +285,7 @@ int trn_cmd_select(int argc, char **argv) {
   if (rc != CLI_OK) {
     cli_fail("select", "%s", err);
   } else if (p.json) {
-    select_report_json(&p, &r);
+    cmd_select_report_json(stdout, &p, &r);
   } else {
     select_report_text(&p, &r);
   }

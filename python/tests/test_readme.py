@@ -1,0 +1,35 @@
+# SPDX-License-Identifier: Apache-2.0
+"""The README's planner example (the ```python block after
+`<!-- readme-example: python-planner -->`), run as written on the README's
+global.tif, its answers checked against the command line."""
+import os
+import re
+import subprocess
+import sys
+
+from conftest import ROOT
+
+
+def readme_block(marker):
+    text = open(os.path.join(ROOT, "README.md"), encoding="utf-8").read()
+    at = text.index(f"<!-- readme-example: {marker} -->")
+    m = re.compile(r"```python\n(.*?)\n```", re.S).search(text, at)
+    assert m, f"no ```python block after the {marker} marker"
+    return m.group(1)
+
+
+def test_readme_planner(cli, tmp_path):
+    code = readme_block("python-planner")
+    cli("terrain", "--out", tmp_path / "global.tif", "--origin", "1000,2000", "--coverage", 0.15, "--seed", 3)
+    (tmp_path / "planner.py").write_text(code)
+    p = subprocess.run([sys.executable, "planner.py"], cwd=tmp_path, capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    assert (tmp_path / "planner.png").stat().st_size > 10000
+    field = cli.json("field", "--dem", tmp_path / "global.tif", "--out", tmp_path / "f.tif",
+                     "--area-m", "1008,2008,1018,2018")
+    b = field["best"]
+    assert f"best waypoint {b['x_m']:.2f}, {b['y_m']:.2f} m: {1000 * b['uncertainty_m']:.1f} mm" in p.stdout
+    sel = cli.json("select", "--dem", tmp_path / "global.tif", "--rover", f"{b['x_m']!r},{b['y_m']!r}",
+                   "--heading-deg", 90, "--pan-deg", "-90,90")
+    t = sel["target"]
+    assert f"sense the target at {t['x_m']:.2f}, {t['y_m']:.2f} m" in p.stdout

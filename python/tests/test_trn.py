@@ -1,0 +1,287 @@
+# SPDX-License-Identifier: Apache-2.0
+"""The Python package trn against the `trn` command line on the same inputs,
+each bad-input class, the GIL released during C calls, and the field's
+progress callback (issue 13 item 3)."""
+import math
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import trn
+from conftest import read
+
+PRIOR = (1002.9, 2003.3)
+ROVER = (1003.25, 2003.25)
+
+
+def same(py, cli_json, skip=()):
+    """Equal key for key (NaN == NaN), keys and nesting included."""
+    assert set(py) - set(skip) == set(cli_json) - set(skip)
+    for k in cli_json:
+        if k not in skip:
+            assert py[k] == cli_json[k], k
+
+
+@pytest.fixture(scope="module")
+def gmap(dems):
+    a, gt, wkt = read(dems["global"])
+    return trn.Map(a, transform=gt, crs=wkt)
+
+
+# ---- equality with the command line -------------------------------------
+
+def test_version(cli):
+    assert trn.__version__ == trn.version()
+    assert cli("--version").stdout.strip() == f"trn {trn.__version__}"
+
+
+def test_localize_equals_cli(cli, dems, gmap):
+    want = cli.json("localize", "--dem", dems["global"], "--local", dems["local"], "--prior", "1002.9,2003.3",
+                    "--window-m", 0.5)
+    a, gt, wkt = read(dems["local"])
+    by_array = gmap.localize(a, prior=PRIOR, window_m=0.5, transform=gt, crs=wkt)
+    by_path = trn.Map(dems["global"]).localize(dems["local"], prior=PRIOR, window_m=0.5)
+    for got in (by_array, by_path):
+        same(got, want, skip=("time_ms",))
+    assert want["status"] == "ok"
+    assert abs(want["x_m"] - dems["truth"][0]) < 0.05 and abs(want["y_m"] - dems["truth"][1]) < 0.05
+
+
+class AffineLike:
+    """What rasterio's affine.Affine offers: to_gdal()."""
+
+    def __init__(self, gt):
+        self.gt = gt
+
+    def to_gdal(self):
+        return self.gt
+
+
+def test_affine_transform(dems, gmap):
+    a, gt, wkt = read(dems["global"])
+    assert trn.Map(a, transform=AffineLike(gt), crs=wkt).select(rover=ROVER) == gmap.select(rover=ROVER)
+    assert trn.Map(a, transform=gt, crs=32611).select(rover=ROVER) == gmap.select(rover=ROVER)
+
+
+def test_localize_options_equal_cli(cli, dems, gmap):
+    """Map options through keywords, and the prepared map re-made when they change."""
+    a, gt, _ = read(dems["local"])
+    for opts in ({"map_config": "paper"}, {}, {"map_config": "paper", "zbin_m": 0.05}):
+        args = []
+        for k, v in opts.items():
+            args += ["--" + k.replace("_", "-"), v]
+        want = cli.json("localize", "--dem", dems["global"], "--local", dems["local"], "--prior", "1002.9,2003.3",
+                        "--window-m", 0.5, *args)
+        same(gmap.localize(a, prior=PRIOR, window_m=0.5, transform=gt, **opts), want, skip=("time_ms",))
+
+
+def test_select_equals_cli(cli, dems, gmap):
+    want = cli.json("select", "--dem", dems["global"], "--rover", "1003.25,2003.25")
+    same(gmap.select(rover=ROVER), want)
+    # options, and the prepared selection map re-made when they change and kept when they do not
+    for opts, args in (({"heading_deg": 30, "pan_deg": (-60, 60), "next_best": 3},
+                        ["--heading-deg", 30, "--pan-deg", "-60,60", "--next-best", 3]),
+                       ({"sensors": [(1000.5, 2000.5), (1006.0, 2006.0)], "max_range_m": 2.5},
+                        ["--sensors", "1000.5,2000.5;1006.0,2006.0", "--max-range-m", 2.5]),
+                       ({}, [])):
+        want = cli.json("select", "--dem", dems["global"], "--rover", "1003.25,2003.25", *args)
+        same(gmap.select(rover=ROVER, **opts), want)
+
+
+def test_select_out_map(cli, dems, gmap, tmp_path):
+    out = tmp_path / "cand.tif"
+    r = gmap.select(rover=ROVER, out_map=out)
+    assert r["out_map"] == str(out)
+    cand, _, _ = read(out)
+    assert np.nanmin(cand) == pytest.approx(r["uncertainty_m"])
+    cli_out = tmp_path / "cli_cand.tif"
+    want = cli.json("select", "--dem", dems["global"], "--rover", "1003.25,2003.25", "--out-map", cli_out)
+    same(r, want, skip=("out_map",))
+    mem = gmap.select(rover=ROVER, candidate_map=True)
+    same(mem, want, skip=("out_map", "candidate_map"))
+    assert "out_map" not in mem
+    np.testing.assert_array_equal(mem["candidate_map"], read(cli_out)[0])
+    assert np.isposinf(mem["candidate_map"]).sum() == want["candidates"] - want["informative"]
+
+
+def test_field_equals_cli(cli, dems, gmap, tmp_path):
+    f = tmp_path / "f.tif"
+    ev = tmp_path / "ev.tif"
+    want = cli.json("field", "--dem", dems["global"], "--out", f, "--evaluated-out", ev,
+                    "--area-m", "1001,2001,1005.5,2005")
+    got = gmap.field(area=(1001, 2001, 1005.5, 2005))
+    same(got, want, skip=("seconds", "file", "field", "evaluated"))
+    assert got["file"] is None
+    fa, _, _ = read(f)
+    ea, _, _ = read(ev)
+    assert got["field"].dtype == np.float32 and got["field"].shape == (64, 64)
+    np.testing.assert_array_equal(got["field"], fa)
+    np.testing.assert_array_equal(got["evaluated"], ea)
+    assert np.nanmin(got["field"]) == pytest.approx(got["best"]["uncertainty_m"])
+    # to a file of the caller's, the reference algorithm
+    out = tmp_path / "mine.tif"
+    ref = gmap.field(area=(1001, 2001, 1005.5, 2005), out=out, reference=True)
+    assert ref["file"] == str(out) and ref["algorithm"] == "trn_field"
+    np.testing.assert_array_equal(ref["field"], fa)
+
+
+# ---- errors ---------------------------------------------------------------
+
+def status_of(fn, *a, **k):
+    with pytest.raises(trn.TrnError) as e:
+        fn(*a, **k)
+    assert e.value.message and "\n" not in e.value.message
+    return e.value.status, e.value.message
+
+
+def test_bad_arrays():
+    gt = (0, 0.1, 0, 6.4, 0, -0.1)
+    for bad in (np.zeros((4, 4, 2)), np.zeros(16), np.zeros((0, 4)), np.zeros((8, 8), complex),
+                np.array([["a"] * 8] * 8)):
+        assert status_of(trn.Map, bad, transform=gt)[0] == "bad_input"
+    assert status_of(trn.Map, np.zeros((8, 8)), transform=(0, 0.1, 0, math.nan, 0, -0.1))[0] == "bad_input"
+    assert status_of(trn.Map, np.zeros((8, 8)), transform=(0, 0.1, 0))[0] == "bad_input"
+    assert status_of(trn.Map, np.zeros((8, 8)))[0] == "bad_input"  # no transform
+    assert status_of(trn.Map, np.zeros((8, 8)), transform=gt, crs="EPSG:nope")[0] == "bad_input"
+    assert status_of(trn.Map, "x.tif", transform=gt)[0] == "bad_input"  # a file has its own
+
+
+def test_geographic_crs(dems):
+    a, gt, _ = read(dems["global"])
+    m = trn.Map(a, transform=(-110.0, 1e-6, 0, 35.0, 0, -1e-6), crs="EPSG:4326")
+    st, msg = status_of(m.select, rover=(-109.99997, 34.99997))
+    assert st == "bad_input" and "geographic" in msg
+
+
+def test_missing_file(dems):
+    st, msg = status_of(trn.Map("/nonexistent/dem.tif").select, rover=ROVER)
+    assert st == "bad_input" and "/nonexistent/dem.tif" in msg
+    st, _ = status_of(trn.Map(dems["global"]).localize, "/nonexistent/local.tif", prior=PRIOR)
+    assert st == "bad_input"
+
+
+def test_usage(gmap, dems):
+    assert status_of(gmap.select, rover=ROVER, bogus=1) == ("usage", "unknown option '--bogus' (trn select --help)")
+    assert status_of(gmap.field, no_such=True)[0] == "usage"
+    assert status_of(gmap.localize, dems["local"], prior=PRIOR, help=True)[0] == "usage"
+    assert status_of(gmap.select, rover=ROVER, json=True)[0] == "usage"
+
+
+def test_values_out_of_range(gmap, dems):
+    assert status_of(gmap.localize, dems["local"], prior=PRIOR, window_m=-1)[0] == "bad_input"
+    st, msg = status_of(gmap.localize, dems["local"], prior=(0.0, 0.0))
+    assert st == "bad_input" and "off the map" in msg
+    assert status_of(gmap.select, rover=(0.0, 0.0))[0] == "bad_input"
+    assert status_of(gmap.select, rover="a,b")[0] == "bad_input"
+    assert status_of(gmap.select, rover=ROVER, pan_deg=(10, -10))[0] == "bad_input"
+    assert status_of(gmap.field, area=(1005, 2001, 1001, 2005))[0] == "bad_input"  # inverted
+    assert status_of(gmap.field, area=(0, 0, 1, 1))[0] == "bad_input"  # off the map
+    assert status_of(gmap.field, coarse_step_cells=3)[0] == "bad_input"
+
+
+def test_no_result():
+    flat = trn.Map(np.zeros((48, 48), np.float32), transform=(0, 0.1, 0, 4.8, 0, -0.1))
+    assert status_of(flat.select, rover=(2.4, 2.4))[0] == "no_result"
+    assert status_of(flat.field)[0] == "no_result"
+
+
+def test_closed(dems):
+    m = trn.Map(dems["global"])
+    m.close()
+    assert status_of(m.select, rover=ROVER)[0] == "bad_input"
+
+
+# ---- progress, cancel, GIL ----------------------------------------------------
+
+def test_progress(gmap):
+    calls = []
+    r = gmap.field(progress=lambda d, t: calls.append((d, t)))
+    assert len(calls) >= r["evaluations"]
+    done = [d for d, _ in calls]
+    assert done == sorted(done) and calls[-1][0] == calls[-1][1]
+
+
+def test_cancel(gmap):
+    calls = []
+
+    def stop(done, total):
+        calls.append(done)
+        return done >= 20
+
+    st, _ = status_of(gmap.field, progress=stop)
+    assert st == "cancelled" and calls[-1] == 20
+
+    def boom(done, total):
+        raise KeyError("from the callback")
+
+    with pytest.raises(KeyError):
+        gmap.field(progress=boom)
+    assert gmap.field()["evaluations"] > 0  # the map still works
+
+
+def test_gil_released(gmap):
+    """A Python thread keeps running while one long field runs in C (no
+    progress callback): its longest pause is far shorter than the call
+    (holding the GIL, ctypes.PyDLL, it would be the whole call)."""
+    stamps = []
+    stop = threading.Event()
+
+    def tick():
+        while not stop.is_set():
+            stamps.append(time.monotonic())
+            time.sleep(0.001)
+
+    th = threading.Thread(target=tick)
+    th.start()
+    time.sleep(0.05)
+    t0 = time.monotonic()
+    r = gmap.field(coarse_step_cells=2, reference=True)
+    t1 = time.monotonic()
+    stop.set()
+    th.join()
+    assert r["evaluations"] > 500
+    inside = [s for s in stamps if t0 <= s <= t1]
+    gaps = np.diff([t0] + inside + [t1])
+    assert t1 - t0 > 0.2, "the field should take a while for this test to mean anything"
+    assert len(inside) > 10 and gaps.max() < 0.25 * (t1 - t0)
+
+
+def test_threads_on_separate_maps(dems):
+    """Two maps in two threads give the answers of one thread."""
+    want = trn.Map(dems["global"]).select(rover=ROVER)
+    out = [None, None]
+
+    def run(i):
+        out[i] = trn.Map(dems["global"]).select(rover=ROVER)
+
+    ths = [threading.Thread(target=run, args=(i,)) for i in range(2)]
+    for t in ths:
+        t.start()
+    for t in ths:
+        t.join()
+    assert out == [want, want]
+
+
+def test_parse_messages_in_threads(dems):
+    """The parsers' messages are caught per call even when threads fail at once."""
+    got = {}
+
+    def run(i):
+        m = trn.Map(dems["global"])
+        msgs = set()
+        for _ in range(30):
+            try:
+                m.select(rover=ROVER, **{f"bogus_{i}": 1})
+            except trn.TrnError as e:
+                msgs.add((e.status, e.message))
+        got[i] = msgs
+
+    ths = [threading.Thread(target=run, args=(i,)) for i in range(4)]
+    for t in ths:
+        t.start()
+    for t in ths:
+        t.join()
+    for i in range(4):
+        assert got[i] == {("usage", f"unknown option '--bogus-{i}' (trn select --help)")}
