@@ -122,8 +122,8 @@ static unsigned init_row(uint8_t *dst, const uint8_t *src, size_t nx, uint8_t ca
 }
 
 /** T(x) of the file comment: a, b take +1 (edge rows), c, d take +0. */
-static uint8_t col_min(const uint8_t *a, const uint8_t *b, const uint8_t *c,
-                       const uint8_t *d, size_t x)
+static uint8_t col_min(const uint8_t *a, const uint8_t *b, const uint8_t *c, const uint8_t *d,
+                       size_t x)
 {
     return min_u8(add_u8(min_u8(a[x], b[x]), 1u), min_u8(c[x], d[x]));
 }
@@ -158,12 +158,12 @@ static unsigned relax_row(uint8_t *row, const uint8_t *src, uint8_t cap, const u
     size_t c0;
     for (c0 = 0u; c0 < nx; c0 += CHUNK) {
         const size_t c1 = (nx - c0 > CHUNK) ? c0 + CHUNK : nx; /* chunk [c0, c1) */
-        const size_t t0 = (c0 > 0u) ? c0 - 1u : 0u;           /* T needed on [t0, t1) */
+        const size_t t0 = (c0 > 0u) ? c0 - 1u : 0u;            /* T needed on [t0, t1) */
         const size_t t1 = (c1 < nx) ? c1 + 1u : nx;
-        uint8_t *const tt = tb + (1u + t0 - c0);               /* tt[x - t0] = T(x) */
-        const uint8_t *const tm = tb;                          /* tm[x - c0] = T(x - 1) */
-        const uint8_t *const t0p = tb + 1u;                    /* t0p[x - c0] = T(x) */
-        const uint8_t *const tp = tb + 2u;                     /* tp[x - c0] = T(x + 1) */
+        uint8_t *const tt = tb + (1u + t0 - c0); /* tt[x - t0] = T(x) */
+        const uint8_t *const tm = tb;            /* tm[x - c0] = T(x - 1) */
+        const uint8_t *const t0p = tb + 1u;      /* t0p[x - c0] = T(x) */
+        const uint8_t *const tp = tb + 2u;       /* tp[x - c0] = T(x + 1) */
         size_t x;
         size_t k;
         tb[0] = (uint8_t)T_OUTSIDE;
@@ -295,8 +295,7 @@ static unsigned dirty_block(const uint8_t *cur, const uint8_t *nb, size_t i0)
  * Dirty span of i in [0, m): cur[i] > nb[i] + 3. Returns 0 if there is none;
  * else 1 with every dirty i inside [*first, *end) (block granularity).
  */
-static int dirty_span(const uint8_t *cur, const uint8_t *nb, size_t m, size_t *first,
-                      size_t *end)
+static int dirty_span(const uint8_t *cur, const uint8_t *nb, size_t m, size_t *first, size_t *end)
 {
     size_t i;
     if (m < LANES) {
@@ -588,8 +587,8 @@ trn_status_t trn_chamfer3d(const trn_vol_u8_t *occ, trn_vol_u8_t *dist, uint8_t 
     for (z = 0u; z < nz; z++) {
         for (y = 0u; y < ny; y++) {
             const size_t off = (z * ny + y) * nx;
-            const unsigned row_any =
-                relax_neighbours(vol, occ->data + off, cap, nx, ny, nz, y, z, -1);
+            const unsigned row_any = relax_neighbours(vol, occ->data + off, cap, nx, ny, nz, y, z,
+                                                      -1);
             /* Only the rows of occupied voxels are closed along x (see the
              * file comment); the others are already closed anyway, as
              * min(cap, A(T) + 3) of closed rows. */

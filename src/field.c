@@ -34,8 +34,9 @@ trn_status_t trn_field_cfg_check(const trn_field_cfg_t *cfg)
 
 /* trn_field's carve: the candidate list, then trn_select's workspace
  * (base NULL: sizing only). Returns the bytes, 0 if refused. */
-static size_t field_carve(const trn_select_cfg_t *scfg, const trn_map_t *map, const trn_kernels_t *k, void *base,
-                          trn_candidate_t **cands, size_t *ncap, void **sws, size_t *swsb)
+static size_t field_carve(const trn_select_cfg_t *scfg, const trn_map_t *map,
+                          const trn_kernels_t *k, void *base, trn_candidate_t **cands, size_t *ncap,
+                          void **sws, size_t *swsb)
 {
     size_t sw, nc;
     trn_ws_t w;
@@ -82,7 +83,7 @@ typedef struct {
     void *sws;
     size_t swsb;
     trn_field_stats_t *st;
-    const trn_selpre_t *pre;       /* ground path (trn_field_fast) or NULL */
+    const trn_selpre_t *pre; /* ground path (trn_field_fast) or NULL */
     trn_field_progress_fn_t progress;
     void *progress_user;
 } field_t;
@@ -124,7 +125,8 @@ static trn_status_t eval_cell(field_t *f, int32_t x, int32_t y)
         f->st->best_x = f->area.x0 + x;
         f->st->best_y = f->area.y0 + y;
     }
-    if (f->progress != NULL && f->progress(f->progress_user, f->st->evaluations, f->st->cells) != 0) {
+    if (f->progress != NULL &&
+        f->progress(f->progress_user, f->st->evaluations, f->st->cells) != 0) {
         return TRN_E_CANCELLED;
     }
     return TRN_OK;
@@ -137,10 +139,7 @@ static int32_t lat(int32_t i, int32_t s, int32_t n)
 }
 
 /* Number of lattice intervals of step s over n cells. */
-static int32_t nint(int32_t s, int32_t n)
-{
-    return (n - 1 + s - 1) / s;
-}
+static int32_t nint(int32_t s, int32_t n) { return (n - 1 + s - 1) / s; }
 
 /* Checks common to trn_field and trn_field_fast (not the workspace). */
 static trn_status_t field_check(const trn_map_t *map, const trn_kernels_t *k,
@@ -151,8 +150,8 @@ static trn_status_t field_check(const trn_map_t *map, const trn_kernels_t *k,
                                 const trn_field_stats_t *stats, const void *ws)
 {
     trn_status_t s;
-    if (map == NULL || k == NULL || pg == NULL || scfg == NULL || fcfg == NULL ||
-        area == NULL || out == NULL || evaluated == NULL || stats == NULL || ws == NULL) {
+    if (map == NULL || k == NULL || pg == NULL || scfg == NULL || fcfg == NULL || area == NULL ||
+        out == NULL || evaluated == NULL || stats == NULL || ws == NULL) {
         return TRN_E_NULL;
     }
     if ((s = trn_field_cfg_check(fcfg)) != TRN_OK) {
@@ -312,9 +311,10 @@ static trn_status_t field_run(field_t *f, const trn_field_cfg_t *fcfg)
 }
 
 /* The run's arguments (what trn_field and trn_field_fast share). */
-static void field_setup(field_t *f, const trn_map_t *map, const trn_kernels_t *k, const trn_vol_f32_t *pg,
-                        const trn_select_cfg_t *scfg, float heading_rad, const trn_window_t *area,
-                        trn_grid_f32_t *out, uint8_t *evaluated, trn_field_stats_t *stats)
+static void field_setup(field_t *f, const trn_map_t *map, const trn_kernels_t *k,
+                        const trn_vol_f32_t *pg, const trn_select_cfg_t *scfg, float heading_rad,
+                        const trn_window_t *area, trn_grid_f32_t *out, uint8_t *evaluated,
+                        trn_field_stats_t *stats)
 {
     memset(f, 0, sizeof *f);
     f->map = map;
@@ -331,17 +331,16 @@ static void field_setup(field_t *f, const trn_map_t *map, const trn_kernels_t *k
 }
 
 trn_status_t trn_field(const trn_map_t *map, const trn_kernels_t *k, const trn_vol_f32_t *pg,
-                       const trn_select_cfg_t *scfg, const trn_field_cfg_t *fcfg,
-                       float heading_rad, const trn_window_t *area, trn_grid_f32_t *out,
-                       uint8_t *evaluated, size_t evaluated_len, trn_field_stats_t *stats,
-                       void *ws, size_t ws_bytes)
+                       const trn_select_cfg_t *scfg, const trn_field_cfg_t *fcfg, float heading_rad,
+                       const trn_window_t *area, trn_grid_f32_t *out, uint8_t *evaluated,
+                       size_t evaluated_len, trn_field_stats_t *stats, void *ws, size_t ws_bytes)
 {
     field_t f;
     trn_status_t s;
     size_t need;
 
-    if ((s = field_check(map, k, pg, scfg, fcfg, heading_rad, area, out, evaluated,
-                         evaluated_len, stats, ws)) != TRN_OK) {
+    if ((s = field_check(map, k, pg, scfg, fcfg, heading_rad, area, out, evaluated, evaluated_len,
+                         stats, ws)) != TRN_OK) {
         return s;
     }
     need = trn_field_workspace_bytes(scfg, map, k);
@@ -356,9 +355,9 @@ trn_status_t trn_field(const trn_map_t *map, const trn_kernels_t *k, const trn_v
 
 /* trn_field_fast's carve: the precomputation's header, then its tables
  * (base NULL: sizing only). Returns the bytes, 0 if refused. */
-static size_t field_fast_carve(const trn_select_cfg_t *scfg, const trn_map_t *map, const trn_kernels_t *k,
-                               const trn_vol_f32_t *pg, void *base, trn_selpre_t **pre, void **tables,
-                               size_t *tables_bytes)
+static size_t field_fast_carve(const trn_select_cfg_t *scfg, const trn_map_t *map,
+                               const trn_kernels_t *k, const trn_vol_f32_t *pg, void *base,
+                               trn_selpre_t **pre, void **tables, size_t *tables_bytes)
 {
     const size_t b = trn_selpre_bytes(scfg, map, k, pg);
     trn_ws_t w;
@@ -396,8 +395,8 @@ trn_status_t trn_field_fast(const trn_map_t *map, const trn_kernels_t *k, const 
     size_t need, tb;
     const size_t hb = TRN_ALIGN_UP(sizeof(trn_selpre_t));
 
-    if ((s = field_check(map, k, pg, scfg, fcfg, heading_rad, area, out, evaluated,
-                         evaluated_len, stats, ws)) != TRN_OK) {
+    if ((s = field_check(map, k, pg, scfg, fcfg, heading_rad, area, out, evaluated, evaluated_len,
+                         stats, ws)) != TRN_OK) {
         return s;
     }
     /* sizes refused (need 0): the header at least, and trn_selpre_init says why */

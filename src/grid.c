@@ -4,8 +4,8 @@
 
 static int dim_ok(int32_t n, int32_t max) { return n >= 1 && n <= max; }
 
-trn_status_t trn_grid_f32_init(trn_grid_f32_t *g, float *data, size_t capacity,
-                               int32_t width, int32_t height)
+trn_status_t trn_grid_f32_init(trn_grid_f32_t *g, float *data, size_t capacity, int32_t width,
+                               int32_t height)
 {
     if (g == NULL || data == NULL) {
         return TRN_E_NULL;
@@ -28,15 +28,14 @@ trn_status_t trn_grid_f32_check(const trn_grid_f32_t *g)
     if (g == NULL || g->data == NULL) {
         return TRN_E_NULL;
     }
-    if (!dim_ok(g->width, TRN_MAX_DIM) || !dim_ok(g->height, TRN_MAX_DIM) ||
-        g->stride < g->width) {
+    if (!dim_ok(g->width, TRN_MAX_DIM) || !dim_ok(g->height, TRN_MAX_DIM) || g->stride < g->width) {
         return TRN_E_SIZE;
     }
     return TRN_OK;
 }
 
-trn_status_t trn_grid_f32_sub(const trn_grid_f32_t *g, int32_t x0, int32_t y0,
-                              int32_t width, int32_t height, trn_grid_f32_t *sub)
+trn_status_t trn_grid_f32_sub(const trn_grid_f32_t *g, int32_t x0, int32_t y0, int32_t width,
+                              int32_t height, trn_grid_f32_t *sub)
 {
     trn_status_t st = trn_grid_f32_check(g);
     if (st != TRN_OK) {
@@ -58,8 +57,8 @@ trn_status_t trn_grid_f32_sub(const trn_grid_f32_t *g, int32_t x0, int32_t y0,
     return TRN_OK;
 }
 
-trn_status_t trn_vol_u8_init(trn_vol_u8_t *v, uint8_t *data, size_t capacity,
-                             int32_t nx, int32_t ny, int32_t nz)
+trn_status_t trn_vol_u8_init(trn_vol_u8_t *v, uint8_t *data, size_t capacity, int32_t nx,
+                             int32_t ny, int32_t nz)
 {
     if (v == NULL || data == NULL) {
         return TRN_E_NULL;
@@ -82,7 +81,8 @@ trn_status_t trn_vol_u8_check(const trn_vol_u8_t *v)
     if (v == NULL || v->data == NULL) {
         return TRN_E_NULL;
     }
-    if (!dim_ok(v->nx, TRN_MAX_DIM) || !dim_ok(v->ny, TRN_MAX_DIM) || !dim_ok(v->nz, TRN_MAX_ZBINS)) {
+    if (!dim_ok(v->nx, TRN_MAX_DIM) || !dim_ok(v->ny, TRN_MAX_DIM) ||
+        !dim_ok(v->nz, TRN_MAX_ZBINS)) {
         return TRN_E_SIZE;
     }
     return TRN_OK;

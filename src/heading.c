@@ -64,8 +64,8 @@ trn_status_t trn_points_rotate(const trn_point_t *in, size_t n, double angle_rad
         return TRN_E_ARG;
     }
     for (i = 0; i < n; ++i) {
-        if (in[i].x > HEADING_MAX_OFFSET || in[i].x < -HEADING_MAX_OFFSET || in[i].y > HEADING_MAX_OFFSET ||
-            in[i].y < -HEADING_MAX_OFFSET) {
+        if (in[i].x > HEADING_MAX_OFFSET || in[i].x < -HEADING_MAX_OFFSET ||
+            in[i].y > HEADING_MAX_OFFSET || in[i].y < -HEADING_MAX_OFFSET) {
             return TRN_E_ARG;
         }
     }
@@ -112,7 +112,8 @@ typedef struct {
 /* The workspace: the turned points, the fit, the search's heading list,
  * then trn_search_bb's workspace. */
 static size_t heading_carve(const trn_map_t *map, size_t n, const trn_window_t *win, void *base,
-                            trn_point_t **buf, fit_t **fit, heading_t **hs, void **search, size_t *search_bytes)
+                            trn_point_t **buf, fit_t **fit, heading_t **hs, void **search,
+                            size_t *search_bytes)
 {
     trn_ws_t w;
     size_t sw = trn_localize_workspace_bytes(map, win);
@@ -121,7 +122,8 @@ static size_t heading_carve(const trn_map_t *map, size_t n, const trn_window_t *
     *hs = NULL;
     *search = NULL;
     *search_bytes = 0u;
-    if (sw == 0u || n == 0u || n > (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_ZBINS) {
+    if (sw == 0u || n == 0u ||
+        n > (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_ZBINS) {
         return 0u;
     }
     trn_ws_begin(&w, base);
@@ -149,8 +151,8 @@ static int32_t step_of(int32_t i) { return (i % 2 == 1) ? -(i + 1) / 2 : i / 2; 
 /* The points turned to heading step k, ordered for the search. Neither
  * call can fail: trn_localize_points_heading checked every point's offsets
  * and bins first, and n is below UINT32_MAX. */
-static void turn(const trn_point_t *pts, size_t n, const trn_heading_cfg_t *cfg, double step, int32_t k,
-                 int32_t nz, trn_point_t *buf)
+static void turn(const trn_point_t *pts, size_t n, const trn_heading_cfg_t *cfg, double step,
+                 int32_t k, int32_t nz, trn_point_t *buf)
 {
     (void)trn_points_rotate(pts, n, cfg->center_rad + (double)k * step, buf);
     (void)trn_points_order(buf, n, nz);
@@ -204,13 +206,14 @@ static void search_one(hsearch_t *h, int32_t k, const int64_t *floor, int *found
     turn(h->pts, h->n, h->cfg, h->step, k, h->map->dist.nz, h->buf);
     if (*found) { /* a tie counts only when this heading ranks first */
         const int64_t f = tie_rank(k) < tie_rank(*best_k) ? best->score - 1 : best->score;
-        st = trn_search_bb_above(&h->map->pyr, &h->map->lnp, h->buf, h->n, h->win, h->ex, f, h->sws, h->swb, &b,
-                                 &s);
+        st = trn_search_bb_above(&h->map->pyr, &h->map->lnp, h->buf, h->n, h->win, h->ex, f, h->sws,
+                                 h->swb, &b, &s);
     } else if (floor != NULL) {
-        st = trn_search_bb_above(&h->map->pyr, &h->map->lnp, h->buf, h->n, h->win, h->ex, *floor, h->sws, h->swb,
-                                 &b, &s);
+        st = trn_search_bb_above(&h->map->pyr, &h->map->lnp, h->buf, h->n, h->win, h->ex, *floor,
+                                 h->sws, h->swb, &b, &s);
     } else {
-        st = trn_search_bb(&h->map->pyr, &h->map->lnp, h->buf, h->n, h->win, h->ex, h->sws, h->swb, &b, &s);
+        st = trn_search_bb(&h->map->pyr, &h->map->lnp, h->buf, h->n, h->win, h->ex, h->sws, h->swb,
+                           &b, &s);
     }
     add_stats(stats, &s);
     if (st == TRN_OK) {
@@ -254,8 +257,9 @@ static trn_status_t search_all(hsearch_t *h, int32_t seed, const int64_t *floor,
 
 /* ln L, nats, on the 3 x 3 x 3 grid around (x, y, k) (checked points, poses
  * within one cell of the window: the scorer cannot fail). */
-static void grid27(const trn_map_t *map, const trn_point_t *pts, size_t n, const trn_heading_cfg_t *cfg,
-                   double step, int32_t x, int32_t y, int32_t k, trn_point_t *buf, double ll[27])
+static void grid27(const trn_map_t *map, const trn_point_t *pts, size_t n,
+                   const trn_heading_cfg_t *cfg, double step, int32_t x, int32_t y, int32_t k,
+                   trn_point_t *buf, double ll[27])
 {
     int32_t dk, i;
     for (dk = -1; dk <= 1; ++dk) {
@@ -271,8 +275,8 @@ static void grid27(const trn_map_t *map, const trn_point_t *pts, size_t n, const
 /* W = 0: trn_localize_points on the points turned by the centre (buf, by
  * the caller's check); its status, the result filled in either case. */
 static trn_status_t fixed_heading(const trn_map_t *map, size_t n, const trn_window_t *win,
-                                  const trn_heading_cfg_t *cfg, const trn_point_t *buf, void *sws, size_t swb,
-                                  trn_heading_result_t *out)
+                                  const trn_heading_cfg_t *cfg, const trn_point_t *buf, void *sws,
+                                  size_t swb, trn_heading_result_t *out)
 {
     const trn_status_t st = trn_localize_points(map, buf, n, win, sws, swb, &out->loc);
     int32_t i;
@@ -312,8 +316,8 @@ trn_status_t trn_localize_points_heading(const trn_map_t *map, const trn_point_t
     if ((st = trn_heading_steps(pts, n, cfg, &step, &kk)) != TRN_OK) {
         return st;
     }
-    if (win->x0 > win->x1 || win->y0 > win->y1 || win->x0 < 0 || win->y0 < 0 || win->x1 >= map->dist.nx ||
-        win->y1 >= map->dist.ny) {
+    if (win->x0 > win->x1 || win->y0 > win->y1 || win->x0 < 0 || win->y0 < 0 ||
+        win->x1 >= map->dist.nx || win->y1 >= map->dist.ny) {
         return TRN_E_RANGE;
     }
     need = heading_carve(map, n, win, NULL, &buf, &fit, &hsl, &sws, &swb);
@@ -360,8 +364,10 @@ trn_status_t trn_localize_points_heading(const trn_map_t *map, const trn_point_t
     out->loc.iy = best.y;
     out->loc.ll_best = (double)best.score / (double)TRN_LNP_SCALE;
     out->loc.n_points = n;
-    out->loc.on_window_edge = (best.x == win->x0 || best.x == win->x1 || best.y == win->y0 || best.y == win->y1 ||
-                               bk == -kk || bk == kk) ? 1 : 0;
+    out->loc.on_window_edge = (best.x == win->x0 || best.x == win->x1 || best.y == win->y0 ||
+                               best.y == win->y1 || bk == -kk || bk == kk)
+                                  ? 1
+                                  : 0;
     out->best_step = bk;
 
     /* eq. 6 in (x, y, heading) */
@@ -380,7 +386,9 @@ trn_status_t trn_localize_points_heading(const trn_map_t *map, const trn_point_t
     out->sigma_heading_rad = fit->pk.sigma[2] * step;
     out->loc.sigma_x_m = fit->pk.sigma[0] * cell;
     out->loc.sigma_y_m = fit->pk.sigma[1] * cell;
-    out->loc.rho = (fit_st == TRN_OK) ? fit->pk.covariance[1] / (fit->pk.sigma[0] * fit->pk.sigma[1]) : 0.0;
+    out->loc.rho = (fit_st == TRN_OK)
+                       ? fit->pk.covariance[1] / (fit->pk.sigma[0] * fit->pk.sigma[1])
+                       : 0.0;
     out->loc.cov_m2[0] = out->cov3[0];
     out->loc.cov_m2[1] = out->cov3[4];
     out->loc.cov_m2[2] = out->cov3[1];
@@ -391,7 +399,8 @@ trn_status_t trn_localize_points_heading(const trn_map_t *map, const trn_point_t
     r = map->cfg.min_exclusion_cells;
     if (fit_st == TRN_OK) {
         /* finite sigmas (a fitted peak); beyond the map no zone is wider */
-        const double r4 = ceil(fmin(4.0 * fmax(fit->pk.sigma[0], fit->pk.sigma[1]), (double)TRN_MAX_DIM));
+        const double r4 = ceil(
+            fmin(4.0 * fmax(fit->pk.sigma[0], fit->pk.sigma[1]), (double)TRN_MAX_DIM));
         r = (int32_t)fmax((double)r, r4);
     }
     ex.cx = best.x;
@@ -409,7 +418,8 @@ trn_status_t trn_localize_points_heading(const trn_map_t *map, const trn_point_t
         out->loc.second_y = second.y;
         out->loc.ll_second = (double)second.score / (double)TRN_LNP_SCALE;
         /* finite, and at most the best's (the best is the maximum): cannot fail */
-        (void)trn_failure_probability(out->loc.ll_best, out->loc.ll_second, &out->loc.failure_probability);
+        (void)trn_failure_probability(out->loc.ll_best, out->loc.ll_second,
+                                      &out->loc.failure_probability);
     } else { /* TRN_E_NODATA: nothing outside the zone within the margin */
         out->loc.has_second = 0;
         out->loc.second_x = best.x;

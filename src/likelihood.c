@@ -158,10 +158,18 @@ static bbox_t points_bbox(const trn_point_t *pts, size_t n)
         b.miny = b.maxy = pts[0].y;
     }
     for (i = 1; i < n; ++i) {
-        if (pts[i].x < b.minx) { b.minx = pts[i].x; }
-        if (pts[i].x > b.maxx) { b.maxx = pts[i].x; }
-        if (pts[i].y < b.miny) { b.miny = pts[i].y; }
-        if (pts[i].y > b.maxy) { b.maxy = pts[i].y; }
+        if (pts[i].x < b.minx) {
+            b.minx = pts[i].x;
+        }
+        if (pts[i].x > b.maxx) {
+            b.maxx = pts[i].x;
+        }
+        if (pts[i].y < b.miny) {
+            b.miny = pts[i].y;
+        }
+        if (pts[i].y > b.maxy) {
+            b.maxy = pts[i].y;
+        }
     }
     return b;
 }
@@ -189,7 +197,8 @@ static int64_t score_level(const level_view_t *L, const int32_t *lnp, const trn_
         oy + bb->maxy < L->dimy) {
         for (i = 0; i < n; ++i) {
             size_t idx = ((size_t)pts[i].z * (size_t)L->dimy + (size_t)(oy + pts[i].y)) *
-                             (size_t)L->dimx + (size_t)(ox + pts[i].x);
+                             (size_t)L->dimx +
+                         (size_t)(ox + pts[i].x);
             s += lnp[L->d[idx]];
         }
     } else {
@@ -236,9 +245,9 @@ static size_t chunk_lo(size_t n, size_t c)
 /* Score (px, py) on L by chunks. up: upper bounds as above, or NULL for no
  * exit. Returns 0 when proven below cut; else 1 with the sum in *total and,
  * if suf is not NULL, the chunk suffix sums in *suf. */
-static int score_chunks(const level_view_t *L, const int32_t *lnp, const trn_point_t *pts,
-                        size_t n, const bbox_t *bb, int32_t px, int32_t py, const suffix_t *up,
-                        int64_t cut, int64_t *total, suffix_t *suf)
+static int score_chunks(const level_view_t *L, const int32_t *lnp, const trn_point_t *pts, size_t n,
+                        const bbox_t *bb, int32_t px, int32_t py, const suffix_t *up, int64_t cut,
+                        int64_t *total, suffix_t *suf)
 {
     int64_t cs[BB_NCH];
     int64_t s = 0;
@@ -296,14 +305,14 @@ static trn_status_t check_search_args(const trn_vol_u8_t *dist, const trn_lnp_ta
     return TRN_OK;
 }
 
-static trn_status_t check_window(const trn_window_t *win, const trn_exclusion_t *ex,
-                                 int32_t nx, int32_t ny)
+static trn_status_t check_window(const trn_window_t *win, const trn_exclusion_t *ex, int32_t nx,
+                                 int32_t ny)
 {
     if (win == NULL) {
         return TRN_E_NULL;
     }
-    if (win->x0 > win->x1 || win->y0 > win->y1 || win->x0 < 0 || win->y0 < 0 ||
-        win->x1 >= nx || win->y1 >= ny) {
+    if (win->x0 > win->x1 || win->y0 > win->y1 || win->x0 < 0 || win->y0 < 0 || win->x1 >= nx ||
+        win->y1 >= ny) {
         return TRN_E_RANGE;
     }
     if (ex != NULL && ex->radius < 0) {
@@ -420,8 +429,8 @@ static size_t pyramid_carve(int32_t nx, int32_t ny, int32_t nz, int32_t nlevels,
     size_t pad, per;
     int32_t lv;
     trn_ws_t w;
-    if (nx < 1 || ny < 1 || nz < 1 || nx > TRN_MAX_DIM || ny > TRN_MAX_DIM ||
-        nz > TRN_MAX_ZBINS || nlevels < 1 || nlevels > TRN_MAX_LEVELS) {
+    if (nx < 1 || ny < 1 || nz < 1 || nx > TRN_MAX_DIM || ny > TRN_MAX_DIM || nz > TRN_MAX_ZBINS ||
+        nlevels < 1 || nlevels > TRN_MAX_LEVELS) {
         return 0u;
     }
     pad = ((size_t)1u << (unsigned)nlevels) - 1u;
@@ -470,8 +479,8 @@ static uint8_t pyr_src(const uint8_t *r, int32_t lo, int32_t nx, int32_t x, uint
  * goes by PYR_LANES-wide blocks (the last one may overlap the one before:
  * the output never aliases a source); the few columns at each end one by one.
  */
-static void pyr_row(uint8_t *row, const uint8_t *r0_in, const uint8_t *r1_in, int32_t lo, int32_t nx,
-                    int32_t pad, int32_t h, uint8_t cap)
+static void pyr_row(uint8_t *row, const uint8_t *r0_in, const uint8_t *r1_in, int32_t lo,
+                    int32_t nx, int32_t pad, int32_t h, uint8_t cap)
 {
     const int32_t pnx = nx + pad;
     const uint8_t *r0 = r0_in, *r1 = r1_in;
@@ -541,8 +550,8 @@ trn_status_t trn_pyramid_build(trn_pyramid_t *p, const trn_vol_u8_t *dist, uint8
         uint8_t *out = p->level[lv - 1];
         for (z = 0; z < dist->nz; ++z) {
             for (y = -p->pad; y < dist->ny; ++y) {
-                uint8_t *row = out + ((size_t)z * (size_t)p->pny + (size_t)(y + p->pad)) *
-                                         (size_t)p->pnx;
+                uint8_t *row = out +
+                               ((size_t)z * (size_t)p->pny + (size_t)(y + p->pad)) * (size_t)p->pnx;
                 const uint8_t *src[2];
                 int32_t k, lo;
                 for (k = 0; k < 2; ++k) {
@@ -551,12 +560,13 @@ trn_status_t trn_pyramid_build(trn_pyramid_t *p, const trn_vol_u8_t *dist, uint8
                     if (lv == 1) {
                         /* base: rows 0..ny-1, columns 0..nx-1, no padding */
                         if (sy >= 0 && sy < dist->ny) {
-                            src[k] = dist->data + ((size_t)z * (size_t)dist->ny + (size_t)sy) *
-                                                      (size_t)dist->nx;
+                            src[k] = dist->data +
+                                     ((size_t)z * (size_t)dist->ny + (size_t)sy) * (size_t)dist->nx;
                         }
                     } else if (sy < dist->ny) { /* sy >= -pad always */
-                        src[k] = p->level[lv - 2] + ((size_t)z * (size_t)p->pny +
-                                                     (size_t)(sy + p->pad)) * (size_t)p->pnx;
+                        src[k] = p->level[lv - 2] +
+                                 ((size_t)z * (size_t)p->pny + (size_t)(sy + p->pad)) *
+                                     (size_t)p->pnx;
                     }
                 }
                 lo = lv == 1 ? 0 : -p->pad;
@@ -605,7 +615,8 @@ typedef struct {
 
 /* The carve of trn_search_bb's workspace (base NULL: sizing only); returns
  * the bytes, 0 if the arguments are out of range. */
-static size_t bb_carve(const trn_pyramid_t *p, const trn_window_t *win, void *base, bb_layout_t *lay)
+static size_t bb_carve(const trn_pyramid_t *p, const trn_window_t *win, void *base,
+                       bb_layout_t *lay)
 {
     int32_t bs;
     trn_ws_t w;
@@ -618,7 +629,8 @@ static size_t bb_carve(const trn_pyramid_t *p, const trn_window_t *win, void *ba
         return 0u;
     }
     bs = (int32_t)(1u << (unsigned)p->nlevels);
-    lay->ntop_max = (size_t)ceil_div(win->x1 - win->x0 + 1, bs) * (size_t)ceil_div(win->y1 - win->y0 + 1, bs);
+    lay->ntop_max = (size_t)ceil_div(win->x1 - win->x0 + 1, bs) *
+                    (size_t)ceil_div(win->y1 - win->y0 + 1, bs);
     trn_ws_begin(&w, base);
     lay->tops = (block_t *)trn_ws_take(&w, lay->ntop_max * sizeof(block_t));
     lay->tops_suf = (suffix_t *)trn_ws_take(&w, lay->ntop_max * sizeof(suffix_t));
@@ -761,8 +773,8 @@ static trn_status_t bb_run(const trn_pyramid_t *p, const trn_lnp_table_t *t, con
                 tb->slot = (int32_t)ntop;
                 /* no bound yet (nothing found before the top level is
                  * scored), so no early exit: every top block is scored whole */
-                if (score_chunks(&L, t->lnp, pts, n, &bb, x, y, NULL,
-                                 best->score, &tb->bound, &tops_suf[ntop])) {
+                if (score_chunks(&L, t->lnp, pts, n, &bb, x, y, NULL, best->score, &tb->bound,
+                                 &tops_suf[ntop])) {
                     ++ntop;
                 }
             }
@@ -845,18 +857,17 @@ static trn_status_t bb_run(const trn_pyramid_t *p, const trn_lnp_table_t *t, con
     return found ? TRN_OK : TRN_E_NODATA;
 }
 
-trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
-                           const trn_point_t *pts, size_t n, const trn_window_t *win,
-                           const trn_exclusion_t *ex, void *ws, size_t ws_bytes,
-                           trn_best_t *best, trn_search_stats_t *stats)
+trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t, const trn_point_t *pts,
+                           size_t n, const trn_window_t *win, const trn_exclusion_t *ex, void *ws,
+                           size_t ws_bytes, trn_best_t *best, trn_search_stats_t *stats)
 {
     return bb_run(p, t, pts, n, win, ex, ws, ws_bytes, NULL, best, stats);
 }
 
 trn_status_t trn_search_bb_above(const trn_pyramid_t *p, const trn_lnp_table_t *t,
                                  const trn_point_t *pts, size_t n, const trn_window_t *win,
-                                 const trn_exclusion_t *ex, int64_t floor, void *ws, size_t ws_bytes,
-                                 trn_best_t *best, trn_search_stats_t *stats)
+                                 const trn_exclusion_t *ex, int64_t floor, void *ws,
+                                 size_t ws_bytes, trn_best_t *best, trn_search_stats_t *stats)
 {
     trn_best_t b;
     trn_status_t st;

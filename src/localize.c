@@ -57,7 +57,9 @@ trn_status_t trn_map_cfg_check(const trn_map_cfg_t *cfg)
     if (cfg->levels < 1 || cfg->levels > TRN_MAX_LEVELS || cfg->min_exclusion_cells < 1 ||
         cfg->min_exclusion_cells > TRN_MAX_DIM ||
         (cfg->local_highpass != TRN_LOCAL_HP_BOX && cfg->local_highpass != TRN_LOCAL_HP_MAP) ||
-        (cfg->refine != 0 && cfg->refine != 1) || (cfg->match != TRN_MATCH_VOXEL && cfg->match != TRN_MATCH_HEIGHTS) || !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
+        (cfg->refine != 0 && cfg->refine != 1) ||
+        (cfg->match != TRN_MATCH_VOXEL && cfg->match != TRN_MATCH_HEIGHTS) ||
+        !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
         !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f) ||
         !(cfg->max_failure_prob > 0.0f && cfg->max_failure_prob <= 1.0f)) {
         return TRN_E_ARG;
@@ -68,7 +70,8 @@ trn_status_t trn_map_cfg_check(const trn_map_cfg_t *cfg)
 /* The configuration keeps the DEM's heights and low-pass in the map. */
 static int needs_heights(const trn_map_cfg_t *cfg)
 {
-    return cfg->refine != 0 || cfg->local_highpass == TRN_LOCAL_HP_MAP || cfg->match == TRN_MATCH_HEIGHTS;
+    return cfg->refine != 0 || cfg->local_highpass == TRN_LOCAL_HP_MAP ||
+           cfg->match == TRN_MATCH_HEIGHTS;
 }
 
 /* Layout of the map buffer: [dist | pyramid | heights | lowpass | hp grid |
@@ -150,9 +153,11 @@ trn_status_t trn_map_build(trn_map_t *map, const trn_map_cfg_t *cfg, const trn_g
         return st;
     }
     map->cfg = *cfg;
-    if ((st = trn_grid_f32_init(&hp, (float *)(void *)(b + lay.hp), (size_t)dem->width * (size_t)dem->height,
-                                dem->width, dem->height)) != TRN_OK ||
-        (st = trn_highpass(dem, &cfg->terrain, &hp, b + lay.hpws, lay.total - lay.hpws)) != TRN_OK ||
+    if ((st = trn_grid_f32_init(&hp, (float *)(void *)(b + lay.hp),
+                                (size_t)dem->width * (size_t)dem->height, dem->width,
+                                dem->height)) != TRN_OK ||
+        (st = trn_highpass(dem, &cfg->terrain, &hp, b + lay.hpws, lay.total - lay.hpws)) !=
+            TRN_OK ||
         (st = trn_vol_u8_init(&map->dist, b + lay.dist, lay.pyr, dem->width, dem->height,
                               cfg->terrain.nz)) != TRN_OK ||
         (st = trn_occupancy(&hp, &cfg->terrain, &map->dist, &map->n_occupied)) != TRN_OK ||
@@ -167,10 +172,10 @@ trn_status_t trn_map_build(trn_map_t *map, const trn_map_cfg_t *cfg, const trn_g
     if (needs_heights(cfg)) {
         int32_t x, y;
         size_t cells = (size_t)dem->width * (size_t)dem->height;
-        if ((st = trn_grid_f32_init(&map->heights, (float *)(void *)(b + lay.heights), cells, dem->width,
-                                    dem->height)) != TRN_OK ||
-            (st = trn_grid_f32_init(&map->lowpass, (float *)(void *)(b + lay.lowpass), cells, dem->width,
-                                    dem->height)) != TRN_OK) {
+        if ((st = trn_grid_f32_init(&map->heights, (float *)(void *)(b + lay.heights), cells,
+                                    dem->width, dem->height)) != TRN_OK ||
+            (st = trn_grid_f32_init(&map->lowpass, (float *)(void *)(b + lay.lowpass), cells,
+                                    dem->width, dem->height)) != TRN_OK) {
             return st;
         }
         for (y = 0; y < dem->height; ++y) {
@@ -216,8 +221,8 @@ size_t trn_map_cfg_auto_workspace_bytes(int32_t width, int32_t height)
     return cfg_auto_carve(width, height, &hp_at, &hpws_at);
 }
 
-trn_status_t trn_map_cfg_auto(trn_map_cfg_t *cfg, const trn_grid_f32_t *dem, float cell_m,
-                              void *ws, size_t ws_bytes, double *sigma_h_m)
+trn_status_t trn_map_cfg_auto(trn_map_cfg_t *cfg, const trn_grid_f32_t *dem, float cell_m, void *ws,
+                              size_t ws_bytes, double *sigma_h_m)
 {
     trn_status_t st;
     trn_map_cfg_t c;
@@ -258,7 +263,8 @@ trn_status_t trn_map_cfg_auto(trn_map_cfg_t *cfg, const trn_grid_f32_t *dem, flo
     cells = (size_t)dem->width * (size_t)dem->height;
     if ((st = trn_grid_f32_init(&hp, (float *)(void *)((uint8_t *)ws + hp_at), cells, dem->width,
                                 dem->height)) != TRN_OK ||
-        (st = trn_highpass(dem, &c.terrain, &hp, (uint8_t *)ws + hpws_at, ws_bytes - hpws_at)) != TRN_OK) {
+        (st = trn_highpass(dem, &c.terrain, &hp, (uint8_t *)ws + hpws_at, ws_bytes - hpws_at)) !=
+            TRN_OK) {
         return st;
     }
     for (y = 0; y < dem->height; ++y) {
@@ -307,9 +313,10 @@ static int map_ok(const trn_map_t *map)
     return trn_map_cfg_check(&map->cfg) == TRN_OK && trn_vol_u8_check(&map->dist) == TRN_OK &&
            map->pyr.nlevels == map->cfg.levels && map->lnp.cap == map->cfg.cap &&
            (!needs_heights(&map->cfg) ||
-            (trn_grid_f32_check(&map->heights) == TRN_OK && trn_grid_f32_check(&map->lowpass) == TRN_OK &&
-             map->heights.width == map->dist.nx && map->heights.height == map->dist.ny &&
-             map->lowpass.width == map->dist.nx && map->lowpass.height == map->dist.ny));
+            (trn_grid_f32_check(&map->heights) == TRN_OK &&
+             trn_grid_f32_check(&map->lowpass) == TRN_OK && map->heights.width == map->dist.nx &&
+             map->heights.height == map->dist.ny && map->lowpass.width == map->dist.nx &&
+             map->lowpass.height == map->dist.ny));
 }
 
 size_t trn_localize_workspace_bytes(const trn_map_t *map, const trn_window_t *win)
@@ -374,7 +381,9 @@ trn_status_t trn_localize_points(const trn_map_t *map, const trn_point_t *pts, s
     out->ll_best = nats(best.score);
     out->n_points = n;
     out->on_window_edge = (best.x == win->x0 || best.x == win->x1 || best.y == win->y0 ||
-                           best.y == win->y1) ? 1 : 0;
+                           best.y == win->y1)
+                              ? 1
+                              : 0;
     for (i = 0; i < 9; ++i) {
         int64_t s;
         if (i == 4) {
@@ -449,7 +458,8 @@ static int loc_layout(const trn_map_t *map, int32_t w, int32_t h, size_t max_poi
     lay->search = trn_ws_offset(&ws, sw);
     lay->llgrid = ws.total;
     if (map->cfg.match == TRN_MATCH_HEIGHTS) { /* every pose's ln L (trn_height_search) */
-        (void)trn_ws_offset(&ws, (size_t)(win->x1 - win->x0 + 1) * (size_t)(win->y1 - win->y0 + 1) * sizeof(double));
+        (void)trn_ws_offset(&ws, (size_t)(win->x1 - win->x0 + 1) * (size_t)(win->y1 - win->y0 + 1) *
+                                     sizeof(double));
     }
     lay->total = ws.total;
     return 1;
@@ -480,7 +490,8 @@ static trn_status_t highpass_by_map(const trn_map_t *map, const trn_grid_f32_t *
         for (x = 0; x < local->width; ++x) {
             int64_t gx = (int64_t)cx + x - rx, gy = (int64_t)cy + y - ry;
             float h = TRN_GRID_AT(local, x, y), v = NAN;
-            if (isfinite(h) && gx >= 0 && gy >= 0 && gx < map->lowpass.width && gy < map->lowpass.height) {
+            if (isfinite(h) && gx >= 0 && gy >= 0 && gx < map->lowpass.width &&
+                gy < map->lowpass.height) {
                 float lp = TRN_GRID_AT(&map->lowpass, (int32_t)gx, (int32_t)gy);
                 if (isfinite(lp)) {
                     double d = (double)h - (double)lp;
@@ -505,7 +516,9 @@ static trn_status_t highpass_by_map(const trn_map_t *map, const trn_grid_f32_t *
                 float v = TRN_GRID_AT(out, x, y);
                 if (isfinite(v)) {
                     double f = (double)v - mean;
-                    f = f > (double)FLT_MAX ? (double)FLT_MAX : f < -(double)FLT_MAX ? -(double)FLT_MAX : f;
+                    f = f > (double)FLT_MAX    ? (double)FLT_MAX
+                        : f < -(double)FLT_MAX ? -(double)FLT_MAX
+                                               : f;
                     TRN_GRID_AT(out, x, y) = (float)f;
                 }
             }
@@ -526,7 +539,8 @@ static void refine_result(const trn_map_t *map, const trn_grid_f32_t *local, int
     rc.noise_k_per_m = map->cfg.noise_k_per_m;
     out->refined = 0;
     out->misfit = 0;
-    if (trn_refine_pose(&map->heights, local, rx, ry, out->ix, out->iy, &rc, &out->refinement) != TRN_OK) {
+    if (trn_refine_pose(&map->heights, local, rx, ry, out->ix, out->iy, &rc, &out->refinement) !=
+        TRN_OK) {
         return;
     }
     out->refined = 1;
@@ -545,8 +559,9 @@ static void refine_result(const trn_map_t *map, const trn_grid_f32_t *local, int
 }
 
 /* TRN_MATCH_HEIGHTS: height search, refinement, competing hypothesis. */
-static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
-                                     const trn_window_t *win, double *ll_grid, trn_loc_result_t *out)
+static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
+                                     int32_t ry, const trn_window_t *win, double *ll_grid,
+                                     trn_loc_result_t *out)
 {
     trn_status_t st;
     trn_height_best_t best, second;
@@ -558,8 +573,8 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
     rc.cell_m = map->cfg.terrain.cell_m;
     rc.noise_m = map->cfg.noise_m;
     rc.noise_k_per_m = map->cfg.noise_k_per_m;
-    if ((st = trn_height_search(&map->heights, local, rx, ry, win, NULL, &rc, map->cfg.inlier_prob, 1.0, ll_grid,
-                                &best)) != TRN_OK) {
+    if ((st = trn_height_search(&map->heights, local, rx, ry, win, NULL, &rc, map->cfg.inlier_prob,
+                                1.0, ll_grid, &best)) != TRN_OK) {
         return st;
     }
     out->ix = best.x;
@@ -568,7 +583,10 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
     out->n_points = 0u;
     out->stats.poses_scored = best.poses;
     out->stats.blocks_bounded = 0u;
-    out->on_window_edge = (best.x == win->x0 || best.x == win->x1 || best.y == win->y0 || best.y == win->y1) ? 1 : 0;
+    out->on_window_edge = (best.x == win->x0 || best.x == win->x1 || best.y == win->y0 ||
+                           best.y == win->y1)
+                              ? 1
+                              : 0;
     out->x = (double)best.x;
     out->y = (double)best.y;
     out->sigma_x_m = out->sigma_y_m = (double)INFINITY;
@@ -653,7 +671,8 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
         return st;
     }
     if (map->cfg.match == TRN_MATCH_HEIGHTS) {
-        st = localize_heights(map, local_dem, rover_x, rover_y, win, (double *)(void *)(b + lay.llgrid), out);
+        st = localize_heights(map, local_dem, rover_x, rover_y, win,
+                              (double *)(void *)(b + lay.llgrid), out);
         return accept(map, st, out);
     }
     pts = (trn_point_t *)(void *)(b + lay.pts);
@@ -668,9 +687,8 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
     } else {
         st = trn_highpass(local_dem, &map->cfg.terrain, &hp, b + lay.hpws, lay.pts - lay.hpws);
     }
-    if (st != TRN_OK ||
-        (st = trn_occupancy_points(&hp, &map->cfg.terrain, rover_x, rover_y, pts, max_points, &n)) !=
-            TRN_OK) {
+    if (st != TRN_OK || (st = trn_occupancy_points(&hp, &map->cfg.terrain, rover_x, rover_y, pts,
+                                                   max_points, &n)) != TRN_OK) {
         return st;
     }
     /* rare height bins first: same result, earlier branch-and-bound exits */
@@ -682,9 +700,10 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
         (out->ix != (win->x0 + win->x1) / 2 || out->iy != (win->y0 + win->y1) / 2)) {
         /* Second pass: the local filter referred to the pose just found
          * (the low-pass's curvature times the prior's error is gone there). */
-        if ((st = highpass_by_map(map, local_dem, rover_x, rover_y, out->ix, out->iy, &hp)) != TRN_OK ||
-            (st = trn_occupancy_points(&hp, &map->cfg.terrain, rover_x, rover_y, pts, max_points, &n)) !=
+        if ((st = highpass_by_map(map, local_dem, rover_x, rover_y, out->ix, out->iy, &hp)) !=
                 TRN_OK ||
+            (st = trn_occupancy_points(&hp, &map->cfg.terrain, rover_x, rover_y, pts, max_points,
+                                       &n)) != TRN_OK ||
             (st = trn_points_order(pts, n, map->cfg.terrain.nz)) != TRN_OK) {
             return st;
         }
@@ -704,8 +723,8 @@ typedef struct {
     size_t hp, hpws, pts, heading, total;
 } head_layout_t;
 
-static int head_layout(const trn_map_t *map, int32_t w, int32_t h, size_t max_points, const trn_window_t *win,
-                       head_layout_t *lay)
+static int head_layout(const trn_map_t *map, int32_t w, int32_t h, size_t max_points,
+                       const trn_window_t *win, head_layout_t *lay)
 {
     size_t hpws = trn_highpass_workspace_bytes(w, h);
     size_t hw = trn_localize_heading_workspace_bytes(map, max_points, win);
@@ -733,10 +752,10 @@ size_t trn_localize_dem_heading_workspace_bytes(const trn_map_t *map, int32_t wi
     return head_layout(map, width, height, max_points, win, &lay) ? lay.total : 0u;
 }
 
-trn_status_t trn_localize_dem_heading(const trn_map_t *map, const trn_grid_f32_t *local_dem, int32_t rover_x,
-                                      int32_t rover_y, size_t max_points, const trn_window_t *win,
-                                      const trn_heading_cfg_t *cfg, void *ws, size_t ws_bytes,
-                                      trn_heading_result_t *out)
+trn_status_t trn_localize_dem_heading(const trn_map_t *map, const trn_grid_f32_t *local_dem,
+                                      int32_t rover_x, int32_t rover_y, size_t max_points,
+                                      const trn_window_t *win, const trn_heading_cfg_t *cfg,
+                                      void *ws, size_t ws_bytes, trn_heading_result_t *out)
 {
     trn_status_t st;
     head_layout_t lay;
@@ -744,36 +763,38 @@ trn_status_t trn_localize_dem_heading(const trn_map_t *map, const trn_grid_f32_t
     trn_grid_f32_t hp;
     size_t n = 0;
 
-    if (map == NULL || local_dem == NULL || win == NULL || cfg == NULL || ws == NULL || out == NULL) {
+    if (map == NULL || local_dem == NULL || win == NULL || cfg == NULL || ws == NULL ||
+        out == NULL) {
         return TRN_E_NULL;
     }
     if ((st = trn_grid_f32_check(local_dem)) != TRN_OK) {
         return st;
     }
-    if (!map_ok(map) || map->cfg.match != TRN_MATCH_VOXEL || map->cfg.refine != 0 || max_points == 0u ||
-        max_points > (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM) {
+    if (!map_ok(map) || map->cfg.match != TRN_MATCH_VOXEL || map->cfg.refine != 0 ||
+        max_points == 0u || max_points > (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM) {
         return TRN_E_ARG;
     }
-    if (!window_ok(map, win) || !head_layout(map, local_dem->width, local_dem->height, max_points, win, &lay)) {
+    if (!window_ok(map, win) ||
+        !head_layout(map, local_dem->width, local_dem->height, max_points, win, &lay)) {
         return TRN_E_RANGE;
     }
     if ((st = trn_ws_check(ws, ws_bytes, lay.total)) != TRN_OK) {
         return st;
     }
     if ((st = trn_grid_f32_init(&hp, (float *)(void *)(b + lay.hp),
-                                (size_t)local_dem->width * (size_t)local_dem->height, local_dem->width,
-                                local_dem->height)) != TRN_OK) {
+                                (size_t)local_dem->width * (size_t)local_dem->height,
+                                local_dem->width, local_dem->height)) != TRN_OK) {
         return st;
     }
     if (map->cfg.local_highpass == TRN_LOCAL_HP_MAP) {
-        st = highpass_by_map(map, local_dem, rover_x, rover_y, (win->x0 + win->x1) / 2, (win->y0 + win->y1) / 2,
-                             &hp);
+        st = highpass_by_map(map, local_dem, rover_x, rover_y, (win->x0 + win->x1) / 2,
+                             (win->y0 + win->y1) / 2, &hp);
     } else {
         st = trn_highpass(local_dem, &map->cfg.terrain, &hp, b + lay.hpws, lay.pts - lay.hpws);
     }
-    if (st != TRN_OK ||
-        (st = trn_occupancy_points(&hp, &map->cfg.terrain, rover_x, rover_y, (trn_point_t *)(void *)(b + lay.pts),
-                                   max_points, &n)) != TRN_OK) {
+    if (st != TRN_OK || (st = trn_occupancy_points(&hp, &map->cfg.terrain, rover_x, rover_y,
+                                                   (trn_point_t *)(void *)(b + lay.pts), max_points,
+                                                   &n)) != TRN_OK) {
         return st;
     }
     return trn_localize_points_heading(map, (const trn_point_t *)(void *)(b + lay.pts), n, win, cfg,

@@ -10,24 +10,22 @@
 #define PI_SLACK_F 3.1415930f
 #define HALF_PI_SLACK_F 1.5707965f
 
-static int finite3(float a, float b, float c)
-{
-    return isfinite(a) && isfinite(b) && isfinite(c);
-}
+static int finite3(float a, float b, float c) { return isfinite(a) && isfinite(b) && isfinite(c); }
 
 trn_status_t trn_mast_geom_check(const trn_mast_geom_t *g)
 {
     if (g == NULL) {
         return TRN_E_NULL;
     }
-    if (!finite3(g->pan_x_m, g->pan_y_m, g->pan_z_m) || !finite3(g->tilt_fwd_m, g->tilt_up_m, g->cam_fwd_m) ||
+    if (!finite3(g->pan_x_m, g->pan_y_m, g->pan_z_m) ||
+        !finite3(g->tilt_fwd_m, g->tilt_up_m, g->cam_fwd_m) ||
         !finite3(g->cam_left_m, g->cam_up_m, g->pan_min_rad) ||
         !finite3(g->pan_max_rad, g->tilt_min_rad, g->tilt_max_rad)) {
         return TRN_E_ARG;
     }
-    if (g->pan_min_rad < -PI_SLACK_F || g->pan_max_rad > PI_SLACK_F || g->pan_min_rad > g->pan_max_rad ||
-        g->tilt_min_rad < -HALF_PI_SLACK_F || g->tilt_max_rad > HALF_PI_SLACK_F ||
-        g->tilt_min_rad > g->tilt_max_rad) {
+    if (g->pan_min_rad < -PI_SLACK_F || g->pan_max_rad > PI_SLACK_F ||
+        g->pan_min_rad > g->pan_max_rad || g->tilt_min_rad < -HALF_PI_SLACK_F ||
+        g->tilt_max_rad > HALF_PI_SLACK_F || g->tilt_min_rad > g->tilt_max_rad) {
         return TRN_E_ARG;
     }
     return TRN_OK;
@@ -45,7 +43,8 @@ trn_status_t trn_mast_point_at(const trn_mast_geom_t *g, const trn_rover_pose_t 
     if (g == NULL || pose == NULL || target == NULL || pan_rad == NULL || tilt_rad == NULL) {
         return TRN_E_NULL;
     }
-    if (trn_mast_geom_check(g) != TRN_OK || !pose_ok(pose) || !finite3(target->x, target->y, target->z)) {
+    if (trn_mast_geom_check(g) != TRN_OK || !pose_ok(pose) ||
+        !finite3(target->x, target->y, target->z)) {
         return TRN_E_ARG;
     }
     /* target in the body frame */
@@ -86,15 +85,16 @@ trn_status_t trn_mast_point_at(const trn_mast_geom_t *g, const trn_rover_pose_t 
     }
     *pan_rad = pan;
     *tilt_rad = tilt;
-    if (pan < g->pan_min_rad || pan > g->pan_max_rad || tilt < g->tilt_min_rad || tilt > g->tilt_max_rad) {
+    if (pan < g->pan_min_rad || pan > g->pan_max_rad || tilt < g->tilt_min_rad ||
+        tilt > g->tilt_max_rad) {
         return TRN_E_RANGE;
     }
     return TRN_OK;
 }
 
 /* Rotation of a head-frame vector (forward, left, up) into the map frame. */
-static void head_dir_to_map(float cp, float sp, float ct, float st, float ch, float sh,
-                            float hf, float hl, float hu, float out[3])
+static void head_dir_to_map(float cp, float sp, float ct, float st, float ch, float sh, float hf,
+                            float hl, float hu, float out[3])
 {
     /* head -> panned: forward = (ct, 0, st), up = (-st, 0, ct) */
     float pf = hf * ct - hu * st;
@@ -116,7 +116,8 @@ trn_status_t trn_mast_camera_to_map(const trn_mast_geom_t *g, const trn_rover_po
     if (g == NULL || pose == NULL || cam_to_map == NULL) {
         return TRN_E_NULL;
     }
-    if (trn_mast_geom_check(g) != TRN_OK || !pose_ok(pose) || !isfinite(pan_rad) || !isfinite(tilt_rad)) {
+    if (trn_mast_geom_check(g) != TRN_OK || !pose_ok(pose) || !isfinite(pan_rad) ||
+        !isfinite(tilt_rad)) {
         return TRN_E_ARG;
     }
     cp = cosf(pan_rad);
@@ -129,9 +130,15 @@ trn_status_t trn_mast_camera_to_map(const trn_mast_geom_t *g, const trn_rover_po
     head_dir_to_map(cp, sp, ct, st, ch, sh, 0.0f, -1.0f, 0.0f, ex);
     head_dir_to_map(cp, sp, ct, st, ch, sh, 0.0f, 0.0f, -1.0f, ey);
     head_dir_to_map(cp, sp, ct, st, ch, sh, 1.0f, 0.0f, 0.0f, ez);
-    cam_to_map->r[0] = ex[0]; cam_to_map->r[1] = ey[0]; cam_to_map->r[2] = ez[0];
-    cam_to_map->r[3] = ex[1]; cam_to_map->r[4] = ey[1]; cam_to_map->r[5] = ez[1];
-    cam_to_map->r[6] = ex[2]; cam_to_map->r[7] = ey[2]; cam_to_map->r[8] = ez[2];
+    cam_to_map->r[0] = ex[0];
+    cam_to_map->r[1] = ey[0];
+    cam_to_map->r[2] = ez[0];
+    cam_to_map->r[3] = ex[1];
+    cam_to_map->r[4] = ey[1];
+    cam_to_map->r[5] = ez[1];
+    cam_to_map->r[6] = ex[2];
+    cam_to_map->r[7] = ey[2];
+    cam_to_map->r[8] = ez[2];
     /* optical centre: head offset -> panned (about the tilt axis) -> body */
     pf = g->tilt_fwd_m + g->cam_fwd_m * ct - g->cam_up_m * st;
     pu = g->tilt_up_m + g->cam_fwd_m * st + g->cam_up_m * ct;
@@ -144,7 +151,8 @@ trn_status_t trn_mast_camera_to_map(const trn_mast_geom_t *g, const trn_rover_po
     return TRN_OK;
 }
 
-trn_status_t trn_rigid_apply(const trn_rigid_t *T, const trn_vec3f_t *in, size_t n, trn_vec3f_t *out)
+trn_status_t trn_rigid_apply(const trn_rigid_t *T, const trn_vec3f_t *in, size_t n,
+                             trn_vec3f_t *out)
 {
     size_t i;
     if (T == NULL || ((in == NULL || out == NULL) && n > 0u)) {
@@ -170,18 +178,19 @@ static trn_status_t local_dem_args(const trn_vec3f_t *pts, size_t n, const trn_r
         return TRN_E_SIZE;
     }
     if (!isfinite(cfg->cell_m) || !(cfg->cell_m > 0.0f) || !isfinite(1.0f / cfg->cell_m) ||
-        (cfg->row_north != 1 && cfg->row_north != -1) ||
-        cfg->rover_col < -TRN_MAX_DIM || cfg->rover_col > dem->width + TRN_MAX_DIM ||
-        cfg->rover_row < -TRN_MAX_DIM || cfg->rover_row > dem->height + TRN_MAX_DIM ||
-        !isfinite(pose->x_m) || !isfinite(pose->y_m)) {
+        (cfg->row_north != 1 && cfg->row_north != -1) || cfg->rover_col < -TRN_MAX_DIM ||
+        cfg->rover_col > dem->width + TRN_MAX_DIM || cfg->rover_row < -TRN_MAX_DIM ||
+        cfg->rover_row > dem->height + TRN_MAX_DIM || !isfinite(pose->x_m) ||
+        !isfinite(pose->y_m)) {
         return TRN_E_ARG;
     }
     return TRN_OK;
 }
 
 /* The cell (c, r) of point p; 0 when p is not finite or off the grid. */
-static int local_cell(const trn_vec3f_t *p, const trn_rover_pose_t *pose, const trn_local_dem_cfg_t *cfg,
-                      const trn_grid_f32_t *dem, float inv, int32_t *c, int32_t *r)
+static int local_cell(const trn_vec3f_t *p, const trn_rover_pose_t *pose,
+                      const trn_local_dem_cfg_t *cfg, const trn_grid_f32_t *dem, float inv,
+                      int32_t *c, int32_t *r)
 {
     float fc, fr;
     if (!finite3(p->x, p->y, p->z)) {
@@ -239,8 +248,8 @@ trn_status_t trn_mast_local_dem(const trn_vec3f_t *pts, size_t n, const trn_rove
 }
 
 trn_status_t trn_mast_local_dem_mean(const trn_vec3f_t *pts, size_t n, const trn_rover_pose_t *pose,
-                                     const trn_local_dem_cfg_t *cfg, trn_grid_f32_t *dem, uint32_t *counts,
-                                     size_t counts_len, size_t *n_used)
+                                     const trn_local_dem_cfg_t *cfg, trn_grid_f32_t *dem,
+                                     uint32_t *counts, size_t counts_len, size_t *n_used)
 {
     size_t i, used = 0u, k;
     float inv;

@@ -128,8 +128,8 @@ static double noise_var(const trn_refine_cfg_t *cfg, int32_t x, int32_t y, int32
  * normalized residual units). */
 static void accumulate_rect(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
                             int32_t ry, double x, double y, double dz, double clip, double model2,
-                            const trn_refine_cfg_t *cfg, int32_t i0, int32_t j0, int32_t i1, int32_t j1,
-                            accum_t *acc)
+                            const trn_refine_cfg_t *cfg, int32_t i0, int32_t j0, int32_t i1,
+                            int32_t j1, accum_t *acc)
 {
     int32_t i, j;
     for (i = 0; i < 9; ++i) {
@@ -187,7 +187,8 @@ static void accumulate(const trn_grid_f32_t *global, const trn_grid_f32_t *local
                        int32_t ry, double x, double y, double dz, double clip, double model2,
                        const trn_refine_cfg_t *cfg, accum_t *acc)
 {
-    accumulate_rect(global, local, rx, ry, x, y, dz, clip, model2, cfg, 0, 0, local->width, local->height, acc);
+    accumulate_rect(global, local, rx, ry, x, y, dz, clip, model2, cfg, 0, 0, local->width,
+                    local->height, acc);
 }
 
 /* One Gauss-Newton pass of the bilinear surface at (bx, by, bz) onto the
@@ -196,9 +197,9 @@ static void accumulate(const trn_grid_f32_t *global, const trn_grid_f32_t *local
  * local height enters but through the inlier test, so the shift it leads
  * to is the model's, free of the data's noise. acc->ss is the weighted sum
  * of squares at (bx, by) with the best offset (closed form). */
-static void model_pass(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx, int32_t ry, double x,
-                       double y, double dz, double bx, double by, double bz, double model2, const trn_refine_cfg_t *cfg,
-                       accum_t *acc)
+static void model_pass(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
+                       int32_t ry, double x, double y, double dz, double bx, double by, double bz,
+                       double model2, const trn_refine_cfg_t *cfg, accum_t *acc)
 {
     int32_t i, j, p, q;
     for (p = 0; p < 9; ++p) {
@@ -215,7 +216,8 @@ static void model_pass(const trn_grid_f32_t *global, const trn_grid_f32_t *local
             }
             px = (double)(i - rx);
             py = (double)(j - ry);
-            if (!sample(global, x + px, y + py, s3) || !sample_bilinear(global, bx + px, by + py, b3)) {
+            if (!sample(global, x + px, y + py, s3) ||
+                !sample_bilinear(global, bx + px, by + py, b3)) {
                 continue;
             }
             v = noise_var(cfg, i, j, rx, ry) + model2;
@@ -253,9 +255,9 @@ static void model_pass(const trn_grid_f32_t *global, const trn_grid_f32_t *local
  * can overshoot and cycle: each step is halved until the sum of squares
  * drops over the same points, and the search stops when no halving does
  * (or the bilinear normal matrix is singular). */
-static void interp_shift(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
-                         double x, double y, double dz, double model2, const trn_refine_cfg_t *cfg,
-                         accum_t *work, double bi[9], double shift[3])
+static void interp_shift(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
+                         int32_t ry, double x, double y, double dz, double model2,
+                         const trn_refine_cfg_t *cfg, accum_t *work, double bi[9], double shift[3])
 {
     /* work and bi are the caller's, dead by now: the stack stays within
      * TRN_STACK_LIMIT_BYTES when this is inlined */
@@ -270,8 +272,8 @@ static void interp_shift(const trn_grid_f32_t *global, const trn_grid_f32_t *loc
         d[1] = bi[3] * acc->b[0] + bi[4] * acc->b[1] + bi[5] * acc->b[2];
         d[2] = bi[6] * acc->b[0] + bi[7] * acc->b[1] + bi[8] * acc->b[2];
         for (h = 0; h < TRN_REFINE_HALVINGS; ++h) {
-            model_pass(global, local, rx, ry, x, y, dz, bx + step * d[0], by + step * d[1], bz + step * d[2], model2,
-                       cfg, &trial);
+            model_pass(global, local, rx, ry, x, y, dz, bx + step * d[0], by + step * d[1],
+                       bz + step * d[2], model2, cfg, &trial);
             if (trial.n_in == acc->n_in && trial.ss < acc->ss) {
                 break;
             }
@@ -298,8 +300,9 @@ static void interp_shift(const trn_grid_f32_t *global, const trn_grid_f32_t *loc
  * product of each block's score (sum of w r J over its inliers). Residuals
  * correlated within a block (the global DEM's interpolation error is smooth
  * over about a cell) add up there instead of averaging out. */
-static void block_meat(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
-                       double x, double y, double dz, double model2, const trn_refine_cfg_t *cfg, double meat[9])
+static void block_meat(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
+                       int32_t ry, double x, double y, double dz, double model2,
+                       const trn_refine_cfg_t *cfg, double meat[9])
 {
     int32_t bi, bj, p, q;
     accum_t acc;
@@ -308,9 +311,12 @@ static void block_meat(const trn_grid_f32_t *global, const trn_grid_f32_t *local
     }
     for (bj = 0; bj < local->height; bj += TRN_REFINE_BLOCK) {
         for (bi = 0; bi < local->width; bi += TRN_REFINE_BLOCK) {
-            int32_t i1 = bi + TRN_REFINE_BLOCK < local->width ? bi + TRN_REFINE_BLOCK : local->width;
-            int32_t j1 = bj + TRN_REFINE_BLOCK < local->height ? bj + TRN_REFINE_BLOCK : local->height;
-            accumulate_rect(global, local, rx, ry, x, y, dz, TRN_REFINE_CLIP, model2, cfg, bi, bj, i1, j1, &acc);
+            int32_t i1 = bi + TRN_REFINE_BLOCK < local->width ? bi + TRN_REFINE_BLOCK
+                                                              : local->width;
+            int32_t j1 = bj + TRN_REFINE_BLOCK < local->height ? bj + TRN_REFINE_BLOCK
+                                                               : local->height;
+            accumulate_rect(global, local, rx, ry, x, y, dz, TRN_REFINE_CLIP, model2, cfg, bi, bj,
+                            i1, j1, &acc);
             for (p = 0; p < 3; ++p) {
                 for (q = 0; q < 3; ++q) {
                     meat[p * 3 + q] += acc.b[p] * acc.b[q];
@@ -355,7 +361,8 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
     if ((st = trn_grid_f32_check(global)) != TRN_OK || (st = trn_grid_f32_check(local)) != TRN_OK) {
         return st;
     }
-    if (!(cfg->cell_m > 0.0f && cfg->cell_m <= 1000.0f) || !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
+    if (!(cfg->cell_m > 0.0f && cfg->cell_m <= 1000.0f) ||
+        !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
         !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f) || rover_x < -TRN_MAX_DIM ||
         rover_y < -TRN_MAX_DIM || rover_x > local->width - 1 + TRN_MAX_DIM ||
         rover_y > local->height - 1 + TRN_MAX_DIM) {
@@ -381,8 +388,8 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
     }
     dz = acc.b[2] / acc.a[8];
     for (it = 0; it < 3; ++it) {
-        accumulate(global, local, rover_x, rover_y, x, y, dz, it == 0 ? (double)INFINITY : TRN_REFINE_CLIP, model2, cfg,
-                   &acc);
+        accumulate(global, local, rover_x, rover_y, x, y, dz,
+                   it == 0 ? (double)INFINITY : TRN_REFINE_CLIP, model2, cfg, &acc);
         if (acc.n_in < 8) {
             break;
         }
@@ -406,7 +413,8 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
         dz += d[2];
         model2 = next_model2(&acc);
         out->iterations = it + 1;
-        if (fabs(x - (double)ix) > TRN_REFINE_MAX_SHIFT || fabs(y - (double)iy) > TRN_REFINE_MAX_SHIFT) {
+        if (fabs(x - (double)ix) > TRN_REFINE_MAX_SHIFT ||
+            fabs(y - (double)iy) > TRN_REFINE_MAX_SHIFT) {
             set_fail(out, ix, iy);
             return TRN_E_ILLCOND;
         }
@@ -504,8 +512,8 @@ static double local_spread(const trn_grid_f32_t *local, int32_t *n_seen)
 }
 
 /* Global height under local cell (x, y) at pose (px, py), or NaN. */
-static double global_at(const trn_grid_f32_t *g, int32_t px, int32_t py, int32_t x, int32_t y, int32_t rx,
-                        int32_t ry)
+static double global_at(const trn_grid_f32_t *g, int32_t px, int32_t py, int32_t x, int32_t y,
+                        int32_t rx, int32_t ry)
 {
     int64_t gx = (int64_t)px + x - rx, gy = (int64_t)py + y - ry;
     if (gx < 0 || gy < 0 || gx >= g->width || gy >= g->height) {
@@ -517,8 +525,9 @@ static double global_at(const trn_grid_f32_t *g, int32_t px, int32_t py, int32_t
 /* Weighted offset and model variance of the residuals at pose (px, py),
  * over the points within clip standard deviations of (dz, m2) (clip < 0:
  * every point). Returns the number of points used. */
-static int32_t pose_fit(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_t rx, int32_t ry, int32_t px,
-                        int32_t py, const trn_refine_cfg_t *cfg, double clip, double *dz, double *m2)
+static int32_t pose_fit(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_t rx, int32_t ry,
+                        int32_t px, int32_t py, const trn_refine_cfg_t *cfg, double clip,
+                        double *dz, double *m2)
 {
     int32_t x, y, n = 0;
     double sw = 0.0, swr = 0.0, sq = 0.0, sqr = 0.0, sqrr = 0.0, sqv = 0.0, ref = 0.0, d, m;
@@ -566,8 +575,9 @@ static int32_t pose_fit(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_
 }
 
 /* Log-likelihood of pose (px, py), nats. */
-static double pose_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_t rx, int32_t ry, int32_t px,
-                      int32_t py, const trn_refine_cfg_t *cfg, double a, double k, double *dz_out, double *m_out)
+static double pose_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_t rx, int32_t ry,
+                      int32_t px, int32_t py, const trn_refine_cfg_t *cfg, double a, double k,
+                      double *dz_out, double *m_out)
 {
     const double two_pi = 6.283185307179586;
     int32_t x, y;
@@ -630,15 +640,17 @@ trn_status_t trn_height_search(const trn_grid_f32_t *global, const trn_grid_f32_
     if ((st = trn_grid_f32_check(global)) != TRN_OK || (st = trn_grid_f32_check(local)) != TRN_OK) {
         return st;
     }
-    if (!(cfg->cell_m > 0.0f && cfg->cell_m <= 1000.0f) || !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
-        !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f) || !(inlier_prob > 0.0f && inlier_prob < 1.0f) ||
-        rover_x < -TRN_MAX_DIM || rover_y < -TRN_MAX_DIM || rover_x > local->width - 1 + TRN_MAX_DIM ||
+    if (!(cfg->cell_m > 0.0f && cfg->cell_m <= 1000.0f) ||
+        !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
+        !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f) ||
+        !(inlier_prob > 0.0f && inlier_prob < 1.0f) || rover_x < -TRN_MAX_DIM ||
+        rover_y < -TRN_MAX_DIM || rover_x > local->width - 1 + TRN_MAX_DIM ||
         rover_y > local->height - 1 + TRN_MAX_DIM || (ex != NULL && ex->radius < 0) ||
         !(ll_scale >= 1.0 && ll_scale <= 1e6)) {
         return TRN_E_ARG;
     }
-    if (win->x0 > win->x1 || win->y0 > win->y1 || win->x0 < 0 || win->y0 < 0 || win->x1 >= global->width ||
-        win->y1 >= global->height) {
+    if (win->x0 > win->x1 || win->y0 > win->y1 || win->x0 < 0 || win->y0 < 0 ||
+        win->x1 >= global->width || win->y1 >= global->height) {
         return TRN_E_RANGE;
     }
     spread = local_spread(local, &n_seen);
@@ -652,10 +664,13 @@ trn_status_t trn_height_search(const trn_grid_f32_t *global, const trn_grid_f32_
     for (y = win->y0; y <= win->y1; ++y) {
         for (x = win->x0; x <= win->x1; ++x) {
             double ll, dz, m, q;
-            int inside = ex != NULL && abs(x - ex->cx) <= ex->radius && abs(y - ex->cy) <= ex->radius;
-            ll = pose_ll(global, local, rover_x, rover_y, x, y, cfg, (double)inlier_prob, k, &dz, &m);
+            int inside = ex != NULL && abs(x - ex->cx) <= ex->radius &&
+                         abs(y - ex->cy) <= ex->radius;
+            ll = pose_ll(global, local, rover_x, rover_y, x, y, cfg, (double)inlier_prob, k, &dz,
+                         &m);
             if (ll_grid != NULL) {
-                ll_grid[(size_t)(y - win->y0) * (size_t)(win->x1 - win->x0 + 1) + (size_t)(x - win->x0)] = ll;
+                ll_grid[(size_t)(y - win->y0) * (size_t)(win->x1 - win->x0 + 1) +
+                        (size_t)(x - win->x0)] = ll;
             }
             best->poses += 1u;
             q = ll / ll_scale;
@@ -678,8 +693,8 @@ trn_status_t trn_height_search(const trn_grid_f32_t *global, const trn_grid_f32_
     return found ? TRN_OK : TRN_E_NODATA;
 }
 
-trn_status_t trn_height_mass(const double *ll_grid, const trn_window_t *win, const trn_exclusion_t *ex,
-                             double ll_scale, trn_height_best_t *best)
+trn_status_t trn_height_mass(const double *ll_grid, const trn_window_t *win,
+                             const trn_exclusion_t *ex, double ll_scale, trn_height_best_t *best)
 {
     int32_t x, y;
     int found = 0;
@@ -689,8 +704,8 @@ trn_status_t trn_height_mass(const double *ll_grid, const trn_window_t *win, con
     if ((ex != NULL && ex->radius < 0) || !(ll_scale >= 1.0 && ll_scale <= 1e6)) {
         return TRN_E_ARG;
     }
-    if (win->x0 > win->x1 || win->y0 > win->y1 || win->x0 < 0 || win->y0 < 0 || win->x1 >= TRN_MAX_DIM ||
-        win->y1 >= TRN_MAX_DIM) {
+    if (win->x0 > win->x1 || win->y0 > win->y1 || win->x0 < 0 || win->y0 < 0 ||
+        win->x1 >= TRN_MAX_DIM || win->y1 >= TRN_MAX_DIM) {
         return TRN_E_RANGE;
     }
     best->poses = 0u;
@@ -699,7 +714,8 @@ trn_status_t trn_height_mass(const double *ll_grid, const trn_window_t *win, con
     best->lse_all = best->lse_out = -(double)INFINITY;
     for (y = win->y0; y <= win->y1; ++y) {
         for (x = win->x0; x <= win->x1; ++x) {
-            double ll = ll_grid[(size_t)(y - win->y0) * (size_t)(win->x1 - win->x0 + 1) + (size_t)(x - win->x0)];
+            double ll = ll_grid[(size_t)(y - win->y0) * (size_t)(win->x1 - win->x0 + 1) +
+                                (size_t)(x - win->x0)];
             double q = ll / ll_scale;
             best->poses += 1u;
             best->lse_all = log_add(best->lse_all, q);

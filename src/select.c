@@ -100,7 +100,8 @@ typedef struct {
     int64_t *sat, *crow;
 } sel_layout_t;
 
-static size_t select_carve(int32_t w, int32_t h, int32_t nz, size_t lw, void *base, sel_layout_t *lay)
+static size_t select_carve(int32_t w, int32_t h, int32_t nz, size_t lw, void *base,
+                           sel_layout_t *lay)
 {
     trn_ws_t c;
     trn_ws_begin(&c, base);
@@ -202,8 +203,8 @@ static void build_sat(const trn_map_t *map, const trn_vol_f32_t *p, const trn_wi
         memset(crow, 0, (size_t)w * sizeof *crow);
         for (z = 0; z < p->nz; ++z) {
             const float *prow = p->data + (size_t)z * lplane + (size_t)y * (size_t)w;
-            const uint8_t *drow =
-                (gy >= 0 && gy < d->ny) ? d->data + TRN_VOL_IDX(d, 0, gy, z) : NULL;
+            const uint8_t *drow = (gy >= 0 && gy < d->ny) ? d->data + TRN_VOL_IDX(d, 0, gy, z)
+                                                          : NULL;
             for (x = 0; x < w; ++x) {
                 const float pv = prow[x];
                 int32_t gx, q;
@@ -211,8 +212,7 @@ static void build_sat(const trn_map_t *map, const trn_vol_f32_t *p, const trn_wi
                 if (!(pv > 0.0f)) {
                     continue;
                 }
-                q = pv >= 4.0f ? SEL_QMAX
-                               : (int32_t)(pv * (float)TRN_SELECT_PROB_SCALE + 0.5f);
+                q = pv >= 4.0f ? SEL_QMAX : (int32_t)(pv * (float)TRN_SELECT_PROB_SCALE + 0.5f);
                 gx = roi->x0 + x + dx;
                 dv = (drow != NULL && gx >= 0 && gx < d->nx) ? drow[gx] : cap;
                 dv = dv < cap ? dv : cap;
@@ -241,8 +241,8 @@ static int64_t window_sum(const int64_t *sat, size_t w1, const trn_window_t *roi
  * (dx, dy) in cells: sh2c2 = s_h^2 c^2 times [dy^2, -dx dy; -dx dy, dx^2].
  * Returns the scalar sqrt(var_x + var_y). One function for trn_select and
  * the ground path, so both give the same bits. */
-static double sel_heading_cov(const trn_peak_t *pk, double cell, double sh2c2, double dx,
-                              double dy, double cov[3])
+static double sel_heading_cov(const trn_peak_t *pk, double cell, double sh2c2, double dx, double dy,
+                              double cov[3])
 {
     cov[0] = pk->var_x * cell * cell + sh2c2 * (dy * dy);
     cov[1] = pk->var_y * cell * cell + sh2c2 * (dx * dx);
@@ -252,8 +252,8 @@ static double sel_heading_cov(const trn_peak_t *pk, double cell, double sh2c2, d
 
 trn_status_t trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_vol_f32_t *pg,
                         const trn_select_cfg_t *cfg, const trn_rover_t *rover,
-                        trn_candidate_t *cands, size_t capacity, size_t *ranked,
-                        size_t ranked_cap, trn_select_result_t *res, void *ws, size_t ws_bytes)
+                        trn_candidate_t *cands, size_t capacity, size_t *ranked, size_t ranked_cap,
+                        trn_select_result_t *res, void *ws, size_t ws_bytes)
 {
     trn_status_t st;
     geom_t g;
@@ -265,9 +265,8 @@ trn_status_t trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_
     int32_t i_x, i_y, d, side_w, side_h, lmax = 0;
     double scale, sep2_cells, sh2c2;
 
-    if (map == NULL || k == NULL || pg == NULL || cfg == NULL || rover == NULL ||
-        cands == NULL || ranked == NULL || res == NULL || ws == NULL || pg->data == NULL ||
-        map->dist.data == NULL) {
+    if (map == NULL || k == NULL || pg == NULL || cfg == NULL || rover == NULL || cands == NULL ||
+        ranked == NULL || res == NULL || ws == NULL || pg->data == NULL || map->dist.data == NULL) {
         return TRN_E_NULL;
     }
     if ((st = trn_select_cfg_check(cfg, map->cfg.terrain.cell_m)) != TRN_OK) {
@@ -403,8 +402,7 @@ trn_status_t trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_
                 c->cov_m2[0] = pk.var_x * g.cell * g.cell;
                 c->cov_m2[1] = pk.var_y * g.cell * g.cell;
                 c->cov_m2[2] = pk.cov_xy * g.cell * g.cell;
-                c->uncertainty_m =
-                    sqrt(c->sigma_x_m * c->sigma_x_m + c->sigma_y_m * c->sigma_y_m);
+                c->uncertainty_m = sqrt(c->sigma_x_m * c->sigma_x_m + c->sigma_y_m * c->sigma_y_m);
             }
             ++ninf;
         } else {
@@ -480,8 +478,7 @@ static uint8_t pre_kernel(const trn_kernels_t *k, const trn_sigma_model_t *m, fl
     const double c2 = (double)cell_m * (double)cell_m;
     const double ex = (double)ox, ey = (double)oy;
     const double best = ex * ex + ey * ey;
-    const double sig = ((double)m->sigma_min_m + (double)m->k_per_m * best * c2) /
-                       (double)cell_m;
+    const double sig = ((double)m->sigma_min_m + (double)m->k_per_m * best * c2) / (double)cell_m;
     return (uint8_t)trn_kernel_pick(k, sig < 1e30 ? (float)sig : 1e30f);
 }
 
@@ -580,12 +577,11 @@ static trn_status_t pre_check(const trn_select_cfg_t *cfg, const trn_map_t *map,
     return TRN_OK;
 }
 
-size_t trn_selpre_bytes(const trn_select_cfg_t *cfg, const trn_map_t *map,
-                        const trn_kernels_t *k, const trn_vol_f32_t *pg)
+size_t trn_selpre_bytes(const trn_select_cfg_t *cfg, const trn_map_t *map, const trn_kernels_t *k,
+                        const trn_vol_f32_t *pg)
 {
     pre_layout_t L;
-    if (pre_check(cfg, map, k, pg) != TRN_OK ||
-        !pre_layout(cfg, map, k, pre_nnz(pg), &L)) {
+    if (pre_check(cfg, map, k, pg) != TRN_OK || !pre_layout(cfg, map, k, pre_nnz(pg), &L)) {
         return 0u;
     }
     return L.total;
@@ -675,8 +671,8 @@ trn_status_t trn_selpre_init(trn_selpre_t *s, const trn_map_t *map, const trn_ke
     s->rmax = 0;
     for (y = 0; y < mw; ++y) {
         for (x = 0; x < mw; ++x) {
-            const uint8_t j = pre_kernel(k, &cfg->local_sigma, map->cfg.terrain.cell_m,
-                                         x - L.m, y - L.m);
+            const uint8_t j = pre_kernel(k, &cfg->local_sigma, map->cfg.terrain.cell_m, x - L.m,
+                                         y - L.m);
             joff[(size_t)y * (size_t)mw + (size_t)x] = j;
             s->rmax = k->radius[j] > s->rmax ? k->radius[j] : s->rmax;
         }
@@ -728,7 +724,8 @@ trn_status_t trn_selpre_init(trn_selpre_t *s, const trn_map_t *map, const trn_ke
                 const size_t i2 = (size_t)y * (size_t)nl + (size_t)x;
                 ex = ex > 0.0 ? ex : 0.0;
                 ey = ey > 0.0 ? ey : 0.0;
-                lok[i2] = (uint8_t)(r >= (double)cfg->min_range_m && r <= (double)cfg->max_range_m &&
+                lok[i2] = (uint8_t)(r >= (double)cfg->min_range_m &&
+                                    r <= (double)cfg->max_range_m &&
                                     sqrt(ex * ex + ey * ey) * cellm >=
                                         (double)cfg->footprint_radius_m);
                 latan[i2] = atan2(dy, dx);
@@ -764,8 +761,8 @@ static void pre_eq9_slice(const trn_selpre_t *s, const trn_window_t *roi, int32_
         const size_t row = (size_t)(sy - sy0);
         const size_t jb = (size_t)(sy - ry + s->m) * mw;
         const trn_selpre_src_t *e = s->src + s->rowptr[(size_t)z * (size_t)s->ny + (size_t)sy];
-        const trn_selpre_src_t *end =
-            s->src + s->rowptr[(size_t)z * (size_t)s->ny + (size_t)sy + 1u];
+        const trn_selpre_src_t *end = s->src +
+                                      s->rowptr[(size_t)z * (size_t)s->ny + (size_t)sy + 1u];
         float *trow = s->t + row * (size_t)w;
         const int32_t ua = roi->x0 + s->ulo[row], ub = roi->x0 + s->uhi[row];
         const int32_t xmin = ua - s->rmax, xmax = ub + s->rmax;
@@ -885,11 +882,11 @@ static int pre_cannot_beat(const double ll[9], double cell_m, double head_m2, do
  * candidates' patches end, prefix sums along it, their nine window sums
  * (exact int64: the values trn_select's summed-area tables give) and their
  * fits, in candidate order (so the first lowest wins, as in trn_select). */
-static void pre_windows(const trn_selpre_t *s, const trn_window_t *roi, const geom_t *g,
-                        size_t nc, double *best, int *found)
+static void pre_windows(const trn_selpre_t *s, const trn_window_t *roi, const geom_t *g, size_t nc,
+                        double *best, int *found)
 {
-    const double sh2c2 =
-        (double)s->cfg->sigma_heading_rad * (double)s->cfg->sigma_heading_rad * g->cell * g->cell;
+    const double sh2c2 = (double)s->cfg->sigma_heading_rad * (double)s->cfg->sigma_heading_rad *
+                         g->cell * g->cell;
     const int32_t w = roi->x1 - roi->x0 + 1, h = roi->y1 - roi->y0 + 1;
     const int32_t ph = 2 * g->half + 1;
     const size_t wz = (size_t)w, w1 = wz + 1u, rowsz = 9u * wz;

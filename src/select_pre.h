@@ -36,31 +36,31 @@ typedef struct {
     const trn_select_cfg_t *cfg;
     int32_t nx, ny, nz, half, n, m, rmax, side_w, side_h, src_h;
     int32_t lmax;
-    const uint8_t *joff;          /* kernel index by offset, (2m+1)^2, row-major */
-    const size_t *rowptr;         /* nz * ny + 1 */
-    const trn_selpre_src_t *src;  /* nonzero P_G by (z, y) row, ascending x */
-    const int32_t *lnpv;          /* lnp[min(D, cap)], index (y * nx + x) * nz + z */
-    int32_t *cxy;                 /* candidate centres, 2 per candidate */
-    double *ll;                   /* 9 per candidate */
+    const uint8_t *joff;         /* kernel index by offset, (2m+1)^2, row-major */
+    const size_t *rowptr;        /* nz * ny + 1 */
+    const trn_selpre_src_t *src; /* nonzero P_G by (z, y) row, ascending x */
+    const int32_t *lnpv;         /* lnp[min(D, cap)], index (y * nx + x) * nz + z */
+    int32_t *cxy;                /* candidate centres, 2 per candidate */
+    double *ll;                  /* 9 per candidate */
     size_t ncap;
-    int32_t *latlo, *lathi;       /* per lattice row: leftmost, rightmost centre */
-    int32_t *nlo, *nhi;           /* per region row: columns inside some patch */
-    uint8_t *touched;             /* per source row: holds an x-pass value */
-    int32_t *ulo, *uhi;           /* per source row: region columns some patch row it reaches needs */
-    uint8_t *hit;                 /* per slice and region row: the y pass wrote to it */
-    const uint8_t *lok;           /* per lattice offset: range and footprint rules hold */
-    const double *latan;          /* per lattice offset: atan2(dy, dx) */
-    int full_pan;                 /* pan limits are the whole circle: no bearing test */
-    float *t;                     /* x pass, src_h rows x side_w */
-    float *p;                     /* eq. 9 over the region, nz slices */
-    int64_t *ring;                /* the nine C_d of the last patch_cells region rows */
-    int64_t *colsum;              /* their column sums, 9 x side_w */
-    int64_t *prefix;              /* prefix sums of colsum along a row, 9 x (side_w + 1) */
+    int32_t *latlo, *lathi; /* per lattice row: leftmost, rightmost centre */
+    int32_t *nlo, *nhi;     /* per region row: columns inside some patch */
+    uint8_t *touched;       /* per source row: holds an x-pass value */
+    int32_t *ulo, *uhi;     /* per source row: region columns some patch row it reaches needs */
+    uint8_t *hit;           /* per slice and region row: the y pass wrote to it */
+    const uint8_t *lok;     /* per lattice offset: range and footprint rules hold */
+    const double *latan;    /* per lattice offset: atan2(dy, dx) */
+    int full_pan;           /* pan limits are the whole circle: no bearing test */
+    float *t;               /* x pass, src_h rows x side_w */
+    float *p;               /* eq. 9 over the region, nz slices */
+    int64_t *ring;          /* the nine C_d of the last patch_cells region rows */
+    int64_t *colsum;        /* their column sums, 9 x side_w */
+    int64_t *prefix;        /* prefix sums of colsum along a row, 9 x (side_w + 1) */
 } trn_selpre_t;
 
 /* Bytes of trn_selpre_init's memory for this map and P_G (0 if invalid). */
-size_t trn_selpre_bytes(const trn_select_cfg_t *cfg, const trn_map_t *map,
-                        const trn_kernels_t *k, const trn_vol_f32_t *pg);
+size_t trn_selpre_bytes(const trn_select_cfg_t *cfg, const trn_map_t *map, const trn_kernels_t *k,
+                        const trn_vol_f32_t *pg);
 
 /* Prepare s (arguments checked as trn_select does; mem 16-byte aligned). */
 trn_status_t trn_selpre_init(trn_selpre_t *s, const trn_map_t *map, const trn_kernels_t *k,

@@ -84,8 +84,8 @@ static void kernel_map(const trn_kernels_t *k, const trn_sigma_model_t *m, float
                 const float v = sg->data[(size_t)y * (size_t)sg->stride + (size_t)x];
                 if (!isnan(v)) {
                     sig = (double)v / (double)cell_m;
-                    idx[(size_t)y * (size_t)width + (size_t)x] =
-                        (uint8_t)trn_kernel_pick(k, sig < 1e30 ? (float)sig : 1e30f);
+                    idx[(size_t)y * (size_t)width + (size_t)x] = (uint8_t)trn_kernel_pick(
+                        k, sig < 1e30 ? (float)sig : 1e30f);
                     continue;
                 }
             }
@@ -98,14 +98,14 @@ static void kernel_map(const trn_kernels_t *k, const trn_sigma_model_t *m, float
                 }
             }
             sig = ((double)m->sigma_min_m + (double)m->k_per_m * best * c2) / (double)cell_m;
-            idx[(size_t)y * (size_t)width + (size_t)x] =
-                (uint8_t)trn_kernel_pick(k, sig < 1e30 ? (float)sig : 1e30f);
+            idx[(size_t)y * (size_t)width + (size_t)x] = (uint8_t)trn_kernel_pick(
+                k, sig < 1e30 ? (float)sig : 1e30f);
         }
     }
 }
 
-trn_status_t trn_spread_kernel_map(const trn_kernels_t *k, const trn_sigma_model_t *m,
-                                   float cell_m, const trn_xy_t *sensors, size_t n_sensors,
+trn_status_t trn_spread_kernel_map(const trn_kernels_t *k, const trn_sigma_model_t *m, float cell_m,
+                                   const trn_xy_t *sensors, size_t n_sensors,
                                    const trn_window_t *win, uint8_t *idx, size_t idx_len)
 {
     trn_status_t st;
@@ -259,9 +259,8 @@ size_t trn_prob_global_workspace_bytes(int32_t nx, int32_t ny)
 }
 
 static trn_status_t prob_global(const trn_kernels_t *k, const trn_sigma_model_t *m, float cell_m,
-                                const trn_xy_t *sensors, size_t n_sensors,
-                                const trn_vol_u8_t *occ, int zero_occupied,
-                                const trn_grid_f32_t *sg, trn_vol_f32_t *pg,
+                                const trn_xy_t *sensors, size_t n_sensors, const trn_vol_u8_t *occ,
+                                int zero_occupied, const trn_grid_f32_t *sg, trn_vol_f32_t *pg,
                                 void *ws, size_t ws_bytes)
 {
     trn_status_t st;
@@ -279,8 +278,8 @@ static trn_status_t prob_global(const trn_kernels_t *k, const trn_sigma_model_t 
     if ((st = trn_vol_u8_check(occ)) != TRN_OK) {
         return st;
     }
-    if (pg->nx != occ->nx || pg->ny != occ->ny || pg->nz != occ->nz ||
-        n_sensors < 1u || n_sensors > (size_t)TRN_SPREAD_MAX_SENSORS) {
+    if (pg->nx != occ->nx || pg->ny != occ->ny || pg->nz != occ->nz || n_sensors < 1u ||
+        n_sensors > (size_t)TRN_SPREAD_MAX_SENSORS) {
         return TRN_E_SIZE;
     }
     for (s = 0; s < n_sensors; ++s) {
@@ -372,7 +371,8 @@ static void source_window(const trn_kernels_t *k, const trn_sigma_model_t *m, fl
     const double ey = fmax(fabs((double)(roi->y0 - r9) - (double)rover.y_cells),
                            fabs((double)(roi->y1 + r9) - (double)rover.y_cells));
     const double c = (double)cell_m;
-    const double sig = ((double)m->sigma_min_m + (double)m->k_per_m * (ex * ex + ey * ey) * c * c) / c;
+    const double sig = ((double)m->sigma_min_m + (double)m->k_per_m * (ex * ex + ey * ey) * c * c) /
+                       c;
     const int32_t r = k->radius[trn_kernel_pick(k, sig < 1e30 ? (float)sig : 1e30f)];
     sw->x0 = roi->x0 - r > 0 ? roi->x0 - r : 0;
     sw->y0 = roi->y0 - r > 0 ? roi->y0 - r : 0;
@@ -394,7 +394,8 @@ size_t trn_prob_local_workspace_bytes(const trn_kernels_t *k, const trn_window_t
     {
         float *t;
         uint8_t *i;
-        return pass_carve((size_t)h + 2u * (size_t)r, (size_t)w, (size_t)w + 2u * (size_t)r, NULL, &t, &i);
+        return pass_carve((size_t)h + 2u * (size_t)r, (size_t)w, (size_t)w + 2u * (size_t)r, NULL,
+                          &t, &i);
     }
 }
 

@@ -165,8 +165,8 @@ static int32_t bin_of(float hp, const trn_terrain_cfg_t *cfg)
 }
 
 /* Occupied bin range [*lo, *hi] of cell (x, y); returns 0 when missing. */
-static int column_of(const trn_grid_f32_t *hp, const trn_terrain_cfg_t *cfg, int32_t x,
-                     int32_t y, int32_t *lo, int32_t *hi)
+static int column_of(const trn_grid_f32_t *hp, const trn_terrain_cfg_t *cfg, int32_t x, int32_t y,
+                     int32_t *lo, int32_t *hi)
 {
     static const int32_t dx[4] = {1, -1, 0, 0};
     static const int32_t dy[4] = {0, 0, 1, -1};
@@ -229,8 +229,8 @@ trn_status_t trn_occupancy(const trn_grid_f32_t *hp, const trn_terrain_cfg_t *cf
 }
 
 trn_status_t trn_occupancy_points(const trn_grid_f32_t *hp, const trn_terrain_cfg_t *cfg,
-                                  int32_t rover_x, int32_t rover_y,
-                                  trn_point_t *pts, size_t capacity, size_t *n_points)
+                                  int32_t rover_x, int32_t rover_y, trn_point_t *pts,
+                                  size_t capacity, size_t *n_points)
 {
     trn_status_t st;
     int32_t x, y, z;
@@ -243,8 +243,8 @@ trn_status_t trn_occupancy_points(const trn_grid_f32_t *hp, const trn_terrain_cf
     if ((st = trn_grid_f32_check(hp)) != TRN_OK || (st = trn_terrain_cfg_check(cfg)) != TRN_OK) {
         return st;
     }
-    if (rover_x < -TRN_MAX_DIM || rover_x > hp->width - 1 + TRN_MAX_DIM ||
-        rover_y < -TRN_MAX_DIM || rover_y > hp->height - 1 + TRN_MAX_DIM) {
+    if (rover_x < -TRN_MAX_DIM || rover_x > hp->width - 1 + TRN_MAX_DIM || rover_y < -TRN_MAX_DIM ||
+        rover_y > hp->height - 1 + TRN_MAX_DIM) {
         return TRN_E_ARG;
     }
     /* Two passes so each column is computed twice, not nz times: count the

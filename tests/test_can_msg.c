@@ -97,8 +97,12 @@ static void test_mast_cmd_bytes(void **state)
 
 static void test_mast_status_bytes(void **state)
 {
-    trn_mast_status_t m = {-32768, 32767, TRN_MAST_ST_MOVING | TRN_MAST_ST_TILT_LIM_MAX,
-                           TRN_MAST_FLT_PAN_STALL | TRN_MAST_FLT_CMD_INVALID, 9, 250};
+    trn_mast_status_t m = {-32768,
+                           32767,
+                           TRN_MAST_ST_MOVING | TRN_MAST_ST_TILT_LIM_MAX,
+                           TRN_MAST_FLT_PAN_STALL | TRN_MAST_FLT_CMD_INVALID,
+                           9,
+                           250};
     trn_can_frame_t f;
     const uint8_t want[8] = {0x00, 0x80, 0xFF, 0x7F, 0x11, 0x21, 0x09, 0xFA};
     trn_mast_status_t back;
@@ -148,15 +152,18 @@ static void test_round_trips(void **state)
     trn_rng_seed(&r, 42);
     for (i = 0; i < 2000; ++i) {
         trn_can_frame_t f;
-        trn_mast_cmd_t c = {(int16_t)trn_rng_int(&r, -32768, 32767), (int16_t)trn_rng_int(&r, -32768, 32767),
+        trn_mast_cmd_t c = {(int16_t)trn_rng_int(&r, -32768, 32767),
+                            (int16_t)trn_rng_int(&r, -32768, 32767),
                             (uint16_t)trn_rng_int(&r, 0, 65535), (uint8_t)trn_rng_int(&r, 0, 255),
                             (uint8_t)trn_rng_int(&r, 0, 2)};
         trn_mast_cmd_t c2;
-        trn_mast_status_t s = {(int16_t)trn_rng_int(&r, -32768, 32767), (int16_t)trn_rng_int(&r, -32768, 32767),
-                               (uint8_t)trn_rng_int(&r, 0, 0x3F), (uint8_t)trn_rng_int(&r, 0, 0x3F),
-                               (uint8_t)trn_rng_int(&r, 0, 255), (uint8_t)trn_rng_int(&r, 0, 255)};
+        trn_mast_status_t s = {
+            (int16_t)trn_rng_int(&r, -32768, 32767), (int16_t)trn_rng_int(&r, -32768, 32767),
+            (uint8_t)trn_rng_int(&r, 0, 0x3F),       (uint8_t)trn_rng_int(&r, 0, 0x3F),
+            (uint8_t)trn_rng_int(&r, 0, 255),        (uint8_t)trn_rng_int(&r, 0, 255)};
         trn_mast_status_t s2;
-        trn_capture_cmd_t k = {(uint16_t)trn_rng_int(&r, 0, 65535), (uint16_t)trn_rng_int(&r, 0, 65535)};
+        trn_capture_cmd_t k = {(uint16_t)trn_rng_int(&r, 0, 65535),
+                               (uint16_t)trn_rng_int(&r, 0, 65535)};
         trn_capture_cmd_t k2;
         trn_heartbeat_t h = {(uint8_t)trn_rng_int(&r, 0, 3), (uint8_t)trn_rng_int(&r, 0, 255),
                              (uint16_t)trn_rng_int(&r, 0, 65535)};
@@ -179,7 +186,8 @@ static void test_round_trips(void **state)
         assert_memory_equal(&k, &k2, sizeof k);
 
         assert_int_equal(trn_can_heartbeat_encode(hb_id, &h, &f), TRN_OK);
-        assert_int_equal(trn_can_classify(&f), (i & 1) ? TRN_CAN_MSG_MAST_HB : TRN_CAN_MSG_STEREO_HB);
+        assert_int_equal(trn_can_classify(&f),
+                         (i & 1) ? TRN_CAN_MSG_MAST_HB : TRN_CAN_MSG_STEREO_HB);
         assert_int_equal(trn_can_heartbeat_decode(&f, &h2), TRN_OK);
         assert_memory_equal(&h, &h2, sizeof h);
     }
@@ -228,17 +236,22 @@ static void test_decoders_reject(void **state)
     (void)state;
 
     assert_int_equal(trn_can_mast_cmd_encode(&c, &f), TRN_OK);
-    g = f; g.dlc = 7;
+    g = f;
+    g.dlc = 7;
     assert_int_equal(trn_can_mast_cmd_decode(&g, &c), TRN_E_FORMAT);
-    g = f; g.flags = TRN_CAN_FLAG_EXT;
+    g = f;
+    g.flags = TRN_CAN_FLAG_EXT;
     assert_int_equal(trn_can_mast_cmd_decode(&g, &c), TRN_E_FORMAT);
     assert_int_equal(trn_can_classify(&g), TRN_CAN_MSG_NONE);
-    g = f; g.flags = TRN_CAN_FLAG_RTR;
+    g = f;
+    g.flags = TRN_CAN_FLAG_RTR;
     assert_int_equal(trn_can_mast_cmd_decode(&g, &c), TRN_E_FORMAT);
     assert_int_equal(trn_can_classify(&g), TRN_CAN_MSG_NONE);
-    g = f; g.id = 0x121u;
+    g = f;
+    g.id = 0x121u;
     assert_int_equal(trn_can_mast_cmd_decode(&g, &c), TRN_E_FORMAT);
-    g = f; g.data[7] = 3;
+    g = f;
+    g.data[7] = 3;
     assert_int_equal(trn_can_mast_cmd_decode(&g, &c), TRN_E_FORMAT);
     assert_int_equal(trn_can_mast_cmd_decode(NULL, &c), TRN_E_NULL);
     assert_int_equal(trn_can_mast_cmd_decode(&f, NULL), TRN_E_NULL);
@@ -248,27 +261,34 @@ static void test_decoders_reject(void **state)
     assert_int_equal(trn_can_mast_cmd_encode(&c, NULL), TRN_E_NULL);
 
     assert_int_equal(trn_can_mast_status_encode(&s, &f), TRN_OK);
-    g = f; g.data[4] = 0x40;
+    g = f;
+    g.data[4] = 0x40;
     assert_int_equal(trn_can_mast_status_decode(&g, &s), TRN_E_FORMAT);
-    g = f; g.data[5] = 0x80;
+    g = f;
+    g.data[5] = 0x80;
     assert_int_equal(trn_can_mast_status_decode(&g, &s), TRN_E_FORMAT);
-    g = f; g.dlc = 6;
+    g = f;
+    g.dlc = 6;
     assert_int_equal(trn_can_mast_status_decode(&g, &s), TRN_E_FORMAT);
-    g = f; g.id = 0x120u;
+    g = f;
+    g.id = 0x120u;
     assert_int_equal(trn_can_mast_status_decode(&g, &s), TRN_E_FORMAT);
     assert_int_equal(trn_can_mast_status_decode(NULL, &s), TRN_E_NULL);
     assert_int_equal(trn_can_mast_status_decode(&f, NULL), TRN_E_NULL);
     s.state = 0x80;
     assert_int_equal(trn_can_mast_status_encode(&s, &f), TRN_E_ARG);
-    s.state = 0; s.faults = 0x40;
+    s.state = 0;
+    s.faults = 0x40;
     assert_int_equal(trn_can_mast_status_encode(&s, &f), TRN_E_ARG);
     assert_int_equal(trn_can_mast_status_encode(NULL, &f), TRN_E_NULL);
     assert_int_equal(trn_can_mast_status_encode(&s, NULL), TRN_E_NULL);
 
     assert_int_equal(trn_can_capture_cmd_encode(&k, &f), TRN_OK);
-    g = f; g.dlc = 8;
+    g = f;
+    g.dlc = 8;
     assert_int_equal(trn_can_capture_cmd_decode(&g, &k), TRN_E_FORMAT);
-    g = f; g.id = 0x131u;
+    g = f;
+    g.id = 0x131u;
     assert_int_equal(trn_can_capture_cmd_decode(&g, &k), TRN_E_FORMAT);
     assert_int_equal(trn_can_capture_cmd_decode(NULL, &k), TRN_E_NULL);
     assert_int_equal(trn_can_capture_cmd_decode(&f, NULL), TRN_E_NULL);
@@ -276,11 +296,14 @@ static void test_decoders_reject(void **state)
     assert_int_equal(trn_can_capture_cmd_encode(&k, NULL), TRN_E_NULL);
 
     assert_int_equal(trn_can_heartbeat_encode(TRN_CAN_ID_MAST_HB, &h, &f), TRN_OK);
-    g = f; g.data[0] = 4;
+    g = f;
+    g.data[0] = 4;
     assert_int_equal(trn_can_heartbeat_decode(&g, &h), TRN_E_FORMAT);
-    g = f; g.dlc = 3;
+    g = f;
+    g.dlc = 3;
     assert_int_equal(trn_can_heartbeat_decode(&g, &h), TRN_E_FORMAT);
-    g = f; g.id = 0x700u;
+    g = f;
+    g.id = 0x700u;
     assert_int_equal(trn_can_heartbeat_decode(&g, &h), TRN_E_FORMAT);
     assert_int_equal(trn_can_heartbeat_decode(NULL, &h), TRN_E_NULL);
     assert_int_equal(trn_can_heartbeat_decode(&f, NULL), TRN_E_NULL);

@@ -32,12 +32,12 @@ static size_t g_seg_len[255];
 
 /* Tests written for the default maximum skip themselves when a build sets
  * a smaller TRN_PORT_MAX_CAPTURE_POINTS. */
-#define NEED_POINTS(n)                                                                  \
-    do {                                                                                \
-        if ((long)TRN_PORT_MAX_CAPTURE_POINTS < (long)(n)) {                            \
+#define NEED_POINTS(n) \
+    do { \
+        if ((long)TRN_PORT_MAX_CAPTURE_POINTS < (long)(n)) { \
             print_message("skipped: needs TRN_PORT_MAX_CAPTURE_POINTS >= %d\n", (int)(n)); \
-            skip();                                                                     \
-        }                                                                               \
+            skip(); \
+        } \
     } while (0)
 
 static void make_capture(trn_capture_t *c, uint16_t n, uint64_t seed)
@@ -66,8 +66,9 @@ static uint8_t split(const uint8_t *wire, size_t len, size_t payload)
     uint8_t n = 0, i;
     assert_int_equal(trn_capture_segment_count(len, payload, &n), TRN_OK);
     for (i = 0; i < n; ++i) {
-        assert_int_equal(trn_capture_segment(wire, len, payload, i, g_segs[i], TRN_ISOTP_MAX_MSG, &g_seg_len[i]),
-                         TRN_OK);
+        assert_int_equal(
+            trn_capture_segment(wire, len, payload, i, g_segs[i], TRN_ISOTP_MAX_MSG, &g_seg_len[i]),
+            TRN_OK);
     }
     return n;
 }
@@ -101,8 +102,12 @@ static void test_hand_vector(void **state)
     c->mast_state = 0x21;
     c->mast_faults = 0x02;
     c->n_points = 2;
-    c->points[0].x_mm = 1; c->points[0].y_mm = -2; c->points[0].z_mm = 1000;
-    c->points[1].x_mm = 32767; c->points[1].y_mm = -32768; c->points[1].z_mm = 0;
+    c->points[0].x_mm = 1;
+    c->points[0].y_mm = -2;
+    c->points[0].z_mm = 1000;
+    c->points[1].x_mm = 32767;
+    c->points[1].y_mm = -32768;
+    c->points[1].z_mm = 0;
     assert_int_equal(trn_capture_encode(c, g_wire, sizeof g_wire, &len), TRN_OK);
     assert_int_equal(len, 32);
     assert_memory_equal(g_wire, want, sizeof want);
@@ -125,7 +130,8 @@ static void test_encode_decode_args(void **state)
     assert_int_equal(trn_capture_encode(NULL, g_wire, sizeof g_wire, &len), TRN_E_NULL);
     assert_int_equal(trn_capture_encode(&g_cap, NULL, sizeof g_wire, &len), TRN_E_NULL);
     assert_int_equal(trn_capture_encode(&g_cap, g_wire, sizeof g_wire, NULL), TRN_E_NULL);
-    assert_int_equal(trn_capture_encode(&g_cap, g_wire, TRN_CAP_WIRE_BYTES(3) - 1, &len), TRN_E_WORKSPACE);
+    assert_int_equal(trn_capture_encode(&g_cap, g_wire, TRN_CAP_WIRE_BYTES(3) - 1, &len),
+                     TRN_E_WORKSPACE);
     assert_int_equal(trn_capture_encode(&g_cap, g_wire, TRN_CAP_WIRE_BYTES(3), &len), TRN_OK);
     assert_int_equal(trn_capture_decode(NULL, len, &g_out, &e), TRN_E_NULL);
     assert_int_equal(trn_capture_decode(g_wire, len, NULL, &e), TRN_E_NULL);
@@ -134,7 +140,8 @@ static void test_encode_decode_args(void **state)
     assert_int_equal(trn_capture_encode(&g_cap, g_wire, sizeof g_wire, &len), TRN_E_CAPACITY);
 #endif
     assert_int_equal(trn_capture_segment_count(100, 0, &(uint8_t){0}), TRN_E_ARG);
-    assert_int_equal(trn_capture_segment_count(100, TRN_CAP_SEG_PAYLOAD_MAX + 1, &(uint8_t){0}), TRN_E_ARG);
+    assert_int_equal(trn_capture_segment_count(100, TRN_CAP_SEG_PAYLOAD_MAX + 1, &(uint8_t){0}),
+                     TRN_E_ARG);
     assert_int_equal(trn_capture_segment_count(0, 10, &(uint8_t){0}), TRN_E_ARG);
     assert_int_equal(trn_capture_segment_count(256, 1, &(uint8_t){0}), TRN_E_SIZE);
     assert_int_equal(trn_capture_segment_count(255, 1, &(uint8_t){0}), TRN_OK);
@@ -142,13 +149,16 @@ static void test_encode_decode_args(void **state)
     {
         uint8_t seg[64];
         size_t sl;
-        assert_int_equal(trn_capture_segment(g_wire, len, 10, 4, seg, sizeof seg, &sl), TRN_E_RANGE);
+        assert_int_equal(trn_capture_segment(g_wire, len, 10, 4, seg, sizeof seg, &sl),
+                         TRN_E_RANGE);
         assert_int_equal(trn_capture_segment(g_wire, len, 0, 0, seg, sizeof seg, &sl), TRN_E_ARG);
         assert_int_equal(trn_capture_segment(g_wire, len, 10, 0, seg, 13, &sl), TRN_E_WORKSPACE);
         assert_int_equal(trn_capture_segment(g_wire, 15, 10, 0, seg, sizeof seg, &sl), TRN_E_ARG);
         assert_int_equal(trn_capture_segment(NULL, len, 10, 0, seg, sizeof seg, &sl), TRN_E_NULL);
-        assert_int_equal(trn_capture_segment(g_wire, len, 10, 0, NULL, sizeof seg, &sl), TRN_E_NULL);
-        assert_int_equal(trn_capture_segment(g_wire, len, 10, 0, seg, sizeof seg, NULL), TRN_E_NULL);
+        assert_int_equal(trn_capture_segment(g_wire, len, 10, 0, NULL, sizeof seg, &sl),
+                         TRN_E_NULL);
+        assert_int_equal(trn_capture_segment(g_wire, len, 10, 0, seg, sizeof seg, NULL),
+                         TRN_E_NULL);
         assert_int_equal(trn_capture_segment(g_wire, len, 10, 3, seg, sizeof seg, &sl), TRN_OK);
         assert_int_equal(sl, 4 + 8); /* 38 bytes: the last of 4 segments holds 8 */
         assert_int_equal(seg[2], 3);
@@ -172,7 +182,8 @@ static void test_encode_decode_args(void **state)
         for (a = 0; a < TRN_CAP_ERR_COUNT; ++a) {
             assert_string_not_equal(trn_cap_err_name((trn_cap_err_t)a), "UNKNOWN");
             for (b = a + 1; b < TRN_CAP_ERR_COUNT; ++b) {
-                assert_string_not_equal(trn_cap_err_name((trn_cap_err_t)a), trn_cap_err_name((trn_cap_err_t)b));
+                assert_string_not_equal(trn_cap_err_name((trn_cap_err_t)a),
+                                        trn_cap_err_name((trn_cap_err_t)b));
             }
         }
     }
@@ -184,7 +195,8 @@ static trn_status_t feed(const int *order, int n, int *done, trn_cap_err_t *err)
     trn_status_t st = TRN_OK;
     int i;
     for (i = 0; i < n; ++i) {
-        st = trn_capture_rx_segment(&g_rx, g_segs[order[i]], g_seg_len[order[i]], &g_out, done, err);
+        st = trn_capture_rx_segment(&g_rx, g_segs[order[i]], g_seg_len[order[i]], &g_out, done,
+                                    err);
         if (i + 1 < n) {
             assert_int_equal(st, TRN_OK);
             assert_int_equal(*done, 0);
@@ -217,8 +229,9 @@ static void test_round_trips(void **state)
             }
             n = split(g_wire, len, payloads[pi]);
             for (i = 0; i < n; ++i) {
-                assert_int_equal(trn_capture_rx_segment(&g_rx, g_segs[i], g_seg_len[i], &g_out, &done, &err),
-                                 TRN_OK);
+                assert_int_equal(
+                    trn_capture_rx_segment(&g_rx, g_segs[i], g_seg_len[i], &g_out, &done, &err),
+                    TRN_OK);
                 assert_int_equal(err, TRN_CAP_ERR_NONE);
                 assert_int_equal(done, i + 1 == n);
             }
@@ -229,7 +242,8 @@ static void test_round_trips(void **state)
             assert_int_equal(g_out.mast_state, g_cap.mast_state);
             assert_int_equal(g_out.mast_faults, g_cap.mast_faults);
             assert_int_equal(g_out.n_points, g_cap.n_points);
-            assert_memory_equal(g_out.points, g_cap.points, sizeof(trn_cap_point_t) * g_cap.n_points);
+            assert_memory_equal(g_out.points, g_cap.points,
+                                sizeof(trn_cap_point_t) * g_cap.n_points);
         }
     }
     for (si = 0; si < TRN_CAP_ERR_COUNT; ++si) {
@@ -252,7 +266,8 @@ static uint8_t setup_seven(void)
     return split(g_wire, g_seven_len, g_seven_payload);
 }
 
-static void expect_reject(trn_status_t st, trn_cap_err_t err, int done, trn_status_t want_st, trn_cap_err_t want)
+static void expect_reject(trn_status_t st, trn_cap_err_t err, int done, trn_status_t want_st,
+                          trn_cap_err_t want)
 {
     assert_int_equal(st, want_st);
     assert_int_equal(err, want);
@@ -516,8 +531,11 @@ static void test_damaged_streams_never_deliver_wrong_data(void **state)
         int done = 0, kind = trn_rng_int(&r, 0, 6), got = 0;
         uint8_t victim;
         trn_cap_err_t err;
-        make_capture(&g_cap, (uint16_t)trn_rng_int(&r, 0, TRN_PORT_MAX_CAPTURE_POINTS < 400 ? TRN_PORT_MAX_CAPTURE_POINTS : 400),
-                     (uint64_t)trial);
+        make_capture(
+            &g_cap,
+            (uint16_t)trn_rng_int(
+                &r, 0, TRN_PORT_MAX_CAPTURE_POINTS < 400 ? TRN_PORT_MAX_CAPTURE_POINTS : 400),
+            (uint64_t)trial);
         assert_int_equal(trn_capture_encode(&g_cap, g_wire, sizeof g_wire, &len), TRN_OK);
         n = split(g_wire, len, (size_t)trn_rng_int(&r, 16, 900));
         victim = (uint8_t)trn_rng_int(&r, 0, n - 1);
@@ -530,13 +548,21 @@ static void test_damaged_streams_never_deliver_wrong_data(void **state)
             if (i == victim) {
                 memcpy(tmp, seg, sl);
                 switch (kind) {
-                case 0: continue;                                     /* dropped */
-                case 1: feed_twice = 1; break;                        /* duplicated */
+                case 0: continue;                                            /* dropped */
+                case 1: feed_twice = 1; break;                               /* duplicated */
                 case 2: sl = (size_t)trn_rng_int(&r, 1, (int)sl - 1); break; /* truncated */
-                case 3: tmp[trn_rng_int(&r, 0, (int)sl - 1)] ^= (uint8_t)(1u << trn_rng_int(&r, 0, 7)); break;
-                case 4: if (i + 1 < n) { seg = g_segs[i + 1]; sl = g_seg_len[i + 1]; memcpy(tmp, seg, sl); } break;
-                case 5: tmp[0] ^= 0x01; break;                        /* stranger's id */
-                default: break;                                       /* clean */
+                case 3:
+                    tmp[trn_rng_int(&r, 0, (int)sl - 1)] ^= (uint8_t)(1u << trn_rng_int(&r, 0, 7));
+                    break;
+                case 4:
+                    if (i + 1 < n) {
+                        seg = g_segs[i + 1];
+                        sl = g_seg_len[i + 1];
+                        memcpy(tmp, seg, sl);
+                    }
+                    break;
+                case 5: tmp[0] ^= 0x01; break; /* stranger's id */
+                default: break;                /* clean */
                 }
                 seg = tmp;
             }
@@ -552,7 +578,8 @@ static void test_damaged_streams_never_deliver_wrong_data(void **state)
             /* delivered: must be exactly what was sent */
             assert_int_equal(g_out.capture_id, g_cap.capture_id);
             assert_int_equal(g_out.n_points, g_cap.n_points);
-            assert_memory_equal(g_out.points, g_cap.points, sizeof(trn_cap_point_t) * g_cap.n_points);
+            assert_memory_equal(g_out.points, g_cap.points,
+                                sizeof(trn_cap_point_t) * g_cap.n_points);
             ++delivered_ok;
         } else {
             assert_memory_equal(&g_out, &g_sentinel, sizeof g_out);
@@ -607,10 +634,12 @@ static void test_capture_to_local_dem(void **state)
     assert_int_equal(trn_can_angle_to_raw(pan, &g_cap.pan_100urad), TRN_OK);
     assert_int_equal(trn_can_angle_to_raw(tilt, &g_cap.tilt_100urad), TRN_OK);
     assert_int_equal(trn_mast_camera_to_map(&g, &p, trn_can_angle_from_raw(g_cap.pan_100urad),
-                                            trn_can_angle_from_raw(g_cap.tilt_100urad), &T), TRN_OK);
+                                            trn_can_angle_from_raw(g_cap.tilt_100urad), &T),
+                     TRN_OK);
     for (y = 0; y < 40; ++y) {
         for (x = 0; x < 40; ++x) {
-            double mx = p.x_m + (x - 20) * 0.1, my = p.y_m + (y - 20) * 0.1, h = synth_height(&terr, mx, my);
+            double mx = p.x_m + (x - 20) * 0.1, my = p.y_m + (y - 20) * 0.1,
+                   h = synth_height(&terr, mx, my);
             double d[3] = {mx - T.t.x, my - T.t.y, h - T.t.z}, c[3];
             int k;
             for (k = 0; k < 3; ++k) {
@@ -628,12 +657,14 @@ static void test_capture_to_local_dem(void **state)
     nseg = split(g_wire, len, TRN_CAP_SEG_PAYLOAD_MAX);
     assert_int_equal(nseg, 3); /* 1600 points = 9620 bytes */
     for (s = 0; s < nseg; ++s) {
-        assert_int_equal(trn_capture_rx_segment(&g_rx, g_segs[s], g_seg_len[s], &g_out, &done, &err), TRN_OK);
+        assert_int_equal(
+            trn_capture_rx_segment(&g_rx, g_segs[s], g_seg_len[s], &g_out, &done, &err), TRN_OK);
     }
     assert_int_equal(done, 1);
     assert_int_equal(trn_capture_points_m(&g_out, pts, TRN_PORT_MAX_CAPTURE_POINTS, &n), TRN_OK);
     assert_int_equal(trn_mast_camera_to_map(&g, &p, trn_can_angle_from_raw(g_out.pan_100urad),
-                                            trn_can_angle_from_raw(g_out.tilt_100urad), &T), TRN_OK);
+                                            trn_can_angle_from_raw(g_out.tilt_100urad), &T),
+                     TRN_OK);
     assert_int_equal(trn_rigid_apply(&T, pts, n, pts), TRN_OK);
     assert_int_equal(trn_grid_f32_init(&dem, dem_mem, 40 * 40, 40, 40), TRN_OK);
     assert_int_equal(trn_mast_local_dem(pts, n, &p, &cfg, &dem, &used), TRN_OK);

@@ -132,9 +132,8 @@ static void check_against_oracle(const uint8_t *occ, int nx, int ny, int nz, uin
             print_error("%dx%dx%d cap %u voxel %lu (x %d y %d z %d): got %u in place %u, "
                         "Dijkstra %u\n",
                         nx, ny, nz, (unsigned)cap, (unsigned long)i, (int)(i % (size_t)nx),
-                        (int)((i / (size_t)nx) % (size_t)ny),
-                        (int)(i / ((size_t)nx * (size_t)ny)), (unsigned)out[i],
-                        (unsigned)inpl[i], (unsigned)ref[i]);
+                        (int)((i / (size_t)nx) % (size_t)ny), (int)(i / ((size_t)nx * (size_t)ny)),
+                        (unsigned)out[i], (unsigned)inpl[i], (unsigned)ref[i]);
             fail();
         }
         /* Contract: occupied voxels 0, all <= cap. */
@@ -157,12 +156,11 @@ typedef struct {
  * around the 256-voxel chunk of the row kernel (257, 271, 272, 520). Long
  * rows let cap-250 distances run 83 voxels along a row. */
 static const dims_t k_dims[] = {
-    {1, 1, 1},   {1, 1, 7},   {1, 9, 1},   {7, 1, 1},   {1, 13, 11}, {1, 5, 8},
-    {19, 1, 1},  {33, 1, 1},  {300, 1, 1}, {1, 1, 128}, {1, 300, 1}, {7, 5, 3},
-    {17, 13, 6}, {33, 31, 9}, {15, 9, 4},  {16, 7, 5},  {18, 3, 7},  {32, 5, 3},
-    {34, 4, 4},  {35, 6, 2},  {47, 3, 3},  {48, 2, 5},  {49, 5, 2},  {31, 31, 1},
-    {40, 3, 2},  {2, 40, 3},  {3, 2, 40},  {129, 5, 2}, {200, 3, 2}, {65, 17, 3},
-    {257, 3, 2}, {271, 2, 3}, {272, 3, 2}, {520, 2, 2},
+    {1, 1, 1},   {1, 1, 7},   {1, 9, 1},   {7, 1, 1},   {1, 13, 11}, {1, 5, 8},   {19, 1, 1},
+    {33, 1, 1},  {300, 1, 1}, {1, 1, 128}, {1, 300, 1}, {7, 5, 3},   {17, 13, 6}, {33, 31, 9},
+    {15, 9, 4},  {16, 7, 5},  {18, 3, 7},  {32, 5, 3},  {34, 4, 4},  {35, 6, 2},  {47, 3, 3},
+    {48, 2, 5},  {49, 5, 2},  {31, 31, 1}, {40, 3, 2},  {2, 40, 3},  {3, 2, 40},  {129, 5, 2},
+    {200, 3, 2}, {65, 17, 3}, {257, 3, 2}, {271, 2, 3}, {272, 3, 2}, {520, 2, 2},
 };
 
 static const double k_dens[] = {0.0005, 0.003, 0.02, 0.1, 0.35, 0.8, 0.995};
@@ -226,9 +224,21 @@ static unsigned chamfer_formula(int dx, int dy, int dz)
 {
     int a = abs(dx), b = abs(dy), c = abs(dz), t;
     /* sort a >= b >= c */
-    if (a < b) { t = a; a = b; b = t; }
-    if (b < c) { t = b; b = c; c = t; }
-    if (a < b) { t = a; a = b; b = t; }
+    if (a < b) {
+        t = a;
+        a = b;
+        b = t;
+    }
+    if (b < c) {
+        t = b;
+        b = c;
+        c = t;
+    }
+    if (a < b) {
+        t = a;
+        a = b;
+        b = t;
+    }
     return 5u * (unsigned)c + 4u * (unsigned)(b - c) + 3u * (unsigned)(a - b);
 }
 
@@ -389,8 +399,15 @@ static void test_bad_size(void **state)
 {
     static uint8_t a[64], b[64];
     static const int32_t bad[][3] = {
-        {0, 2, 2},  {2, 0, 2}, {2, 2, 0}, {-1, 2, 2}, {2, -3, 2}, {2, 2, -1},
-        {TRN_MAX_DIM + 1, 1, 1}, {1, TRN_MAX_DIM + 1, 1}, {1, 1, TRN_MAX_ZBINS + 1},
+        {0, 2, 2},
+        {2, 0, 2},
+        {2, 2, 0},
+        {-1, 2, 2},
+        {2, -3, 2},
+        {2, 2, -1},
+        {TRN_MAX_DIM + 1, 1, 1},
+        {1, TRN_MAX_DIM + 1, 1},
+        {1, 1, TRN_MAX_ZBINS + 1},
         {INT32_MIN, 1, 1},
     };
     trn_vol_u8_t good = {a, 4, 4, 4};

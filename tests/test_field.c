@@ -183,20 +183,31 @@ static void test_bad_inputs(void **state)
     assert_int_equal(trn_grid_f32_init(&g, out, 48, 8, 6), TRN_OK);
     wsb = trn_field_workspace_bytes(&sc, &w.map, &w.k);
     ws = selworld_alloc(wsb);
-#define F(m, k, pg, s, f, h, a, o, e, el, stt, wp, wb) trn_field(m, k, pg, s, f, h, a, o, e, el, stt, wp, wb)
-    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_OK);
-    assert_int_equal(F(NULL, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_E_NULL);
-    assert_int_equal(F(&w.map, &w.k, &w.pg, NULL, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_E_NULL);
-    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, NULL, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_E_NULL);
-    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, NULL, &g, ev, 48, &st, ws, wsb), TRN_E_NULL);
-    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, NULL, ev, 48, &st, ws, wsb), TRN_E_NULL);
-    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, NULL, 48, &st, ws, wsb), TRN_E_NULL);
-    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, NULL, ws, wsb), TRN_E_NULL);
-    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, NULL, wsb), TRN_E_NULL);
+#define F(m, k, pg, s, f, h, a, o, e, el, stt, wp, wb) \
+    trn_field(m, k, pg, s, f, h, a, o, e, el, stt, wp, wb)
+    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+                     TRN_OK);
+    assert_int_equal(F(NULL, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+                     TRN_E_NULL);
+    assert_int_equal(F(&w.map, &w.k, &w.pg, NULL, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+                     TRN_E_NULL);
+    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, NULL, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+                     TRN_E_NULL);
+    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, NULL, &g, ev, 48, &st, ws, wsb),
+                     TRN_E_NULL);
+    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, NULL, ev, 48, &st, ws, wsb),
+                     TRN_E_NULL);
+    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, NULL, 48, &st, ws, wsb),
+                     TRN_E_NULL);
+    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, NULL, ws, wsb),
+                     TRN_E_NULL);
+    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, NULL, wsb),
+                     TRN_E_NULL);
     fb = fc;
     fb.coarse_step_cells = 12;
     assert_int_equal(trn_field_cfg_check(&fb), TRN_E_ARG);
-    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fb, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_E_ARG);
+    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fb, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+                     TRN_E_ARG);
     fb = fc;
     fb.margin_rel = NAN;
     assert_int_equal(trn_field_cfg_check(&fb), TRN_E_ARG);
@@ -206,14 +217,20 @@ static void test_bad_inputs(void **state)
     assert_int_equal(trn_field_cfg_check(NULL), TRN_E_NULL);
     sb = sc;
     sb.stride_cells = -2;
-    assert_int_equal(F(&w.map, &w.k, &w.pg, &sb, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_E_ARG);
+    assert_int_equal(F(&w.map, &w.k, &w.pg, &sb, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+                     TRN_E_ARG);
     assert_int_equal(trn_field_workspace_bytes(&sb, &w.map, &w.k), 0u);
-    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fc, NAN, &area, &g, ev, 48, &st, ws, wsb), TRN_E_ARG);
-    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &off, &g, ev, 48, &st, ws, wsb), TRN_E_RANGE);
-    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &empty, &g, ev, 48, &st, ws, wsb), TRN_E_RANGE);
-    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 47, &st, ws, wsb), TRN_E_SIZE);
+    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fc, NAN, &area, &g, ev, 48, &st, ws, wsb),
+                     TRN_E_ARG);
+    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &off, &g, ev, 48, &st, ws, wsb),
+                     TRN_E_RANGE);
+    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &empty, &g, ev, 48, &st, ws, wsb),
+                     TRN_E_RANGE);
+    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 47, &st, ws, wsb),
+                     TRN_E_SIZE);
     g.width = 7;
-    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_E_SIZE);
+    assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+                     TRN_E_SIZE);
     g.width = 8;
     assert_int_equal(F(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb - 1),
                      TRN_E_WORKSPACE);

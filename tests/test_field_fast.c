@@ -73,10 +73,11 @@ static uint32_t compare(const selworld_t *w, const trn_select_cfg_t *sc, const t
     ws2 = selworld_alloc(b2);
     assert_int_equal(trn_grid_f32_init(&g1, o1, n, aw, ah), TRN_OK);
     assert_int_equal(trn_grid_f32_init(&g2, o2, n, aw, ah), TRN_OK);
-    assert_int_equal(trn_field(&w->map, &w->k, &w->pg, sc, fc, heading, area, &g1, e1, n, &s1, ws1,
-                               b1), TRN_OK);
-    assert_int_equal(trn_field_fast(&w->map, &w->k, &w->pg, sc, fc, heading, area, &g2, e2, n, &s2,
-                                    ws2, b2), TRN_OK);
+    assert_int_equal(
+        trn_field(&w->map, &w->k, &w->pg, sc, fc, heading, area, &g1, e1, n, &s1, ws1, b1), TRN_OK);
+    assert_int_equal(
+        trn_field_fast(&w->map, &w->k, &w->pg, sc, fc, heading, area, &g2, e2, n, &s2, ws2, b2),
+        TRN_OK);
     assert_memory_equal(o1, o2, n * sizeof(float));
     assert_memory_equal(e1, e2, n);
     assert_int_equal(s1.evaluations, s2.evaluations);
@@ -85,8 +86,9 @@ static uint32_t compare(const selworld_t *w, const trn_select_cfg_t *sc, const t
     assert_int_equal(s1.best_y, s2.best_y);
     assert_true(s1.best_m == s2.best_m || (isinf(s1.best_m) && isinf(s2.best_m)));
     printf("  area (%d,%d)-(%d,%d): %u evaluations, best %.6f m at (%d, %d); workspace %zu B "
-           "(onboard %zu B)\n", (int)area->x0, (int)area->y0, (int)area->x1, (int)area->y1,
-           s1.evaluations, s1.best_m, (int)s1.best_x, (int)s1.best_y, b2, b1);
+           "(onboard %zu B)\n",
+           (int)area->x0, (int)area->y0, (int)area->x1, (int)area->y1, s1.evaluations, s1.best_m,
+           (int)s1.best_x, (int)s1.best_y, b2, b1);
     free(o1);
     free(o2);
     free(e1);
@@ -222,9 +224,10 @@ static void test_progress_and_cancel(void **state)
         trn_status_t s;
         memset(&p, 0, sizeof p);
         p.monotone = 1;
-        s = alg == 0 ? trn_field(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, n, &st, ws1, b1)
-                     : trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, n, &st,
-                                      ws2, b2);
+        s = alg == 0
+                ? trn_field(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, n, &st, ws1, b1)
+                : trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, n, &st, ws2,
+                                 b2);
         assert_int_equal(s, TRN_OK);
         assert_int_equal(p.calls, st.evaluations + 1u); /* each evaluation, then the end */
         assert_int_equal(p.last_done, p.last_total);
@@ -233,9 +236,10 @@ static void test_progress_and_cancel(void **state)
         /* cancel at the fifth evaluation */
         memset(&p, 0, sizeof p);
         p.stop_after = 5u;
-        s = alg == 0 ? trn_field(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, n, &st, ws1, b1)
-                     : trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, n, &st,
-                                      ws2, b2);
+        s = alg == 0
+                ? trn_field(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, n, &st, ws1, b1)
+                : trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, n, &st, ws2,
+                                 b2);
         assert_int_equal(s, TRN_E_CANCELLED);
         assert_int_equal(st.evaluations, 5u);
         assert_int_equal(p.calls, 5u);
@@ -272,25 +276,51 @@ static void test_bad_inputs(void **state)
     wsb = trn_field_fast_workspace_bytes(&sc, &w.map, &w.k, &w.pg);
     assert_true(wsb > trn_field_workspace_bytes(&sc, &w.map, &w.k));
     ws = selworld_alloc(wsb + 16u);
-    assert_int_equal(trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_OK);
+    assert_int_equal(
+        trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+        TRN_OK);
     /* TRN_E_NULL */
-    assert_int_equal(trn_field_fast(NULL, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_E_NULL);
-    assert_int_equal(trn_field_fast(&w.map, NULL, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_E_NULL);
-    assert_int_equal(trn_field_fast(&w.map, &w.k, NULL, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_E_NULL);
-    assert_int_equal(trn_field_fast(&w.map, &w.k, &w.pg, NULL, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_E_NULL);
-    assert_int_equal(trn_field_fast(&w.map, &w.k, &w.pg, &sc, NULL, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_E_NULL);
-    assert_int_equal(trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, NULL, &g, ev, 48, &st, ws, wsb), TRN_E_NULL);
-    assert_int_equal(trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, NULL, ev, 48, &st, ws, wsb), TRN_E_NULL);
-    assert_int_equal(trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, NULL, 48, &st, ws, wsb), TRN_E_NULL);
-    assert_int_equal(trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, NULL, ws, wsb), TRN_E_NULL);
-    assert_int_equal(trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, NULL, wsb), TRN_E_NULL);
+    assert_int_equal(
+        trn_field_fast(NULL, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+        TRN_E_NULL);
+    assert_int_equal(
+        trn_field_fast(&w.map, NULL, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+        TRN_E_NULL);
+    assert_int_equal(
+        trn_field_fast(&w.map, &w.k, NULL, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+        TRN_E_NULL);
+    assert_int_equal(
+        trn_field_fast(&w.map, &w.k, &w.pg, NULL, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+        TRN_E_NULL);
+    assert_int_equal(
+        trn_field_fast(&w.map, &w.k, &w.pg, &sc, NULL, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+        TRN_E_NULL);
+    assert_int_equal(
+        trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, NULL, &g, ev, 48, &st, ws, wsb),
+        TRN_E_NULL);
+    assert_int_equal(
+        trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, NULL, ev, 48, &st, ws, wsb),
+        TRN_E_NULL);
+    assert_int_equal(
+        trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, NULL, 48, &st, ws, wsb),
+        TRN_E_NULL);
+    assert_int_equal(
+        trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, NULL, ws, wsb),
+        TRN_E_NULL);
+    assert_int_equal(
+        trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, NULL, wsb),
+        TRN_E_NULL);
     pb = w.pg;
     pb.data = NULL;
-    assert_int_equal(trn_field_fast(&w.map, &w.k, &pb, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_E_NULL);
+    assert_int_equal(
+        trn_field_fast(&w.map, &w.k, &pb, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+        TRN_E_NULL);
     assert_int_equal(trn_field_fast_workspace_bytes(&sc, &w.map, &w.k, &pb), 0u);
     mb = w.map;
     mb.dist.data = NULL;
-    assert_int_equal(trn_field_fast(&mb, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_E_NULL);
+    assert_int_equal(
+        trn_field_fast(&mb, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+        TRN_E_NULL);
     assert_int_equal(trn_field_fast_workspace_bytes(NULL, &w.map, &w.k, &w.pg), 0u);
     assert_int_equal(trn_field_fast_workspace_bytes(&sc, NULL, &w.k, &w.pg), 0u);
     assert_int_equal(trn_field_fast_workspace_bytes(&sc, &w.map, NULL, &w.pg), 0u);
@@ -298,60 +328,95 @@ static void test_bad_inputs(void **state)
     /* TRN_E_ARG: field and selection configurations, heading, kernel table */
     fb = fc;
     fb.coarse_step_cells = 12;
-    assert_int_equal(trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fb, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_E_ARG);
+    assert_int_equal(
+        trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fb, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+        TRN_E_ARG);
     sb = sc;
     sb.stride_cells = 0;
-    assert_int_equal(trn_field_fast(&w.map, &w.k, &w.pg, &sb, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_E_ARG);
+    assert_int_equal(
+        trn_field_fast(&w.map, &w.k, &w.pg, &sb, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+        TRN_E_ARG);
     assert_int_equal(trn_field_fast_workspace_bytes(&sb, &w.map, &w.k, &w.pg), 0u);
-    assert_int_equal(trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, NAN, &area, &g, ev, 48, &st, ws, wsb), TRN_E_ARG);
+    assert_int_equal(
+        trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, NAN, &area, &g, ev, 48, &st, ws, wsb),
+        TRN_E_ARG);
     kb = w.k;
     kb.sigma0_cells = 0.0f;
-    assert_int_equal(trn_field_fast(&w.map, &kb, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_E_ARG);
+    assert_int_equal(
+        trn_field_fast(&w.map, &kb, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+        TRN_E_ARG);
     kb = w.k;
     kb.radius[TRN_KERNEL_COUNT - 1] = 0;
-    assert_int_equal(trn_field_fast(&w.map, &kb, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_E_ARG);
+    assert_int_equal(
+        trn_field_fast(&w.map, &kb, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+        TRN_E_ARG);
     kb.radius[TRN_KERNEL_COUNT - 1] = TRN_KERNEL_MAX_RADIUS + 1;
-    assert_int_equal(trn_field_fast(&w.map, &kb, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_E_ARG);
+    assert_int_equal(
+        trn_field_fast(&w.map, &kb, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+        TRN_E_ARG);
     /* TRN_E_RANGE */
-    assert_int_equal(trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &off, &g, ev, 48, &st, ws, wsb), TRN_E_RANGE);
-    assert_int_equal(trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &empty, &g, ev, 48, &st, ws, wsb), TRN_E_RANGE);
+    assert_int_equal(
+        trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &off, &g, ev, 48, &st, ws, wsb),
+        TRN_E_RANGE);
+    assert_int_equal(
+        trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &empty, &g, ev, 48, &st, ws, wsb),
+        TRN_E_RANGE);
     /* TRN_E_SIZE: out, evaluated, P_G, the map's distance cap, its volume */
-    assert_int_equal(trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 47, &st, ws, wsb), TRN_E_SIZE);
+    assert_int_equal(
+        trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 47, &st, ws, wsb),
+        TRN_E_SIZE);
     g.width = 7;
-    assert_int_equal(trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_E_SIZE);
+    assert_int_equal(
+        trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+        TRN_E_SIZE);
     g.width = 8;
     pb = w.pg;
     pb.nz = w.pg.nz - 1;
-    assert_int_equal(trn_field_fast(&w.map, &w.k, &pb, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_E_SIZE);
+    assert_int_equal(
+        trn_field_fast(&w.map, &w.k, &pb, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+        TRN_E_SIZE);
     pb = w.pg;
     pb.nx = w.pg.nx - 1;
-    assert_int_equal(trn_field_fast(&w.map, &w.k, &pb, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_E_SIZE);
+    assert_int_equal(
+        trn_field_fast(&w.map, &w.k, &pb, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+        TRN_E_SIZE);
     pb = w.pg;
     pb.ny = w.pg.ny - 1;
-    assert_int_equal(trn_field_fast(&w.map, &w.k, &pb, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_E_SIZE);
+    assert_int_equal(
+        trn_field_fast(&w.map, &w.k, &pb, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+        TRN_E_SIZE);
     mb = w.map;
     mb.lnp.cap = 0u;
-    assert_int_equal(trn_field_fast(&mb, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_E_SIZE);
+    assert_int_equal(
+        trn_field_fast(&mb, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+        TRN_E_SIZE);
     mb = w.map;
     mb.lnp.cap = (uint8_t)(TRN_CHAMFER_CAP_MAX + 1 > 255 ? 255 : TRN_CHAMFER_CAP_MAX + 1);
     if (TRN_CHAMFER_CAP_MAX < 255) {
-        assert_int_equal(trn_field_fast(&mb, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
-                         TRN_E_SIZE);
+        assert_int_equal(
+            trn_field_fast(&mb, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+            TRN_E_SIZE);
     }
     mb = w.map;
     mb.dist.nz = 0;
-    assert_int_not_equal(trn_field_fast(&mb, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_OK);
+    assert_int_not_equal(
+        trn_field_fast(&mb, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_OK);
     /* ln p so large that a region's exact int64 sum could overflow: as trn_select */
     mb = w.map;
     mb.lnp.lnp[0] = 2000000000;
-    assert_int_equal(trn_field_fast(&mb, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb), TRN_E_SIZE);
+    assert_int_equal(
+        trn_field_fast(&mb, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+        TRN_E_SIZE);
     /* TRN_E_WORKSPACE: short, misaligned, shorter than the context header */
-    assert_int_equal(trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb - 1),
-                     TRN_E_WORKSPACE);
-    assert_int_equal(trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws + 1, wsb),
-                     TRN_E_WORKSPACE);
-    assert_int_equal(trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, 8u),
-                     TRN_E_WORKSPACE);
+    assert_int_equal(
+        trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, wsb - 1),
+        TRN_E_WORKSPACE);
+    assert_int_equal(
+        trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws + 1, wsb),
+        TRN_E_WORKSPACE);
+    assert_int_equal(
+        trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 48, &st, ws, 8u),
+        TRN_E_WORKSPACE);
     /* TRN_E_CANCELLED: the callback's first return stops it */
     fb = fc;
     fb.progress = on_progress;
@@ -360,12 +425,14 @@ static void test_bad_inputs(void **state)
         memset(&p, 0, sizeof p);
         p.stop_after = 1u;
         fb.progress_user = &p;
-        assert_int_equal(trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fb, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
-                         TRN_E_CANCELLED);
+        assert_int_equal(
+            trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fb, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+            TRN_E_CANCELLED);
         memset(&p, 0, sizeof p);
         p.stop_after = 1u;
-        assert_int_equal(trn_field(&w.map, &w.k, &w.pg, &sc, &fb, 0.0f, &area, &g, ev, 48, &st, ws,
-                                   wsb), TRN_E_CANCELLED);
+        assert_int_equal(
+            trn_field(&w.map, &w.k, &w.pg, &sc, &fb, 0.0f, &area, &g, ev, 48, &st, ws, wsb),
+            TRN_E_CANCELLED);
     }
     free(ws);
     selworld_free(&w);

@@ -24,9 +24,9 @@
  * representable (about 1e-232 cells^2). */
 static void test_peakfit_huge_curvature(void **state)
 {
-    const double ll[9] = { 4.074231918653e-312, -1.000000000014495, -2.0,
-                           -1.0, 0.0, -1.0,
-                           -3.105036184601418e+231, 9.44e-322, -3.105036184601418e+231 };
+    const double ll[9] = {
+        4.074231918653e-312, -1.000000000014495,     -2.0, -1.0, 0.0, -1.0, -3.105036184601418e+231,
+        9.44e-322,           -3.105036184601418e+231};
     trn_peak_t p;
     trn_status_t st;
     (void)state;
@@ -48,9 +48,9 @@ static void test_peakfit_huge_curvature(void **state)
  * (NaN is not), otherwise TRN_E_ILLCOND with infinite sigmas. */
 static void test_peakfit_gradient_overflow(void **state)
 {
-    const double ll[9] = { 9.999996651535603e+307, 1.38099255942677e-309, -3.065401726890636e+248,
-                           -3.065401728968514e+248, 3.000000007447147, 4.0,
-                           1.8986433709307e-310, 2.027487299871762e-304, -9.99999999869373e+307 };
+    const double ll[9] = {9.999996651535603e+307,  1.38099255942677e-309,  -3.065401726890636e+248,
+                          -3.065401728968514e+248, 3.000000007447147,      4.0,
+                          1.8986433709307e-310,    2.027487299871762e-304, -9.99999999869373e+307};
     trn_peak_t p;
     trn_status_t st;
     (void)state;
@@ -69,7 +69,7 @@ static void test_peakfit_gradient_overflow(void **state)
  * fitted, one beyond it is TRN_E_ILLCOND (peakfit.h). */
 static void test_peakfit_difference_limit(void **state)
 {
-    double ll[9] = { -1.0, -1.0, -1.0, -1.0, 0.0, -1.0, -1.0, -1.0, -1.0 };
+    double ll[9] = {-1.0, -1.0, -1.0, -1.0, 0.0, -1.0, -1.0, -1.0, -1.0};
     trn_peak_t p;
     (void)state;
     ll[0] = -1.0e300;
@@ -97,7 +97,7 @@ static void test_highpass_extreme_heights_stay_finite(void **state)
     enum { W = 6, H = 3 };
     static float dem_buf[W * H], out_buf[W * H];
     TRN_WORKSPACE_DECLARE(ws, 1024 * sizeof(double));
-    const trn_terrain_cfg_t cfg = { 0.1f, 0.1f, 0.1f, 9 };
+    const trn_terrain_cfg_t cfg = {0.1f, 0.1f, 0.1f, 9};
     trn_grid_f32_t dem, out;
     int x, y, i;
     (void)state;
@@ -135,9 +135,9 @@ static void test_highpass_extreme_heights_stay_finite(void **state)
  * reciprocal is not finite is TRN_E_ARG, like a non-finite one. */
 static void test_mast_local_dem_subnormal_cell(void **state)
 {
-    const trn_vec3f_t pt = { 0.0f, 0.0f, 1.0f };
-    const trn_rover_pose_t pose = { 0.0f, 0.0f, 0.0f, 0.0f };
-    trn_local_dem_cfg_t cfg = { 1.0e-45f, 2, 2, 1 };
+    const trn_vec3f_t pt = {0.0f, 0.0f, 1.0f};
+    const trn_rover_pose_t pose = {0.0f, 0.0f, 0.0f, 0.0f};
+    trn_local_dem_cfg_t cfg = {1.0e-45f, 2, 2, 1};
     float cells[25];
     trn_grid_f32_t dem;
     size_t used = 99u;

@@ -22,10 +22,9 @@
 /* ------------------------------------------------------------------------ */
 
 static const trn_status_t k_all_status[] = {
-    TRN_OK,       TRN_E_NULL,     TRN_E_ARG,      TRN_E_SIZE,     TRN_E_WORKSPACE, TRN_E_NODATA,
-    TRN_E_RANGE,  TRN_E_ILLCOND,  TRN_E_CAPACITY, TRN_E_NOTARGET, TRN_E_TIMEOUT,   TRN_E_CRC,
-    TRN_E_SEQ,    TRN_E_BUS,      TRN_E_IO,       TRN_E_FORMAT,   TRN_E_CANCELLED,
-    TRN_E_AMBIGUOUS};
+    TRN_OK,      TRN_E_NULL,    TRN_E_ARG,      TRN_E_SIZE,     TRN_E_WORKSPACE, TRN_E_NODATA,
+    TRN_E_RANGE, TRN_E_ILLCOND, TRN_E_CAPACITY, TRN_E_NOTARGET, TRN_E_TIMEOUT,   TRN_E_CRC,
+    TRN_E_SEQ,   TRN_E_BUS,     TRN_E_IO,       TRN_E_FORMAT,   TRN_E_CANCELLED, TRN_E_AMBIGUOUS};
 #define N_STATUS (sizeof k_all_status / sizeof k_all_status[0])
 
 static void test_status_values_fixed(void **state)
@@ -317,11 +316,11 @@ static void test_vol_init_errors(void **state)
     assert_int_equal(trn_vol_u8_init(&v, buf, 60u, 5, 4, 3), TRN_OK);
     assert_int_equal(trn_vol_u8_init(&v, buf, 59u, 5, 4, 3), TRN_E_WORKSPACE);
     assert_int_equal(trn_vol_u8_init(&v, buf, 0u, 1, 1, 1), TRN_E_WORKSPACE);
-    assert_int_equal(trn_vol_u8_init(&v, buf,
-                                     (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM *
-                                             (size_t)TRN_MAX_ZBINS - 1u,
-                                     TRN_MAX_DIM, TRN_MAX_DIM, TRN_MAX_ZBINS),
-                     TRN_E_WORKSPACE);
+    assert_int_equal(
+        trn_vol_u8_init(&v, buf,
+                        (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_ZBINS - 1u,
+                        TRN_MAX_DIM, TRN_MAX_DIM, TRN_MAX_ZBINS),
+        TRN_E_WORKSPACE);
 }
 
 static void test_vol_check_errors(void **state)

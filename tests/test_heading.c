@@ -27,8 +27,8 @@
 #endif
 
 #define CELL 0.1
-#define N 128          /* global map side, cells */
-#define LR 20          /* local map radius, cells */
+#define N 128 /* global map side, cells */
+#define LR 20 /* local map radius, cells */
 #define LW (2 * LR + 1)
 #define MAXPTS 20000
 #define DEG (M_PI / 180.0)
@@ -75,7 +75,7 @@ static void world_build(uint64_t seed, int flat)
  * sees the terrain at the map offset turned by delta (trn_points_rotate's
  * convention), so turning the points by delta puts them back. */
 static float g_loc[LW * LW];
-static double g_noise_m;        /* height noise of the local DEM (test_calibration) */
+static double g_noise_m; /* height noise of the local DEM (test_calibration) */
 static trn_rng_t g_noise_rng = {12345u};
 
 /* A standard normal draw (Box-Muller). */
@@ -97,17 +97,19 @@ static size_t local_points(double rx, double ry, double delta)
     for (j = -LR; j <= LR; ++j) {
         for (i = -LR; i <= LR; ++i) {
             const double mx = (double)i * c + (double)j * s, my = -(double)i * s + (double)j * c;
-            loc[(j + LR) * LW + (i + LR)] =
-                (i * i + j * j <= LR * LR)
-                    ? (float)(synth_height(&g_w.t, (rx + mx) * CELL, (ry + my) * CELL) + g_noise_m * gauss())
-                    : NAN;
+            loc[(j + LR) * LW + (i + LR)] = (i * i + j * j <= LR * LR)
+                                                ? (float)(synth_height(&g_w.t, (rx + mx) * CELL,
+                                                                       (ry + my) * CELL) +
+                                                          g_noise_m * gauss())
+                                                : NAN;
         }
     }
     assert_int_equal(trn_grid_f32_init(&lg, loc, LW * LW, LW, LW), TRN_OK);
     assert_int_equal(trn_grid_f32_init(&hg, hp, LW * LW, LW, LW), TRN_OK);
     assert_true(trn_highpass_workspace_bytes(LW, LW) <= sizeof hws);
     assert_int_equal(trn_highpass(&lg, &g_w.cfg.terrain, &hg, hws, sizeof hws), TRN_OK);
-    assert_int_equal(trn_occupancy_points(&hg, &g_w.cfg.terrain, LR, LR, g_pts, MAXPTS, &np), TRN_OK);
+    assert_int_equal(trn_occupancy_points(&hg, &g_w.cfg.terrain, LR, LR, g_pts, MAXPTS, &np),
+                     TRN_OK);
     return np;
 }
 
@@ -127,7 +129,8 @@ static void test_rotate_formula(void **state)
         const double a = (trn_rng_unit(&r) - 0.5) * 2.0 * M_PI;
         assert_int_equal(trn_points_rotate(in, 64, a, out), TRN_OK);
         for (i = 0; i < 64; ++i) {
-            const double x = in[i].x * cos(a) + in[i].y * sin(a), y = -in[i].x * sin(a) + in[i].y * cos(a);
+            const double x = in[i].x * cos(a) + in[i].y * sin(a),
+                         y = -in[i].x * sin(a) + in[i].y * cos(a);
             assert_true(fabs(out[i].x - x) <= 0.5 + 1e-9 && fabs(out[i].y - y) <= 0.5 + 1e-9);
             assert_int_equal(out[i].z, in[i].z);
         }
@@ -136,10 +139,15 @@ static void test_rotate_formula(void **state)
         assert_memory_equal(same, out, sizeof out);
     }
     /* a quarter turn counterclockwise: east goes north (-row), south goes east */
-    in[0].x = 10; in[0].y = 0; in[1].x = 0; in[1].y = 10;
+    in[0].x = 10;
+    in[0].y = 0;
+    in[1].x = 0;
+    in[1].y = 10;
     assert_int_equal(trn_points_rotate(in, 2, M_PI / 2, out), TRN_OK);
-    assert_int_equal(out[0].x, 0); assert_int_equal(out[0].y, -10);
-    assert_int_equal(out[1].x, 10); assert_int_equal(out[1].y, 0);
+    assert_int_equal(out[0].x, 0);
+    assert_int_equal(out[0].y, -10);
+    assert_int_equal(out[1].x, 10);
+    assert_int_equal(out[1].y, 0);
     /* bad input */
     assert_int_equal(trn_points_rotate(NULL, 1, 0.1, out), TRN_E_NULL);
     assert_int_equal(trn_points_rotate(in, 1, 0.1, NULL), TRN_E_NULL);
@@ -147,13 +155,16 @@ static void test_rotate_formula(void **state)
     assert_int_equal(trn_points_rotate(in, 1, INFINITY, out), TRN_E_ARG);
     in[0].x = 16384;
     assert_int_equal(trn_points_rotate(in, 1, 0.1, out), TRN_E_ARG);
-    in[0].x = 0; in[0].y = -16384;
+    in[0].x = 0;
+    in[0].y = -16384;
     assert_int_equal(trn_points_rotate(in, 1, 0.1, out), TRN_E_ARG);
     in[0].y = 16384;
     assert_int_equal(trn_points_rotate(in, 1, 0.1, out), TRN_E_ARG);
-    in[0].x = -16384; in[0].y = 0;
+    in[0].x = -16384;
+    in[0].y = 0;
     assert_int_equal(trn_points_rotate(in, 1, 0.1, out), TRN_E_ARG);
-    in[0].x = 16383; in[0].y = -16383; /* the largest offsets turn within int16_t */
+    in[0].x = 16383;
+    in[0].y = -16383; /* the largest offsets turn within int16_t */
     assert_int_equal(trn_points_rotate(in, 1, 0.7, out), TRN_OK);
 }
 
@@ -300,49 +311,61 @@ static void test_search_bb_above(void **state)
     np = local_points(60.3, 61.6, 0.0);
     wb = trn_search_bb_workspace_bytes(&g_w.map.pyr, &win);
     assert_true(wb > 0u && wb <= sizeof g_ws);
-    assert_int_equal(trn_search_bb(&g_w.map.pyr, &g_w.map.lnp, g_pts, np, &win, NULL, g_ws, wb, &b, NULL), TRN_OK);
+    assert_int_equal(
+        trn_search_bb(&g_w.map.pyr, &g_w.map.lnp, g_pts, np, &win, NULL, g_ws, wb, &b, NULL),
+        TRN_OK);
     /* just below the best: the same pose; at or above it: none */
-    assert_int_equal(trn_search_bb_above(&g_w.map.pyr, &g_w.map.lnp, g_pts, np, &win, NULL, b.score - 1, g_ws, wb,
-                                         &ba, &s), TRN_OK);
+    assert_int_equal(trn_search_bb_above(&g_w.map.pyr, &g_w.map.lnp, g_pts, np, &win, NULL,
+                                         b.score - 1, g_ws, wb, &ba, &s),
+                     TRN_OK);
     assert_int_equal(ba.x, b.x);
     assert_int_equal(ba.y, b.y);
     assert_true(ba.score == b.score);
     ba.x = -7;
-    assert_int_equal(trn_search_bb_above(&g_w.map.pyr, &g_w.map.lnp, g_pts, np, &win, NULL, b.score, g_ws, wb, &ba,
-                                         NULL), TRN_E_NODATA);
+    assert_int_equal(trn_search_bb_above(&g_w.map.pyr, &g_w.map.lnp, g_pts, np, &win, NULL, b.score,
+                                         g_ws, wb, &ba, NULL),
+                     TRN_E_NODATA);
     assert_int_equal(ba.x, -7); /* untouched */
-    assert_int_equal(trn_search_bb_above(&g_w.map.pyr, &g_w.map.lnp, g_pts, np, &win, NULL, INT64_MIN, g_ws, wb,
-                                         &ba, NULL), TRN_OK);
+    assert_int_equal(trn_search_bb_above(&g_w.map.pyr, &g_w.map.lnp, g_pts, np, &win, NULL,
+                                         INT64_MIN, g_ws, wb, &ba, NULL),
+                     TRN_OK);
     assert_int_equal(ba.x, b.x);
-    assert_int_equal(trn_search_bb_above(&g_w.map.pyr, &g_w.map.lnp, g_pts, np, &win, NULL, 0, g_ws, wb, NULL,
-                                         NULL), TRN_E_NULL);
-    assert_int_equal(trn_search_bb_above(&g_w.map.pyr, &g_w.map.lnp, g_pts, np, &win, NULL, 0, g_ws, 1, &ba,
-                                         NULL), TRN_E_WORKSPACE);
+    assert_int_equal(trn_search_bb_above(&g_w.map.pyr, &g_w.map.lnp, g_pts, np, &win, NULL, 0, g_ws,
+                                         wb, NULL, NULL),
+                     TRN_E_NULL);
+    assert_int_equal(trn_search_bb_above(&g_w.map.pyr, &g_w.map.lnp, g_pts, np, &win, NULL, 0, g_ws,
+                                         1, &ba, NULL),
+                     TRN_E_WORKSPACE);
     { /* the rest as trn_search_bb: a bad exclusion, a window off the map, a volume of no size */
         trn_exclusion_t neg = {60, 60, -1};
         trn_window_t off = {120, 40, 140, 80};
         trn_pyramid_t p = g_w.map.pyr;
-        assert_int_equal(trn_search_bb_above(&g_w.map.pyr, &g_w.map.lnp, g_pts, np, &win, &neg, 0, g_ws, wb, &ba,
-                                             NULL), TRN_E_ARG);
-        assert_int_equal(trn_search_bb_above(&g_w.map.pyr, &g_w.map.lnp, g_pts, np, &off, NULL, 0, g_ws, wb, &ba,
-                                             NULL), TRN_E_RANGE);
+        assert_int_equal(trn_search_bb_above(&g_w.map.pyr, &g_w.map.lnp, g_pts, np, &win, &neg, 0,
+                                             g_ws, wb, &ba, NULL),
+                         TRN_E_ARG);
+        assert_int_equal(trn_search_bb_above(&g_w.map.pyr, &g_w.map.lnp, g_pts, np, &off, NULL, 0,
+                                             g_ws, wb, &ba, NULL),
+                         TRN_E_RANGE);
         p.base.ny = 0;
-        assert_int_equal(trn_search_bb_above(&p, &g_w.map.lnp, g_pts, np, &win, NULL, 0, g_ws, wb, &ba, NULL),
-                         TRN_E_SIZE);
+        assert_int_equal(
+            trn_search_bb_above(&p, &g_w.map.lnp, g_pts, np, &win, NULL, 0, g_ws, wb, &ba, NULL),
+            TRN_E_SIZE);
     }
 }
 
 /* The exhaustive reference: every heading in the search's order, every
  * pose (trn_search_exhaustive), strictly better replaces. */
-static void exhaustive3(size_t np, const trn_window_t *win, const trn_heading_cfg_t *c, double step, int32_t kk,
-                        trn_best_t *best, int32_t *bk)
+static void exhaustive3(size_t np, const trn_window_t *win, const trn_heading_cfg_t *c, double step,
+                        int32_t kk, trn_best_t *best, int32_t *bk)
 {
     int32_t i;
     for (i = 0; i <= 2 * kk; ++i) {
         const int32_t k = (i % 2 == 1) ? -(i + 1) / 2 : i / 2;
         trn_best_t b;
         assert_int_equal(trn_points_rotate(g_pts, np, c->center_rad + k * step, g_rot), TRN_OK);
-        assert_int_equal(trn_search_exhaustive(&g_w.map.dist, &g_w.map.lnp, g_rot, np, win, NULL, &b, NULL), TRN_OK);
+        assert_int_equal(
+            trn_search_exhaustive(&g_w.map.dist, &g_w.map.lnp, g_rot, np, win, NULL, &b, NULL),
+            TRN_OK);
         if (i == 0 || b.score > best->score) {
             *best = b;
             *bk = k;
@@ -388,7 +411,8 @@ static void test_equals_exhaustive(void **state)
         }
     }
     printf("heading search: %llu exact pose scores against %llu exhaustive (%.3f)\n",
-           (unsigned long long)bb_scored, (unsigned long long)ex_scored, (double)bb_scored / (double)ex_scored);
+           (unsigned long long)bb_scored, (unsigned long long)ex_scored,
+           (double)bb_scored / (double)ex_scored);
     assert_true(bb_scored < ex_scored); /* the bound across headings prunes */
 }
 
@@ -420,7 +444,8 @@ static void test_recovers_heading(void **state)
             right += (fabs(eh) < 2.0 * DEG && ex * ex + ey * ey < 1.5 * 1.5);
         }
     }
-    printf("heading recovered: %d of 40 fitted, %d right; RMS heading error %.3f deg, RMS position error %.3f "
+    printf("heading recovered: %d of 40 fitted, %d right; RMS heading error %.3f deg, RMS position "
+           "error %.3f "
            "cells, mean (error / sigma)^2 in heading %.2f\n",
            n, right, sqrt(se_h / n) / DEG, sqrt(se_xy / n), z2 / n);
     assert_true(n >= 36);
@@ -459,7 +484,8 @@ static void test_calibration(void **state)
             size_t np = local_points(rx, ry, delta);
             size_t wb = trn_localize_heading_workspace_bytes(&g_w.map, np, &win);
             double eh, ex, ey, a, b, d, m2, z;
-            if (trn_localize_points_heading(&g_w.map, g_pts, np, &win, &c, g_ws, wb, &res) != TRN_OK) {
+            if (trn_localize_points_heading(&g_w.map, g_pts, np, &win, &c, g_ws, wb, &res) !=
+                TRN_OK) {
                 continue;
             }
             eh = res.heading_rad - delta;
@@ -484,14 +510,18 @@ static void test_calibration(void **state)
         }
     }
     g_noise_m = 0.0;
-    printf("calibration: %d fitted, %d wrong; heading within 1/2/3 sigma %.1f / %.1f / %.1f %% (68.3 / 95.4 / "
-           "99.7); position inside the 1/2/3-sigma ellipses %.1f / %.1f / %.1f %% (39.3 / 86.5 / 98.9)\n",
+    printf("calibration: %d fitted, %d wrong; heading within 1/2/3 sigma %.1f / %.1f / %.1f %% "
+           "(68.3 / 95.4 / "
+           "99.7); position inside the 1/2/3-sigma ellipses %.1f / %.1f / %.1f %% (39.3 / 86.5 / "
+           "98.9)\n",
            n, wrong, 100.0 * ch[0] / n, 100.0 * ch[1] / n, 100.0 * ch[2] / n, 100.0 * cp[0] / n,
            100.0 * cp[1] / n, 100.0 * cp[2] / n);
     assert_true(n >= 38 * fields && wrong <= fields / 5 + 1);
-    assert_true(ch[0] >= 0.60 * n && ch[0] <= 0.80 * n); /* within ~8 points of 68.3 % on 200 cases */
+    assert_true(ch[0] >= 0.60 * n &&
+                ch[0] <= 0.80 * n); /* within ~8 points of 68.3 % on 200 cases */
     assert_true(ch[1] >= 0.90 * n && ch[2] >= 0.98 * n);
-    assert_true(cp[1] >= 0.80 * n && cp[2] >= 0.97 * n); /* position: never optimistic by more than ~6 points */
+    assert_true(cp[1] >= 0.80 * n &&
+                cp[2] >= 0.97 * n); /* position: never optimistic by more than ~6 points */
 }
 
 static void test_w0_is_2d(void **state)
@@ -509,7 +539,8 @@ static void test_w0_is_2d(void **state)
     s1 = trn_localize_points_heading(&g_w.map, g_pts, np, &win, &c, g_ws, wb, &res);
     assert_int_equal(res.half_steps, 0);
     assert_int_equal(trn_points_rotate(g_pts, np, c.center_rad, g_rot), TRN_OK);
-    s2 = trn_localize_points(&g_w.map, g_rot, np, &win, g_ws, trn_localize_workspace_bytes(&g_w.map, &win), &ref);
+    s2 = trn_localize_points(&g_w.map, g_rot, np, &win, g_ws,
+                             trn_localize_workspace_bytes(&g_w.map, &win), &ref);
     assert_int_equal(s1, s2);
     assert_true(res.loc.x == ref.x && res.loc.y == ref.y && res.loc.ll_best == ref.ll_best);
     assert_true(res.loc.failure_probability == ref.failure_probability);
@@ -533,51 +564,75 @@ static void test_bad_inputs(void **state)
     assert_int_equal(trn_localize_heading_workspace_bytes(NULL, np, &win), 0u);
     assert_int_equal(trn_localize_heading_workspace_bytes(&g_w.map, 0, &win), 0u);
     assert_int_equal(trn_localize_heading_workspace_bytes(&g_w.map, np, NULL), 0u);
-    assert_int_equal(trn_localize_points_heading(NULL, g_pts, np, &win, &c, g_ws, wb, &res), TRN_E_NULL);
-    assert_int_equal(trn_localize_points_heading(&g_w.map, NULL, np, &win, &c, g_ws, wb, &res), TRN_E_NULL);
-    assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, NULL, &c, g_ws, wb, &res), TRN_E_NULL);
-    assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &win, NULL, g_ws, wb, &res), TRN_E_NULL);
-    assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &win, &c, NULL, wb, &res), TRN_E_NULL);
-    assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &win, &c, g_ws, wb, NULL), TRN_E_NULL);
+    assert_int_equal(trn_localize_points_heading(NULL, g_pts, np, &win, &c, g_ws, wb, &res),
+                     TRN_E_NULL);
+    assert_int_equal(trn_localize_points_heading(&g_w.map, NULL, np, &win, &c, g_ws, wb, &res),
+                     TRN_E_NULL);
+    assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, NULL, &c, g_ws, wb, &res),
+                     TRN_E_NULL);
+    assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &win, NULL, g_ws, wb, &res),
+                     TRN_E_NULL);
+    assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &win, &c, NULL, wb, &res),
+                     TRN_E_NULL);
+    assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &win, &c, g_ws, wb, NULL),
+                     TRN_E_NULL);
     /* window out of range, inverted */
-    assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &off, &c, g_ws, wb, &res), TRN_E_RANGE);
-    assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &inv, &c, g_ws, wb, &res), TRN_E_RANGE);
+    assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &off, &c, g_ws, wb, &res),
+                     TRN_E_RANGE);
+    assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &inv, &c, g_ws, wb, &res),
+                     TRN_E_RANGE);
     {
-        const trn_window_t offs[4] = {{-1, 50, 70, 70}, {50, -1, 70, 70}, {50, 50, 70, N}, {50, 60, 70, 50}};
+        const trn_window_t offs[4] = {
+            {-1, 50, 70, 70}, {50, -1, 70, 70}, {50, 50, 70, N}, {50, 60, 70, 50}};
         int i;
         for (i = 0; i < 4; ++i) {
-            assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &offs[i], &c, g_ws, wb, &res),
-                             TRN_E_RANGE);
+            assert_int_equal(
+                trn_localize_points_heading(&g_w.map, g_pts, np, &offs[i], &c, g_ws, wb, &res),
+                TRN_E_RANGE);
         }
     }
     { /* the truth at the window's edge: found there, and flagged */
         trn_window_t edge = {60, 55, 70, 65};
-        assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &edge, &c, g_ws, wb, &res), TRN_OK);
+        assert_int_equal(
+            trn_localize_points_heading(&g_w.map, g_pts, np, &edge, &c, g_ws, wb, &res), TRN_OK);
         assert_int_equal(res.loc.ix, 60);
         assert_int_equal(res.loc.on_window_edge, 1);
     }
     /* heading window out of range, NaN heading, step too fine */
-    bc = c; bc.window_rad = 4.0;
-    assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &win, &bc, g_ws, wb, &res), TRN_E_ARG);
-    bc = c; bc.center_rad = NAN;
-    assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &win, &bc, g_ws, wb, &res), TRN_E_ARG);
-    bc = c; bc.window_rad = M_PI; bc.step_rad = 1e-3;
-    assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &win, &bc, g_ws, wb, &res), TRN_E_SIZE);
+    bc = c;
+    bc.window_rad = 4.0;
+    assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &win, &bc, g_ws, wb, &res),
+                     TRN_E_ARG);
+    bc = c;
+    bc.center_rad = NAN;
+    assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &win, &bc, g_ws, wb, &res),
+                     TRN_E_ARG);
+    bc = c;
+    bc.window_rad = M_PI;
+    bc.step_rad = 1e-3;
+    assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &win, &bc, g_ws, wb, &res),
+                     TRN_E_SIZE);
     /* workspace short, misaligned */
-    assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &win, &c, g_ws, wb - 1u, &res),
-                     TRN_E_WORKSPACE);
-    assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, np, &win, &c, g_ws + 8, wb + 8u, &res),
-                     TRN_E_WORKSPACE);
+    assert_int_equal(
+        trn_localize_points_heading(&g_w.map, g_pts, np, &win, &c, g_ws, wb - 1u, &res),
+        TRN_E_WORKSPACE);
+    assert_int_equal(
+        trn_localize_points_heading(&g_w.map, g_pts, np, &win, &c, g_ws + 8, wb + 8u, &res),
+        TRN_E_WORKSPACE);
     /* no points; an unbuilt map; a point out of the volume's bins */
-    assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, 0, &win, &c, g_ws, wb, &res), TRN_E_NODATA);
+    assert_int_equal(trn_localize_points_heading(&g_w.map, g_pts, 0, &win, &c, g_ws, wb, &res),
+                     TRN_E_NODATA);
     memset(&zero, 0, sizeof zero);
-    assert_int_equal(trn_localize_points_heading(&zero, g_pts, np, &win, &c, g_ws, wb, &res), TRN_E_RANGE);
+    assert_int_equal(trn_localize_points_heading(&zero, g_pts, np, &win, &c, g_ws, wb, &res),
+                     TRN_E_RANGE);
     zero = g_w.map;
     zero.pyr.nlevels = 0;
-    assert_int_equal(trn_localize_points_heading(&zero, g_pts, np, &win, &c, g_ws, wb, &res), TRN_E_ARG);
+    assert_int_equal(trn_localize_points_heading(&zero, g_pts, np, &win, &c, g_ws, wb, &res),
+                     TRN_E_ARG);
     g_rot[0] = g_pts[0];
     g_rot[0].z = 500;
-    assert_int_equal(trn_localize_points_heading(&g_w.map, g_rot, 1, &win, &c, g_ws, wb, &res), TRN_E_ARG);
+    assert_int_equal(trn_localize_points_heading(&g_w.map, g_rot, 1, &win, &c, g_ws, wb, &res),
+                     TRN_E_ARG);
     /* flat terrain: every pose and heading alike, no finite covariance */
     world_build(9, 1);
     {
@@ -588,7 +643,8 @@ static void test_bad_inputs(void **state)
             flat[i].y = (int16_t)(i / 3 * 5 - 5);
             flat[i].z = g_pts[0].z;
         }
-        assert_int_equal(trn_localize_points_heading(&g_w.map, flat, 9, &win, &c, g_ws, wb, &res), TRN_E_ILLCOND);
+        assert_int_equal(trn_localize_points_heading(&g_w.map, flat, 9, &win, &c, g_ws, wb, &res),
+                         TRN_E_ILLCOND);
         assert_true(isinf(res.sigma_heading_rad));
     }
 }
@@ -617,8 +673,10 @@ static void test_dem_entry(void **state)
     sb = trn_localize_points_heading(&g_w.map, g_pts, np, &win, &c, g_ws, wp, &b);
     assert_int_equal(sa, sb);
     assert_true(a.loc.x == b.loc.x && a.loc.y == b.loc.y && a.heading_rad == b.heading_rad);
-    assert_true(a.loc.ll_best == b.loc.ll_best && a.loc.failure_probability == b.loc.failure_probability);
-    assert_true(fabs(a.heading_rad - 4.0 * DEG) < 1.0 * DEG && fabs(a.loc.x - 59.3) < 1.0 && fabs(a.loc.y - 57.8) < 1.0);
+    assert_true(a.loc.ll_best == b.loc.ll_best &&
+                a.loc.failure_probability == b.loc.failure_probability);
+    assert_true(fabs(a.heading_rad - 4.0 * DEG) < 1.0 * DEG && fabs(a.loc.x - 59.3) < 1.0 &&
+                fabs(a.loc.y - 57.8) < 1.0);
     { /* the local filter against the map's low-pass (TRN_LOCAL_HP_MAP) finds it too */
         trn_map_cfg_t mc;
         trn_map_t mm;
@@ -630,7 +688,8 @@ static void test_dem_entry(void **state)
         assert_int_equal(trn_map_build(&mm, &mc, &g_w.g, g_mapbuf2, mb), TRN_OK);
         wb2 = trn_localize_dem_heading_workspace_bytes(&mm, LW, LW, MAXPTS, &win);
         assert_true(wb2 > 0u && wb2 <= sizeof g_ws);
-        assert_int_equal(trn_localize_dem_heading(&mm, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb2, &b), TRN_OK);
+        assert_int_equal(
+            trn_localize_dem_heading(&mm, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb2, &b), TRN_OK);
         assert_true(fabs(b.heading_rad - 4.0 * DEG) < 1.0 * DEG && fabs(b.loc.x - 59.3) < 1.0 &&
                     fabs(b.loc.y - 57.8) < 1.0);
     }
@@ -639,80 +698,110 @@ static void test_dem_entry(void **state)
     assert_int_equal(trn_localize_dem_heading_workspace_bytes(&g_w.map, LW, LW, 0, &win), 0u);
     assert_int_equal(trn_localize_dem_heading_workspace_bytes(&g_w.map, 0, LW, MAXPTS, &win), 0u);
     /* bad inputs, one class each */
-    assert_int_equal(trn_localize_dem_heading(NULL, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a), TRN_E_NULL);
-    assert_int_equal(trn_localize_dem_heading(&g_w.map, NULL, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a), TRN_E_NULL);
-    assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, NULL, &c, g_ws, wb, &a), TRN_E_NULL);
-    assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, NULL, g_ws, wb, &a), TRN_E_NULL);
-    assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &c, NULL, wb, &a), TRN_E_NULL);
-    assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, NULL), TRN_E_NULL);
+    assert_int_equal(trn_localize_dem_heading(NULL, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a),
+                     TRN_E_NULL);
+    assert_int_equal(
+        trn_localize_dem_heading(&g_w.map, NULL, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a),
+        TRN_E_NULL);
+    assert_int_equal(
+        trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, NULL, &c, g_ws, wb, &a),
+        TRN_E_NULL);
+    assert_int_equal(
+        trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, NULL, g_ws, wb, &a),
+        TRN_E_NULL);
+    assert_int_equal(
+        trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &c, NULL, wb, &a),
+        TRN_E_NULL);
+    assert_int_equal(
+        trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, NULL),
+        TRN_E_NULL);
     {
         trn_grid_f32_t bad = lg;
         bad.width = 0;
-        assert_int_equal(trn_localize_dem_heading(&g_w.map, &bad, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a),
-                         TRN_E_SIZE);
+        assert_int_equal(
+            trn_localize_dem_heading(&g_w.map, &bad, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a),
+            TRN_E_SIZE);
     }
     m2 = g_w.map;
     m2.cfg.refine = 1; /* the height refinement is not heading-aware yet */
-    assert_int_equal(trn_localize_dem_heading(&m2, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a), TRN_E_ARG);
+    assert_int_equal(trn_localize_dem_heading(&m2, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a),
+                     TRN_E_ARG);
     m2 = g_w.map;
     m2.cfg.match = TRN_MATCH_HEIGHTS; /* nor the height matcher */
-    assert_int_equal(trn_localize_dem_heading(&m2, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a), TRN_E_ARG);
-    assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, (size_t)TRN_MAX_DIM * TRN_MAX_DIM + 1u, &win, &c,
-                                              g_ws, wb, &a), TRN_E_ARG);
+    assert_int_equal(trn_localize_dem_heading(&m2, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a),
+                     TRN_E_ARG);
+    assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR,
+                                              (size_t)TRN_MAX_DIM * TRN_MAX_DIM + 1u, &win, &c,
+                                              g_ws, wb, &a),
+                     TRN_E_ARG);
     assert_int_equal(trn_localize_dem_heading_workspace_bytes(&g_w.map, LW, LW, MAXPTS, NULL), 0u);
-    assert_int_equal(trn_localize_dem_heading_workspace_bytes(&g_w.map, LW, LW, (size_t)TRN_MAX_DIM * TRN_MAX_DIM + 1u,
-                                                              &win), 0u);
+    assert_int_equal(trn_localize_dem_heading_workspace_bytes(
+                         &g_w.map, LW, LW, (size_t)TRN_MAX_DIM * TRN_MAX_DIM + 1u, &win),
+                     0u);
     {
         trn_window_t off = {200, 50, 210, 60};
-        assert_int_equal(trn_localize_dem_heading_workspace_bytes(&g_w.map, LW, LW, MAXPTS, &off), 0u);
+        assert_int_equal(trn_localize_dem_heading_workspace_bytes(&g_w.map, LW, LW, MAXPTS, &off),
+                         0u);
         m2 = g_w.map;
         m2.pyr.nlevels = 0;
         assert_int_equal(trn_localize_dem_heading_workspace_bytes(&m2, LW, LW, MAXPTS, &win), 0u);
     }
-    assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, 0, &win, &c, g_ws, wb, &a), TRN_E_ARG);
+    assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, 0, &win, &c, g_ws, wb, &a),
+                     TRN_E_ARG);
     {
         trn_window_t off = {200, 50, 210, 60};
         trn_heading_cfg_t fine = {0.0, M_PI, 1e-4}, nan_c = {NAN, 0.1, 0.0};
-        assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &off, &c, g_ws, wb, &a), TRN_E_RANGE);
-        assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &fine, g_ws, wb, &a),
-                         TRN_E_SIZE);
-        assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &nan_c, g_ws, wb, &a),
-                         TRN_E_ARG);
+        assert_int_equal(
+            trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &off, &c, g_ws, wb, &a),
+            TRN_E_RANGE);
+        assert_int_equal(
+            trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &fine, g_ws, wb, &a),
+            TRN_E_SIZE);
+        assert_int_equal(
+            trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &nan_c, g_ws, wb, &a),
+            TRN_E_ARG);
     }
-    assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb - 1u, &a),
-                     TRN_E_WORKSPACE);
-    assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &c, g_ws + 8, wb, &a),
-                     TRN_E_WORKSPACE);
-    assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, 3, &win, &c, g_ws, wb, &a), TRN_E_CAPACITY);
+    assert_int_equal(
+        trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb - 1u, &a),
+        TRN_E_WORKSPACE);
+    assert_int_equal(
+        trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &c, g_ws + 8, wb, &a),
+        TRN_E_WORKSPACE);
+    assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, 3, &win, &c, g_ws, wb, &a),
+                     TRN_E_CAPACITY);
     {
         int i;
         for (i = 0; i < LW * LW; ++i) {
             g_loc[i] = NAN;
         }
-        assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a),
-                         TRN_E_NODATA);
+        assert_int_equal(
+            trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a),
+            TRN_E_NODATA);
     }
     /* flat map, flat local DEM: every pose and heading alike */
     world_build(14, 1);
     {
         int i;
         for (i = 0; i < LW * LW; ++i) {
-            g_loc[i] = (i % LW - LR) * (i % LW - LR) + (i / LW - LR) * (i / LW - LR) <= LR * LR ? 1.0f : NAN;
+            g_loc[i] = (i % LW - LR) * (i % LW - LR) + (i / LW - LR) * (i / LW - LR) <= LR * LR
+                           ? 1.0f
+                           : NAN;
         }
         wb = trn_localize_dem_heading_workspace_bytes(&g_w.map, LW, LW, MAXPTS, &win);
-        assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a),
-                         TRN_E_ILLCOND);
+        assert_int_equal(
+            trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a),
+            TRN_E_ILLCOND);
     }
 }
 
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_rotate_formula),  cmocka_unit_test(test_steps),
-        cmocka_unit_test(test_fit3_analytic),   cmocka_unit_test(test_search_bb_above),
+        cmocka_unit_test(test_rotate_formula),    cmocka_unit_test(test_steps),
+        cmocka_unit_test(test_fit3_analytic),     cmocka_unit_test(test_search_bb_above),
         cmocka_unit_test(test_equals_exhaustive), cmocka_unit_test(test_recovers_heading),
-        cmocka_unit_test(test_w0_is_2d),        cmocka_unit_test(test_bad_inputs),
-        cmocka_unit_test(test_dem_entry),       cmocka_unit_test(test_calibration),
+        cmocka_unit_test(test_w0_is_2d),          cmocka_unit_test(test_bad_inputs),
+        cmocka_unit_test(test_dem_entry),         cmocka_unit_test(test_calibration),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

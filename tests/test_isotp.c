@@ -69,11 +69,14 @@ static void test_decode_rejects(void **state)
     assert_int_equal(trn_isotp_decode(d, 4, &fr), TRN_E_FORMAT);
     d[0] = 0x08; /* SF length 8: classic CAN has 7 at most */
     assert_int_equal(trn_isotp_decode(d, 8, &fr), TRN_E_FORMAT);
-    d[0] = 0x10; d[1] = 0x20; /* FF in 7 bytes */
+    d[0] = 0x10;
+    d[1] = 0x20; /* FF in 7 bytes */
     assert_int_equal(trn_isotp_decode(d, 7, &fr), TRN_E_FORMAT);
-    d[0] = 0x10; d[1] = 0x07; /* FF of 7 bytes would have been an SF */
+    d[0] = 0x10;
+    d[1] = 0x07; /* FF of 7 bytes would have been an SF */
     assert_int_equal(trn_isotp_decode(d, 8, &fr), TRN_E_FORMAT);
-    d[0] = 0x10; d[1] = 0x00; /* 32-bit length escape: not supported */
+    d[0] = 0x10;
+    d[1] = 0x00; /* 32-bit length escape: not supported */
     assert_int_equal(trn_isotp_decode(d, 8, &fr), TRN_E_FORMAT);
     d[0] = 0x21; /* CF without data */
     assert_int_equal(trn_isotp_decode(d, 1, &fr), TRN_E_FORMAT);
@@ -196,7 +199,8 @@ static void test_rx_init_args(void **state)
         for (a = 0; a < TRN_ISOTP_ERR_COUNT; ++a) {
             assert_string_not_equal(trn_isotp_err_name((trn_isotp_err_t)a), "UNKNOWN");
             for (b = a + 1; b < TRN_ISOTP_ERR_COUNT; ++b) {
-                assert_string_not_equal(trn_isotp_err_name((trn_isotp_err_t)a), trn_isotp_err_name((trn_isotp_err_t)b));
+                assert_string_not_equal(trn_isotp_err_name((trn_isotp_err_t)a),
+                                        trn_isotp_err_name((trn_isotp_err_t)b));
             }
         }
         for (a = 0; a < TRN_ISOTP_TX_ERR_COUNT; ++a) {
@@ -212,7 +216,8 @@ static void test_rx_init_args(void **state)
 
 /* Send msg through the stateless sender into rx; returns the number of FC
  * frames the receiver asked for, or -1 on any error. */
-static int transfer(trn_isotp_rx_t *rx, const uint8_t *msg, size_t len, uint32_t t0, uint32_t step_ms)
+static int transfer(trn_isotp_rx_t *rx, const uint8_t *msg, size_t len, uint32_t t0,
+                    uint32_t step_ms)
 {
     uint16_t n = trn_isotp_frame_count(len), i;
     int n_fc = 0, got_msg = 0;
@@ -473,7 +478,8 @@ static void test_rx_random_noise(void **state)
         }
     }
     print_message("noise: %d real messages, %d from noise, %u wrong SN, %u bad frames\n", got_real,
-                  noise_sf, rx.err_count[TRN_ISOTP_ERR_WRONG_SN], rx.err_count[TRN_ISOTP_ERR_BAD_FRAME]);
+                  noise_sf, rx.err_count[TRN_ISOTP_ERR_WRONG_SN],
+                  rx.err_count[TRN_ISOTP_ERR_BAD_FRAME]);
     assert_true(got_real > 0);
 }
 
@@ -579,7 +585,8 @@ static void test_tx_timeout_bs(void **state)
 static void test_tx_fc_errors(void **state)
 {
     static uint8_t msg[40];
-    const uint8_t wait[3] = {0x31, 0, 0}, ovf[3] = {0x32, 0, 0}, bad[3] = {0x34, 0, 0}, cts[3] = {0x30, 0, 0};
+    const uint8_t wait[3] = {0x31, 0, 0}, ovf[3] = {0x32, 0, 0}, bad[3] = {0x34, 0, 0},
+                  cts[3] = {0x30, 0, 0};
     const uint8_t sf[2] = {0x01, 0x55};
     trn_isotp_tx_t tx;
     trn_isotp_tx_result_t r;
@@ -589,7 +596,8 @@ static void test_tx_fc_errors(void **state)
     assert_int_equal(trn_isotp_tx_start(&tx, msg, 40), TRN_OK);
     assert_int_equal(trn_isotp_tx_step(&tx, 0, &r), TRN_OK);
     assert_int_equal(trn_isotp_tx_fc(&tx, wait, 3, 90000, &r), TRN_OK);
-    assert_int_equal(trn_isotp_tx_step(&tx, 180000, &r), TRN_OK); /* 90 ms after the WAIT: no timeout */
+    assert_int_equal(trn_isotp_tx_step(&tx, 180000, &r),
+                     TRN_OK); /* 90 ms after the WAIT: no timeout */
     assert_int_equal(r.events, 0);
     assert_int_equal(trn_isotp_tx_fc(&tx, wait, 3, 180000, &r), TRN_OK);
     assert_int_equal(trn_isotp_tx_fc(&tx, wait, 3, 190000, &r), TRN_E_SEQ);

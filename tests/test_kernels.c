@@ -41,7 +41,7 @@ static void test_table(void **state)
                     const double g = exp(-(double)i * i / (2.0 * s * s));
                     const double c = k.taps[j][TRN_KERNEL_MAX_RADIUS];
                     assert_true(v > 0.0);
-                    assert_true(v == k.taps[j][TRN_KERNEL_MAX_RADIUS - i]); /* symmetric */
+                    assert_true(v == k.taps[j][TRN_KERNEL_MAX_RADIUS - i]);  /* symmetric */
                     assert_true(fabs(v / c - g) < 1e-6 * (1.0 + g) + 1e-12); /* Gaussian shape */
                 }
                 sum += v;
@@ -61,8 +61,8 @@ static void test_pick_nearest_in_log(void **state)
     trn_rng_seed(&r, 42);
     for (n = 0; n < 20000; ++n) {
         /* log-uniform over [sigma_0 / 8, sigma_9 * 8] */
-        const double ls = log2(0.5 / 8.0) + trn_rng_unit(&r) * (log2(0.5 * 22.63 * 8.0) -
-                                                                log2(0.5 / 8.0));
+        const double ls = log2(0.5 / 8.0) +
+                          trn_rng_unit(&r) * (log2(0.5 * 22.63 * 8.0) - log2(0.5 / 8.0));
         const float s = (float)exp2(ls);
         const double jj = 2.0 * log2((double)s / 0.5); /* position in kernel steps */
         int want = (int)floor(jj + 0.5), j, best = 0;

@@ -49,10 +49,9 @@ static void test_lnp_table_matches_formula(void **state)
     trn_rng_seed(&r, 11);
     for (trial = 0; trial < 50; ++trial) {
         trn_lnp_table_t t;
-        trn_lik_cfg_t c = cfg_of((float)(0.02 + 0.3 * trn_rng_unit(&r)),
-                                 (float)(0.01 + 0.5 * trn_rng_unit(&r)),
-                                 (float)(0.05 + 0.9 * trn_rng_unit(&r)),
-                                 (uint8_t)trn_rng_int(&r, 3, 250));
+        trn_lik_cfg_t c = cfg_of(
+            (float)(0.02 + 0.3 * trn_rng_unit(&r)), (float)(0.01 + 0.5 * trn_rng_unit(&r)),
+            (float)(0.05 + 0.9 * trn_rng_unit(&r)), (uint8_t)trn_rng_int(&r, 3, 250));
         double k = exp(-6.0 + 8.0 * trn_rng_unit(&r));
         unsigned d;
         assert_int_equal(trn_lnp_table_build(&t, &c, k), TRN_OK);
@@ -191,8 +190,7 @@ static void test_score_pose_vs_naive(void **state)
             pts[i].z = (int16_t)trn_rng_int(&r, 0, NZ - 1);
             x = px + pts[i].x;
             y = py + pts[i].y;
-            d = (x < 0 || y < 0 || x >= NX || y >= NY) ? 30u
-                                                        : buf[TRN_VOL_IDX(&v, x, y, pts[i].z)];
+            d = (x < 0 || y < 0 || x >= NX || y >= NY) ? 30u : buf[TRN_VOL_IDX(&v, x, y, pts[i].z)];
             naive += ref_lnp(&c, 0.3, d);
         }
         assert_int_equal(trn_score_pose(&v, &t, pts, NP, px, py, &s), TRN_OK);
@@ -233,9 +231,10 @@ static void pyramid_case(int NX, int NY, int NZ, int max_levels, trn_rng_t *r)
                                 }
                             }
                         }
-                        assert_int_equal(p.level[lv - 1][((size_t)z * p.pny + (size_t)(y + p.pad)) *
-                                                             p.pnx + (size_t)(x + p.pad)],
-                                         want);
+                        assert_int_equal(
+                            p.level[lv - 1][((size_t)z * p.pny + (size_t)(y + p.pad)) * p.pnx +
+                                            (size_t)(x + p.pad)],
+                            want);
                     }
                 }
             }
@@ -342,8 +341,12 @@ static void test_points_order(void **state)
         }
     }
     /* bad inputs leave the points unchanged */
-    pts[0].x = 1; pts[0].y = 2; pts[0].z = 3;
-    pts[1].x = 4; pts[1].y = 5; pts[1].z = 0;
+    pts[0].x = 1;
+    pts[0].y = 2;
+    pts[0].z = 3;
+    pts[1].x = 4;
+    pts[1].y = 5;
+    pts[1].z = 0;
     memcpy(orig, pts, 2 * sizeof pts[0]);
     assert_int_equal(trn_points_order(NULL, 2, 4), TRN_E_NULL);
     assert_int_equal(trn_points_order(pts, 2, 0), TRN_E_ARG);
@@ -417,8 +420,8 @@ static void scene_free(scene_t *s)
 
 /* Local points: the occupied voxels of a patch around (tx, ty), relative to
  * it, with some voxels dropped and some outliers added. */
-static size_t local_points(const scene_t *s, int tx, int ty, int half, trn_point_t *pts,
-                           size_t cap, trn_rng_t *r)
+static size_t local_points(const scene_t *s, int tx, int ty, int half, trn_point_t *pts, size_t cap,
+                           trn_rng_t *r)
 {
     size_t n = 0;
     int x, y, z;
@@ -589,21 +592,41 @@ static void test_bad_inputs(void **state)
 
     /* configuration */
     assert_int_equal(trn_lik_cfg_check(NULL), TRN_E_NULL);
-    bc = c; bc.cell_m = 0.0f; assert_int_equal(trn_lik_cfg_check(&bc), TRN_E_ARG);
-    bc = c; bc.cell_m = NAN; assert_int_equal(trn_lik_cfg_check(&bc), TRN_E_ARG);
-    bc = c; bc.sigma_m = -1.0f; assert_int_equal(trn_lik_cfg_check(&bc), TRN_E_ARG);
-    bc = c; bc.sigma_m = NAN; assert_int_equal(trn_lik_cfg_check(&bc), TRN_E_ARG);
-    bc = c; bc.inlier_prob = 1.0f; assert_int_equal(trn_lik_cfg_check(&bc), TRN_E_ARG);
-    bc = c; bc.inlier_prob = 0.0f; assert_int_equal(trn_lik_cfg_check(&bc), TRN_E_ARG);
-    bc = c; bc.cap = 2; assert_int_equal(trn_lik_cfg_check(&bc), TRN_E_ARG);
-    bc = c; bc.cap = TRN_CHAMFER_CAP_MAX + 1; assert_int_equal(trn_lik_cfg_check(&bc), TRN_E_ARG);
+    bc = c;
+    bc.cell_m = 0.0f;
+    assert_int_equal(trn_lik_cfg_check(&bc), TRN_E_ARG);
+    bc = c;
+    bc.cell_m = NAN;
+    assert_int_equal(trn_lik_cfg_check(&bc), TRN_E_ARG);
+    bc = c;
+    bc.sigma_m = -1.0f;
+    assert_int_equal(trn_lik_cfg_check(&bc), TRN_E_ARG);
+    bc = c;
+    bc.sigma_m = NAN;
+    assert_int_equal(trn_lik_cfg_check(&bc), TRN_E_ARG);
+    bc = c;
+    bc.inlier_prob = 1.0f;
+    assert_int_equal(trn_lik_cfg_check(&bc), TRN_E_ARG);
+    bc = c;
+    bc.inlier_prob = 0.0f;
+    assert_int_equal(trn_lik_cfg_check(&bc), TRN_E_ARG);
+    bc = c;
+    bc.cap = 2;
+    assert_int_equal(trn_lik_cfg_check(&bc), TRN_E_ARG);
+    bc = c;
+    bc.cap = TRN_CHAMFER_CAP_MAX + 1;
+    assert_int_equal(trn_lik_cfg_check(&bc), TRN_E_ARG);
 
     /* K */
     assert_int_equal(trn_outlier_density(NULL, &c, &k), TRN_E_NULL);
     assert_int_equal(trn_outlier_density(&v, NULL, &k), TRN_E_NULL);
     assert_int_equal(trn_outlier_density(&v, &c, NULL), TRN_E_NULL);
-    bad = v; bad.nz = 0; assert_int_equal(trn_outlier_density(&bad, &c, &k), TRN_E_SIZE);
-    bc = c; bc.cap = 4; assert_int_equal(trn_outlier_density(&v, &bc, &k), TRN_E_ARG);
+    bad = v;
+    bad.nz = 0;
+    assert_int_equal(trn_outlier_density(&bad, &c, &k), TRN_E_SIZE);
+    bc = c;
+    bc.cap = 4;
+    assert_int_equal(trn_outlier_density(&v, &bc, &k), TRN_E_ARG);
     {
         /* one voxel above cap (or above any table index) anywhere: each lane
          * of the first 4-voxel group, the middle, the last two voxels */
@@ -636,7 +659,9 @@ static void test_bad_inputs(void **state)
     assert_int_equal(trn_score_pose(&v, &t, pts, 0, 0, 0, &s), TRN_E_NODATA);
     assert_int_equal(trn_score_pose(&v, &t, badz, 1, 0, 0, &s), TRN_E_ARG);
     assert_int_equal(trn_score_pose(&v, &t, pts, 2, 3 * TRN_MAX_DIM, 0, &s), TRN_E_RANGE);
-    bad = v; bad.nx = TRN_MAX_DIM + 1; assert_int_equal(trn_score_pose(&bad, &t, pts, 2, 0, 0, &s), TRN_E_SIZE);
+    bad = v;
+    bad.nx = TRN_MAX_DIM + 1;
+    assert_int_equal(trn_score_pose(&bad, &t, pts, 2, 0, 0, &s), TRN_E_SIZE);
 
     /* exhaustive */
     assert_int_equal(trn_search_exhaustive(&v, &t, pts, 2, NULL, NULL, &b, NULL), TRN_E_NULL);
@@ -657,9 +682,12 @@ static void test_bad_inputs(void **state)
     assert_int_equal(trn_pyramid_build(&p, NULL, 20, 2, pbuf, sizeof pbuf), TRN_E_NULL);
     assert_int_equal(trn_pyramid_build(&p, &v, 20, 0, pbuf, sizeof pbuf), TRN_E_ARG);
     assert_int_equal(trn_pyramid_build(&p, &v, 2, 2, pbuf, sizeof pbuf), TRN_E_ARG);
-    bad = v; bad.ny = 0; assert_int_equal(trn_pyramid_build(&p, &bad, 20, 2, pbuf, sizeof pbuf), TRN_E_SIZE);
+    bad = v;
+    bad.ny = 0;
+    assert_int_equal(trn_pyramid_build(&p, &bad, 20, 2, pbuf, sizeof pbuf), TRN_E_SIZE);
     assert_int_equal(trn_pyramid_build(&p, &v, 20, 2, pbuf, 10), TRN_E_WORKSPACE);
-    assert_true(trn_pyramid_bytes(NX, NY, NZ, 2) + 8u <= sizeof pbuf); /* misaligned, large enough */
+    assert_true(trn_pyramid_bytes(NX, NY, NZ, 2) + 8u <=
+                sizeof pbuf); /* misaligned, large enough */
     assert_int_equal(trn_pyramid_build(&p, &v, 20, 2, pbuf + 8, sizeof pbuf - 8u), TRN_E_WORKSPACE);
     assert_int_equal(trn_pyramid_build(&p, &v, 20, 2, pbuf, sizeof pbuf), TRN_OK);
 
@@ -667,26 +695,37 @@ static void test_bad_inputs(void **state)
     assert_true(trn_search_bb_workspace_bytes(&p, &w) <= sizeof ws);
     assert_int_equal(trn_search_bb_workspace_bytes(NULL, &w), 0u);
     assert_int_equal(trn_search_bb_workspace_bytes(&p, &inv), 0u);
-    assert_int_equal(trn_search_bb(NULL, &t, pts, 2, &w, NULL, ws, sizeof ws, &b, NULL), TRN_E_NULL);
-    assert_int_equal(trn_search_bb(&p, NULL, pts, 2, &w, NULL, ws, sizeof ws, &b, NULL), TRN_E_NULL);
+    assert_int_equal(trn_search_bb(NULL, &t, pts, 2, &w, NULL, ws, sizeof ws, &b, NULL),
+                     TRN_E_NULL);
+    assert_int_equal(trn_search_bb(&p, NULL, pts, 2, &w, NULL, ws, sizeof ws, &b, NULL),
+                     TRN_E_NULL);
     assert_int_equal(trn_search_bb(&p, &t, NULL, 2, &w, NULL, ws, sizeof ws, &b, NULL), TRN_E_NULL);
-    assert_int_equal(trn_search_bb(&p, &t, pts, 2, NULL, NULL, ws, sizeof ws, &b, NULL), TRN_E_NULL);
-    assert_int_equal(trn_search_bb(&p, &t, pts, 2, &w, NULL, NULL, sizeof ws, &b, NULL), TRN_E_NULL);
-    assert_int_equal(trn_search_bb(&p, &t, pts, 2, &w, NULL, ws, sizeof ws, NULL, NULL), TRN_E_NULL);
-    assert_int_equal(trn_search_bb(&p, &t, pts, 2, &off, NULL, ws, sizeof ws, &b, NULL), TRN_E_RANGE);
+    assert_int_equal(trn_search_bb(&p, &t, pts, 2, NULL, NULL, ws, sizeof ws, &b, NULL),
+                     TRN_E_NULL);
+    assert_int_equal(trn_search_bb(&p, &t, pts, 2, &w, NULL, NULL, sizeof ws, &b, NULL),
+                     TRN_E_NULL);
+    assert_int_equal(trn_search_bb(&p, &t, pts, 2, &w, NULL, ws, sizeof ws, NULL, NULL),
+                     TRN_E_NULL);
+    assert_int_equal(trn_search_bb(&p, &t, pts, 2, &off, NULL, ws, sizeof ws, &b, NULL),
+                     TRN_E_RANGE);
     assert_int_equal(trn_search_bb(&p, &t, pts, 2, &w, &negr, ws, sizeof ws, &b, NULL), TRN_E_ARG);
-    assert_int_equal(trn_search_bb(&p, &t, pts, 2, &w, &all, ws, sizeof ws, &b, NULL), TRN_E_NODATA);
-    assert_int_equal(trn_search_bb(&p, &t, pts, 0, &w, NULL, ws, sizeof ws, &b, NULL), TRN_E_NODATA);
+    assert_int_equal(trn_search_bb(&p, &t, pts, 2, &w, &all, ws, sizeof ws, &b, NULL),
+                     TRN_E_NODATA);
+    assert_int_equal(trn_search_bb(&p, &t, pts, 0, &w, NULL, ws, sizeof ws, &b, NULL),
+                     TRN_E_NODATA);
     assert_int_equal(trn_search_bb(&p, &t, badz, 1, &w, NULL, ws, sizeof ws, &b, NULL), TRN_E_ARG);
     assert_int_equal(trn_search_bb(&p, &t, pts, 2, &w, NULL, ws, 1, &b, NULL), TRN_E_WORKSPACE);
     assert_true(trn_search_bb_workspace_bytes(&p, &w) + 8u <= sizeof ws);
-    assert_int_equal(trn_search_bb(&p, &t, pts, 2, &w, NULL, ws + 8, sizeof ws - 8u, &b, NULL), TRN_E_WORKSPACE);
-    bc = c; bc.cap = 30;
+    assert_int_equal(trn_search_bb(&p, &t, pts, 2, &w, NULL, ws + 8, sizeof ws - 8u, &b, NULL),
+                     TRN_E_WORKSPACE);
+    bc = c;
+    bc.cap = 30;
     {
         trn_lnp_table_t t2;
         assert_int_equal(trn_lnp_table_build(&t2, &bc, 1.0), TRN_OK);
         /* a table built for another cap than the pyramid's */
-        assert_int_equal(trn_search_bb(&p, &t2, pts, 2, &w, NULL, ws, sizeof ws, &b, NULL), TRN_E_ARG);
+        assert_int_equal(trn_search_bb(&p, &t2, pts, 2, &w, NULL, ws, sizeof ws, &b, NULL),
+                         TRN_E_ARG);
     }
     assert_int_equal(trn_search_bb(&p, &t, pts, 2, &w, NULL, ws, sizeof ws, &b, NULL), TRN_OK);
 }

@@ -62,18 +62,36 @@ static void fixture(fix_t *f)
 
 static void test_lik_cfg_each_field(void **state)
 {
-    trn_lik_cfg_t c, ok = { 0.1f, 0.1f, 0.95f, CAP };
+    trn_lik_cfg_t c, ok = {0.1f, 0.1f, 0.95f, CAP};
     (void)state;
     assert_int_equal(trn_lik_cfg_check(&ok), TRN_OK);
-    c = ok; c.cell_m = 0.0f;      assert_int_equal(trn_lik_cfg_check(&c), TRN_E_ARG);
-    c = ok; c.cell_m = 1000.5f;   assert_int_equal(trn_lik_cfg_check(&c), TRN_E_ARG);
-    c = ok; c.cell_m = NAN;       assert_int_equal(trn_lik_cfg_check(&c), TRN_E_ARG);
-    c = ok; c.sigma_m = -1.0f;    assert_int_equal(trn_lik_cfg_check(&c), TRN_E_ARG);
-    c = ok; c.sigma_m = 1000.5f;  assert_int_equal(trn_lik_cfg_check(&c), TRN_E_ARG);
-    c = ok; c.inlier_prob = 0.0f; assert_int_equal(trn_lik_cfg_check(&c), TRN_E_ARG);
-    c = ok; c.inlier_prob = 1.0f; assert_int_equal(trn_lik_cfg_check(&c), TRN_E_ARG);
-    c = ok; c.cap = 2u;           assert_int_equal(trn_lik_cfg_check(&c), TRN_E_ARG);
-    c = ok; c.cap = (uint8_t)(TRN_CHAMFER_CAP_MAX + 1); assert_int_equal(trn_lik_cfg_check(&c), TRN_E_ARG);
+    c = ok;
+    c.cell_m = 0.0f;
+    assert_int_equal(trn_lik_cfg_check(&c), TRN_E_ARG);
+    c = ok;
+    c.cell_m = 1000.5f;
+    assert_int_equal(trn_lik_cfg_check(&c), TRN_E_ARG);
+    c = ok;
+    c.cell_m = NAN;
+    assert_int_equal(trn_lik_cfg_check(&c), TRN_E_ARG);
+    c = ok;
+    c.sigma_m = -1.0f;
+    assert_int_equal(trn_lik_cfg_check(&c), TRN_E_ARG);
+    c = ok;
+    c.sigma_m = 1000.5f;
+    assert_int_equal(trn_lik_cfg_check(&c), TRN_E_ARG);
+    c = ok;
+    c.inlier_prob = 0.0f;
+    assert_int_equal(trn_lik_cfg_check(&c), TRN_E_ARG);
+    c = ok;
+    c.inlier_prob = 1.0f;
+    assert_int_equal(trn_lik_cfg_check(&c), TRN_E_ARG);
+    c = ok;
+    c.cap = 2u;
+    assert_int_equal(trn_lik_cfg_check(&c), TRN_E_ARG);
+    c = ok;
+    c.cap = (uint8_t)(TRN_CHAMFER_CAP_MAX + 1);
+    assert_int_equal(trn_lik_cfg_check(&c), TRN_E_ARG);
     assert_int_equal(trn_lik_cfg_check(NULL), TRN_E_NULL);
 }
 
@@ -151,9 +169,11 @@ static void test_window_each_bound(void **state)
         case 4: w.x1 = NX; break;
         default: w.y1 = NY; break;
         }
-        assert_int_equal(trn_search_exhaustive(&f.dist, &f.t, f.pts, 2, &w, NULL, &b, NULL), TRN_E_RANGE);
-        assert_int_equal(trn_search_bb(&f.p, &f.t, f.pts, 2, &w, NULL, ws_buf, sizeof ws_buf, &b, NULL),
+        assert_int_equal(trn_search_exhaustive(&f.dist, &f.t, f.pts, 2, &w, NULL, &b, NULL),
                          TRN_E_RANGE);
+        assert_int_equal(
+            trn_search_bb(&f.p, &f.t, f.pts, 2, &w, NULL, ws_buf, sizeof ws_buf, &b, NULL),
+            TRN_E_RANGE);
     }
 }
 
@@ -178,11 +198,13 @@ static void test_pyramid_build_each_arg(void **state)
     (void)state;
     fixture(&f);
     assert_int_equal(trn_pyramid_build(&p, &f.dist, CAP, 0, pyr_buf, sizeof pyr_buf), TRN_E_ARG);
-    assert_int_equal(trn_pyramid_build(&p, &f.dist, CAP, TRN_MAX_LEVELS + 1, pyr_buf, sizeof pyr_buf),
-                     TRN_E_ARG);
+    assert_int_equal(
+        trn_pyramid_build(&p, &f.dist, CAP, TRN_MAX_LEVELS + 1, pyr_buf, sizeof pyr_buf),
+        TRN_E_ARG);
     assert_int_equal(trn_pyramid_build(&p, &f.dist, 2u, 2, pyr_buf, sizeof pyr_buf), TRN_E_ARG);
     assert_int_equal(trn_pyramid_build(&p, &f.dist, (uint8_t)(TRN_CHAMFER_CAP_MAX + 1), 2, pyr_buf,
-                                       sizeof pyr_buf), TRN_E_ARG);
+                                       sizeof pyr_buf),
+                     TRN_E_ARG);
 }
 
 static void test_bb_workspace_bytes_each_arg(void **state)
@@ -195,17 +217,25 @@ static void test_bb_workspace_bytes_each_arg(void **state)
     assert_true(trn_search_bb_workspace_bytes(&f.p, &f.win) > 0u);
     assert_int_equal(trn_search_bb_workspace_bytes(NULL, &f.win), 0);
     assert_int_equal(trn_search_bb_workspace_bytes(&f.p, NULL), 0);
-    p = f.p; p.nlevels = 0;
+    p = f.p;
+    p.nlevels = 0;
     assert_int_equal(trn_search_bb_workspace_bytes(&p, &f.win), 0);
-    p = f.p; p.nlevels = TRN_MAX_LEVELS + 1;
+    p = f.p;
+    p.nlevels = TRN_MAX_LEVELS + 1;
     assert_int_equal(trn_search_bb_workspace_bytes(&p, &f.win), 0);
-    w = f.win; w.x1 = w.x0 - 1;
+    w = f.win;
+    w.x1 = w.x0 - 1;
     assert_int_equal(trn_search_bb_workspace_bytes(&f.p, &w), 0);
-    w = f.win; w.y1 = w.y0 - 1;
+    w = f.win;
+    w.y1 = w.y0 - 1;
     assert_int_equal(trn_search_bb_workspace_bytes(&f.p, &w), 0);
-    w = f.win; w.x0 = 0; w.x1 = TRN_MAX_DIM;
+    w = f.win;
+    w.x0 = 0;
+    w.x1 = TRN_MAX_DIM;
     assert_int_equal(trn_search_bb_workspace_bytes(&f.p, &w), 0);
-    w = f.win; w.y0 = 0; w.y1 = TRN_MAX_DIM;
+    w = f.win;
+    w.y0 = 0;
+    w.y1 = TRN_MAX_DIM;
     assert_int_equal(trn_search_bb_workspace_bytes(&f.p, &w), 0);
 }
 
@@ -216,17 +246,23 @@ static void test_search_bb_pyramid_table_mismatch(void **state)
     trn_best_t b;
     (void)state;
     fixture(&f);
-    assert_int_equal(trn_search_bb(&f.p, &f.t, f.pts, 2, &f.win, NULL, ws_buf, sizeof ws_buf, &b, NULL),
-                     TRN_OK);
-    p = f.p; p.nlevels = 0;
-    assert_int_equal(trn_search_bb(&p, &f.t, f.pts, 2, &f.win, NULL, ws_buf, sizeof ws_buf, &b, NULL),
-                     TRN_E_ARG);
-    p = f.p; p.nlevels = TRN_MAX_LEVELS + 1;
-    assert_int_equal(trn_search_bb(&p, &f.t, f.pts, 2, &f.win, NULL, ws_buf, sizeof ws_buf, &b, NULL),
-                     TRN_E_ARG);
-    p = f.p; p.cap = (uint8_t)(CAP - 1u);
-    assert_int_equal(trn_search_bb(&p, &f.t, f.pts, 2, &f.win, NULL, ws_buf, sizeof ws_buf, &b, NULL),
-                     TRN_E_ARG);
+    assert_int_equal(
+        trn_search_bb(&f.p, &f.t, f.pts, 2, &f.win, NULL, ws_buf, sizeof ws_buf, &b, NULL), TRN_OK);
+    p = f.p;
+    p.nlevels = 0;
+    assert_int_equal(
+        trn_search_bb(&p, &f.t, f.pts, 2, &f.win, NULL, ws_buf, sizeof ws_buf, &b, NULL),
+        TRN_E_ARG);
+    p = f.p;
+    p.nlevels = TRN_MAX_LEVELS + 1;
+    assert_int_equal(
+        trn_search_bb(&p, &f.t, f.pts, 2, &f.win, NULL, ws_buf, sizeof ws_buf, &b, NULL),
+        TRN_E_ARG);
+    p = f.p;
+    p.cap = (uint8_t)(CAP - 1u);
+    assert_int_equal(
+        trn_search_bb(&p, &f.t, f.pts, 2, &f.win, NULL, ws_buf, sizeof ws_buf, &b, NULL),
+        TRN_E_ARG);
 }
 
 /* A distance volume with a zero dimension: TRN_E_SIZE from both searches. */
@@ -238,11 +274,14 @@ static void test_searches_bad_volume_size(void **state)
     trn_best_t b;
     (void)state;
     fixture(&f);
-    d = f.dist; d.nx = 0;
+    d = f.dist;
+    d.nx = 0;
     assert_int_equal(trn_search_exhaustive(&d, &f.t, f.pts, 2, &f.win, NULL, &b, NULL), TRN_E_SIZE);
-    p = f.p; p.base.ny = 0;
-    assert_int_equal(trn_search_bb(&p, &f.t, f.pts, 2, &f.win, NULL, ws_buf, sizeof ws_buf, &b, NULL),
-                     TRN_E_SIZE);
+    p = f.p;
+    p.base.ny = 0;
+    assert_int_equal(
+        trn_search_bb(&p, &f.t, f.pts, 2, &f.win, NULL, ws_buf, sizeof ws_buf, &b, NULL),
+        TRN_E_SIZE);
 }
 
 int main(void)

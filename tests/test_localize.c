@@ -284,8 +284,9 @@ static void test_subpixel_fit_choice(void **state)
         for (y = -2; y <= 2; ++y) {
             for (x = -2; x <= 2; ++x) {
                 int64_t s;
-                assert_int_equal(trn_score_pose(&w.map.dist, &w.map.lnp, pts, n, res.ix + x,
-                                                res.iy + y, &s), TRN_OK);
+                assert_int_equal(
+                    trn_score_pose(&w.map.dist, &w.map.lnp, pts, n, res.ix + x, res.iy + y, &s),
+                    TRN_OK);
                 p[(y + 2) * 5 + (x + 2)] = (double)s / (double)TRN_LNP_SCALE - res.ll_best;
             }
         }
@@ -429,12 +430,14 @@ static void test_localize_matches_exhaustive(void **state)
         assert_int_equal(trn_grid_f32_init(&local, loc, 32 * 32, 32, 32), TRN_OK);
         assert_int_equal(trn_grid_f32_init(&hp, hpbuf, 32 * 32, 32, 32), TRN_OK);
         assert_int_equal(trn_highpass(&local, &w.cfg.terrain, &hp, hws, sizeof hws), TRN_OK);
-        assert_int_equal(trn_occupancy_points(&hp, &w.cfg.terrain, 16, 16, pts, MAXPTS, &n), TRN_OK);
+        assert_int_equal(trn_occupancy_points(&hp, &w.cfg.terrain, 16, 16, pts, MAXPTS, &n),
+                         TRN_OK);
         wb = trn_localize_workspace_bytes(&w.map, &win);
         ws = malloc(wb);
         assert_int_equal(trn_localize_points(&w.map, pts, n, &win, ws, wb, &res), TRN_OK);
-        assert_int_equal(trn_search_exhaustive(&w.map.dist, &w.map.lnp, pts, n, &win, NULL, &best, NULL),
-                         TRN_OK);
+        assert_int_equal(
+            trn_search_exhaustive(&w.map.dist, &w.map.lnp, pts, n, &win, NULL, &best, NULL),
+            TRN_OK);
         assert_int_equal(res.ix, best.x);
         assert_int_equal(res.iy, best.y);
         assert_true(fabs(res.ll_best - (double)best.score / TRN_LNP_SCALE) < 1e-9);
@@ -470,14 +473,30 @@ static void test_bad_inputs(void **state)
     /* configuration */
     assert_int_equal(trn_map_cfg_check(NULL), TRN_E_NULL);
     assert_int_equal(trn_map_cfg_check(&cfg), TRN_OK);
-    bc = cfg; bc.terrain.cell_m = -1.0f; assert_int_equal(trn_map_cfg_check(&bc), TRN_E_ARG);
-    bc = cfg; bc.terrain.nz = 0; assert_int_equal(trn_map_cfg_check(&bc), TRN_E_SIZE);
-    bc = cfg; bc.sigma_m = NAN; assert_int_equal(trn_map_cfg_check(&bc), TRN_E_ARG);
-    bc = cfg; bc.inlier_prob = 1.5f; assert_int_equal(trn_map_cfg_check(&bc), TRN_E_ARG);
-    bc = cfg; bc.cap = 1; assert_int_equal(trn_map_cfg_check(&bc), TRN_E_ARG);
-    bc = cfg; bc.levels = 0; assert_int_equal(trn_map_cfg_check(&bc), TRN_E_ARG);
-    bc = cfg; bc.levels = TRN_MAX_LEVELS + 1; assert_int_equal(trn_map_cfg_check(&bc), TRN_E_ARG);
-    bc = cfg; bc.min_exclusion_cells = 0; assert_int_equal(trn_map_cfg_check(&bc), TRN_E_ARG);
+    bc = cfg;
+    bc.terrain.cell_m = -1.0f;
+    assert_int_equal(trn_map_cfg_check(&bc), TRN_E_ARG);
+    bc = cfg;
+    bc.terrain.nz = 0;
+    assert_int_equal(trn_map_cfg_check(&bc), TRN_E_SIZE);
+    bc = cfg;
+    bc.sigma_m = NAN;
+    assert_int_equal(trn_map_cfg_check(&bc), TRN_E_ARG);
+    bc = cfg;
+    bc.inlier_prob = 1.5f;
+    assert_int_equal(trn_map_cfg_check(&bc), TRN_E_ARG);
+    bc = cfg;
+    bc.cap = 1;
+    assert_int_equal(trn_map_cfg_check(&bc), TRN_E_ARG);
+    bc = cfg;
+    bc.levels = 0;
+    assert_int_equal(trn_map_cfg_check(&bc), TRN_E_ARG);
+    bc = cfg;
+    bc.levels = TRN_MAX_LEVELS + 1;
+    assert_int_equal(trn_map_cfg_check(&bc), TRN_E_ARG);
+    bc = cfg;
+    bc.min_exclusion_cells = 0;
+    assert_int_equal(trn_map_cfg_check(&bc), TRN_E_ARG);
     assert_int_equal(trn_map_bytes(NULL, N, N), 0u);
     assert_int_equal(trn_map_bytes(&cfg, 0, N), 0u);
     assert_int_equal(trn_map_bytes(&cfg, N, TRN_MAX_DIM + 1), 0u);
@@ -492,8 +511,12 @@ static void test_bad_inputs(void **state)
     assert_int_equal(trn_map_build(&map, &cfg, &g, buf, mb - 1), TRN_E_WORKSPACE);
     assert_true(mb + 8u <= sizeof buf); /* misaligned (8 past a 16-byte boundary), large enough */
     assert_int_equal(trn_map_build(&map, &cfg, &g, buf + 8, sizeof buf - 8u), TRN_E_WORKSPACE);
-    bc = cfg; bc.sigma_m = 0.0f; assert_int_equal(trn_map_build(&map, &bc, &g, buf, mb), TRN_E_ARG);
-    big = g; big.width = 0; assert_int_equal(trn_map_build(&map, &cfg, &big, buf, mb), TRN_E_SIZE);
+    bc = cfg;
+    bc.sigma_m = 0.0f;
+    assert_int_equal(trn_map_build(&map, &bc, &g, buf, mb), TRN_E_ARG);
+    big = g;
+    big.width = 0;
+    assert_int_equal(trn_map_build(&map, &cfg, &big, buf, mb), TRN_E_SIZE);
     assert_int_equal(trn_map_build(&map, &cfg, &gn, buf, mb), TRN_E_NODATA);
     assert_int_equal(trn_map_build(&map, &cfg, &g, buf, mb), TRN_OK);
 
@@ -509,7 +532,8 @@ static void test_bad_inputs(void **state)
     assert_int_equal(trn_localize_points(&map, pts, 2, &off, ws, sizeof ws, &res), TRN_E_RANGE);
     assert_int_equal(trn_localize_points(&map, pts, 2, &win, ws, 1, &res), TRN_E_WORKSPACE);
     assert_true(trn_localize_workspace_bytes(&map, &win) + 8u <= sizeof ws);
-    assert_int_equal(trn_localize_points(&map, pts, 2, &win, ws + 8, sizeof ws - 8u, &res), TRN_E_WORKSPACE);
+    assert_int_equal(trn_localize_points(&map, pts, 2, &win, ws + 8, sizeof ws - 8u, &res),
+                     TRN_E_WORKSPACE);
     memset(&zero, 0, sizeof zero);
     assert_int_equal(trn_localize_points(&zero, pts, 2, &win, ws, sizeof ws, &res), TRN_E_ARG);
 
@@ -518,23 +542,37 @@ static void test_bad_inputs(void **state)
     assert_int_equal(trn_localize_dem_workspace_bytes(NULL, 20, 20, 100, &win), 0u);
     assert_int_equal(trn_localize_dem_workspace_bytes(&map, 0, 20, 100, &win), 0u);
     assert_int_equal(trn_localize_dem_workspace_bytes(&map, 20, 20, 0, &win), 0u);
-    assert_int_equal(trn_localize_dem(NULL, &local, 10, 10, 100, &win, ws, sizeof ws, &res), TRN_E_NULL);
-    assert_int_equal(trn_localize_dem(&map, NULL, 10, 10, 100, &win, ws, sizeof ws, &res), TRN_E_NULL);
-    assert_int_equal(trn_localize_dem(&map, &local, 10, 10, 100, NULL, ws, sizeof ws, &res), TRN_E_NULL);
-    assert_int_equal(trn_localize_dem(&map, &local, 10, 10, 100, &win, NULL, sizeof ws, &res), TRN_E_NULL);
-    assert_int_equal(trn_localize_dem(&map, &local, 10, 10, 100, &win, ws, sizeof ws, NULL), TRN_E_NULL);
-    big = local; big.height = TRN_MAX_DIM + 1;
-    assert_int_equal(trn_localize_dem(&map, &big, 10, 10, 100, &win, ws, sizeof ws, &res), TRN_E_SIZE);
-    assert_int_equal(trn_localize_dem(&map, &local, 10, 10, 0, &win, ws, sizeof ws, &res), TRN_E_ARG);
-    assert_int_equal(trn_localize_dem(&zero, &local, 10, 10, 100, &win, ws, sizeof ws, &res), TRN_E_ARG);
-    assert_int_equal(trn_localize_dem(&map, &local, 10, 10, 100, &off, ws, sizeof ws, &res), TRN_E_RANGE);
-    assert_int_equal(trn_localize_dem(&map, &local, 10, 10, 100, &win, ws, 16, &res), TRN_E_WORKSPACE);
-    assert_true(trn_localize_dem_workspace_bytes(&map, 20, 20, 100, &win) + 8u <= sizeof ws);
-    assert_int_equal(trn_localize_dem(&map, &local, 10, 10, 100, &win, ws + 8, sizeof ws - 8u, &res),
+    assert_int_equal(trn_localize_dem(NULL, &local, 10, 10, 100, &win, ws, sizeof ws, &res),
+                     TRN_E_NULL);
+    assert_int_equal(trn_localize_dem(&map, NULL, 10, 10, 100, &win, ws, sizeof ws, &res),
+                     TRN_E_NULL);
+    assert_int_equal(trn_localize_dem(&map, &local, 10, 10, 100, NULL, ws, sizeof ws, &res),
+                     TRN_E_NULL);
+    assert_int_equal(trn_localize_dem(&map, &local, 10, 10, 100, &win, NULL, sizeof ws, &res),
+                     TRN_E_NULL);
+    assert_int_equal(trn_localize_dem(&map, &local, 10, 10, 100, &win, ws, sizeof ws, NULL),
+                     TRN_E_NULL);
+    big = local;
+    big.height = TRN_MAX_DIM + 1;
+    assert_int_equal(trn_localize_dem(&map, &big, 10, 10, 100, &win, ws, sizeof ws, &res),
+                     TRN_E_SIZE);
+    assert_int_equal(trn_localize_dem(&map, &local, 10, 10, 0, &win, ws, sizeof ws, &res),
+                     TRN_E_ARG);
+    assert_int_equal(trn_localize_dem(&zero, &local, 10, 10, 100, &win, ws, sizeof ws, &res),
+                     TRN_E_ARG);
+    assert_int_equal(trn_localize_dem(&map, &local, 10, 10, 100, &off, ws, sizeof ws, &res),
+                     TRN_E_RANGE);
+    assert_int_equal(trn_localize_dem(&map, &local, 10, 10, 100, &win, ws, 16, &res),
                      TRN_E_WORKSPACE);
-    assert_int_equal(trn_localize_dem(&map, &local, 10, 10, 3, &win, ws, sizeof ws, &res), TRN_E_CAPACITY);
+    assert_true(trn_localize_dem_workspace_bytes(&map, 20, 20, 100, &win) + 8u <= sizeof ws);
+    assert_int_equal(
+        trn_localize_dem(&map, &local, 10, 10, 100, &win, ws + 8, sizeof ws - 8u, &res),
+        TRN_E_WORKSPACE);
+    assert_int_equal(trn_localize_dem(&map, &local, 10, 10, 3, &win, ws, sizeof ws, &res),
+                     TRN_E_CAPACITY);
     assert_int_equal(trn_grid_f32_sub(&gn, 5, 5, 20, 20, &local), TRN_OK);
-    assert_int_equal(trn_localize_dem(&map, &local, 10, 10, 100, &win, ws, sizeof ws, &res), TRN_E_NODATA);
+    assert_int_equal(trn_localize_dem(&map, &local, 10, 10, 100, &win, ws, sizeof ws, &res),
+                     TRN_E_NODATA);
 }
 
 int main(void)

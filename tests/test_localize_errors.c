@@ -40,9 +40,11 @@ static void test_map_cfg_exclusion_upper(void **state)
     trn_map_cfg_t cfg, bc;
     (void)state;
     trn_map_cfg_default(&cfg);
-    bc = cfg; bc.min_exclusion_cells = TRN_MAX_DIM;
+    bc = cfg;
+    bc.min_exclusion_cells = TRN_MAX_DIM;
     assert_int_equal(trn_map_cfg_check(&bc), TRN_OK);
-    bc = cfg; bc.min_exclusion_cells = TRN_MAX_DIM + 1;
+    bc = cfg;
+    bc.min_exclusion_cells = TRN_MAX_DIM + 1;
     assert_int_equal(trn_map_cfg_check(&bc), TRN_E_ARG);
 }
 
@@ -56,7 +58,8 @@ static void test_map_bytes_each_dim(void **state)
     assert_int_equal(trn_map_bytes(&cfg, 1, 0), 0u);
     assert_int_equal(trn_map_bytes(&cfg, TRN_MAX_DIM + 1, 1), 0u);
     assert_int_equal(trn_map_bytes(&cfg, 1, TRN_MAX_DIM + 1), 0u);
-    bc = cfg; bc.levels = 0;
+    bc = cfg;
+    bc.levels = 0;
     assert_int_equal(trn_map_bytes(&bc, 1, 1), 0u);
 }
 
@@ -66,20 +69,24 @@ static void test_corrupt_map_each_field(void **state)
     trn_map_t map, bad;
     trn_map_cfg_t cfg;
     trn_grid_f32_t g;
-    trn_window_t win = { 4, 4, 18, 18 };
-    trn_point_t pts[2] = { { 0, 0, 8 }, { 1, 0, 8 } };
+    trn_window_t win = {4, 4, 18, 18};
+    trn_point_t pts[2] = {{0, 0, 8}, {1, 0, 8}};
     trn_loc_result_t res;
     (void)state;
     build(&map, &cfg, &g);
     assert_true(trn_localize_workspace_bytes(&map, &win) > 0u);
-    bad = map; bad.cfg.sigma_m = 0.0f;
+    bad = map;
+    bad.cfg.sigma_m = 0.0f;
     assert_int_equal(trn_localize_points(&bad, pts, 2, &win, ws, sizeof ws, &res), TRN_E_ARG);
     assert_int_equal(trn_localize_workspace_bytes(&bad, &win), 0u);
-    bad = map; bad.dist.nz = 0;
+    bad = map;
+    bad.dist.nz = 0;
     assert_int_equal(trn_localize_points(&bad, pts, 2, &win, ws, sizeof ws, &res), TRN_E_ARG);
-    bad = map; bad.pyr.nlevels = map.cfg.levels + 1;
+    bad = map;
+    bad.pyr.nlevels = map.cfg.levels + 1;
     assert_int_equal(trn_localize_points(&bad, pts, 2, &win, ws, sizeof ws, &res), TRN_E_ARG);
-    bad = map; bad.lnp.cap = (uint8_t)(map.cfg.cap - 1u);
+    bad = map;
+    bad.lnp.cap = (uint8_t)(map.cfg.cap - 1u);
     assert_int_equal(trn_localize_points(&bad, pts, 2, &win, ws, sizeof ws, &res), TRN_E_ARG);
     assert_int_equal(trn_localize_dem(&bad, &g, 10, 10, 100, &win, ws, sizeof ws, &res), TRN_E_ARG);
 }
@@ -89,8 +96,8 @@ static void test_window_each_bound(void **state)
     trn_map_t map;
     trn_map_cfg_t cfg;
     trn_grid_f32_t g, local;
-    trn_window_t ok = { 4, 4, 18, 18 }, w;
-    trn_point_t pts[2] = { { 0, 0, 8 }, { 1, 0, 8 } };
+    trn_window_t ok = {4, 4, 18, 18}, w;
+    trn_point_t pts[2] = {{0, 0, 8}, {1, 0, 8}};
     trn_loc_result_t res;
     int i;
     (void)state;
@@ -117,7 +124,7 @@ static void test_dem_workspace_bytes_each_arg(void **state)
     trn_map_t map;
     trn_map_cfg_t cfg;
     trn_grid_f32_t g;
-    trn_window_t win = { 4, 4, 18, 18 }, bad = { 4, 4, 3, 18 };
+    trn_window_t win = {4, 4, 18, 18}, bad = {4, 4, 3, 18};
     const size_t too_many = (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM + 1u;
     (void)state;
     build(&map, &cfg, &g);
@@ -132,7 +139,7 @@ static void test_localize_dem_too_many_points(void **state)
     trn_map_t map;
     trn_map_cfg_t cfg;
     trn_grid_f32_t g, local;
-    trn_window_t win = { 4, 4, 18, 18 };
+    trn_window_t win = {4, 4, 18, 18};
     trn_loc_result_t res;
     const size_t too_many = (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM + 1u;
     (void)state;
@@ -149,7 +156,7 @@ static void test_single_pose_window_has_no_second(void **state)
     trn_map_t map;
     trn_map_cfg_t cfg;
     trn_grid_f32_t g, local;
-    trn_window_t win = { 10, 10, 10, 10 };
+    trn_window_t win = {10, 10, 10, 10};
     trn_loc_result_t res;
     trn_status_t st;
     (void)state;
@@ -175,11 +182,11 @@ static void test_window_edge_flag_each_side(void **state)
     trn_map_cfg_t cfg;
     trn_grid_f32_t g, local;
     const trn_window_t wins[5] = {
-        { 10, 8, 14, 12 }, /* truth on x0 */
-        { 6, 8, 10, 12 },  /* on x1 */
-        { 8, 10, 12, 14 }, /* on y0 */
-        { 8, 6, 12, 10 },  /* on y1 */
-        { 8, 8, 12, 12 },  /* inside */
+        {10, 8, 14, 12}, /* truth on x0 */
+        {6, 8, 10, 12},  /* on x1 */
+        {8, 10, 12, 14}, /* on y0 */
+        {8, 6, 12, 10},  /* on y1 */
+        {8, 8, 12, 12},  /* inside */
     };
     trn_loc_result_t res;
     trn_status_t st;
@@ -204,7 +211,7 @@ static void test_broad_peak_widens_exclusion(void **state)
     trn_map_t map;
     trn_map_cfg_t cfg;
     trn_grid_f32_t g, local;
-    trn_window_t win = { 6, 6, 18, 18 };
+    trn_window_t win = {6, 6, 18, 18};
     trn_loc_result_t res;
     trn_status_t st;
     double smax_cells;
@@ -230,7 +237,8 @@ static void test_broad_peak_widens_exclusion(void **state)
     assert_int_equal(res.ix, 12); /* the truth: cut at (6, 6), rover at local (6, 6) */
     assert_int_equal(res.iy, 12);
     smax_cells = (res.sigma_x_m > res.sigma_y_m ? res.sigma_x_m : res.sigma_y_m) / 0.1;
-    print_message("broad peak: sigma %.3f cells, exclusion %d cells\n", smax_cells, (int)res.exclusion_cells);
+    print_message("broad peak: sigma %.3f cells, exclusion %d cells\n", smax_cells,
+                  (int)res.exclusion_cells);
     assert_true(4.0 * smax_cells > (double)cfg.min_exclusion_cells);
     assert_int_equal(res.exclusion_cells, (int32_t)ceil(4.0 * smax_cells - 1e-9));
 }
@@ -243,7 +251,7 @@ static void test_localize_points_size_and_illcond(void **state)
     trn_map_t map, bad;
     trn_map_cfg_t cfg;
     trn_grid_f32_t g;
-    trn_window_t win = { 6, 6, 16, 16 };
+    trn_window_t win = {6, 6, 16, 16};
     trn_point_t plane[25];
     trn_loc_result_t res;
     size_t mb;
@@ -264,7 +272,8 @@ static void test_localize_points_size_and_illcond(void **state)
     }
     mb = trn_map_bytes(&cfg, N, N);
     assert_int_equal(trn_map_build(&map, &cfg, &g, map_buf, mb), TRN_OK);
-    assert_int_equal(trn_localize_points(&map, plane, 25, &win, ws, sizeof ws, &res), TRN_E_ILLCOND);
+    assert_int_equal(trn_localize_points(&map, plane, 25, &win, ws, sizeof ws, &res),
+                     TRN_E_ILLCOND);
     assert_true(isinf(res.sigma_x_m) && isinf(res.sigma_y_m));
 }
 

@@ -44,8 +44,8 @@
 #include "trn/localize.h"
 #include "trn/refine.h"
 
-#define GW 96          /* global side, cells of 1 m */
-#define LR 20          /* wedge radius, cells */
+#define GW 96           /* global side, cells of 1 m */
+#define LR 20           /* wedge radius, cells */
 #define LW (2 * LR + 1) /* local side; rover at its centre cell */
 #define MAXPTS 40000
 #define PI 3.14159265358979323846
@@ -58,7 +58,8 @@ static double g_sx = 0.3, g_sy = -0.2;
 
 static double surface(double x, double y)
 {
-    return 100.0 + g_sx * x + g_sy * y + 4.0 * sin(x * 0.37) * cos(y * 0.23) + 2.5 * sin(0.51 * x + 0.44 * y);
+    return 100.0 + g_sx * x + g_sy * y + 4.0 * sin(x * 0.37) * cos(y * 0.23) +
+           2.5 * sin(0.51 * x + 0.44 * y);
 }
 
 static void make_global(trn_grid_f32_t *g)
@@ -106,7 +107,10 @@ static int make_wedge(trn_grid_f32_t *l, double tx, double ty, double dz, double
             a = atan2(sin(a), cos(a));
             if (r > 0.0 && r <= LR && fabs(a) <= PI / 3.0) {
                 double gx = tx + dx, gy = ty + dy;
-                v = (float)((gx >= 0.0 && gy >= 0.0 && gx <= GW - 1 && gy <= GW - 1 ? surface(gx, gy) : -7.0e3) + dz);
+                v = (float)((gx >= 0.0 && gy >= 0.0 && gx <= GW - 1 && gy <= GW - 1
+                                 ? surface(gx, gy)
+                                 : -7.0e3) +
+                            dz);
                 ++n;
             }
             l_data[y * LW + x] = v;
@@ -142,8 +146,8 @@ static void nat_free(nat_t *w)
     free(w->ws);
 }
 
-static trn_status_t nat_localize(nat_t *w, const trn_grid_f32_t *local, int rx, int ry, const trn_window_t *win,
-                                 trn_loc_result_t *res)
+static trn_status_t nat_localize(nat_t *w, const trn_grid_f32_t *local, int rx, int ry,
+                                 const trn_window_t *win, trn_loc_result_t *res)
 {
     size_t wb = trn_localize_dem_workspace_bytes(&w->map, local->width, local->height, MAXPTS, win);
     assert_true(wb > 0u);
@@ -210,7 +214,8 @@ static void check_cov(const trn_loc_result_t *res)
     assert_true(fabs(res->rho - res->cov_m2[2] / (res->sigma_x_m * res->sigma_y_m)) < 1e-12);
     assert_true(fabs(res->rho) < 1.0);
     /* cell = 1 m: cov_m2 is the refinement's cov_cells */
-    assert_true(res->cov_m2[0] == res->refinement.cov_cells[0] && res->cov_m2[2] == res->refinement.cov_cells[2]);
+    assert_true(res->cov_m2[0] == res->refinement.cov_cells[0] &&
+                res->cov_m2[2] == res->refinement.cov_cells[2]);
 }
 
 /* Wedges at integer and sub-cell poses, offset -37.5 m, prior up to 3 cells
@@ -236,7 +241,8 @@ static void wedges(const trn_map_cfg_t *cfg, const trn_grid_f32_t *g, const char
             ty += trn_rng_unit(&r) - 0.5;
         }
         seen = make_wedge(&l, tx, ty, -37.5, 2.0 * PI * trn_rng_unit(&r));
-        win = window_at((int)floor(tx + 0.5) + trn_rng_int(&r, -3, 3), (int)floor(ty + 0.5) + trn_rng_int(&r, -3, 3), 6);
+        win = window_at((int)floor(tx + 0.5) + trn_rng_int(&r, -3, 3),
+                        (int)floor(ty + 0.5) + trn_rng_int(&r, -3, 3), 6);
         assert_int_equal(nat_localize(&w, &l, LR, LR, &win, &res), TRN_OK);
         assert_int_equal(res.refined, 1);
         worst = fmax(worst, fmax(fabs(res.x - tx), fabs(res.y - ty)));
@@ -248,8 +254,8 @@ static void wedges(const trn_map_cfg_t *cfg, const trn_grid_f32_t *g, const char
         assert_true(res.failure_probability >= 0.0 && res.failure_probability < 0.01);
         check_cov(&res);
     }
-    printf("wedges, %s config (zbin %.3f m x %d): worst pose error %.2e cells, dz %.2e m over 10\n", name,
-           (double)cfg->terrain.zbin_m, cfg->terrain.nz, worst, wdz);
+    printf("wedges, %s config (zbin %.3f m x %d): worst pose error %.2e cells, dz %.2e m over 10\n",
+           name, (double)cfg->terrain.zbin_m, cfg->terrain.nz, worst, wdz);
     nat_free(&w);
 }
 
@@ -295,7 +301,8 @@ static void box_vs_map(double sx, double sy, double *em, double *eb, int *bad_b)
     for (k = 0; k < n; ++k) {
         trn_loc_result_t rm, rb;
         trn_window_t win;
-        double tx = trn_rng_int(&r, 30, 65) + trn_rng_unit(&r) - 0.5, ty = trn_rng_int(&r, 30, 65) + trn_rng_unit(&r) - 0.5;
+        double tx = trn_rng_int(&r, 30, 65) + trn_rng_unit(&r) - 0.5,
+               ty = trn_rng_int(&r, 30, 65) + trn_rng_unit(&r) - 0.5;
         double e1, e2;
         (void)make_wedge(&l, tx, ty, 5.0, 2.0 * PI * trn_rng_unit(&r));
         win = window_at((int)floor(tx + 0.5), (int)floor(ty + 0.5), 6);
@@ -310,7 +317,8 @@ static void box_vs_map(double sx, double sy, double *em, double *eb, int *bad_b)
         bad_m += e1 > 1.5;
         *bad_b += e2 > 1.5;
     }
-    printf("wedge on a %.1f / %.1f slope, eq. 6 pose: mean error map filter %.3f, box filter %.3f cells; "
+    printf("wedge on a %.1f / %.1f slope, eq. 6 pose: mean error map filter %.3f, box filter %.3f "
+           "cells; "
            "over 1.5 cells %d / %d of %d\n",
            sx, sy, *em, *eb, bad_m, *bad_b, n);
     assert_int_equal(bad_m, 0);
@@ -358,7 +366,8 @@ static void test_constant_offset_invariance(void **state)
     for (k = 0; k < 6; ++k) {
         trn_loc_result_t a, b;
         trn_status_t sa, sb;
-        double tx = trn_rng_int(&r, 30, 65) + trn_rng_unit(&r) - 0.5, ty = trn_rng_int(&r, 30, 65) + trn_rng_unit(&r) - 0.5;
+        double tx = trn_rng_int(&r, 30, 65) + trn_rng_unit(&r) - 0.5,
+               ty = trn_rng_int(&r, 30, 65) + trn_rng_unit(&r) - 0.5;
         trn_window_t win;
         (void)make_wedge(&l, tx, ty, 0.0, 2.0 * PI * trn_rng_unit(&r));
         win = window_at((int)floor(tx + 0.5) + 2, (int)floor(ty + 0.5) - 1, 6);
@@ -385,8 +394,8 @@ static void test_constant_offset_invariance(void **state)
  * minus the map's low-pass at (cx + x - LR, cy + y - LR), minus the mean
  * difference (same arithmetic as the library), occupancy, ordering, then
  * trn_localize_points over win. */
-static trn_status_t emulate_pass(const nat_t *w, const trn_grid_f32_t *l, int cx, int cy, const trn_window_t *win,
-                                 trn_loc_result_t *out)
+static trn_status_t emulate_pass(const nat_t *w, const trn_grid_f32_t *l, int cx, int cy,
+                                 const trn_window_t *win, trn_loc_result_t *out)
 {
     static float hpd[LW * LW];
     static trn_point_t pts[MAXPTS];
@@ -421,7 +430,8 @@ static trn_status_t emulate_pass(const nat_t *w, const trn_grid_f32_t *l, int cx
         }
     }
     assert_int_equal(trn_grid_f32_init(&hp, hpd, LW * LW, LW, LW), TRN_OK);
-    assert_int_equal(trn_occupancy_points(&hp, &w->map.cfg.terrain, LR, LR, pts, MAXPTS, &np), TRN_OK);
+    assert_int_equal(trn_occupancy_points(&hp, &w->map.cfg.terrain, LR, LR, pts, MAXPTS, &np),
+                     TRN_OK);
     assert_int_equal(trn_points_order(pts, np, w->map.cfg.terrain.nz), TRN_OK);
     ws = malloc(wb);
     assert_non_null(ws);
@@ -455,8 +465,10 @@ static void test_second_pass(void **state)
     trn_rng_seed(&r, 12);
     for (k = 0; k < n; ++k) {
         trn_loc_result_t a, p1, p2, c;
-        double tx = trn_rng_int(&r, 30, 65) + trn_rng_unit(&r) - 0.5, ty = trn_rng_int(&r, 30, 65) + trn_rng_unit(&r) - 0.5;
-        int px = (int)floor(tx + 0.5) + (k % 2 ? 4 : -4), py = (int)floor(ty + 0.5) + (k / 2 % 2 ? 4 : -4);
+        double tx = trn_rng_int(&r, 30, 65) + trn_rng_unit(&r) - 0.5,
+               ty = trn_rng_int(&r, 30, 65) + trn_rng_unit(&r) - 0.5;
+        int px = (int)floor(tx + 0.5) + (k % 2 ? 4 : -4),
+            py = (int)floor(ty + 0.5) + (k / 2 % 2 ? 4 : -4);
         trn_window_t far = window_at(px, py, 6);
         (void)make_wedge(&l, tx, ty, 2.0, 2.0 * PI * trn_rng_unit(&r));
         assert_int_equal(nat_localize(&w, &l, LR, LR, &far, &a), TRN_OK);
@@ -465,7 +477,8 @@ static void test_second_pass(void **state)
         assert_int_equal(emulate_pass(&w, &l, p1.ix, p1.iy, &far, &p2), TRN_OK);
         assert_int_equal(a.ix, p2.ix);
         assert_int_equal(a.iy, p2.iy);
-        assert_true(a.x == p2.x && a.y == p2.y && a.ll_best == p2.ll_best && a.n_points == p2.n_points);
+        assert_true(a.x == p2.x && a.y == p2.y && a.ll_best == p2.ll_best &&
+                    a.n_points == p2.n_points);
         assert_true(a.cov_m2[0] == p2.cov_m2[0] && a.cov_m2[2] == p2.cov_m2[2]);
         differ += p1.x != a.x || p1.y != a.y;
         e1 += hypot(p1.x - tx, p1.y - ty) / n;
@@ -475,7 +488,8 @@ static void test_second_pass(void **state)
         assert_int_equal(c.refined, 1);
         assert_true(fabs(c.x - tx) < 0.05 && fabs(c.y - ty) < 0.05);
     }
-    printf("prior 4 cells off: eq. 6 mean error first pass %.3f, after the second %.3f cells; changed in %d of %d\n",
+    printf("prior 4 cells off: eq. 6 mean error first pass %.3f, after the second %.3f cells; "
+           "changed in %d of %d\n",
            e1, e2, differ, n);
     assert_true(differ > 0);
     assert_true(e2 < e1); /* measured 0.118 -> 0.091 */
@@ -512,7 +526,8 @@ static void test_map_filter_unseen_cells(void **state)
     for (y = 0; y < GW; ++y) {
         for (x = 0; x < GW; ++x) {
             int hole = x >= 40 && x < 46 && y >= 50 && y < 56;
-            assert_true(hole ? isnan(TRN_GRID_AT(&w.map.heights, x, y)) && isnan(TRN_GRID_AT(&w.map.lowpass, x, y))
+            assert_true(hole ? isnan(TRN_GRID_AT(&w.map.heights, x, y)) &&
+                                   isnan(TRN_GRID_AT(&w.map.lowpass, x, y))
                              : TRN_GRID_AT(&w.map.heights, x, y) == g_data[y * GW + x] &&
                                    isfinite(TRN_GRID_AT(&w.map.lowpass, x, y)));
         }
@@ -572,7 +587,8 @@ static void test_map_filter_unseen_cells(void **state)
     assert_int_equal(nat_localize(&w, &l, LR - 200, LR, &win, &a), TRN_E_NODATA);
     for (y = 0; y < LW; ++y) {
         for (x = 0; x < LW; ++x) {
-            l_data[y * LW + x] = (x == LR + 1 && y == LR) || (x == LR + 2 && y == LR) ? 100.0f : NAN;
+            l_data[y * LW + x] = (x == LR + 1 && y == LR) || (x == LR + 2 && y == LR) ? 100.0f
+                                                                                      : NAN;
         }
     }
     win = window_at(42, 52, 2); /* rover + (1..2, 0) lands in the hole */
@@ -609,7 +625,8 @@ static void test_refine_failure_is_illcond(void **state)
         trn_loc_result_t a, b;
         trn_status_t sa, sb;
         double tx = trn_rng_int(&r, 25, 70), ty = trn_rng_int(&r, 25, 70);
-        trn_window_t win = window_at(tx < 47 ? (int)tx + 22 : (int)tx - 22, ty < 47 ? (int)ty + 22 : (int)ty - 22, 4);
+        trn_window_t win = window_at(tx < 47 ? (int)tx + 22 : (int)tx - 22,
+                                     ty < 47 ? (int)ty + 22 : (int)ty - 22, 4);
         (void)make_wedge(&l, tx, ty, 0.0, 2.0 * PI * trn_rng_unit(&r));
         sa = nat_localize(&w, &l, LR, LR, &win, &a);
         sb = nat_localize(&w0, &l, LR, LR, &win, &b);
@@ -618,7 +635,8 @@ static void test_refine_failure_is_illcond(void **state)
         assert_int_equal(a.iy, b.iy);
         if (sa == TRN_E_ILLCOND && a.refined == 0) {
             ++fails;
-            assert_true(a.x == b.x && a.y == b.y && a.sigma_x_m == b.sigma_x_m && a.cov_m2[1] == b.cov_m2[1]);
+            assert_true(a.x == b.x && a.y == b.y && a.sigma_x_m == b.sigma_x_m &&
+                        a.cov_m2[1] == b.cov_m2[1]);
             assert_true(isinf(a.refinement.cov_cells[0]));
         } else if (sa == TRN_E_ILLCOND) {
             /* refined, but flagged: the model error is beyond the map's roughness */
@@ -628,7 +646,8 @@ static void test_refine_failure_is_illcond(void **state)
         } else {
             assert_int_equal(sa, TRN_OK);
             assert_int_equal(a.refined, 1);
-            printf("local DEM from elsewhere accepted: error %.1f cells, P_fail %.2g, model error %.2f m "
+            printf("local DEM from elsewhere accepted: error %.1f cells, P_fail %.2g, model error "
+                   "%.2f m "
                    "(voxel search alone: status %d)\n",
                    hypot(a.x - tx, a.y - ty), a.failure_probability, a.refinement.model_m, sb);
             assert_true(a.refinement.model_m > 1.0);
@@ -673,33 +692,82 @@ static void test_cfg_check_new_fields(void **state)
     assert_int_equal(c.local_highpass, TRN_LOCAL_HP_BOX);
     assert_int_equal(c.refine, 0);
     assert_int_equal(trn_map_cfg_check(&c), TRN_OK);
-    b = c; b.local_highpass = TRN_LOCAL_HP_MAP; assert_int_equal(trn_map_cfg_check(&b), TRN_OK);
-    b = c; b.local_highpass = 2; assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
-    b = c; b.local_highpass = -1; assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
-    b = c; b.refine = 1; assert_int_equal(trn_map_cfg_check(&b), TRN_OK);
-    b = c; b.refine = 2; assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
-    b = c; b.refine = -1; assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
-    b = c; b.noise_m = NAN; assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
-    b = c; b.noise_m = 0.0f; assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
-    b = c; b.noise_m = -0.01f; assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
-    b = c; b.noise_m = 1e-30f; assert_int_equal(trn_map_cfg_check(&b), TRN_OK);
-    b = c; b.noise_m = 1000.0f; assert_int_equal(trn_map_cfg_check(&b), TRN_OK);
-    b = c; b.noise_m = 1000.0001f; assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
-    b = c; b.noise_m = INFINITY; assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
-    b = c; b.noise_k_per_m = NAN; assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
-    b = c; b.noise_k_per_m = -1e-30f; assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
-    b = c; b.noise_k_per_m = 0.0f; assert_int_equal(trn_map_cfg_check(&b), TRN_OK);
-    b = c; b.noise_k_per_m = 1000.0f; assert_int_equal(trn_map_cfg_check(&b), TRN_OK);
-    b = c; b.noise_k_per_m = 1000.0001f; assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    b = c;
+    b.local_highpass = TRN_LOCAL_HP_MAP;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_OK);
+    b = c;
+    b.local_highpass = 2;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    b = c;
+    b.local_highpass = -1;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    b = c;
+    b.refine = 1;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_OK);
+    b = c;
+    b.refine = 2;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    b = c;
+    b.refine = -1;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    b = c;
+    b.noise_m = NAN;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    b = c;
+    b.noise_m = 0.0f;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    b = c;
+    b.noise_m = -0.01f;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    b = c;
+    b.noise_m = 1e-30f;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_OK);
+    b = c;
+    b.noise_m = 1000.0f;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_OK);
+    b = c;
+    b.noise_m = 1000.0001f;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    b = c;
+    b.noise_m = INFINITY;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    b = c;
+    b.noise_k_per_m = NAN;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    b = c;
+    b.noise_k_per_m = -1e-30f;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    b = c;
+    b.noise_k_per_m = 0.0f;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_OK);
+    b = c;
+    b.noise_k_per_m = 1000.0f;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_OK);
+    b = c;
+    b.noise_k_per_m = 1000.0001f;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
     assert_true(c.max_failure_prob == 1.0f);
-    b = c; b.max_failure_prob = NAN; assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
-    b = c; b.max_failure_prob = 0.0f; assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
-    b = c; b.max_failure_prob = -0.05f; assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
-    b = c; b.max_failure_prob = 1.0001f; assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
-    b = c; b.max_failure_prob = INFINITY; assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
-    b = c; b.max_failure_prob = 1e-6f; assert_int_equal(trn_map_cfg_check(&b), TRN_OK);
+    b = c;
+    b.max_failure_prob = NAN;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    b = c;
+    b.max_failure_prob = 0.0f;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    b = c;
+    b.max_failure_prob = -0.05f;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    b = c;
+    b.max_failure_prob = 1.0001f;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    b = c;
+    b.max_failure_prob = INFINITY;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    b = c;
+    b.max_failure_prob = 1e-6f;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_OK);
     /* the map sizing and building refuse the same configurations */
-    b = c; b.refine = 2;
+    b = c;
+    b.refine = 2;
     assert_int_equal(trn_map_bytes(&b, 8, 8), 0u);
 }
 
@@ -722,7 +790,8 @@ static void test_ambiguous_acceptance(void **state)
     (void)state;
     for (y = 0; y < GW; ++y) {
         for (x = 0; x < GW; ++x) {
-            g_data[y * GW + x] = (float)(3.0 * sin(2.0 * PI * x / 3.0) + 4.0 * sin(0.37 * y) + 1.5 * cos(0.61 * y));
+            g_data[y * GW + x] = (float)(3.0 * sin(2.0 * PI * x / 3.0) + 4.0 * sin(0.37 * y) +
+                                         1.5 * cos(0.61 * y));
         }
     }
     assert_int_equal(trn_grid_f32_init(&g, g_data, GW * GW, GW, GW), TRN_OK);
@@ -738,7 +807,8 @@ static void test_ambiguous_acceptance(void **state)
     nat_build(&w, &cfg, &g);
     assert_int_equal(nat_localize(&w, &l, LR, LR, &win, &amb), TRN_E_AMBIGUOUS);
     nat_free(&w);
-    printf("periodic DEM: answer (%.3f, %.3f), failure probability %.3f\n", amb.x, amb.y, amb.failure_probability);
+    printf("periodic DEM: answer (%.3f, %.3f), failure probability %.3f\n", amb.x, amb.y,
+           amb.failure_probability);
     assert_true(amb.failure_probability > 0.5 && amb.failure_probability < 0.8);
     assert_true(amb.refined == 1 && amb.misfit == 0 && isfinite(amb.cov_m2[0]));
     assert_true(fabs(amb.y - 48.0) < 1e-3 && fmod(fabs(amb.x - 48.0) + 1e-3, 3.0) < 2e-3);
@@ -746,15 +816,18 @@ static void test_ambiguous_acceptance(void **state)
     nat_build(&w, &cfg, &g);
     assert_int_equal(nat_localize(&w, &l, LR, LR, &win, &ok), TRN_OK);
     nat_free(&w);
-    assert_true(ok.x == amb.x && ok.y == amb.y && ok.failure_probability == amb.failure_probability);
+    assert_true(ok.x == amb.x && ok.y == amb.y &&
+                ok.failure_probability == amb.failure_probability);
     assert_true(ok.cov_m2[0] == amb.cov_m2[0] && ok.cov_m2[1] == amb.cov_m2[1]);
     cfg.max_failure_prob = (float)amb.failure_probability;
     nat_build(&w, &cfg, &g);
     st = nat_localize(&w, &l, LR, LR, &win, &edge);
-    assert_int_equal(st, edge.failure_probability > (double)cfg.max_failure_prob ? TRN_E_AMBIGUOUS : TRN_OK);
+    assert_int_equal(st, edge.failure_probability > (double)cfg.max_failure_prob ? TRN_E_AMBIGUOUS
+                                                                                 : TRN_OK);
     cfg.max_failure_prob = nextafterf((float)amb.failure_probability, 0.0f);
     w.map.cfg.max_failure_prob = cfg.max_failure_prob;
-    assert_int_equal(trn_localize_dem(&w.map, &l, LR, LR, MAXPTS, &win, w.ws, w.wb, &edge), TRN_E_AMBIGUOUS);
+    assert_int_equal(trn_localize_dem(&w.map, &l, LR, LR, MAXPTS, &win, w.ws, w.wb, &edge),
+                     TRN_E_AMBIGUOUS);
     nat_free(&w);
 }
 
@@ -816,12 +889,14 @@ static void test_cfg_auto_regimes(void **state)
     c.levels = 99; /* garbage on entry: written */
     c.local_highpass = 7;
     assert_int_equal(trn_map_cfg_auto(&c, &g, 1.0f, auto_ws, wb, &sh), TRN_OK);
-    printf("auto: relief sigma_H %.4f m (rule %.4f): zbin %.4f x %d\n", sh, s, (double)c.terrain.zbin_m, c.terrain.nz);
+    printf("auto: relief sigma_H %.4f m (rule %.4f): zbin %.4f x %d\n", sh, s,
+           (double)c.terrain.zbin_m, c.terrain.nz);
     assert_true(fabs(sh - s) < 1e-9 * s);
     assert_true(sh / 2.0 > 0.1 && sh / 2.0 < 1.0);
     assert_true(c.terrain.zbin_m == (float)(sh / 2.0));
     assert_int_equal(c.terrain.nz, 17);
-    assert_true(c.terrain.cell_m == 1.0f && c.terrain.highpass_half_m == 10.0f && c.sigma_m == 1.0f);
+    assert_true(c.terrain.cell_m == 1.0f && c.terrain.highpass_half_m == 10.0f &&
+                c.sigma_m == 1.0f);
     assert_true(c.noise_m == 0.01f && c.noise_k_per_m == 0.0004f);
     assert_int_equal(c.local_highpass, TRN_LOCAL_HP_MAP);
     assert_int_equal(c.refine, 1);
@@ -864,13 +939,15 @@ static void test_cfg_auto_regimes(void **state)
     /* the same DEM read at 10 m cells, range-independent noise: relief regime */
     c.noise_k_per_m = 0.0f;
     assert_int_equal(trn_map_cfg_auto(&c, &g, 10.0f, auto_ws, wb, &sh), TRN_OK);
-    assert_true(c.terrain.cell_m == 10.0f && c.terrain.highpass_half_m == 100.0f && c.sigma_m == 10.0f);
+    assert_true(c.terrain.cell_m == 10.0f && c.terrain.highpass_half_m == 100.0f &&
+                c.sigma_m == 10.0f);
     assert_true(c.terrain.zbin_m == (float)(sh / 2.0));
     assert_int_equal(c.terrain.nz, 17);
     /* with the range term, s(100 m) = 4.01 m: the noise floor wins */
     c.noise_k_per_m = 0.0004f;
     assert_int_equal(trn_map_cfg_auto(&c, &g, 10.0f, auto_ws, wb, &sh), TRN_OK);
-    assert_true(sh / 2.0 < 2.0 * 4.01 && c.terrain.zbin_m == (float)(2.0 * ((double)0.01f + (double)0.0004f * 1.0e4)));
+    assert_true(sh / 2.0 < 2.0 * 4.01 &&
+                c.terrain.zbin_m == (float)(2.0 * ((double)0.01f + (double)0.0004f * 1.0e4)));
     assert_int_equal(c.terrain.nz, 16);
     /* NaN cells are ignored */
     make_global(&g);
@@ -898,7 +975,8 @@ static void test_cfg_auto_regimes(void **state)
     assert_int_equal(trn_map_cfg_auto(&c, &g, 1.0f, auto_ws, wb, &sh), TRN_OK);
     assert_int_equal(trn_map_cfg_auto(&c, &g, 1.0f, auto_ws, wb - 1u, &sh), TRN_E_WORKSPACE);
     assert_true(wb + 8u <= sizeof auto_ws); /* misaligned, large enough */
-    assert_int_equal(trn_map_cfg_auto(&c, &g, 1.0f, auto_ws + 8, sizeof auto_ws - 8u, &sh), TRN_E_WORKSPACE);
+    assert_int_equal(trn_map_cfg_auto(&c, &g, 1.0f, auto_ws + 8, sizeof auto_ws - 8u, &sh),
+                     TRN_E_WORKSPACE);
     g.width = 0;
     assert_int_equal(trn_map_cfg_auto(&c, &g, 1.0f, auto_ws, wb, &sh), TRN_E_SIZE);
     g.width = GW;
@@ -961,14 +1039,16 @@ static void test_map_build_heights(void **state)
                     map.lowpass.height == N);
         for (y = 0; y < N; ++y) {
             for (x = 0; x < N; ++x) {
-                float v = dem[y * N + x], h = TRN_GRID_AT(&map.heights, x, y), lp = TRN_GRID_AT(&map.lowpass, x, y);
+                float v = dem[y * N + x], h = TRN_GRID_AT(&map.heights, x, y),
+                      lp = TRN_GRID_AT(&map.lowpass, x, y);
                 if (!isfinite(v)) {
                     assert_true(isnan(h) && isnan(lp));
                     continue;
                 }
                 assert_true(h == v && isfinite(lp));
                 /* a whole 7 x 7 box clear of the missing cells: plane in, plane out */
-                if (x >= 3 && y >= 3 && x < N - 3 && y < N - 3 && !(abs(x - 4) <= 3 && abs(y - 3) <= 3) &&
+                if (x >= 3 && y >= 3 && x < N - 3 && y < N - 3 &&
+                    !(abs(x - 4) <= 3 && abs(y - 3) <= 3) &&
                     !(x >= 27 && y >= 27 && x <= 34 && y <= 34)) {
                     assert_true(fabs((double)lp - (double)v) < 1e-4);
                 }
@@ -1030,14 +1110,24 @@ static void test_corrupt_heights(void **state)
         case 4: bad.lowpass.width = GW - 1; break;
         case 5: bad.lowpass.height = GW - 1; break;
         case 6: bad.lowpass.stride = GW - 1; break;
-        case 7: bad.heights.width = GW + 1; bad.heights.stride = GW + 1; break;
-        case 8: bad.cfg.refine = 0; bad.heights.data = NULL; break; /* still TRN_LOCAL_HP_MAP */
-        default: bad.cfg.local_highpass = TRN_LOCAL_HP_BOX; bad.lowpass.data = NULL; break; /* still refine */
+        case 7:
+            bad.heights.width = GW + 1;
+            bad.heights.stride = GW + 1;
+            break;
+        case 8:
+            bad.cfg.refine = 0;
+            bad.heights.data = NULL;
+            break; /* still TRN_LOCAL_HP_MAP */
+        default:
+            bad.cfg.local_highpass = TRN_LOCAL_HP_BOX;
+            bad.lowpass.data = NULL;
+            break; /* still refine */
         }
         assert_int_equal(trn_localize_workspace_bytes(&bad, &win), 0u);
         assert_int_equal(trn_localize_dem_workspace_bytes(&bad, LW, LW, MAXPTS, &win), 0u);
         assert_int_equal(trn_localize_points(&bad, pts, 2, &win, ws, sizeof ws, &res), TRN_E_ARG);
-        assert_int_equal(trn_localize_dem(&bad, &l, LR, LR, MAXPTS, &win, ws, sizeof ws, &res), TRN_E_ARG);
+        assert_int_equal(trn_localize_dem(&bad, &l, LR, LR, MAXPTS, &win, ws, sizeof ws, &res),
+                         TRN_E_ARG);
     }
     /* neither needed: the paper's map runs without them */
     bad = w.map;
@@ -1073,21 +1163,26 @@ static void test_localize_dem_statuses(void **state)
     assert_int_equal(trn_localize_dem(&w.map, &l, LR, LR, MAXPTS, &win, ws, wb, &res), TRN_OK);
     assert_true(res.ix == 48 && res.iy == 48 && res.refined == 1 && fabs(res.x - 48.0) < 1e-4);
     assert_int_equal(trn_localize_dem(NULL, &l, LR, LR, MAXPTS, &win, ws, wb, &res), TRN_E_NULL);
-    assert_int_equal(trn_localize_dem(&w.map, NULL, LR, LR, MAXPTS, &win, ws, wb, &res), TRN_E_NULL);
+    assert_int_equal(trn_localize_dem(&w.map, NULL, LR, LR, MAXPTS, &win, ws, wb, &res),
+                     TRN_E_NULL);
     assert_int_equal(trn_localize_dem(&w.map, &l, LR, LR, MAXPTS, NULL, ws, wb, &res), TRN_E_NULL);
-    assert_int_equal(trn_localize_dem(&w.map, &l, LR, LR, MAXPTS, &win, NULL, wb, &res), TRN_E_NULL);
+    assert_int_equal(trn_localize_dem(&w.map, &l, LR, LR, MAXPTS, &win, NULL, wb, &res),
+                     TRN_E_NULL);
     assert_int_equal(trn_localize_dem(&w.map, &l, LR, LR, MAXPTS, &win, ws, wb, NULL), TRN_E_NULL);
     big = l;
     big.width = 0;
-    assert_int_equal(trn_localize_dem(&w.map, &big, LR, LR, MAXPTS, &win, ws, wb, &res), TRN_E_SIZE);
+    assert_int_equal(trn_localize_dem(&w.map, &big, LR, LR, MAXPTS, &win, ws, wb, &res),
+                     TRN_E_SIZE);
     assert_int_equal(trn_localize_dem(&w.map, &l, LR, LR, 0, &win, ws, wb, &res), TRN_E_ARG);
     assert_int_equal(trn_localize_dem(&w.map, &l, LR, LR, MAXPTS, &off, ws, wb, &res), TRN_E_RANGE);
-    assert_int_equal(trn_localize_dem(&w.map, &l, LR, LR, MAXPTS, &win, ws, wb - 1u, &res), TRN_E_WORKSPACE);
+    assert_int_equal(trn_localize_dem(&w.map, &l, LR, LR, MAXPTS, &win, ws, wb - 1u, &res),
+                     TRN_E_WORKSPACE);
     assert_int_equal(trn_localize_dem(&w.map, &l, LR, LR, 10, &win, ws, wb, &res), TRN_E_CAPACITY);
     for (i = 0; i < LW * LW; ++i) {
         l_data[i] = NAN;
     }
-    assert_int_equal(trn_localize_dem(&w.map, &l, LR, LR, MAXPTS, &win, ws, wb, &res), TRN_E_NODATA);
+    assert_int_equal(trn_localize_dem(&w.map, &l, LR, LR, MAXPTS, &win, ws, wb, &res),
+                     TRN_E_NODATA);
     /* TRN_E_ILLCOND: test_refine_failure_is_illcond */
     nat_free(&w);
 }
@@ -1134,7 +1229,8 @@ static void test_refine_grid_edges(void **state)
     }
     assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 90, 88, &c, &out), TRN_OK);
     assert_int_equal(out.n_seen, expect);
-    assert_true(fabs(out.x - 90.0) < 1e-4 && fabs(out.y - 88.0) < 1e-4 && fabs(out.dz_m - 1.5) < 1e-3);
+    assert_true(fabs(out.x - 90.0) < 1e-4 && fabs(out.y - 88.0) < 1e-4 &&
+                fabs(out.dz_m - 1.5) < 1e-3);
     /* near the origin: cells at negative columns and rows (nonsense there) */
     (void)make_wedge(&l, 5.0, 6.0, 0.0, -3.0 * PI / 4.0);
     for (expect = 0, y = 0; y < LW; ++y) {
@@ -1264,13 +1360,15 @@ static void test_refine_iteration_limits(void **state)
         for (x = 0; x < LW; ++x) {
             if (isfinite(l_data[y * LW + x])) {
                 int gx = 40 + x - LR, gy = 40 + y - LR;
-                double d2 = g_data[gy * GW + gx + 1] - 2.0 * g_data[gy * GW + gx] + g_data[gy * GW + gx - 1];
+                double d2 = g_data[gy * GW + gx + 1] - 2.0 * g_data[gy * GW + gx] +
+                            g_data[gy * GW + gx - 1];
                 l_data[y * LW + x] = (float)(g_data[gy * GW + gx] - eps * d2);
             }
         }
     }
     assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 40, &c, &out), TRN_OK);
-    printf("kink at a cell edge: %d iterations, stopped at (%.4f, %.4f)\n", out.iterations, out.x, out.y);
+    printf("kink at a cell edge: %d iterations, stopped at (%.4f, %.4f)\n", out.iterations, out.x,
+           out.y);
     /* bilinear sampling: 12 iterations, stopped at (40.025, 40.010); with the
      * bicubic sampling the cost is smooth at the edge and it converges */
     assert_true(out.iterations >= 1 && out.iterations <= TRN_REFINE_MAX_ITER);
@@ -1291,28 +1389,47 @@ static void test_refine_args(void **state)
     (void)state;
     make_global(&g);
     (void)make_wedge(&l, 40.0, 40.0, 0.0, 0.0);
-    b = c; b.cell_m = 1000.0f; assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 40, &b, &out), TRN_OK);
-    b = c; b.cell_m = 1000.5f; assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 40, &b, &out), TRN_E_ARG);
-    b = c; b.cell_m = NAN; assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 40, &b, &out), TRN_E_ARG);
-    b = c; b.noise_m = 1000.0f; assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 40, &b, &out), TRN_OK);
-    b = c; b.noise_m = 1000.5f; assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 40, &b, &out), TRN_E_ARG);
-    b = c; b.noise_k_per_m = 1000.0f; assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 40, &b, &out), TRN_OK);
-    b = c; b.noise_k_per_m = 1000.5f; assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 40, &b, &out), TRN_E_ARG);
-    b = c; b.noise_k_per_m = -1.0f; assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 40, &b, &out), TRN_E_ARG);
+    b = c;
+    b.cell_m = 1000.0f;
+    assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 40, &b, &out), TRN_OK);
+    b = c;
+    b.cell_m = 1000.5f;
+    assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 40, &b, &out), TRN_E_ARG);
+    b = c;
+    b.cell_m = NAN;
+    assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 40, &b, &out), TRN_E_ARG);
+    b = c;
+    b.noise_m = 1000.0f;
+    assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 40, &b, &out), TRN_OK);
+    b = c;
+    b.noise_m = 1000.5f;
+    assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 40, &b, &out), TRN_E_ARG);
+    b = c;
+    b.noise_k_per_m = 1000.0f;
+    assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 40, &b, &out), TRN_OK);
+    b = c;
+    b.noise_k_per_m = 1000.5f;
+    assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 40, &b, &out), TRN_E_ARG);
+    b = c;
+    b.noise_k_per_m = -1.0f;
+    assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 40, &b, &out), TRN_E_ARG);
     assert_int_equal(trn_refine_pose(&g, &l, -TRN_MAX_DIM, LR, 40, 40, &c, &out), TRN_E_NODATA);
     assert_int_equal(trn_refine_pose(&g, &l, -TRN_MAX_DIM - 1, LR, 40, 40, &c, &out), TRN_E_ARG);
     assert_int_equal(trn_refine_pose(&g, &l, LR, -TRN_MAX_DIM, 40, 40, &c, &out), TRN_E_NODATA);
     assert_int_equal(trn_refine_pose(&g, &l, LR, -TRN_MAX_DIM - 1, 40, 40, &c, &out), TRN_E_ARG);
-    assert_int_equal(trn_refine_pose(&g, &l, LW - 1 + TRN_MAX_DIM, LR, 40, 40, &c, &out), TRN_E_NODATA);
+    assert_int_equal(trn_refine_pose(&g, &l, LW - 1 + TRN_MAX_DIM, LR, 40, 40, &c, &out),
+                     TRN_E_NODATA);
     assert_int_equal(trn_refine_pose(&g, &l, LW + TRN_MAX_DIM, LR, 40, 40, &c, &out), TRN_E_ARG);
-    assert_int_equal(trn_refine_pose(&g, &l, LR, LW - 1 + TRN_MAX_DIM, 40, 40, &c, &out), TRN_E_NODATA);
+    assert_int_equal(trn_refine_pose(&g, &l, LR, LW - 1 + TRN_MAX_DIM, 40, 40, &c, &out),
+                     TRN_E_NODATA);
     assert_int_equal(trn_refine_pose(&g, &l, LR, LW + TRN_MAX_DIM, 40, 40, &c, &out), TRN_E_ARG);
     assert_int_equal(trn_refine_pose(&g, &l, LR, LR, -1, 40, &c, &out), TRN_E_RANGE);
     assert_true(out.x == -1.0 && isinf(out.cov_cells[0]));
     assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, -1, &c, &out), TRN_E_RANGE);
     assert_int_equal(trn_refine_pose(&g, &l, LR, LR, GW, 40, &c, &out), TRN_E_RANGE);
     assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, GW, &c, &out), TRN_E_RANGE);
-    assert_int_equal(trn_refine_pose(&g, &l, LR, LR, GW - 1, GW - 1, &c, &out), TRN_E_NODATA); /* wedge off the grid */
+    assert_int_equal(trn_refine_pose(&g, &l, LR, LR, GW - 1, GW - 1, &c, &out),
+                     TRN_E_NODATA); /* wedge off the grid */
     bad = l;
     bad.stride = LW - 1;
     assert_int_equal(trn_refine_pose(&g, &bad, LR, LR, 40, 40, &c, &out), TRN_E_SIZE);

@@ -159,17 +159,25 @@ static void test_geom_check(void **state)
     (void)state;
     assert_int_equal(trn_mast_geom_check(&g), TRN_OK);
     assert_int_equal(trn_mast_geom_check(NULL), TRN_E_NULL);
-    b = g; b.cam_up_m = NAN;
+    b = g;
+    b.cam_up_m = NAN;
     assert_int_equal(trn_mast_geom_check(&b), TRN_E_ARG);
-    b = g; b.pan_min_rad = 1.0f; b.pan_max_rad = 0.5f;
+    b = g;
+    b.pan_min_rad = 1.0f;
+    b.pan_max_rad = 0.5f;
     assert_int_equal(trn_mast_geom_check(&b), TRN_E_ARG);
-    b = g; b.pan_max_rad = 3.2f;
+    b = g;
+    b.pan_max_rad = 3.2f;
     assert_int_equal(trn_mast_geom_check(&b), TRN_E_ARG);
-    b = g; b.tilt_min_rad = -1.6f;
+    b = g;
+    b.tilt_min_rad = -1.6f;
     assert_int_equal(trn_mast_geom_check(&b), TRN_E_ARG);
-    b = g; b.tilt_min_rad = 0.5f; b.tilt_max_rad = 0.4f;
+    b = g;
+    b.tilt_min_rad = 0.5f;
+    b.tilt_max_rad = 0.4f;
     assert_int_equal(trn_mast_geom_check(&b), TRN_E_ARG);
-    b = g; b.pan_x_m = INFINITY;
+    b = g;
+    b.pan_x_m = INFINITY;
     assert_int_equal(trn_mast_geom_check(&b), TRN_E_ARG);
 }
 
@@ -281,8 +289,10 @@ static void test_round_trip_boresight(void **state)
         }
         dist = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
         assert_true(c[2] > 0.0f);
-        if (fabs(c[0]) / dist > worst) worst = fabs(c[0]) / dist;
-        if (fabs(c[1]) / dist > worst) worst = fabs(c[1]) / dist;
+        if (fabs(c[0]) / dist > worst)
+            worst = fabs(c[0]) / dist;
+        if (fabs(c[1]) / dist > worst)
+            worst = fabs(c[1]) / dist;
         /* off-axis error, as an angle: float rounding only */
         assert_true(fabsf(c[0]) < 1e-4f * dist + 1e-4f);
         assert_true(fabsf(c[1]) < 1e-4f * dist + 1e-4f);
@@ -308,12 +318,12 @@ static void test_local_dem_hand(void **state)
     trn_rover_pose_t p = {100.0f, 200.0f, 0.0f, 1.0f}; /* heading does not matter */
     trn_local_dem_cfg_t cfg = {0.5f, 10, 20, 1};
     trn_vec3f_t pts[7] = {
-        {100.0f, 200.0f, 1.0f},   /* rover cell (10, 20) */
-        {100.2f, 200.2f, 3.0f},   /* same cell, higher */
-        {100.1f, 199.9f, 2.0f},   /* same cell, lower */
-        {101.0f, 199.0f, -1.0f},  /* 2 east, 2 south: (12, 18) */
-        {NAN, 200.0f, 5.0f},      /* skipped */
-        {50.0f, 200.0f, 5.0f},    /* 100 cells west: off the grid */
+        {100.0f, 200.0f, 1.0f},    /* rover cell (10, 20) */
+        {100.2f, 200.2f, 3.0f},    /* same cell, higher */
+        {100.1f, 199.9f, 2.0f},    /* same cell, lower */
+        {101.0f, 199.0f, -1.0f},   /* 2 east, 2 south: (12, 18) */
+        {NAN, 200.0f, 5.0f},       /* skipped */
+        {50.0f, 200.0f, 5.0f},     /* 100 cells west: off the grid */
         {100.0f, 200.0f, INFINITY} /* skipped */
     };
     size_t used = 0;
@@ -457,7 +467,8 @@ static void test_localize_from_mast_views(void **state)
     const trn_rover_pose_t truth = {9.63f, 9.47f, 0.0f, 0.5f};
     trn_rover_pose_t known = truth; /* what the rover knows: heading only */
     trn_local_dem_cfg_t dcfg = {0.1f, L / 2, L / 2, 1};
-    size_t nrocks = (size_t)(N * N * cell * cell * 0.15 / (PI * 0.15 * 0.15)), mb, wb, n = 0, used = 0;
+    size_t nrocks = (size_t)(N * N * cell * cell * 0.15 / (PI * 0.15 * 0.15)), mb, wb, n = 0,
+           used = 0;
     void *mbuf, *ws;
     int view;
     trn_status_t st;
@@ -493,8 +504,12 @@ static void test_localize_from_mast_views(void **state)
         assert_int_equal(trn_can_angle_to_raw_for_test(pan, &pan_raw), 0);
         assert_int_equal(trn_can_angle_to_raw_for_test(tilt, &tilt_raw), 0);
         /* the world as the head sees it at the measured angles */
-        assert_int_equal(trn_mast_camera_to_map(&geo, &truth, pan_raw * 1e-4f, tilt_raw * 1e-4f, &Ttrue), TRN_OK);
-        assert_int_equal(trn_mast_camera_to_map(&geo, &known, pan_raw * 1e-4f, tilt_raw * 1e-4f, &Tknown), TRN_OK);
+        assert_int_equal(
+            trn_mast_camera_to_map(&geo, &truth, pan_raw * 1e-4f, tilt_raw * 1e-4f, &Ttrue),
+            TRN_OK);
+        assert_int_equal(
+            trn_mast_camera_to_map(&geo, &known, pan_raw * 1e-4f, tilt_raw * 1e-4f, &Tknown),
+            TRN_OK);
         /* stereo footprint: terrain within 1.6 m of the target, 4 cm spacing */
         for (iy = -1.6; iy <= 1.6; iy += 0.04) {
             for (ix = -1.6; ix <= 1.6; ix += 0.04) {
@@ -533,9 +548,11 @@ static void test_localize_from_mast_views(void **state)
     assert_true(wb > 0);
     ws = malloc(wb);
     assert_non_null(ws);
-    st = trn_localize_dem(&map, &lg, L / 2, L / 2, (size_t)L * L * cfg.terrain.nz, &win, ws, wb, &res);
+    st = trn_localize_dem(&map, &lg, L / 2, L / 2, (size_t)L * L * cfg.terrain.nz, &win, ws, wb,
+                          &res);
     assert_true(st == TRN_OK || st == TRN_E_ILLCOND);
-    print_message("mast views: %zu points, estimate (%.2f, %.2f) cells, truth (%.2f, %.2f), sigma %.3f/%.3f m, "
+    print_message("mast views: %zu points, estimate (%.2f, %.2f) cells, truth (%.2f, %.2f), sigma "
+                  "%.3f/%.3f m, "
                   "P_fail %.3g\n",
                   n, res.x, res.y, truth.x_m / cell, truth.y_m / cell, res.sigma_x_m, res.sigma_y_m,
                   res.failure_probability);

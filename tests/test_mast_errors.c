@@ -239,17 +239,35 @@ static void test_local_dem_checks_and_skips(void **state)
     (void)state;
     assert_int_equal(trn_grid_f32_init(&dem, cells, 25u, 5, 5), TRN_OK);
     /* in the grid: the rover cell and one cell north-east */
-    pts[0].x = 10.0f; pts[0].y = 20.0f; pts[0].z = 1.0f;
-    pts[1].x = 10.5f; pts[1].y = 20.5f; pts[1].z = 2.0f;
+    pts[0].x = 10.0f;
+    pts[0].y = 20.0f;
+    pts[0].z = 1.0f;
+    pts[1].x = 10.5f;
+    pts[1].y = 20.5f;
+    pts[1].z = 2.0f;
     /* off each edge: west, east, south, north */
-    pts[2].x = 8.5f; pts[2].y = 20.0f; pts[2].z = 3.0f;
-    pts[3].x = 11.5f; pts[3].y = 20.0f; pts[3].z = 3.0f;
-    pts[4].x = 10.0f; pts[4].y = 18.5f; pts[4].z = 3.0f;
-    pts[5].x = 10.0f; pts[5].y = 21.5f; pts[5].z = 3.0f;
+    pts[2].x = 8.5f;
+    pts[2].y = 20.0f;
+    pts[2].z = 3.0f;
+    pts[3].x = 11.5f;
+    pts[3].y = 20.0f;
+    pts[3].z = 3.0f;
+    pts[4].x = 10.0f;
+    pts[4].y = 18.5f;
+    pts[4].z = 3.0f;
+    pts[5].x = 10.0f;
+    pts[5].y = 21.5f;
+    pts[5].z = 3.0f;
     /* farther than 2 TRN_MAX_DIM cells in x, then in y; not finite */
-    pts[6].x = 1.0e9f; pts[6].y = 20.0f; pts[6].z = 3.0f;
-    pts[7].x = 10.0f; pts[7].y = -1.0e9f; pts[7].z = 3.0f;
-    pts[8].x = 10.0f; pts[8].y = 20.0f; pts[8].z = NAN;
+    pts[6].x = 1.0e9f;
+    pts[6].y = 20.0f;
+    pts[6].z = 3.0f;
+    pts[7].x = 10.0f;
+    pts[7].y = -1.0e9f;
+    pts[7].z = 3.0f;
+    pts[8].x = 10.0f;
+    pts[8].y = 20.0f;
+    pts[8].z = NAN;
     assert_int_equal(trn_mast_local_dem(pts, 9u, &p, &c, &dem, &used), TRN_OK);
     assert_int_equal((int)used, 2);
     assert_true(TRN_GRID_AT(&dem, 2, 2) == 1.0f);
@@ -310,14 +328,30 @@ static void test_local_dem_mean(void **state)
     /* rover cell: 1, 2, 6 (mean 3); one cell north-east: 4000.25, 4000.75
      * (mean 4000.5: absolute heights keep their precision); off the grid;
      * not finite */
-    pts[0].x = 10.0f; pts[0].y = 20.0f; pts[0].z = 1.0f;
-    pts[1].x = 10.1f; pts[1].y = 19.9f; pts[1].z = 2.0f;
-    pts[2].x = 9.9f; pts[2].y = 20.2f; pts[2].z = 6.0f;
-    pts[3].x = 10.5f; pts[3].y = 20.5f; pts[3].z = 4000.25f;
-    pts[4].x = 10.6f; pts[4].y = 20.4f; pts[4].z = 4000.75f;
-    pts[5].x = 8.5f; pts[5].y = 20.0f; pts[5].z = 9.0f;
-    pts[6].x = 10.0f; pts[6].y = 20.0f; pts[6].z = NAN;
-    pts[7].x = 1.0e9f; pts[7].y = 20.0f; pts[7].z = 9.0f;
+    pts[0].x = 10.0f;
+    pts[0].y = 20.0f;
+    pts[0].z = 1.0f;
+    pts[1].x = 10.1f;
+    pts[1].y = 19.9f;
+    pts[1].z = 2.0f;
+    pts[2].x = 9.9f;
+    pts[2].y = 20.2f;
+    pts[2].z = 6.0f;
+    pts[3].x = 10.5f;
+    pts[3].y = 20.5f;
+    pts[3].z = 4000.25f;
+    pts[4].x = 10.6f;
+    pts[4].y = 20.4f;
+    pts[4].z = 4000.75f;
+    pts[5].x = 8.5f;
+    pts[5].y = 20.0f;
+    pts[5].z = 9.0f;
+    pts[6].x = 10.0f;
+    pts[6].y = 20.0f;
+    pts[6].z = NAN;
+    pts[7].x = 1.0e9f;
+    pts[7].y = 20.0f;
+    pts[7].z = 9.0f;
     assert_int_equal(trn_mast_local_dem_mean(pts, 8u, &p, &c, &dem, cnt, 25u, &used), TRN_OK);
     assert_int_equal((int)used, 5);
     assert_true(fabsf(TRN_GRID_AT(&dem, 2, 2) - 3.0f) < 1e-6f);
@@ -333,9 +367,11 @@ static void test_local_dem_mean(void **state)
     assert_int_equal(trn_mast_local_dem(pts, 8u, &p, &c, &dem, &used), TRN_OK);
     assert_true(TRN_GRID_AT(&dem, 2, 2) == 6.0f);
     /* statuses */
-    assert_int_equal(trn_mast_local_dem_mean(&pts[5], 3u, &p, &c, &dem, cnt, 25u, NULL), TRN_E_NODATA);
+    assert_int_equal(trn_mast_local_dem_mean(&pts[5], 3u, &p, &c, &dem, cnt, 25u, NULL),
+                     TRN_E_NODATA);
     assert_int_equal(trn_mast_local_dem_mean(pts, 1u, &p, &c, &dem, NULL, 25u, &used), TRN_E_NULL);
-    assert_int_equal(trn_mast_local_dem_mean(pts, 1u, &p, &c, &dem, cnt, 24u, &used), TRN_E_WORKSPACE);
+    assert_int_equal(trn_mast_local_dem_mean(pts, 1u, &p, &c, &dem, cnt, 24u, &used),
+                     TRN_E_WORKSPACE);
     assert_int_equal(trn_mast_local_dem_mean(pts, 1u, NULL, &c, &dem, cnt, 25u, &used), TRN_E_NULL);
     assert_int_equal(trn_mast_local_dem_mean(NULL, 1u, &p, &c, &dem, cnt, 25u, &used), TRN_E_NULL);
     cb = c;

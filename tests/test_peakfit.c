@@ -45,8 +45,8 @@ static void gaussian_patch(double c, double mx, double my, double sx, double sy,
     for (y = -1; y <= 1; ++y) {
         for (x = -1; x <= 1; ++x) {
             const double ex = (double)x - mx, ey = (double)y - my;
-            ll[(y + 1) * 3 + (x + 1)] =
-                c - 0.5 * (pxx * ex * ex + 2.0 * pxy * ex * ey + pyy * ey * ey);
+            ll[(y + 1) * 3 + (x + 1)] = c -
+                                        0.5 * (pxx * ex * ex + 2.0 * pxy * ex * ey + pyy * ey * ey);
         }
     }
 }
@@ -59,8 +59,8 @@ static void quad_patch(double c0, double c1, double c2, double c3, double c4, do
     for (y = -1; y <= 1; ++y) {
         for (x = -1; x <= 1; ++x) {
             const double fx = (double)x, fy = (double)y;
-            ll[(y + 1) * 3 + (x + 1)] =
-                c0 + c1 * fx + c2 * fy + c3 * fx * fx + c4 * fx * fy + c5 * fy * fy;
+            ll[(y + 1) * 3 + (x + 1)] = c0 + c1 * fx + c2 * fy + c3 * fx * fx + c4 * fx * fy +
+                                        c5 * fy * fy;
         }
     }
 }
@@ -144,8 +144,9 @@ static void test_centre_subtraction(void **state)
         for (y = -1; y <= 1; ++y) {
             for (x = -1; x <= 1; ++x) {
                 const double ex = (double)x - mx, ey = (double)y - my;
-                ll[(y + 1) * 3 + (x + 1)] =
-                    offsets[i] - 0.5 * (pxx * ex * ex + 2.0 * pxy * ex * ey + pyy * ey * ey);
+                ll[(y + 1) * 3 + (x + 1)] = offsets[i] -
+                                            0.5 * (pxx * ex * ex + 2.0 * pxy * ex * ey +
+                                                   pyy * ey * ey);
             }
         }
         st = trn_peak_fit(ll, &p);
@@ -190,8 +191,7 @@ static void test_gaussian_recovery(void **state)
         /* internal consistency of the reported covariance */
         e = fmax(fabs(p.var_x - p.sigma_x * p.sigma_x) / p.var_x,
                  fmax(fabs(p.var_y - p.sigma_y * p.sigma_y) / p.var_y,
-                      fabs(p.cov_xy - p.rho * p.sigma_x * p.sigma_y) /
-                              (p.sigma_x * p.sigma_y)));
+                      fabs(p.cov_xy - p.rho * p.sigma_x * p.sigma_y) / (p.sigma_x * p.sigma_y)));
         e_var = fmax(e_var, e);
         if (!(fabs(p.dx - mx) <= RECOVERY_TOL && fabs(p.dy - my) <= RECOVERY_TOL &&
               fabs(p.sigma_x - sx) <= RECOVERY_TOL * sx &&
@@ -263,9 +263,8 @@ static void test_curvature_noise_floor(void **state)
         double c, lambda;
         trn_status_t st;
     } cases[] = {
-        {0.0, 1e-12, TRN_OK},   {0.0, 1e-16, TRN_E_ILLCOND},
-        {-1e4, 1e-8, TRN_OK},   {-1e4, 1e-12, TRN_E_ILLCOND},
-        {-1e9, 1e-3, TRN_OK},   {-1e9, 1e-7, TRN_E_ILLCOND},
+        {0.0, 1e-12, TRN_OK},         {0.0, 1e-16, TRN_E_ILLCOND}, {-1e4, 1e-8, TRN_OK},
+        {-1e4, 1e-12, TRN_E_ILLCOND}, {-1e9, 1e-3, TRN_OK},        {-1e9, 1e-7, TRN_E_ILLCOND},
     };
     size_t i;
     (void)state;
@@ -287,8 +286,8 @@ static void test_curvature_noise_floor(void **state)
 
 static void test_illcond_peak_outside(void **state)
 {
-    static const double mu[][2] = {{1.5, 0.0}, {0.0, -2.0}, {1.2, 1.2}, {-1.01, 0.0},
-                                   {0.0, 1.01}, {-3.0, 4.0}};
+    static const double mu[][2] = {{1.5, 0.0},   {0.0, -2.0}, {1.2, 1.2},
+                                   {-1.01, 0.0}, {0.0, 1.01}, {-3.0, 4.0}};
     double ll[9];
     size_t i;
     (void)state;

@@ -122,7 +122,8 @@ static void test_lcan_decode_error_table(void **state)
         {CAN_ERR_CRTL, CAN_ERR_CRTL_TX_OVERFLOW, TRN_LCAN_ERROR_ACTIVE, TRN_LCAN_ERROR_ACTIVE, 1},
         {CAN_ERR_BUSOFF, 0, TRN_LCAN_ERROR_PASSIVE, TRN_LCAN_BUS_OFF, 0},
         /* bus-off wins over anything else in the same frame */
-        {CAN_ERR_BUSOFF | CAN_ERR_CRTL, CAN_ERR_CRTL_ACTIVE, TRN_LCAN_ERROR_ACTIVE, TRN_LCAN_BUS_OFF, 0},
+        {CAN_ERR_BUSOFF | CAN_ERR_CRTL, CAN_ERR_CRTL_ACTIVE, TRN_LCAN_ERROR_ACTIVE,
+         TRN_LCAN_BUS_OFF, 0},
         {CAN_ERR_RESTARTED, 0, TRN_LCAN_BUS_OFF, TRN_LCAN_ERROR_ACTIVE, 0},
         /* classes that say nothing about the state keep it */
         {CAN_ERR_PROT, 0, TRN_LCAN_ERROR_WARNING, TRN_LCAN_ERROR_WARNING, 0},

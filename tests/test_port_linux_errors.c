@@ -32,10 +32,7 @@
 #include "trn_port/linux_can.h"
 #include "trn_port/linux_gpio.h"
 
-static void pair(int sv[2])
-{
-    assert_int_equal(socketpair(AF_UNIX, SOCK_SEQPACKET, 0, sv), 0);
-}
+static void pair(int sv[2]) { assert_int_equal(socketpair(AF_UNIX, SOCK_SEQPACKET, 0, sv), 0); }
 
 static void put_frame(int fd, canid_t id, uint8_t dlc, uint8_t fill)
 {

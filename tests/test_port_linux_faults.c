@@ -38,15 +38,7 @@
 /* ------------------------------------------------------------------------ */
 /* one-shot faults                                                           */
 
-enum {
-    F_SEND,
-    F_RECV,
-    F_SET_VALUE,
-    F_GET_VALUE,
-    F_EVENT_WAIT,
-    F_EVENT_READ,
-    F_COUNT
-};
+enum { F_SEND, F_RECV, F_SET_VALUE, F_GET_VALUE, F_EVENT_WAIT, F_EVENT_READ, F_COUNT };
 
 static struct {
     int armed;
@@ -78,10 +70,7 @@ static int fire(int which)
     return 1;
 }
 
-static void faults_reset(void)
-{
-    memset(faults, 0, sizeof faults);
-}
+static void faults_reset(void) { memset(faults, 0, sizeof faults); }
 
 /* ------------------------------------------------------------------------ */
 /* send / recv: the real call unless armed                                   */
@@ -119,8 +108,8 @@ static union {
 } fake_chip_mem, fake_line_mem[FAKE_LINES];
 
 static struct {
-    int open;               /* chip open, not closed */
-    int value[FAKE_LINES];  /* line values (logical) */
+    int open;              /* chip open, not closed */
+    int value[FAKE_LINES]; /* line values (logical) */
     int requested[FAKE_LINES];
     unsigned events;        /* queued events on the deployed line */
     int event_type;         /* their type */
@@ -143,10 +132,10 @@ struct gpiod_chip *__wrap_gpiod_chip_open_lookup(const char *descr);
 void __wrap_gpiod_chip_close(struct gpiod_chip *chip);
 unsigned int __wrap_gpiod_chip_num_lines(struct gpiod_chip *chip);
 struct gpiod_line *__wrap_gpiod_chip_get_line(struct gpiod_chip *chip, unsigned int offset);
-int __wrap_gpiod_line_request_output_flags(struct gpiod_line *line, const char *consumer,
-                                           int flags, int default_val);
-int __wrap_gpiod_line_request_both_edges_events_flags(struct gpiod_line *line,
-                                                      const char *consumer, int flags);
+int __wrap_gpiod_line_request_output_flags(struct gpiod_line *line, const char *consumer, int flags,
+                                           int default_val);
+int __wrap_gpiod_line_request_both_edges_events_flags(struct gpiod_line *line, const char *consumer,
+                                                      int flags);
 void __wrap_gpiod_line_release(struct gpiod_line *line);
 int __wrap_gpiod_line_set_value(struct gpiod_line *line, int value);
 int __wrap_gpiod_line_get_value(struct gpiod_line *line);
@@ -180,8 +169,8 @@ struct gpiod_line *__wrap_gpiod_chip_get_line(struct gpiod_chip *chip, unsigned 
     return (struct gpiod_line *)(void *)&fake_line_mem[offset];
 }
 
-int __wrap_gpiod_line_request_output_flags(struct gpiod_line *line, const char *consumer,
-                                           int flags, int default_val)
+int __wrap_gpiod_line_request_output_flags(struct gpiod_line *line, const char *consumer, int flags,
+                                           int default_val)
 {
     unsigned i = line_index(line);
     (void)consumer;
@@ -191,8 +180,8 @@ int __wrap_gpiod_line_request_output_flags(struct gpiod_line *line, const char *
     return 0;
 }
 
-int __wrap_gpiod_line_request_both_edges_events_flags(struct gpiod_line *line,
-                                                      const char *consumer, int flags)
+int __wrap_gpiod_line_request_both_edges_events_flags(struct gpiod_line *line, const char *consumer,
+                                                      int flags)
 {
     (void)consumer;
     (void)flags;
@@ -200,10 +189,7 @@ int __wrap_gpiod_line_request_both_edges_events_flags(struct gpiod_line *line,
     return 0;
 }
 
-void __wrap_gpiod_line_release(struct gpiod_line *line)
-{
-    gp.requested[line_index(line)] = 0;
-}
+void __wrap_gpiod_line_release(struct gpiod_line *line) { gp.requested[line_index(line)] = 0; }
 
 int __wrap_gpiod_line_set_value(struct gpiod_line *line, int value)
 {

@@ -126,7 +126,8 @@ static void test_capture_rx_segment_longer_than_any_capture(void **state)
     g_seg[4 + 15] = (uint8_t)(TRN_PORT_MAX_CAPTURE_POINTS >> 8);
     assert_int_equal(trn_capture_rx_init(&g_rx), TRN_OK);
     assert_int_equal(trn_capture_rx_segment(&g_rx, g_seg, TRN_CAP_SEG_HEADER_BYTES + plen, &g_out,
-                                            &complete, &e), TRN_E_FORMAT);
+                                            &complete, &e),
+                     TRN_E_FORMAT);
     assert_int_equal(e, TRN_CAP_ERR_OVERFLOW);
     assert_int_equal(complete, 0);
     assert_int_equal(g_rx.active, 0u);

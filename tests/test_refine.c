@@ -32,7 +32,8 @@ static float l_data[LW * LW];
 
 static double surface(double x, double y)
 {
-    return 100.0 + 0.3 * x - 0.2 * y + 4.0 * sin(x * 0.37) * cos(y * 0.23) + 2.5 * sin(0.51 * x + 0.44 * y);
+    return 100.0 + 0.3 * x - 0.2 * y + 4.0 * sin(x * 0.37) * cos(y * 0.23) +
+           2.5 * sin(0.51 * x + 0.44 * y);
 }
 
 static double gauss(trn_rng_t *r)
@@ -58,8 +59,9 @@ static void make_global(trn_grid_f32_t *g)
 static double keysw(double t)
 {
     double u = fabs(t);
-    return u < 1.0 ? 1.5 * u * u * u - 2.5 * u * u + 1.0
-                   : u < 2.0 ? -0.5 * u * u * u + 2.5 * u * u - 4.0 * u + 2.0 : 0.0;
+    return u < 1.0   ? 1.5 * u * u * u - 2.5 * u * u + 1.0
+           : u < 2.0 ? -0.5 * u * u * u + 2.5 * u * u - 4.0 * u + 2.0
+                     : 0.0;
 }
 
 static double bilin(double x, double y)
@@ -112,7 +114,8 @@ static void test_exact_model(void **state)
     make_global(&g);
     for (i = 0; i < 50; ++i) {
         double tx = 24.0 + 12.0 * trn_rng_unit(&r), ty = 24.0 + 12.0 * trn_rng_unit(&r);
-        int ix = (int)floor(tx + 0.5) + (i % 3) - 1, iy = (int)floor(ty + 0.5); /* start up to 1.5 cells off */
+        int ix = (int)floor(tx + 0.5) + (i % 3) - 1,
+            iy = (int)floor(ty + 0.5); /* start up to 1.5 cells off */
         make_local(&l, tx, ty, -37.5, 0.0, &c, &r);
         assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, ix, iy, &c, &out), TRN_OK);
         worst = fmax(worst, fmax(fabs(out.x - tx), fabs(out.y - ty)));
@@ -135,7 +138,8 @@ static double lin(double x, double y)
 /* Weighted sum of squares of the bilinear surface at (bx, by) against the
  * bicubic heights at the estimate (x, y), the offset eliminated in closed
  * form: what interp_shift minimises. */
-static double shift_ss(const trn_refine_cfg_t *c, double model2, double x, double y, double bx, double by)
+static double shift_ss(const trn_refine_cfg_t *c, double model2, double x, double y, double bx,
+                       double by)
 {
     int i, j, m = LW / 2;
     double sw = 0.0, swr = 0.0, swrr = 0.0;
@@ -179,7 +183,8 @@ static void test_interp_shift(void **state)
         double bx, by, span = 1.0, m2;
         int z, i, j;
         make_local(&l, tx, ty, 3.0, 0.0, &c, &r);
-        assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, (int)floor(tx + 0.5), (int)floor(ty + 0.5), &c, &out),
+        assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, (int)floor(tx + 0.5),
+                                         (int)floor(ty + 0.5), &c, &out),
                          TRN_OK);
         m2 = out.model_m * out.model_m;
         bx = out.x;
@@ -199,13 +204,18 @@ static void test_interp_shift(void **state)
             }
             span /= 5.0;
         }
-        excess = fmax(excess, shift_ss(&c, m2, out.x, out.y, out.x + out.interp_shift[0], out.y + out.interp_shift[1]) /
-                                  shift_ss(&c, m2, out.x, out.y, bx, by) - 1.0);
-        worst = fmax(worst, fmax(fabs(out.interp_shift[0] - (bx - out.x)), fabs(out.interp_shift[1] - (by - out.y))));
+        excess = fmax(excess, shift_ss(&c, m2, out.x, out.y, out.x + out.interp_shift[0],
+                                       out.y + out.interp_shift[1]) /
+                                      shift_ss(&c, m2, out.x, out.y, bx, by) -
+                                  1.0);
+        worst = fmax(worst, fmax(fabs(out.interp_shift[0] - (bx - out.x)),
+                                 fabs(out.interp_shift[1] - (by - out.y))));
         least = fmin(least, hypot(out.interp_shift[0], out.interp_shift[1]));
     }
-    printf("interp shift: worst difference from brute force %.2e cells, sum of squares %.1e above its minimum; "
-           "least shift %.3f cells\n", worst, excess, least);
+    printf("interp shift: worst difference from brute force %.2e cells, sum of squares %.1e above "
+           "its minimum; "
+           "least shift %.3f cells\n",
+           worst, excess, least);
     /* a minimum on a cell edge (a kink of the bilinear surface) is flat
      * across it: the position agrees to 5e-3 cells, the objective to 1e-2 */
     assert_true(worst < 5e-3);
@@ -227,19 +237,23 @@ static void test_noise_coverage(void **state)
     trn_rng_seed(&r, 5);
     make_global(&g);
     for (i = 0; i < n; ++i) {
-        double tx = 24.0 + 12.0 * trn_rng_unit(&r), ty = 24.0 + 12.0 * trn_rng_unit(&r), ex, ey, det, m2;
+        double tx = 24.0 + 12.0 * trn_rng_unit(&r), ty = 24.0 + 12.0 * trn_rng_unit(&r), ex, ey,
+               det, m2;
         make_local(&l, tx, ty, 3.0, 1.0, &c, &r);
-        assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, (int)floor(tx + 0.5), (int)floor(ty + 0.5), &c,
-                                         &out),
+        assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, (int)floor(tx + 0.5),
+                                         (int)floor(ty + 0.5), &c, &out),
                          TRN_OK);
         ex = out.x - tx;
         ey = out.y - ty;
         /* the statistical part: the covariance less the interpolants'
          * systematic term (which the exact cubic model here does not need) */
         {
-            double c0 = out.cov_cells[0] - TRN_REFINE_SYS * out.interp_shift[0] * out.interp_shift[0];
-            double c1 = out.cov_cells[1] - TRN_REFINE_SYS * out.interp_shift[1] * out.interp_shift[1];
-            double c2 = out.cov_cells[2] - TRN_REFINE_SYS * out.interp_shift[0] * out.interp_shift[1];
+            double c0 = out.cov_cells[0] -
+                        TRN_REFINE_SYS * out.interp_shift[0] * out.interp_shift[0];
+            double c1 = out.cov_cells[1] -
+                        TRN_REFINE_SYS * out.interp_shift[1] * out.interp_shift[1];
+            double c2 = out.cov_cells[2] -
+                        TRN_REFINE_SYS * out.interp_shift[0] * out.interp_shift[1];
             det = c0 * c1 - c2 * c2;
             m2 = (c1 * ex * ex - 2.0 * c2 * ex * ey + c0 * ey * ey) / det;
             assert_true(out.cov_cells[0] >= c0 && out.cov_cells[1] >= c1);
@@ -248,8 +262,8 @@ static void test_noise_coverage(void **state)
         in[1] += m2 <= 4.0;
         in[2] += m2 <= 9.0;
     }
-    printf("noise coverage 1/2/3 sigma: %.1f / %.1f / %.1f %%\n", 100.0 * in[0] / n, 100.0 * in[1] / n,
-           100.0 * in[2] / n);
+    printf("noise coverage 1/2/3 sigma: %.1f / %.1f / %.1f %%\n", 100.0 * in[0] / n,
+           100.0 * in[1] / n, 100.0 * in[2] / n);
     assert_true(fabs(100.0 * in[0] / n - 39.3) < 8.0);
     assert_true(fabs(100.0 * in[1] / n - 86.5) < 6.0);
     assert_true(100.0 * in[2] / n > 95.0);
@@ -335,8 +349,8 @@ static void test_errors(void **state)
 /* trn_height_search: the best integer pose against a brute-force evaluation
  * of the documented likelihood (here in the test, in double), the
  * exclusion zone, and every status. */
-static double brute_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int px, int py, const trn_refine_cfg_t *c,
-                       double a)
+static double brute_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int px, int py,
+                       const trn_refine_cfg_t *c, double a)
 {
     /* K from the local spread, dz and m^2 as documented (all points, then clipped) */
     int x, y, cx = LW / 2, n = 0, pass;
@@ -345,7 +359,8 @@ static double brute_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int px,
         for (x = 0; x < LW; ++x) {
             double h = TRN_GRID_AT(l, x, y);
             if (isfinite(h)) {
-                if (n == 0) ref = h;
+                if (n == 0)
+                    ref = h;
                 s1 += h - ref;
                 s2 += (h - ref) * (h - ref);
                 ++n;
@@ -362,11 +377,13 @@ static double brute_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int px,
             for (x = 0; x < LW; ++x) {
                 double h = TRN_GRID_AT(l, x, y), rm, v, r, q;
                 int gx = px + x - cx, gy = py + y - cx;
-                if (!isfinite(h) || gx < 0 || gy < 0 || gx >= GW || gy >= GW) continue;
+                if (!isfinite(h) || gx < 0 || gy < 0 || gx >= GW || gy >= GW)
+                    continue;
                 rm = c->cell_m * sqrt((double)((x - cx) * (x - cx) + (y - cx) * (y - cx)));
                 v = pow(c->noise_m + c->noise_k_per_m * rm * rm, 2);
                 r = h - TRN_GRID_AT(g, gx, gy);
-                if (pass == 2 && fabs(r - d0) > 3.0 * sqrt(v + m0)) continue;
+                if (pass == 2 && fabs(r - d0) > 3.0 * sqrt(v + m0))
+                    continue;
                 sw += 1 / (v + m0);
                 swr += r / (v + m0);
                 q = 1 / ((v + m0) * (v + m0));
@@ -376,7 +393,8 @@ static double brute_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int px,
                 sqv += q * v;
                 ++m;
             }
-        if (m == 0) break;
+        if (m == 0)
+            break;
         dz = swr / sw;
         m2 = fmax(0.0, (sqrr - 2 * dz * sqr + dz * dz * sq - sqv) / sq);
     }
@@ -384,7 +402,8 @@ static double brute_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int px,
         for (x = 0; x < LW; ++x) {
             double h = TRN_GRID_AT(l, x, y), rm, v, u;
             int gx = px + x - cx, gy = py + y - cx;
-            if (!isfinite(h)) continue;
+            if (!isfinite(h))
+                continue;
             if (gx < 0 || gy < 0 || gx >= GW || gy >= GW) {
                 ll += log((1 - a) * k);
                 continue;
@@ -412,7 +431,8 @@ static void test_height_search(void **state)
     trn_rng_seed(&r, 9);
     make_global(&g);
     make_local(&l, 30.4, 29.7, 12.0, 1.0, &c, &r);
-    assert_int_equal(trn_height_search(&g, &l, LW / 2, LW / 2, &win, NULL, &c, 0.95f, 1.0, grid, &b), TRN_OK);
+    assert_int_equal(
+        trn_height_search(&g, &l, LW / 2, LW / 2, &win, NULL, &c, 0.95f, 1.0, grid, &b), TRN_OK);
     for (y = win.y0; y <= win.y1; ++y)
         for (x = win.x0; x <= win.x1; ++x) {
             double ll = brute_ll(&g, &l, x, y, &c, 0.95);
@@ -431,7 +451,8 @@ static void test_height_search(void **state)
     ex.cx = b.x;
     ex.cy = b.y;
     ex.radius = 2;
-    assert_int_equal(trn_height_search(&g, &l, LW / 2, LW / 2, &win, &ex, &c, 0.95f, 1.0, NULL, &b2), TRN_OK);
+    assert_int_equal(
+        trn_height_search(&g, &l, LW / 2, LW / 2, &win, &ex, &c, 0.95f, 1.0, NULL, &b2), TRN_OK);
     assert_true(abs(b2.x - b.x) > 2 || abs(b2.y - b.y) > 2);
     assert_true(b2.ll < b.ll);
     assert_true(b2.poses == 13u * 11u);
@@ -442,9 +463,11 @@ static void test_height_search(void **state)
     assert_true(b3.x == b2.x && b3.y == b2.y && b3.ll == b2.ll && b3.poses == b2.poses);
     assert_true(fabs(b3.lse_all - b2.lse_all) < 1e-12 * fabs(b2.lse_all) &&
                 fabs(b3.lse_out - b2.lse_out) < 1e-12 * fabs(b2.lse_out));
-    assert_int_equal(trn_height_search(&g, &l, LW / 2, LW / 2, &win, &ex, &c, 0.95f, 2.5, NULL, &b2), TRN_OK);
+    assert_int_equal(
+        trn_height_search(&g, &l, LW / 2, LW / 2, &win, &ex, &c, 0.95f, 2.5, NULL, &b2), TRN_OK);
     assert_int_equal(trn_height_mass(grid, &win, &ex, 2.5, &b3), TRN_OK);
-    assert_true(b3.x == b2.x && b3.y == b2.y && fabs(b3.lse_out - b2.lse_out) < 1e-12 * fabs(b2.lse_out));
+    assert_true(b3.x == b2.x && b3.y == b2.y &&
+                fabs(b3.lse_out - b2.lse_out) < 1e-12 * fabs(b2.lse_out));
     assert_true(isnan(b3.dz_m) && isnan(b3.model_m));
     assert_int_equal(trn_height_mass(NULL, &win, &ex, 1.0, &b3), TRN_E_NULL);
     assert_int_equal(trn_height_mass(grid, NULL, &ex, 1.0, &b3), TRN_E_NULL);
@@ -467,32 +490,46 @@ static void test_height_search(void **state)
         assert_int_equal(trn_height_mass(grid, &bw, &ex, 1.0, &b3), TRN_E_RANGE);
     }
     assert_true(b.lse_all >= b.ll && b.lse_all <= b.ll + log(143.0));
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 0.5, NULL, &b), TRN_E_ARG);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 0.5, NULL, &b),
+                     TRN_E_ARG);
     /* statuses */
-    assert_int_equal(trn_height_search(NULL, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, NULL, &b), TRN_E_NULL);
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, NULL, NULL, &c, 0.95f, 1.0, NULL, &b), TRN_E_NULL);
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, NULL, NULL), TRN_E_NULL);
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 1.0f, 1.0, NULL, &b), TRN_E_ARG);
+    assert_int_equal(trn_height_search(NULL, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, NULL, &b),
+                     TRN_E_NULL);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, NULL, NULL, &c, 0.95f, 1.0, NULL, &b),
+                     TRN_E_NULL);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, NULL, NULL),
+                     TRN_E_NULL);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 1.0f, 1.0, NULL, &b),
+                     TRN_E_ARG);
     bad = c;
     bad.noise_m = -1.0f;
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &bad, 0.95f, 1.0, NULL, &b), TRN_E_ARG);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &bad, 0.95f, 1.0, NULL, &b),
+                     TRN_E_ARG);
     ex.radius = -1;
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, &ex, &c, 0.95f, 1.0, NULL, &b), TRN_E_ARG);
-    assert_int_equal(trn_height_search(&g, &l, TRN_MAX_DIM + LW, 15, &win, NULL, &c, 0.95f, 1.0, NULL, &b), TRN_E_ARG);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, &ex, &c, 0.95f, 1.0, NULL, &b),
+                     TRN_E_ARG);
+    assert_int_equal(
+        trn_height_search(&g, &l, TRN_MAX_DIM + LW, 15, &win, NULL, &c, 0.95f, 1.0, NULL, &b),
+        TRN_E_ARG);
     win.x1 = GW;
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, NULL, &b), TRN_E_RANGE);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, NULL, &b),
+                     TRN_E_RANGE);
     win.x1 = 20;
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, NULL, &b), TRN_E_RANGE);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, NULL, &b),
+                     TRN_E_RANGE);
     win.x1 = 36;
     ex.radius = 100;
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, &ex, &c, 0.95f, 1.0, NULL, &b), TRN_E_NODATA);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, &ex, &c, 0.95f, 1.0, NULL, &b),
+                     TRN_E_NODATA);
     l.width = 0;
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, NULL, &b), TRN_E_SIZE);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, NULL, &b),
+                     TRN_E_SIZE);
     make_local(&l, 30.0, 30.0, 0.0, 0.0, &c, &r);
     for (x = 0; x < LW * LW; ++x) {
         l_data[x] = x < 5 ? 1.0f : NAN;
     }
-    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, NULL, &b), TRN_E_NODATA);
+    assert_int_equal(trn_height_search(&g, &l, 15, 15, &win, NULL, &c, 0.95f, 1.0, NULL, &b),
+                     TRN_E_NODATA);
 }
 
 /* trn_map_cfg_auto: the documented rule on the analytic DEM, and every status. */
@@ -514,8 +551,8 @@ static void test_cfg_auto(void **state)
     assert_int_equal(trn_map_cfg_auto(&c, &g, 1.0f, ws_auto, wb, &sh), TRN_OK);
     /* zbin = min(cell, max(sigma_H / 2, 2 s(10 cells))), s(10 m) = 0.05 m */
     assert_true(fabs((double)c.terrain.zbin_m - fmin(1.0, fmax(sh / 2.0, 0.1))) < 1e-6);
-    assert_true(c.terrain.nz >= 16 && c.terrain.nz <= 64 && c.refine == 1 && c.local_highpass == TRN_LOCAL_HP_MAP &&
-                c.match == TRN_MATCH_HEIGHTS);
+    assert_true(c.terrain.nz >= 16 && c.terrain.nz <= 64 && c.refine == 1 &&
+                c.local_highpass == TRN_LOCAL_HP_MAP && c.match == TRN_MATCH_HEIGHTS);
     assert_true(sh > 0.5); /* the surface's sinusoids survive a 10-cell high-pass */
     assert_int_equal(trn_map_cfg_auto(NULL, &g, 1.0f, ws_auto, wb, &sh), TRN_E_NULL);
     assert_int_equal(trn_map_cfg_auto(&c, NULL, 1.0f, ws_auto, wb, &sh), TRN_E_NULL);
@@ -534,12 +571,9 @@ static void test_cfg_auto(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_exact_model),
-        cmocka_unit_test(test_interp_shift),
-        cmocka_unit_test(test_noise_coverage),
-        cmocka_unit_test(test_outliers),
-        cmocka_unit_test(test_errors),
-        cmocka_unit_test(test_cfg_auto),
+        cmocka_unit_test(test_exact_model),    cmocka_unit_test(test_interp_shift),
+        cmocka_unit_test(test_noise_coverage), cmocka_unit_test(test_outliers),
+        cmocka_unit_test(test_errors),         cmocka_unit_test(test_cfg_auto),
         cmocka_unit_test(test_height_search),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -94,15 +94,16 @@ static float *region_p(selworld_t *w, const trn_select_cfg_t *cfg, const trn_rov
     p->ny = roi->y1 - roi->y0 + 1;
     p->nz = w->pg.nz;
     p->data = malloc(sizeof(float) * p->nx * p->ny * p->nz);
-    assert_int_equal(trn_prob_local(&w->k, &cfg->local_sigma, (float)CELL, rv->pos, &w->pg, roi,
-                                    p, ws, wb), TRN_OK);
+    assert_int_equal(
+        trn_prob_local(&w->k, &cfg->local_sigma, (float)CELL, rv->pos, &w->pg, roi, p, ws, wb),
+        TRN_OK);
     free(ws);
     return p->data;
 }
 
 /* Brute force: E[ln L(d)] of the patch centred at (cx, cy), double. */
-static void brute_ll(const selworld_t *w, const trn_vol_f32_t *p, const trn_window_t *roi,
-                     int cx, int cy, int half, double ll[9], double labs_sum[9], double *bound)
+static void brute_ll(const selworld_t *w, const trn_vol_f32_t *p, const trn_window_t *roi, int cx,
+                     int cy, int half, double ll[9], double labs_sum[9], double *bound)
 {
     const trn_vol_u8_t *D = &w->map.dist;
     const int cap = w->map.lnp.cap;
@@ -246,8 +247,8 @@ static void test_defaults_one_position(void **state)
     }
     printf("defaults: %zu candidates, %zu informative, region %dx%d, best (%d, %d) %.4f m\n",
            s.res.n_candidates, s.res.n_informative, (int)(s.res.roi.x1 - s.res.roi.x0 + 1),
-           (int)(s.res.roi.y1 - s.res.roi.y0 + 1), (int)s.c[s.res.best].x,
-           (int)s.c[s.res.best].y, s.c[s.res.best].uncertainty_m);
+           (int)(s.res.roi.y1 - s.res.roi.y0 + 1), (int)s.c[s.res.best].x, (int)s.c[s.res.best].y,
+           s.c[s.res.best].uncertainty_m);
     assert_true(s.res.best == bf_best ||
                 fabs(s.c[s.res.best].uncertainty_m - bf_min) <= 1e-6 * bf_min);
     for (i = 0; i < s.res.n_candidates; ++i) {
@@ -283,8 +284,8 @@ static void test_candidate_rules_and_ranking(void **state)
             b = b > PI ? b - 2 * PI : (b < -PI ? b + 2 * PI : b);
             ex = fmax(fabs(dx) - half - 0.5, 0.0);
             ey = fmax(fabs(dy) - half - 0.5, 0.0);
-            if (cx < half + 1 || cy < half + 1 || cx > 78 - half || cy > 78 - half || r < 0.5 || r > 2.0 ||
-                hypot(ex, ey) * CELL < 0.3 || b < -1.2 || b > 0.8) {
+            if (cx < half + 1 || cy < half + 1 || cx > 78 - half || cy > 78 - half || r < 0.5 ||
+                r > 2.0 || hypot(ex, ey) * CELL < 0.3 || b < -1.2 || b > 0.8) {
                 continue;
             }
             ++count;
@@ -313,7 +314,8 @@ static void test_candidate_rules_and_ranking(void **state)
             for (j = 0; j < k; ++j) {
                 eligible &= i != s.ranked[j] &&
                             hypot(s.c[i].x - s.c[s.ranked[j]].x, s.c[i].y - s.c[s.ranked[j]].y) *
-                                    CELL >= 0.45;
+                                    CELL >=
+                                0.45;
             }
             assert_true(!eligible || s.c[i].uncertainty_m >= ck->uncertainty_m);
         }
@@ -381,17 +383,22 @@ static void test_bad_inputs(void **state)
     wsb = trn_select_workspace_bytes(&cfg, &w.map, &w.k);
     c = malloc(cap * sizeof *c);
     ws = selworld_alloc(wsb);
-#define SEL(m, k, pg, cf, r, cc, cp, rr, rc, re, wp, wb) trn_select(m, k, pg, cf, r, cc, cp, rr, rc, re, wp, wb)
+#define SEL(m, k, pg, cf, r, cc, cp, rr, rc, re, wp, wb) \
+    trn_select(m, k, pg, cf, r, cc, cp, rr, rc, re, wp, wb)
     assert_int_equal(SEL(&w.map, &w.k, &w.pg, &cfg, &rv, c, cap, rk, 4, &res, ws, wsb), TRN_OK);
     assert_int_equal(SEL(NULL, &w.k, &w.pg, &cfg, &rv, c, cap, rk, 4, &res, ws, wsb), TRN_E_NULL);
     assert_int_equal(SEL(&w.map, NULL, &w.pg, &cfg, &rv, c, cap, rk, 4, &res, ws, wsb), TRN_E_NULL);
     assert_int_equal(SEL(&w.map, &w.k, NULL, &cfg, &rv, c, cap, rk, 4, &res, ws, wsb), TRN_E_NULL);
     assert_int_equal(SEL(&w.map, &w.k, &w.pg, NULL, &rv, c, cap, rk, 4, &res, ws, wsb), TRN_E_NULL);
-    assert_int_equal(SEL(&w.map, &w.k, &w.pg, &cfg, NULL, c, cap, rk, 4, &res, ws, wsb), TRN_E_NULL);
-    assert_int_equal(SEL(&w.map, &w.k, &w.pg, &cfg, &rv, NULL, cap, rk, 4, &res, ws, wsb), TRN_E_NULL);
-    assert_int_equal(SEL(&w.map, &w.k, &w.pg, &cfg, &rv, c, cap, NULL, 4, &res, ws, wsb), TRN_E_NULL);
+    assert_int_equal(SEL(&w.map, &w.k, &w.pg, &cfg, NULL, c, cap, rk, 4, &res, ws, wsb),
+                     TRN_E_NULL);
+    assert_int_equal(SEL(&w.map, &w.k, &w.pg, &cfg, &rv, NULL, cap, rk, 4, &res, ws, wsb),
+                     TRN_E_NULL);
+    assert_int_equal(SEL(&w.map, &w.k, &w.pg, &cfg, &rv, c, cap, NULL, 4, &res, ws, wsb),
+                     TRN_E_NULL);
     assert_int_equal(SEL(&w.map, &w.k, &w.pg, &cfg, &rv, c, cap, rk, 4, NULL, ws, wsb), TRN_E_NULL);
-    assert_int_equal(SEL(&w.map, &w.k, &w.pg, &cfg, &rv, c, cap, rk, 4, &res, NULL, wsb), TRN_E_NULL);
+    assert_int_equal(SEL(&w.map, &w.k, &w.pg, &cfg, &rv, c, cap, rk, 4, &res, NULL, wsb),
+                     TRN_E_NULL);
     bad = cfg;
     bad.max_range_m = NAN;
     assert_int_equal(SEL(&w.map, &w.k, &w.pg, &bad, &rv, c, cap, rk, 4, &res, ws, wsb), TRN_E_ARG);
@@ -421,12 +428,15 @@ static void test_bad_inputs(void **state)
     assert_int_equal(SEL(&w.map, &w.k, &w.pg, &cfg, &rb, c, cap, rk, 4, &res, ws, wsb), TRN_E_ARG);
     rb = rv;
     rb.pos.x_cells = 200.0f;
-    assert_int_equal(SEL(&w.map, &w.k, &w.pg, &cfg, &rb, c, cap, rk, 4, &res, ws, wsb), TRN_E_RANGE);
+    assert_int_equal(SEL(&w.map, &w.k, &w.pg, &cfg, &rb, c, cap, rk, 4, &res, ws, wsb),
+                     TRN_E_RANGE);
     pg2 = w.pg;
     pg2.nz -= 1;
     assert_int_equal(SEL(&w.map, &w.k, &pg2, &cfg, &rv, c, cap, rk, 4, &res, ws, wsb), TRN_E_SIZE);
-    assert_int_equal(SEL(&w.map, &w.k, &w.pg, &cfg, &rv, c, 10, rk, 4, &res, ws, wsb), TRN_E_CAPACITY);
-    assert_int_equal(SEL(&w.map, &w.k, &w.pg, &cfg, &rv, c, cap, rk, 0, &res, ws, wsb), TRN_E_CAPACITY);
+    assert_int_equal(SEL(&w.map, &w.k, &w.pg, &cfg, &rv, c, 10, rk, 4, &res, ws, wsb),
+                     TRN_E_CAPACITY);
+    assert_int_equal(SEL(&w.map, &w.k, &w.pg, &cfg, &rv, c, cap, rk, 0, &res, ws, wsb),
+                     TRN_E_CAPACITY);
     assert_int_equal(SEL(&w.map, &w.k, &w.pg, &cfg, &rv, c, cap, rk, 4, &res, ws, wsb - 1),
                      TRN_E_WORKSPACE);
     /* nothing within reach: the rover in a corner looking off the map */

@@ -464,8 +464,8 @@ static void test_select_clauses(void **state)
     {
         size_t *all = malloc(cap * sizeof *all), a, b2;
         double sep = (double)cfg.min_separation_m / (double)CELL;
-        assert_int_equal(trn_select(&w.map, &w.k, &w.pg, &cfg, &rv, c, cap, all, cap, &res, ws, wsb),
-                         TRN_OK);
+        assert_int_equal(
+            trn_select(&w.map, &w.k, &w.pg, &cfg, &rv, c, cap, all, cap, &res, ws, wsb), TRN_OK);
         assert_true(res.n_ranked >= 1u && res.n_ranked < cap && res.n_ranked <= res.n_informative);
         for (a = 0; a < res.n_ranked; ++a) {
             for (b2 = 0; b2 < a; ++b2) {
@@ -610,8 +610,9 @@ static void test_field_one_rock_on_a_plain(void **state)
     assert_int_equal(trn_grid_f32_init(&g, out, 28u * 28u, 28, 28), TRN_OK);
     wsb = trn_field_workspace_bytes(&sc, &w.map, &w.k);
     ws = selworld_alloc(wsb);
-    assert_int_equal(trn_field(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 28u * 28u, &st,
-                               ws, wsb), TRN_OK);
+    assert_int_equal(
+        trn_field(&w.map, &w.k, &w.pg, &sc, &fc, 0.0f, &area, &g, ev, 28u * 28u, &st, ws, wsb),
+        TRN_OK);
     assert_true(isfinite(st.best_m));
     for (i = 0; i < 28u * 28u; ++i) {
         if (isfinite(out[i])) {

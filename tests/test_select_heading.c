@@ -80,8 +80,8 @@ static trn_status_t run_select(selworld_t *w, const trn_select_cfg_t *cfg, const
     assert_true(s->cap > 0u && s->wsb > 0u);
     s->c = calloc(s->cap, sizeof *s->c);
     s->ws = selworld_alloc(s->wsb);
-    return trn_select(&w->map, &w->k, &w->pg, cfg, rv, s->c, s->cap, s->ranked, 8u, &s->res,
-                      s->ws, s->wsb);
+    return trn_select(&w->map, &w->k, &w->pg, cfg, rv, s->c, s->cap, s->ranked, 8u, &s->res, s->ws,
+                      s->wsb);
 }
 
 static void sel_free(sel_t *s)
@@ -250,8 +250,8 @@ static void test_best_is_argmin(void **state)
         printf("  sigma_heading %.3f rad (%5.2f deg): best (%d, %d) at %.2f m, %.1f mm "
                "(fit %.1f mm, heading %.1f mm)\n",
                s, s * 180.0 / 3.14159265358979, (int)b.c[arg].x, (int)b.c[arg].y,
-               (double)b.c[arg].range_m, 1e3 * b.c[arg].uncertainty_m,
-               1e3 * a.c[arg].uncertainty_m, 1e3 * b.c[arg].heading_m);
+               (double)b.c[arg].range_m, 1e3 * b.c[arg].uncertainty_m, 1e3 * a.c[arg].uncertainty_m,
+               1e3 * b.c[arg].heading_m);
         assert_true((double)b.c[arg].range_m <= last_range);
         last_range = (double)b.c[arg].range_m;
         sel_free(&b);
@@ -285,8 +285,8 @@ static void sensed_turned(const selworld_t *w, int rx, int ry, int ox, int oy, i
         for (i = 0; i < side; ++i) {
             const double a = (double)(ox - half - HP_M + i), b = (double)(oy - half - HP_M + j);
             const double mx = a * c - b * sn, my = a * sn + b * c;
-            dem[j * side + i] =
-                (float)synth_height(&g_t, ((double)rx + mx) * CELL, ((double)ry + my) * CELL);
+            dem[j * side + i] = (float)synth_height(&g_t, ((double)rx + mx) * CELL,
+                                                    ((double)ry + my) * CELL);
         }
     }
     assert_int_equal(trn_grid_f32_init(&dg, dem, (size_t)side * side, side, side), TRN_OK);
@@ -300,7 +300,8 @@ static void sensed_turned(const selworld_t *w, int rx, int ry, int ox, int oy, i
         }
     }
     assert_int_equal(trn_occupancy_points(&hg, &w->cfg.terrain, half + HP_M - ox, half + HP_M - oy,
-                                          g_pts, sizeof g_pts / sizeof g_pts[0], np), TRN_OK);
+                                          g_pts, sizeof g_pts / sizeof g_pts[0], np),
+                     TRN_OK);
     free(dem);
     free(hp);
     free(hws);
@@ -344,8 +345,8 @@ static void test_lever_arm_measured(void **state)
             across = ex * tx + ey * ty;
             along = (ex * (double)ox + ey * (double)oy) / r;
             printf("  target %.2f m, fit %.1f mm, dtheta %+.2f rad: error across %+.2f cells "
-                   "(model %+.2f), along %+.2f cells\n", r * CELLM, 1e3 * c->uncertainty_m,
-                   dth[q], across, r * dth[q], along);
+                   "(model %+.2f), along %+.2f cells\n",
+                   r * CELLM, 1e3 * c->uncertainty_m, dth[q], across, r * dth[q], along);
             /* the terrain seen at offsets turned by dtheta: the matcher moves
              * the rover by r dtheta across the line of sight */
             assert_true(fabs(across - r * dth[q]) <= 0.5 * r * fabs(dth[q]) + 0.5);
@@ -358,8 +359,8 @@ static void test_lever_arm_measured(void **state)
     }
     assert_true(n >= 8u);
     printf("  %zu cases: mean (error across) / (r dtheta) %.3f, RMS (error across - r dtheta) "
-           "%.2f cells, mean |error along| %.2f cells\n", n, sum_ratio / (double)n,
-           sqrt(sum_res2 / (double)n), sum_along / (double)n);
+           "%.2f cells, mean |error along| %.2f cells\n",
+           n, sum_ratio / (double)n, sqrt(sum_res2 / (double)n), sum_along / (double)n);
     assert_true(fabs(sum_ratio / (double)n - 1.0) <= 0.2);
     free(lws);
     sel_free(&a);
@@ -373,9 +374,9 @@ static void test_lever_arm_measured(void **state)
 static void test_nearer_preferred(void **state)
 {
     static const synth_rock_t rocks[] = {
-        {1.2, 3.0, 0.15, 0.15}, {1.05, 2.8, 0.12, 0.12}, {1.3, 3.25, 0.14, 0.14},
-        {1.0, 3.2, 0.10, 0.10},                                                  /* far cluster */
-        {3.8, 3.0, 0.15, 0.15},                                                  /* near rock */
+        {1.2, 3.0, 0.15, 0.15},  {1.05, 2.8, 0.12, 0.12},
+        {1.3, 3.25, 0.14, 0.14}, {1.0, 3.2, 0.10, 0.10}, /* far cluster */
+        {3.8, 3.0, 0.15, 0.15},                          /* near rock */
     };
     selworld_t w;
     trn_select_cfg_t cfg;
@@ -394,9 +395,9 @@ static void test_nearer_preferred(void **state)
             cfg.sigma_heading_rad = sw[q];
             assert_int_equal(run_select(&w, &cfg, &rv, &t), TRN_OK);
             printf("  sigma_heading %.3f rad: best (%d, %d) %.2f m away, %.1f mm (fit %.1f mm)\n",
-                   (double)sw[q],
-                   (int)t.c[t.res.best].x, (int)t.c[t.res.best].y, (double)t.c[t.res.best].range_m,
-                   1e3 * t.c[t.res.best].uncertainty_m, 1e3 * a.c[t.res.best].uncertainty_m);
+                   (double)sw[q], (int)t.c[t.res.best].x, (int)t.c[t.res.best].y,
+                   (double)t.c[t.res.best].range_m, 1e3 * t.c[t.res.best].uncertainty_m,
+                   1e3 * a.c[t.res.best].uncertainty_m);
             sel_free(&t);
         }
     }
@@ -408,8 +409,8 @@ static void test_nearer_preferred(void **state)
            "(%d, %d) %.2f m away, %.1f mm (heading part %.1f mm)\n",
            (int)ba->x, (int)ba->y, (double)ba->range_m, 1e3 * ba->uncertainty_m, (int)bb->x,
            (int)bb->y, (double)bb->range_m, 1e3 * bb->uncertainty_m, 1e3 * bb->heading_m);
-    assert_true(ba->x < 30 && ba->range_m > 1.4f);  /* the far cluster, west */
-    assert_true(bb->x > 30 && bb->range_m < 1.1f);  /* the near rock, east */
+    assert_true(ba->x < 30 && ba->range_m > 1.4f); /* the far cluster, west */
+    assert_true(bb->x > 30 && bb->range_m < 1.1f); /* the near rock, east */
     /* the far winner is still the better fit: the heading's term decided */
     assert_true(a.c[b.res.best].uncertainty_m > ba->uncertainty_m);
     sel_free(&a);
@@ -435,10 +436,11 @@ static void field_pair(const selworld_t *w, const trn_select_cfg_t *sc, const tr
     void *ws1 = selworld_alloc(b1), *ws2 = selworld_alloc(b2);
     assert_int_equal(trn_grid_f32_init(&g1, out, n, aw, ah), TRN_OK);
     assert_int_equal(trn_grid_f32_init(&g2, o2, n, aw, ah), TRN_OK);
-    assert_int_equal(trn_field(&w->map, &w->k, &w->pg, sc, fc, heading, area, &g1, e1, n, st, ws1,
-                               b1), TRN_OK);
-    assert_int_equal(trn_field_fast(&w->map, &w->k, &w->pg, sc, fc, heading, area, &g2, e2, n, &s2,
-                                    ws2, b2), TRN_OK);
+    assert_int_equal(
+        trn_field(&w->map, &w->k, &w->pg, sc, fc, heading, area, &g1, e1, n, st, ws1, b1), TRN_OK);
+    assert_int_equal(
+        trn_field_fast(&w->map, &w->k, &w->pg, sc, fc, heading, area, &g2, e2, n, &s2, ws2, b2),
+        TRN_OK);
     assert_memory_equal(out, o2, n * sizeof(float));
     assert_memory_equal(e1, e2, n);
     assert_int_equal(st->evaluations, s2.evaluations);
@@ -446,9 +448,9 @@ static void field_pair(const selworld_t *w, const trn_select_cfg_t *sc, const tr
     assert_int_equal(st->best_y, s2.best_y);
     assert_true(st->best_m == s2.best_m);
     printf("  sigma_heading %.3f rad, area (%d,%d)-(%d,%d): %u evaluations, best %.6f m at "
-           "(%d, %d)\n", (double)sc->sigma_heading_rad, (int)area->x0, (int)area->y0,
-           (int)area->x1, (int)area->y1, st->evaluations, st->best_m, (int)st->best_x,
-           (int)st->best_y);
+           "(%d, %d)\n",
+           (double)sc->sigma_heading_rad, (int)area->x0, (int)area->y0, (int)area->x1,
+           (int)area->y1, st->evaluations, st->best_m, (int)st->best_x, (int)st->best_y);
     free(o2);
     free(e1);
     free(e2);
@@ -534,21 +536,24 @@ static void test_bad_sigma(void **state)
     assert_int_equal(trn_select_cfg_check(&b, (float)CELL), TRN_OK);
     for (i = 0; i < sizeof bad / sizeof bad[0] + 3u; ++i) {
         b = c;
-        b.sigma_heading_rad = i < sizeof bad / sizeof bad[0] ? bad[i]
-                              : i == sizeof bad / sizeof bad[0] ? NAN
+        b.sigma_heading_rad = i < sizeof bad / sizeof bad[0]         ? bad[i]
+                              : i == sizeof bad / sizeof bad[0]      ? NAN
                               : i == sizeof bad / sizeof bad[0] + 1u ? INFINITY
                                                                      : -INFINITY;
         assert_int_equal(trn_select_cfg_check(&b, (float)CELL), TRN_E_ARG);
         assert_int_equal(trn_select_max_candidates(&b, (float)CELL), 0u);
         assert_int_equal(trn_select_workspace_bytes(&b, &w.map, &w.k), 0u);
-        assert_int_equal(trn_select(&w.map, &w.k, &w.pg, &b, &rv, cands, 4u, rk, 2u, &res, ws,
-                                    sizeof ws), TRN_E_ARG);
+        assert_int_equal(
+            trn_select(&w.map, &w.k, &w.pg, &b, &rv, cands, 4u, rk, 2u, &res, ws, sizeof ws),
+            TRN_E_ARG);
         assert_int_equal(trn_field_workspace_bytes(&b, &w.map, &w.k), 0u);
         assert_int_equal(trn_field_fast_workspace_bytes(&b, &w.map, &w.k, &w.pg), 0u);
-        assert_int_equal(trn_field(&w.map, &w.k, &w.pg, &b, &fc, 0.0f, &area, &g, ev, 16u, &st,
-                                   ws, sizeof ws), TRN_E_ARG);
-        assert_int_equal(trn_field_fast(&w.map, &w.k, &w.pg, &b, &fc, 0.0f, &area, &g, ev, 16u,
-                                        &st, ws, sizeof ws), TRN_E_ARG);
+        assert_int_equal(
+            trn_field(&w.map, &w.k, &w.pg, &b, &fc, 0.0f, &area, &g, ev, 16u, &st, ws, sizeof ws),
+            TRN_E_ARG);
+        assert_int_equal(trn_field_fast(&w.map, &w.k, &w.pg, &b, &fc, 0.0f, &area, &g, ev, 16u, &st,
+                                        ws, sizeof ws),
+                         TRN_E_ARG);
     }
     selworld_free(&w);
 }
@@ -556,12 +561,9 @@ static void test_bad_sigma(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_zero_is_the_paper),
-        cmocka_unit_test(test_added_term),
-        cmocka_unit_test(test_best_is_argmin),
-        cmocka_unit_test(test_lever_arm_measured),
-        cmocka_unit_test(test_nearer_preferred),
-        cmocka_unit_test(test_field_equal),
+        cmocka_unit_test(test_zero_is_the_paper), cmocka_unit_test(test_added_term),
+        cmocka_unit_test(test_best_is_argmin),    cmocka_unit_test(test_lever_arm_measured),
+        cmocka_unit_test(test_nearer_preferred),  cmocka_unit_test(test_field_equal),
         cmocka_unit_test(test_bad_sigma),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

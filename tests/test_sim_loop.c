@@ -72,8 +72,8 @@ typedef struct {
     double se, along; /* squared errors; the error along the view (toward the target), summed */
 } tally_t;
 
-static void tally(tally_t *t, trn_status_t st, const trn_loc_result_t *r, const trn_rover_pose_t *truth,
-                  trn_vec3f_t target)
+static void tally(tally_t *t, trn_status_t st, const trn_loc_result_t *r,
+                  const trn_rover_pose_t *truth, trn_vec3f_t target)
 {
     double ex = r->x * CELL - truth->x_m, ey = r->y * CELL - truth->y_m, m2;
     double tx = target.x - truth->x_m, ty = target.y - truth->y_m, tr = hypot(tx, ty);
@@ -181,8 +181,9 @@ static void test_loop_calibration(void **state)
         wb = trn_select_workspace_bytes(&scfg, &g_w.map, &g_w.k);
         ws = selworld_alloc(wb);
         assert_true(cands != NULL && ws != NULL);
-        assert_int_equal(trn_select(&g_w.map, &g_w.k, &g_w.pg, &scfg, &rv, cands, cap, ranked, 4, &sres, ws, wb),
-                         TRN_OK);
+        assert_int_equal(
+            trn_select(&g_w.map, &g_w.k, &g_w.pg, &scfg, &rv, cands, cap, ranked, 4, &sres, ws, wb),
+            TRN_OK);
         free(ws);
         target.x = (float)(cands[ranked[0]].x * CELL);
         target.y = (float)(cands[ranked[0]].y * CELL);
@@ -219,23 +220,27 @@ static void test_loop_calibration(void **state)
 
         for (v = 0; v < 2; ++v) {
             if (v == 1) { /* the same points, each cell their mean */
-                assert_int_equal(trn_mast_local_dem_mean(g_pts, npts, &known, &dcfg, &lg, g_cnt, (size_t)L * L, &used),
+                assert_int_equal(trn_mast_local_dem_mean(g_pts, npts, &known, &dcfg, &lg, g_cnt,
+                                                         (size_t)L * L, &used),
                                  TRN_OK);
             }
-            wb = trn_localize_dem_workspace_bytes(&g_w.map, L, L, (size_t)L * L * g_w.cfg.terrain.nz, &win);
+            wb = trn_localize_dem_workspace_bytes(&g_w.map, L, L,
+                                                  (size_t)L * L * g_w.cfg.terrain.nz, &win);
             ws = selworld_alloc(wb);
             assert_non_null(ws);
             memset(&res, 0, sizeof res);
-            st = trn_localize_dem(&g_w.map, &lg, L / 2, L / 2, (size_t)L * L * g_w.cfg.terrain.nz, &win, ws, wb,
-                                  &res);
+            st = trn_localize_dem(&g_w.map, &lg, L / 2, L / 2, (size_t)L * L * g_w.cfg.terrain.nz,
+                                  &win, ws, wb, &res);
             free(ws);
             tally(&t[v][0], st, &res, &truth, target);
 
-            wb = trn_localize_dem_workspace_bytes(&amap, L, L, (size_t)L * L * acfg.terrain.nz, &win);
+            wb = trn_localize_dem_workspace_bytes(&amap, L, L, (size_t)L * L * acfg.terrain.nz,
+                                                  &win);
             ws = selworld_alloc(wb);
             assert_non_null(ws);
             memset(&res, 0, sizeof res);
-            st = trn_localize_dem(&amap, &lg, L / 2, L / 2, (size_t)L * L * acfg.terrain.nz, &win, ws, wb, &res);
+            st = trn_localize_dem(&amap, &lg, L / 2, L / 2, (size_t)L * L * acfg.terrain.nz, &win,
+                                  ws, wb, &res);
             free(ws);
             tally(&t[v][1], st, &res, &truth, target);
         }
@@ -243,9 +248,11 @@ static void test_loop_calibration(void **state)
     for (v = 0; v < 2; ++v) {
         for (m = 0; m < 2; ++m) {
             const tally_t *q = &t[v][m];
-            printf("loop, %s, %s: %d runs, within 3 cells %d, RMS error %.4f m, mean error along the view "
-                   "%+.4f m, inside 1/2/3 sigma %.1f / %.1f / %.1f %%\n", bin_name[v], match_name[m], q->n,
-                   q->within3, sqrt(q->se / q->n), q->along / q->n, 100.0 * q->in[0] / q->n, 100.0 * q->in[1] / q->n,
+            printf("loop, %s, %s: %d runs, within 3 cells %d, RMS error %.4f m, mean error along "
+                   "the view "
+                   "%+.4f m, inside 1/2/3 sigma %.1f / %.1f / %.1f %%\n",
+                   bin_name[v], match_name[m], q->n, q->within3, sqrt(q->se / q->n),
+                   q->along / q->n, 100.0 * q->in[0] / q->n, 100.0 * q->in[1] / q->n,
                    100.0 * q->in[2] / q->n);
             assert_int_equal(q->within3, RUNS);
         }

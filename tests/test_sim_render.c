@@ -194,8 +194,9 @@ static void test_rows_in_chunks(void **state)
     (void)state;
     assert_int_equal(sim_render(&d, &c, &T, &a, g_a, MAXP, &na), TRN_OK);
     for (r = 0; r < c.rows; r += 5) {
-        assert_int_equal(sim_render_rows(&d, &c, &T, &b, r, r + 5 > c.rows ? c.rows : r + 5, g_b, MAXP, &nb),
-                         TRN_OK);
+        assert_int_equal(
+            sim_render_rows(&d, &c, &T, &b, r, r + 5 > c.rows ? c.rows : r + 5, g_b, MAXP, &nb),
+            TRN_OK);
     }
     assert_int_equal(na, nb);
     assert_memory_equal(g_a, g_b, na * sizeof g_a[0]);

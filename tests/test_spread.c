@@ -37,8 +37,7 @@ static int setup(void **state)
     return trn_kernels_build(&g_k, 0.5f) == TRN_OK ? 0 : -1;
 }
 
-static void random_occ(uint8_t *occ, int nx, int ny, int nz, double frac, int border,
-                       uint64_t seed)
+static void random_occ(uint8_t *occ, int nx, int ny, int nz, double frac, int border, uint64_t seed)
 {
     trn_rng_t r;
     int x, y, z;
@@ -190,7 +189,8 @@ static void test_varying_sigma_and_mass(void **state)
         n_occ += occ[i];
     }
     printf("varying sigma (%d kernels in use): worst |separable - direct 2-D| = %.3g; "
-           "mass %.4f for %zu occupied voxels\n", nused, worst, mass, n_occ);
+           "mass %.4f for %zu occupied voxels\n",
+           nused, worst, mass, n_occ);
     assert_true(worst < VARYING_TOL);
     assert_true(fabs(mass / (double)n_occ - 1.0) < 1e-5); /* nothing near a border */
     free(occ);
@@ -241,13 +241,16 @@ static void test_local_region_equals_whole(void **state)
     /* the bad inputs of trn_prob_local */
     assert_int_equal(trn_prob_local(NULL, &lm, 0.1f, rover, &vpg, &roi, &vroi, ws, wb), TRN_E_NULL);
     assert_int_equal(trn_prob_local(&g_k, &lm, 0.1f, rover, NULL, &roi, &vroi, ws, wb), TRN_E_NULL);
-    assert_int_equal(trn_prob_local(&g_k, &lm, 0.1f, rover, &vpg, &roi, &vroi, NULL, wb), TRN_E_NULL);
-    assert_int_equal(trn_prob_local(&g_k, NULL, 0.1f, rover, &vpg, &roi, &vroi, ws, wb), TRN_E_NULL);
+    assert_int_equal(trn_prob_local(&g_k, &lm, 0.1f, rover, &vpg, &roi, &vroi, NULL, wb),
+                     TRN_E_NULL);
+    assert_int_equal(trn_prob_local(&g_k, NULL, 0.1f, rover, &vpg, &roi, &vroi, ws, wb),
+                     TRN_E_NULL);
     assert_int_equal(trn_prob_local(&g_k, &lm, 0.0f, rover, &vpg, &roi, &vroi, ws, wb), TRN_E_ARG);
     {
         trn_xy_t bad = {NAN, 1.0f};
         trn_window_t off = {80, 0, 95, 10}, empty = {5, 5, 4, 9};
-        assert_int_equal(trn_prob_local(&g_k, &lm, 0.1f, bad, &vpg, &roi, &vroi, ws, wb), TRN_E_ARG);
+        assert_int_equal(trn_prob_local(&g_k, &lm, 0.1f, bad, &vpg, &roi, &vroi, ws, wb),
+                         TRN_E_ARG);
         assert_int_equal(trn_prob_local(&g_k, &lm, 0.1f, rover, &vpg, &off, &vroi, ws, wb),
                          TRN_E_RANGE);
         assert_int_equal(trn_prob_local(&g_k, &lm, 0.1f, rover, &vpg, &empty, &vroi, ws, wb),
@@ -379,8 +382,8 @@ static void raster_world(selworld_t *w, int n, const trn_sigma_model_t *gm, cons
     assert_non_null(dem);
     for (y = 0; y < n; ++y) {
         for (x = 0; x < n; ++x) {
-            dem[y * n + x] = (float)(0.25 * sin(0.45 * x) * cos(0.35 * y) + 0.12 * sin(1.3 * x + 0.7 * y) +
-                                     0.005 * x);
+            dem[y * n + x] = (float)(0.25 * sin(0.45 * x) * cos(0.35 * y) +
+                                     0.12 * sin(1.3 * x + 0.7 * y) + 0.005 * x);
         }
     }
     assert_int_equal(selworld_init(w, n, dem, gm, s, 1), TRN_OK);
@@ -568,11 +571,15 @@ static void test_raster_statuses(void **state)
     /* TRN_E_NULL */
     assert_int_equal(trn_prob_global_raster(NULL, &gm, &s, 1, &g, &w.map, &p, ws, wb), TRN_E_NULL);
     assert_int_equal(trn_prob_global_raster(&w.k, NULL, &s, 1, &g, &w.map, &p, ws, wb), TRN_E_NULL);
-    assert_int_equal(trn_prob_global_raster(&w.k, &gm, NULL, 1, &g, &w.map, &p, ws, wb), TRN_E_NULL);
-    assert_int_equal(trn_prob_global_raster(&w.k, &gm, &s, 1, NULL, &w.map, &p, ws, wb), TRN_E_NULL);
+    assert_int_equal(trn_prob_global_raster(&w.k, &gm, NULL, 1, &g, &w.map, &p, ws, wb),
+                     TRN_E_NULL);
+    assert_int_equal(trn_prob_global_raster(&w.k, &gm, &s, 1, NULL, &w.map, &p, ws, wb),
+                     TRN_E_NULL);
     assert_int_equal(trn_prob_global_raster(&w.k, &gm, &s, 1, &g, NULL, &p, ws, wb), TRN_E_NULL);
-    assert_int_equal(trn_prob_global_raster(&w.k, &gm, &s, 1, &g, &w.map, NULL, ws, wb), TRN_E_NULL);
-    assert_int_equal(trn_prob_global_raster(&w.k, &gm, &s, 1, &g, &w.map, &p, NULL, wb), TRN_E_NULL);
+    assert_int_equal(trn_prob_global_raster(&w.k, &gm, &s, 1, &g, &w.map, NULL, ws, wb),
+                     TRN_E_NULL);
+    assert_int_equal(trn_prob_global_raster(&w.k, &gm, &s, 1, &g, &w.map, &p, NULL, wb),
+                     TRN_E_NULL);
     gs = g;
     gs.data = NULL;
     assert_int_equal(trn_prob_global_raster(&w.k, &gm, &s, 1, &gs, &w.map, &p, ws, wb), TRN_E_NULL);
@@ -602,8 +609,9 @@ static void test_raster_statuses(void **state)
     assert_int_equal(trn_prob_global_raster(&w.k, &gm, &s, 1, &g, &w.map, &p, ws, wb), TRN_E_SIZE);
     p.nz = w.map.dist.nz;
     assert_int_equal(trn_prob_global_raster(&w.k, &gm, &s, 0, &g, &w.map, &p, ws, wb), TRN_E_SIZE);
-    assert_int_equal(trn_prob_global_raster(&w.k, &gm, &s, TRN_SPREAD_MAX_SENSORS + 1u, &g, &w.map, &p,
-                                            ws, wb), TRN_E_SIZE);
+    assert_int_equal(
+        trn_prob_global_raster(&w.k, &gm, &s, TRN_SPREAD_MAX_SENSORS + 1u, &g, &w.map, &p, ws, wb),
+        TRN_E_SIZE);
     /* TRN_E_WORKSPACE: short, misaligned */
     assert_int_equal(trn_prob_global_raster(&w.k, &gm, &s, 1, &g, &w.map, &p, ws, wb - 1),
                      TRN_E_WORKSPACE);
@@ -639,16 +647,25 @@ static void test_bad_inputs(void **state)
     assert_int_equal(trn_sigma_model_check(&m), TRN_OK);
 
     assert_int_equal(trn_spread_kernel_map(&g_k, &m, 0.1f, &s, 1, &win, idx, sizeof idx), TRN_OK);
-    assert_int_equal(trn_spread_kernel_map(NULL, &m, 0.1f, &s, 1, &win, idx, sizeof idx), TRN_E_NULL);
-    assert_int_equal(trn_spread_kernel_map(&g_k, &m, 0.1f, NULL, 1, &win, idx, sizeof idx), TRN_E_NULL);
-    assert_int_equal(trn_spread_kernel_map(&unbuilt, &m, 0.1f, &s, 1, &win, idx, sizeof idx), TRN_E_ARG);
-    assert_int_equal(trn_spread_kernel_map(&g_k, &bad, 0.1f, &s, 1, &win, idx, sizeof idx), TRN_E_ARG);
-    assert_int_equal(trn_spread_kernel_map(&g_k, &m, -0.1f, &s, 1, &win, idx, sizeof idx), TRN_E_ARG);
-    assert_int_equal(trn_spread_kernel_map(&g_k, &m, 0.1f, &sn, 1, &win, idx, sizeof idx), TRN_E_ARG);
-    assert_int_equal(trn_spread_kernel_map(&g_k, &m, 0.1f, &s, 0, &win, idx, sizeof idx), TRN_E_SIZE);
+    assert_int_equal(trn_spread_kernel_map(NULL, &m, 0.1f, &s, 1, &win, idx, sizeof idx),
+                     TRN_E_NULL);
+    assert_int_equal(trn_spread_kernel_map(&g_k, &m, 0.1f, NULL, 1, &win, idx, sizeof idx),
+                     TRN_E_NULL);
+    assert_int_equal(trn_spread_kernel_map(&unbuilt, &m, 0.1f, &s, 1, &win, idx, sizeof idx),
+                     TRN_E_ARG);
+    assert_int_equal(trn_spread_kernel_map(&g_k, &bad, 0.1f, &s, 1, &win, idx, sizeof idx),
+                     TRN_E_ARG);
+    assert_int_equal(trn_spread_kernel_map(&g_k, &m, -0.1f, &s, 1, &win, idx, sizeof idx),
+                     TRN_E_ARG);
+    assert_int_equal(trn_spread_kernel_map(&g_k, &m, 0.1f, &sn, 1, &win, idx, sizeof idx),
+                     TRN_E_ARG);
+    assert_int_equal(trn_spread_kernel_map(&g_k, &m, 0.1f, &s, 0, &win, idx, sizeof idx),
+                     TRN_E_SIZE);
     assert_int_equal(trn_spread_kernel_map(&g_k, &m, 0.1f, &s, TRN_SPREAD_MAX_SENSORS + 1u, &win,
-                                           idx, sizeof idx), TRN_E_SIZE);
-    assert_int_equal(trn_spread_kernel_map(&g_k, &m, 0.1f, &s, 1, &empty, idx, sizeof idx), TRN_E_SIZE);
+                                           idx, sizeof idx),
+                     TRN_E_SIZE);
+    assert_int_equal(trn_spread_kernel_map(&g_k, &m, 0.1f, &s, 1, &empty, idx, sizeof idx),
+                     TRN_E_SIZE);
     assert_int_equal(trn_spread_kernel_map(&g_k, &m, 0.1f, &s, 1, &win, idx, sizeof idx - 1),
                      TRN_E_WORKSPACE);
 

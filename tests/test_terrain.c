@@ -58,8 +58,8 @@ typedef struct {
     trn_grid_f32_t view;
 } padded_t;
 
-static void padded_make(padded_t *p, int32_t w, int32_t h, int32_t padx, int32_t pady,
-                        int32_t ox, int32_t oy, float fill)
+static void padded_make(padded_t *p, int32_t w, int32_t h, int32_t padx, int32_t pady, int32_t ox,
+                        int32_t oy, float fill)
 {
     size_t i;
     p->n = (size_t)(w + padx) * (size_t)(h + pady);
@@ -172,8 +172,8 @@ static double compare_hp(const trn_grid_f32_t *out, const double *expect, double
             } else {
                 const double d = fabs((double)o - e);
                 if (!(d <= tol)) {
-                    fail_msg("cell (%d, %d): got %.9g, expected %.9g (|diff| %.3g > %.3g)",
-                             (int)x, (int)y, (double)o, e, d, tol);
+                    fail_msg("cell (%d, %d): got %.9g, expected %.9g (|diff| %.3g > %.3g)", (int)x,
+                             (int)y, (double)o, e, d, tol);
                 }
                 worst = fmax(worst, d);
             }
@@ -428,10 +428,10 @@ static void test_highpass_random_vs_bruteforce(void **state)
         size_t n_valid;
         trn_status_t st;
         assert_non_null(expect);
-        padded_make(&dem, w, h, padx, pady, trn_rng_int(&rng, 0, padx),
-                    trn_rng_int(&rng, 0, pady), POISON_IN);
-        padded_make(&out, w, h, pady, padx, trn_rng_int(&rng, 0, pady),
-                    trn_rng_int(&rng, 0, padx), SENTINEL_OUT);
+        padded_make(&dem, w, h, padx, pady, trn_rng_int(&rng, 0, padx), trn_rng_int(&rng, 0, pady),
+                    POISON_IN);
+        padded_make(&out, w, h, pady, padx, trn_rng_int(&rng, 0, pady), trn_rng_int(&rng, 0, padx),
+                    SENTINEL_OUT);
         n_sub += padx > 0 ? 1 : 0;
         fill_dem(&rng, &dem.view, offset, hole_p);
         n_valid = oracle_highpass(&dem.view, oracle_radius(&cfg), expect);
@@ -823,15 +823,35 @@ static void test_occupancy_bins(void **state)
         int32_t nz, bin;
     } cases[] = {
         /* bins centred on multiples of zbin: k = floor(h/zbin + 1/2) + nz/2 */
-        {0.0f, 1.0f, 5, 2},   {-0.0f, 1.0f, 5, 2},  {0.999f, 1.0f, 5, 3}, {1.0f, 1.0f, 5, 3},
-        {-1e-6f, 1.0f, 5, 2}, {-1.0f, 1.0f, 5, 1},  {-1.5f, 1.0f, 5, 1},  {-2.0f, 1.0f, 5, 0},
-        {-2.5f, 1.0f, 5, 0},  {2.999f, 1.0f, 5, 4}, {3.0f, 1.0f, 5, 4},   {1e30f, 1.0f, 5, 4},
-        {-1e30f, 1.0f, 5, 0}, {0.75f, 0.25f, 8, 7}, {0.74f, 0.25f, 8, 7}, {-1.0f, 0.25f, 8, 0},
-        {-0.9f, 0.25f, 8, 0}, {-0.74f, 0.25f, 8, 1}, {5.0f, 1.0f, 1, 0},  {-5.0f, 1.0f, 1, 0},
-        {0.3f, 0.1f, 128, 67}, {-12.75f, 0.5f, 64, 7},
+        {0.0f, 1.0f, 5, 2},
+        {-0.0f, 1.0f, 5, 2},
+        {0.999f, 1.0f, 5, 3},
+        {1.0f, 1.0f, 5, 3},
+        {-1e-6f, 1.0f, 5, 2},
+        {-1.0f, 1.0f, 5, 1},
+        {-1.5f, 1.0f, 5, 1},
+        {-2.0f, 1.0f, 5, 0},
+        {-2.5f, 1.0f, 5, 0},
+        {2.999f, 1.0f, 5, 4},
+        {3.0f, 1.0f, 5, 4},
+        {1e30f, 1.0f, 5, 4},
+        {-1e30f, 1.0f, 5, 0},
+        {0.75f, 0.25f, 8, 7},
+        {0.74f, 0.25f, 8, 7},
+        {-1.0f, 0.25f, 8, 0},
+        {-0.9f, 0.25f, 8, 0},
+        {-0.74f, 0.25f, 8, 1},
+        {5.0f, 1.0f, 1, 0},
+        {-5.0f, 1.0f, 1, 0},
+        {0.3f, 0.1f, 128, 67},
+        {-12.75f, 0.5f, 64, 7},
         /* the rounding edges at +-zbin/2: ground flat within them stays in one bin */
-        {0.5f, 1.0f, 5, 3},   {0.4999f, 1.0f, 5, 2}, {-0.5f, 1.0f, 5, 2}, {-0.5001f, 1.0f, 5, 1},
-        {0.049f, 0.1f, 16, 8}, {-0.049f, 0.1f, 16, 8},
+        {0.5f, 1.0f, 5, 3},
+        {0.4999f, 1.0f, 5, 2},
+        {-0.5f, 1.0f, 5, 2},
+        {-0.5001f, 1.0f, 5, 1},
+        {0.049f, 0.1f, 16, 8},
+        {-0.049f, 0.1f, 16, 8},
     };
     size_t i;
     (void)state;
@@ -909,7 +929,8 @@ static void test_occupancy_random_vs_naive(void **state)
         n_ref = oracle_occupancy(&hp.view, &cfg, ref);
         memset(vol, 0xAB, nvox);
         assert_int_equal(trn_vol_u8_init(&occ, vol, nvox, w, h, nz), TRN_OK);
-        assert_int_equal(trn_occupancy(&hp.view, &cfg, &occ, &n), n_ref > 0u ? TRN_OK : TRN_E_NODATA);
+        assert_int_equal(trn_occupancy(&hp.view, &cfg, &occ, &n),
+                         n_ref > 0u ? TRN_OK : TRN_E_NODATA);
         assert_int_equal(n, n_ref);
         assert_memory_equal(vol, ref, nvox);
         /* missing cells are never occupied */
@@ -923,7 +944,8 @@ static void test_occupancy_random_vs_naive(void **state)
             }
         }
         /* n_occupied may be NULL */
-        assert_int_equal(trn_occupancy(&hp.view, &cfg, &occ, NULL), n_ref > 0u ? TRN_OK : TRN_E_NODATA);
+        assert_int_equal(trn_occupancy(&hp.view, &cfg, &occ, NULL),
+                         n_ref > 0u ? TRN_OK : TRN_E_NODATA);
         assert_memory_equal(vol, ref, nvox);
         total += n_ref;
         padded_free(&hp);
@@ -1075,8 +1097,8 @@ static void test_points_vs_occupancy(void **state)
         /* strictly increasing in (z, y, x) */
         for (k = 1; k < np; ++k) {
             const trn_point_t *a = &pts[k - 1], *b = &pts[k];
-            assert_true(a->z < b->z || (a->z == b->z && (a->y < b->y ||
-                                                        (a->y == b->y && a->x < b->x))));
+            assert_true(a->z < b->z ||
+                        (a->z == b->z && (a->y < b->y || (a->y == b->y && a->x < b->x))));
         }
         /* more room than needed: same answer */
         assert_int_equal(trn_occupancy_points(&hp.view, &cfg, rx, ry, pts, cap, &np), st);
@@ -1185,12 +1207,9 @@ static void test_points_rover_far_above(void **state)
     (void)state;
     memset(d, 0, sizeof d);
     assert_int_equal(trn_grid_f32_init(&hp, d, W * H, W, H), TRN_OK);
-    assert_int_equal(trn_occupancy_points(&hp, &cfg, W + TRN_MAX_DIM, 0, pts, cap, &np),
-                     TRN_E_ARG);
-    assert_int_equal(trn_occupancy_points(&hp, &cfg, 0, H + TRN_MAX_DIM, pts, cap, &np),
-                     TRN_E_ARG);
-    assert_int_equal(trn_occupancy_points(&hp, &cfg, 2 * TRN_MAX_DIM, 0, pts, cap, &np),
-                     TRN_E_ARG);
+    assert_int_equal(trn_occupancy_points(&hp, &cfg, W + TRN_MAX_DIM, 0, pts, cap, &np), TRN_E_ARG);
+    assert_int_equal(trn_occupancy_points(&hp, &cfg, 0, H + TRN_MAX_DIM, pts, cap, &np), TRN_E_ARG);
+    assert_int_equal(trn_occupancy_points(&hp, &cfg, 2 * TRN_MAX_DIM, 0, pts, cap, &np), TRN_E_ARG);
 }
 
 /* Offsets at the far end of the allowed rover range still fit trn_point_t

@@ -34,7 +34,8 @@ trn_status_t trn_abi_check(size_t kernels_bytes, size_t lnp_table_bytes, size_t 
 
 /** trn_abi_check with this file's sizes. */
 #define TRN_ABI_CHECK() \
-    trn_abi_check(sizeof(trn_kernels_t), sizeof(trn_lnp_table_t), sizeof(trn_pyramid_t), sizeof(trn_map_t))
+    trn_abi_check(sizeof(trn_kernels_t), sizeof(trn_lnp_table_t), sizeof(trn_pyramid_t), \
+                  sizeof(trn_map_t))
 
 #ifdef __cplusplus
 }

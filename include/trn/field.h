@@ -48,19 +48,19 @@ typedef int32_t (*trn_field_progress_fn_t)(void *user, uint32_t done, uint32_t t
 
 /** Refinement parameters. */
 typedef struct {
-    int32_t coarse_step_cells; /**< power of two, 1..256 */
-    float margin_rel;          /**< "low" margin, [0, 100] */
-    float change_rel;          /**< "changes fast" threshold, [0, 100] */
+    int32_t coarse_step_cells;        /**< power of two, 1..256 */
+    float margin_rel;                 /**< "low" margin, [0, 100] */
+    float change_rel;                 /**< "changes fast" threshold, [0, 100] */
     trn_field_progress_fn_t progress; /**< NULL: none (trn_field_progress_fn_t) */
-    void *progress_user;       /**< passed to progress */
+    void *progress_user;              /**< passed to progress */
 } trn_field_cfg_t;
 
 /** Work and answer of one field computation. */
 typedef struct {
-    uint32_t evaluations;      /**< trn_select calls */
-    uint32_t cells;            /**< cells of the area */
-    int32_t best_x, best_y;    /**< global cell of the lowest evaluated value (-1 if none finite) */
-    double best_m;             /**< that value, m (+inf if none finite) */
+    uint32_t evaluations;   /**< trn_select calls */
+    uint32_t cells;         /**< cells of the area */
+    int32_t best_x, best_y; /**< global cell of the lowest evaluated value (-1 if none finite) */
+    double best_m;          /**< that value, m (+inf if none finite) */
 } trn_field_stats_t;
 
 /** @brief Defaults: coarse step 16 cells (1.6 m), margin 0.4, change 1.5, no progress callback.
@@ -95,10 +95,9 @@ size_t trn_field_workspace_bytes(const trn_select_cfg_t *scfg, const trn_map_t *
  * @retval TRN_E_CANCELLED fcfg->progress returned nonzero
  */
 trn_status_t trn_field(const trn_map_t *map, const trn_kernels_t *k, const trn_vol_f32_t *pg,
-                       const trn_select_cfg_t *scfg, const trn_field_cfg_t *fcfg,
-                       float heading_rad, const trn_window_t *area, trn_grid_f32_t *out,
-                       uint8_t *evaluated, size_t evaluated_len, trn_field_stats_t *stats,
-                       void *ws, size_t ws_bytes);
+                       const trn_select_cfg_t *scfg, const trn_field_cfg_t *fcfg, float heading_rad,
+                       const trn_window_t *area, trn_grid_f32_t *out, uint8_t *evaluated,
+                       size_t evaluated_len, trn_field_stats_t *stats, void *ws, size_t ws_bytes);
 
 /**
  * @brief Workspace bytes of trn_field_fast for this map and P_G (0 if

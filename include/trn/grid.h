@@ -23,18 +23,18 @@ extern "C" {
 
 /** 2-D grid of float, row-major. Missing data is NaN. */
 typedef struct {
-    float *data;     /**< first cell; at least (height-1)*stride + width elements */
-    int32_t width;   /**< cells per row, 1..TRN_MAX_DIM */
-    int32_t height;  /**< rows, 1..TRN_MAX_DIM */
-    int32_t stride;  /**< elements between rows, >= width */
+    float *data;    /**< first cell; at least (height-1)*stride + width elements */
+    int32_t width;  /**< cells per row, 1..TRN_MAX_DIM */
+    int32_t height; /**< rows, 1..TRN_MAX_DIM */
+    int32_t stride; /**< elements between rows, >= width */
 } trn_grid_f32_t;
 
 /** Dense 3-D volume of uint8_t. */
 typedef struct {
-    uint8_t *data;   /**< nx*ny*nz bytes */
-    int32_t nx;      /**< 1..TRN_MAX_DIM */
-    int32_t ny;      /**< 1..TRN_MAX_DIM */
-    int32_t nz;      /**< 1..TRN_MAX_ZBINS */
+    uint8_t *data; /**< nx*ny*nz bytes */
+    int32_t nx;    /**< 1..TRN_MAX_DIM */
+    int32_t ny;    /**< 1..TRN_MAX_DIM */
+    int32_t nz;    /**< 1..TRN_MAX_ZBINS */
 } trn_vol_u8_t;
 
 /**
@@ -45,8 +45,8 @@ typedef struct {
  * @retval TRN_OK, TRN_E_NULL (g or data NULL), TRN_E_SIZE (dimension 0 or
  *         > TRN_MAX_DIM), TRN_E_WORKSPACE (capacity < width*height).
  */
-trn_status_t trn_grid_f32_init(trn_grid_f32_t *g, float *data, size_t capacity,
-                               int32_t width, int32_t height);
+trn_status_t trn_grid_f32_init(trn_grid_f32_t *g, float *data, size_t capacity, int32_t width,
+                               int32_t height);
 
 /**
  * @brief Check a grid view a caller filled in by hand.
@@ -60,16 +60,16 @@ trn_status_t trn_grid_f32_check(const trn_grid_f32_t *g);
  * @retval TRN_OK, TRN_E_NULL, TRN_E_SIZE (bad g or zero size), TRN_E_RANGE
  *         (the rectangle is not inside g).
  */
-trn_status_t trn_grid_f32_sub(const trn_grid_f32_t *g, int32_t x0, int32_t y0,
-                              int32_t width, int32_t height, trn_grid_f32_t *sub);
+trn_status_t trn_grid_f32_sub(const trn_grid_f32_t *g, int32_t x0, int32_t y0, int32_t width,
+                              int32_t height, trn_grid_f32_t *sub);
 
 /**
  * @brief Make a volume view over caller memory.
  * @retval TRN_OK, TRN_E_NULL, TRN_E_SIZE (nx, ny out of 1..TRN_MAX_DIM or nz
  *         out of 1..TRN_MAX_ZBINS), TRN_E_WORKSPACE (capacity < nx*ny*nz).
  */
-trn_status_t trn_vol_u8_init(trn_vol_u8_t *v, uint8_t *data, size_t capacity,
-                             int32_t nx, int32_t ny, int32_t nz);
+trn_status_t trn_vol_u8_init(trn_vol_u8_t *v, uint8_t *data, size_t capacity, int32_t nx,
+                             int32_t ny, int32_t nz);
 
 /**
  * @brief Check a volume view a caller filled in by hand.

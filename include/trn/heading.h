@@ -55,18 +55,18 @@ typedef struct {
 
 /** Result of trn_localize_points_heading. */
 typedef struct {
-    trn_loc_result_t loc;   /**< at the best heading: x, y (sub-step fit), ix, iy, ll_best,
+    trn_loc_result_t loc;     /**< at the best heading: x, y (sub-step fit), ix, iy, ll_best,
                                  the competitor, the failure probability; sigma_x_m,
                                  sigma_y_m, rho and cov_m2 are the position marginal of cov3;
                                  stats: the first search's work summed over the headings
                                  (the competitor's search not counted, as in
                                  trn_localize_points) */
-    double heading_rad;     /**< centre + (k + dk) step */
+    double heading_rad;       /**< centre + (k + dk) step */
     double sigma_heading_rad; /**< sqrt(cov3[8]); 0 with W = 0 (heading taken as known) */
-    double cov3[9];         /**< covariance of (x m, y m, heading rad), row-major */
-    double step_rad;        /**< step used */
-    int32_t half_steps;     /**< K: headings centre + k step, k = -K..K */
-    int32_t best_step;      /**< k of the best integer pose */
+    double cov3[9];           /**< covariance of (x m, y m, heading rad), row-major */
+    double step_rad;          /**< step used */
+    int32_t half_steps;       /**< K: headings centre + k step, k = -K..K */
+    int32_t best_step;        /**< k of the best integer pose */
 } trn_heading_result_t;
 
 /** @brief Heading step and K for cfg and these points (step 0: automatic).
@@ -83,7 +83,8 @@ trn_status_t trn_heading_steps(const trn_point_t *pts, size_t n, const trn_headi
 trn_status_t trn_points_rotate(const trn_point_t *in, size_t n, double angle_rad, trn_point_t *out);
 
 /** @brief Workspace bytes of trn_localize_points_heading (0 if invalid). */
-size_t trn_localize_heading_workspace_bytes(const trn_map_t *map, size_t n, const trn_window_t *win);
+size_t trn_localize_heading_workspace_bytes(const trn_map_t *map, size_t n,
+                                            const trn_window_t *win);
 
 /**
  * @brief Localize over (x, y, heading) (see the file comment). With W = 0
@@ -121,10 +122,10 @@ size_t trn_localize_dem_heading_workspace_bytes(const trn_map_t *map, int32_t wi
  *         when the window is not inside the map or the local DEM's size is
  *         out of range.
  */
-trn_status_t trn_localize_dem_heading(const trn_map_t *map, const trn_grid_f32_t *local_dem, int32_t rover_x,
-                                      int32_t rover_y, size_t max_points, const trn_window_t *win,
-                                      const trn_heading_cfg_t *cfg, void *ws, size_t ws_bytes,
-                                      trn_heading_result_t *out);
+trn_status_t trn_localize_dem_heading(const trn_map_t *map, const trn_grid_f32_t *local_dem,
+                                      int32_t rover_x, int32_t rover_y, size_t max_points,
+                                      const trn_window_t *win, const trn_heading_cfg_t *cfg,
+                                      void *ws, size_t ws_bytes, trn_heading_result_t *out);
 
 #ifdef __cplusplus
 }

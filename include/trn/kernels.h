@@ -39,8 +39,9 @@ extern "C" {
 /** The kernel table. Tap i of kernel j is taps[j][TRN_KERNEL_MAX_RADIUS + i], zero for |i| > R_j. */
 typedef struct {
     float taps[TRN_KERNEL_COUNT][2 * TRN_KERNEL_MAX_RADIUS + 1];
-    float sigma_cells[TRN_KERNEL_COUNT];   /**< sigma_j, cells */
-    float bound_cells[TRN_KERNEL_COUNT - 1]; /**< sigma_0 sqrt(2)^(j+1/2): above it, j+1 is nearer */
+    float sigma_cells[TRN_KERNEL_COUNT]; /**< sigma_j, cells */
+    float
+        bound_cells[TRN_KERNEL_COUNT - 1]; /**< sigma_0 sqrt(2)^(j+1/2): above it, j+1 is nearer */
     int32_t radius[TRN_KERNEL_COUNT];      /**< R_j, taps each side */
     float sigma0_cells;                    /**< sigma_0 */
 } trn_kernels_t;

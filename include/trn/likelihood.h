@@ -46,8 +46,8 @@ typedef struct {
 /** ln p(d) as a fixed-point table indexed by chamfer distance 0..cap. */
 typedef struct {
     int32_t lnp[TRN_CHAMFER_CAP_MAX + 1]; /**< round(TRN_LNP_SCALE * ln p(d)), d = i/3*cell_m */
-    double k_per_m;                        /**< K, 1/m */
-    uint8_t cap;                           /**< entries 0..cap are valid */
+    double k_per_m;                       /**< K, 1/m */
+    uint8_t cap;                          /**< entries 0..cap are valid */
 } trn_lnp_table_t;
 
 /** Inclusive rectangle of poses, in global cells. */
@@ -62,8 +62,8 @@ typedef struct {
 
 /** Best pose of a search. */
 typedef struct {
-    int32_t x, y;   /**< global cell */
-    int64_t score;  /**< ln L in table units (TRN_LNP_SCALE per nat) */
+    int32_t x, y;  /**< global cell */
+    int64_t score; /**< ln L in table units (TRN_LNP_SCALE per nat) */
 } trn_best_t;
 
 /** Work counters of a search (for benchmarks and tests). */
@@ -74,11 +74,11 @@ typedef struct {
 
 /** Min-filtered distance volumes for branch-and-bound; memory owned by caller. */
 typedef struct {
-    trn_vol_u8_t base;                  /**< level 0: the distance volume (not owned) */
-    uint8_t *level[TRN_MAX_LEVELS];     /**< level l (1..nlevels) at level[l-1] */
-    int32_t nlevels;                    /**< 1..TRN_MAX_LEVELS */
-    int32_t pad;                        /**< 2^nlevels - 1 cells of low-side padding in x and y */
-    int32_t pnx, pny;                   /**< padded sizes nx + pad, ny + pad */
+    trn_vol_u8_t base;              /**< level 0: the distance volume (not owned) */
+    uint8_t *level[TRN_MAX_LEVELS]; /**< level l (1..nlevels) at level[l-1] */
+    int32_t nlevels;                /**< 1..TRN_MAX_LEVELS */
+    int32_t pad;                    /**< 2^nlevels - 1 cells of low-side padding in x and y */
+    int32_t pnx, pny;               /**< padded sizes nx + pad, ny + pad */
     uint8_t cap;
 } trn_pyramid_t;
 
@@ -145,10 +145,9 @@ size_t trn_search_bb_workspace_bytes(const trn_pyramid_t *p, const trn_window_t 
  * @retval as trn_search_exhaustive, plus TRN_E_WORKSPACE (ws_bytes below
  *         trn_search_bb_workspace_bytes or ws not TRN_WS_ALIGN-aligned).
  */
-trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
-                           const trn_point_t *pts, size_t n, const trn_window_t *win,
-                           const trn_exclusion_t *ex, void *ws, size_t ws_bytes,
-                           trn_best_t *best, trn_search_stats_t *stats);
+trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t, const trn_point_t *pts,
+                           size_t n, const trn_window_t *win, const trn_exclusion_t *ex, void *ws,
+                           size_t ws_bytes, trn_best_t *best, trn_search_stats_t *stats);
 
 /**
  * @brief trn_search_bb over the poses scoring strictly above floor (table
@@ -160,8 +159,8 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t,
  */
 trn_status_t trn_search_bb_above(const trn_pyramid_t *p, const trn_lnp_table_t *t,
                                  const trn_point_t *pts, size_t n, const trn_window_t *win,
-                                 const trn_exclusion_t *ex, int64_t floor, void *ws, size_t ws_bytes,
-                                 trn_best_t *best, trn_search_stats_t *stats);
+                                 const trn_exclusion_t *ex, int64_t floor, void *ws,
+                                 size_t ws_bytes, trn_best_t *best, trn_search_stats_t *stats);
 
 /**
  * @brief Reorder local points so that those in the least populated height

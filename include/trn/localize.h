@@ -78,10 +78,10 @@ typedef struct {
 /** A prepared global map. All pointers point into the caller's buffer. */
 typedef struct {
     trn_map_cfg_t cfg;
-    trn_vol_u8_t dist;     /**< chamfer distances of the global occupancy */
-    trn_pyramid_t pyr;     /**< min-filtered distances for branch-and-bound */
-    trn_lnp_table_t lnp;   /**< ln p(d), with K of this map */
-    uint32_t n_occupied;   /**< occupied voxels of the global map */
+    trn_vol_u8_t dist;      /**< chamfer distances of the global occupancy */
+    trn_pyramid_t pyr;      /**< min-filtered distances for branch-and-bound */
+    trn_lnp_table_t lnp;    /**< ln p(d), with K of this map */
+    uint32_t n_occupied;    /**< occupied voxels of the global map */
     trn_grid_f32_t heights; /**< the DEM (NaN = unknown); data NULL unless the
                                  configuration needs it (TRN_LOCAL_HP_MAP, refine or
                                  TRN_MATCH_HEIGHTS) */
@@ -156,8 +156,8 @@ size_t trn_map_cfg_auto_workspace_bytes(int32_t width, int32_t height);
  *         TRN_E_SIZE, TRN_E_WORKSPACE (ws below trn_map_cfg_auto_workspace_bytes
  *         or not TRN_WS_ALIGN-aligned), TRN_E_NODATA (no valid height)
  */
-trn_status_t trn_map_cfg_auto(trn_map_cfg_t *cfg, const trn_grid_f32_t *dem, float cell_m,
-                              void *ws, size_t ws_bytes, double *sigma_h_m);
+trn_status_t trn_map_cfg_auto(trn_map_cfg_t *cfg, const trn_grid_f32_t *dem, float cell_m, void *ws,
+                              size_t ws_bytes, double *sigma_h_m);
 
 /** @brief Check a map configuration. @retval TRN_OK, TRN_E_NULL, TRN_E_ARG, TRN_E_SIZE. */
 trn_status_t trn_map_cfg_check(const trn_map_cfg_t *cfg);

@@ -43,21 +43,21 @@ typedef struct {
 
 /** Rover pose in the map frame. */
 typedef struct {
-    float x_m;          /**< east */
-    float y_m;          /**< north */
-    float z_m;          /**< up (height of the body origin) */
-    float heading_rad;  /**< from east, counterclockwise */
+    float x_m;         /**< east */
+    float y_m;         /**< north */
+    float z_m;         /**< up (height of the body origin) */
+    float heading_rad; /**< from east, counterclockwise */
 } trn_rover_pose_t;
 
 /** Mast geometry and joint limits (see the frames above). */
 typedef struct {
-    float pan_x_m, pan_y_m;   /**< pan axis position in the body frame */
-    float pan_z_m;            /**< pan joint height above the body origin */
-    float tilt_fwd_m;         /**< tilt axis ahead of the pan axis (panned frame) */
-    float tilt_up_m;          /**< tilt axis above the pan joint */
-    float cam_fwd_m;          /**< optical centre ahead of the tilt axis (head frame) */
-    float cam_left_m;         /**< optical centre left of the tilt-axis midpoint */
-    float cam_up_m;           /**< optical centre above the tilt axis */
+    float pan_x_m, pan_y_m;           /**< pan axis position in the body frame */
+    float pan_z_m;                    /**< pan joint height above the body origin */
+    float tilt_fwd_m;                 /**< tilt axis ahead of the pan axis (panned frame) */
+    float tilt_up_m;                  /**< tilt axis above the pan joint */
+    float cam_fwd_m;                  /**< optical centre ahead of the tilt axis (head frame) */
+    float cam_left_m;                 /**< optical centre left of the tilt-axis midpoint */
+    float cam_up_m;                   /**< optical centre above the tilt axis */
     float pan_min_rad, pan_max_rad;   /**< pan limits, within [-pi, pi] */
     float tilt_min_rad, tilt_max_rad; /**< tilt limits, within [-pi/2, pi/2] */
 } trn_mast_geom_t;
@@ -70,10 +70,10 @@ typedef struct {
 
 /** How a local DEM grid sits on the map (rover-centred, map-aligned). */
 typedef struct {
-    float cell_m;       /**< cell size, the global map's; > 0 */
-    int32_t rover_col;  /**< the grid column holding the rover's position */
-    int32_t rover_row;  /**< the grid row holding the rover's position */
-    int32_t row_north;  /**< +1: row index grows northward; -1: southward (north-up images) */
+    float cell_m;      /**< cell size, the global map's; > 0 */
+    int32_t rover_col; /**< the grid column holding the rover's position */
+    int32_t rover_row; /**< the grid row holding the rover's position */
+    int32_t row_north; /**< +1: row index grows northward; -1: southward (north-up images) */
 } trn_local_dem_cfg_t;
 
 /**
@@ -132,7 +132,8 @@ trn_status_t trn_mast_camera_to_map(const trn_mast_geom_t *g, const trn_rover_po
  * @param[out] out n points.
  * @retval TRN_OK, TRN_E_NULL (T, or in/out NULL with n > 0)
  */
-trn_status_t trn_rigid_apply(const trn_rigid_t *T, const trn_vec3f_t *in, size_t n, trn_vec3f_t *out);
+trn_status_t trn_rigid_apply(const trn_rigid_t *T, const trn_vec3f_t *in, size_t n,
+                             trn_vec3f_t *out);
 
 /**
  * @brief Bin map-frame points into a rover-centred, map-aligned local DEM:
@@ -158,7 +159,8 @@ trn_status_t trn_rigid_apply(const trn_rigid_t *T, const trn_vec3f_t *in, size_t
  * @retval TRN_E_NODATA no point landed in the grid (dem is all NaN)
  */
 trn_status_t trn_mast_local_dem(const trn_vec3f_t *pts, size_t n, const trn_rover_pose_t *pose,
-                                const trn_local_dem_cfg_t *cfg, trn_grid_f32_t *dem, size_t *n_used);
+                                const trn_local_dem_cfg_t *cfg, trn_grid_f32_t *dem,
+                                size_t *n_used);
 
 /**
  * @brief trn_mast_local_dem with each cell holding the MEAN z of its points
@@ -175,8 +177,8 @@ trn_status_t trn_mast_local_dem(const trn_vec3f_t *pts, size_t n, const trn_rove
  *         TRN_E_WORKSPACE (counts_len too small)
  */
 trn_status_t trn_mast_local_dem_mean(const trn_vec3f_t *pts, size_t n, const trn_rover_pose_t *pose,
-                                     const trn_local_dem_cfg_t *cfg, trn_grid_f32_t *dem, uint32_t *counts,
-                                     size_t counts_len, size_t *n_used);
+                                     const trn_local_dem_cfg_t *cfg, trn_grid_f32_t *dem,
+                                     uint32_t *counts, size_t counts_len, size_t *n_used);
 
 #ifdef __cplusplus
 }

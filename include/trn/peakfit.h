@@ -49,9 +49,9 @@ trn_status_t trn_peak_fit(const double ll[9], trn_peak_t *out);
 
 /** Result of the three-dimensional fit (trn_peak_fit3), in grid units. */
 typedef struct {
-    double offset[3]; /**< peak offset from the centre sample, per axis */
+    double offset[3];     /**< peak offset from the centre sample, per axis */
     double covariance[9]; /**< row-major 3 x 3, units^2 */
-    double sigma[3]; /**< standard deviations, sqrt of cov's diagonal */
+    double sigma[3];      /**< standard deviations, sqrt of cov's diagonal */
 } trn_peak3_t;
 
 /**

@@ -59,29 +59,29 @@ typedef struct {
 
 /** Best integer pose of trn_height_search. */
 typedef struct {
-    int32_t x, y;       /**< global cell of the local rover cell */
-    double ll;          /**< its log-likelihood, nats (see trn_height_search) */
-    double dz_m;        /**< its vertical offset local - global, metres */
-    double model_m;     /**< its model error m, metres */
-    uint64_t poses;     /**< poses evaluated */
-    double lse_all;     /**< ln sum over every pose of the window of exp(ll / ll_scale) */
-    double lse_out;     /**< the same over the poses outside the exclusion zone
+    int32_t x, y;   /**< global cell of the local rover cell */
+    double ll;      /**< its log-likelihood, nats (see trn_height_search) */
+    double dz_m;    /**< its vertical offset local - global, metres */
+    double model_m; /**< its model error m, metres */
+    uint64_t poses; /**< poses evaluated */
+    double lse_all; /**< ln sum over every pose of the window of exp(ll / ll_scale) */
+    double lse_out; /**< the same over the poses outside the exclusion zone
                              (= lse_all without one) */
 } trn_height_best_t;
 
 /** Result of trn_refine_pose. Pose in global cells (x = column, y = row). */
 typedef struct {
-    double x, y;        /**< refined pose of the local rover cell */
-    double dz_m;        /**< vertical offset local - global, metres */
-    double model_m;     /**< model error estimated beside the noise, metres */
-    double cov_cells[3];/**< var_x, var_y, cov_xy in cells^2 */
-    double chi2_dof;    /**< reduced chi-square of the inliers (before the >= 1 floor) */
-    double inflation;   /**< factor (>= 1) the block sandwich put on the model covariance */
+    double x, y;            /**< refined pose of the local rover cell */
+    double dz_m;            /**< vertical offset local - global, metres */
+    double model_m;         /**< model error estimated beside the noise, metres */
+    double cov_cells[3];    /**< var_x, var_y, cov_xy in cells^2 */
+    double chi2_dof;        /**< reduced chi-square of the inliers (before the >= 1 floor) */
+    double inflation;       /**< factor (>= 1) the block sandwich put on the model covariance */
     double interp_shift[2]; /**< shift of (x, y) had the DEM been bilinear, cells;
                                  TRN_REFINE_SYS times its outer product is in the covariance */
-    int32_t n_used;     /**< inlier points of the last iteration */
-    int32_t n_seen;     /**< seen local points with a global height under them */
-    int32_t iterations; /**< Gauss-Newton steps taken */
+    int32_t n_used;         /**< inlier points of the last iteration */
+    int32_t n_seen;         /**< seen local points with a global height under them */
+    int32_t iterations;     /**< Gauss-Newton steps taken */
 } trn_refine_t;
 
 /**
@@ -144,8 +144,8 @@ trn_status_t trn_height_search(const trn_grid_f32_t *global, const trn_grid_f32_
  * @retval TRN_E_RANGE  window empty, negative or beyond TRN_MAX_DIM
  * @retval TRN_E_NODATA every pose excluded
  */
-trn_status_t trn_height_mass(const double *ll_grid, const trn_window_t *win, const trn_exclusion_t *ex,
-                             double ll_scale, trn_height_best_t *best);
+trn_status_t trn_height_mass(const double *ll_grid, const trn_window_t *win,
+                             const trn_exclusion_t *ex, double ll_scale, trn_height_best_t *best);
 
 #ifdef __cplusplus
 }

@@ -59,16 +59,16 @@ extern "C" {
 
 /** Candidate rules (see the file comment). */
 typedef struct {
-    float min_range_m;        /**< nearest target, m, [0, max_range_m] */
-    float max_range_m;        /**< farthest target, m, (0, 1e6], at most TRN_MAX_DIM cells */
-    float pan_min_rad;        /**< bearing limits relative to the heading, */
-    float pan_max_rad;        /**< [-pi, pi], min <= max */
-    float footprint_radius_m; /**< rover disc no patch may touch, m, [0, 1e5] */
-    float patch_m;            /**< patch side, m; >= 3 cells after rounding (file comment) */
-    int32_t stride_cells;     /**< candidate lattice step, 1..64 */
-    float min_separation_m;   /**< least distance between ranked targets, m, [0, 1e6] */
+    float min_range_m;             /**< nearest target, m, [0, max_range_m] */
+    float max_range_m;             /**< farthest target, m, (0, 1e6], at most TRN_MAX_DIM cells */
+    float pan_min_rad;             /**< bearing limits relative to the heading, */
+    float pan_max_rad;             /**< [-pi, pi], min <= max */
+    float footprint_radius_m;      /**< rover disc no patch may touch, m, [0, 1e5] */
+    float patch_m;                 /**< patch side, m; >= 3 cells after rounding (file comment) */
+    int32_t stride_cells;          /**< candidate lattice step, 1..64 */
+    float min_separation_m;        /**< least distance between ranked targets, m, [0, 1e6] */
     trn_sigma_model_t local_sigma; /**< eq. 9 error model of the new local map */
-    float sigma_heading_rad;  /**< standard deviation of the rover's heading, rad,
+    float sigma_heading_rad;       /**< standard deviation of the rover's heading, rad,
                                    [0, TRN_SELECT_MAX_SIGMA_HEADING_RAD]; 0 (the default):
                                    the heading is known, the paper's prediction exactly */
 } trn_select_cfg_t;
@@ -87,28 +87,28 @@ typedef struct {
 
 /** One candidate target and its prediction (Fig. 2b is the set of these). */
 typedef struct {
-    int32_t x, y;          /**< patch centre, global cells */
-    float range_m;         /**< distance from the rover, m */
-    float bearing_rad;     /**< relative to the heading, (-pi, pi] */
-    double ll[9];          /**< E[ln L(d)], nats, ll[(dy + 1) * 3 + (dx + 1)] */
+    int32_t x, y;                     /**< patch centre, global cells */
+    float range_m;                    /**< distance from the rover, m */
+    float bearing_rad;                /**< relative to the heading, (-pi, pi] */
+    double ll[9];                     /**< E[ln L(d)], nats, ll[(dy + 1) * 3 + (dx + 1)] */
     double sigma_x_m, sigma_y_m, rho; /**< eq. 6 fit (with the heading's term);
                                            +inf sigmas when uninformative */
-    double cov_m2[3];      /**< var_x, var_y, cov_xy, m^2 (with the heading's term) */
-    double uncertainty_m;  /**< sqrt(sigma_x^2 + sigma_y^2), m; +inf when uninformative */
-    double heading_m;      /**< the heading's part, sigma_heading_rad * range, m
+    double cov_m2[3];                 /**< var_x, var_y, cov_xy, m^2 (with the heading's term) */
+    double uncertainty_m; /**< sqrt(sigma_x^2 + sigma_y^2), m; +inf when uninformative */
+    double heading_m;     /**< the heading's part, sigma_heading_rad * range, m
                                 (0 with a known heading); the fit's own sigmas are
                                 sqrt(var - its term) (file comment) */
-    int32_t informative;   /**< 1 finite fit, 0 ill-conditioned */
+    int32_t informative;  /**< 1 finite fit, 0 ill-conditioned */
 } trn_candidate_t;
 
 /** Summary of one selection. */
 typedef struct {
-    trn_window_t roi;      /**< region where P (eq. 9) was computed */
-    size_t n_candidates;   /**< entries written to the candidate array */
-    size_t n_informative;  /**< of them with a finite fit */
-    size_t n_ranked;       /**< entries written to the ranked array */
-    size_t best;           /**< index of the best candidate (= ranked[0]) */
-    int32_t patch_cells;   /**< patch side used */
+    trn_window_t roi;     /**< region where P (eq. 9) was computed */
+    size_t n_candidates;  /**< entries written to the candidate array */
+    size_t n_informative; /**< of them with a finite fit */
+    size_t n_ranked;      /**< entries written to the ranked array */
+    size_t best;          /**< index of the best candidate (= ranked[0]) */
+    int32_t patch_cells;  /**< patch side used */
 } trn_select_result_t;
 
 /** @brief Defaults (method.md 4): range 1-10 m, full pan (+-pi), footprint
@@ -155,8 +155,8 @@ size_t trn_select_workspace_bytes(const trn_select_cfg_t *cfg, const trn_map_t *
  */
 trn_status_t trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_vol_f32_t *pg,
                         const trn_select_cfg_t *cfg, const trn_rover_t *rover,
-                        trn_candidate_t *cands, size_t capacity, size_t *ranked,
-                        size_t ranked_cap, trn_select_result_t *res, void *ws, size_t ws_bytes);
+                        trn_candidate_t *cands, size_t capacity, size_t *ranked, size_t ranked_cap,
+                        trn_select_result_t *res, void *ws, size_t ws_bytes);
 
 #ifdef __cplusplus
 }

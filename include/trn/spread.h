@@ -90,8 +90,8 @@ trn_status_t trn_sigma_model_check(const trn_sigma_model_t *m);
  *         TRN_E_SIZE (n_sensors 0 or too many, empty window or a side > TRN_MAX_DIM),
  *         TRN_E_WORKSPACE (idx_len too small)
  */
-trn_status_t trn_spread_kernel_map(const trn_kernels_t *k, const trn_sigma_model_t *m,
-                                   float cell_m, const trn_xy_t *sensors, size_t n_sensors,
+trn_status_t trn_spread_kernel_map(const trn_kernels_t *k, const trn_sigma_model_t *m, float cell_m,
+                                   const trn_xy_t *sensors, size_t n_sensors,
                                    const trn_window_t *win, uint8_t *idx, size_t idx_len);
 
 /** @brief Workspace bytes of trn_prob_global for an nx x ny map (0 if out of range).

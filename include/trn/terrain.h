@@ -30,17 +30,18 @@ extern "C" {
 
 /** Terrain-to-occupancy parameters, shared by the global and local maps. */
 typedef struct {
-    float cell_m;           /**< grid cell side, metres, (0, 1000] */
-    float zbin_m;           /**< height bin, metres, (0, 1000]; = cell_m for cubic voxels */
-    float highpass_half_m;  /**< half-width of the smoothing box, metres, [cell_m, 1e6] (ten 1 km cells and more) */
-    int32_t nz;             /**< height bins, 1..TRN_MAX_ZBINS */
+    float cell_m; /**< grid cell side, metres, (0, 1000] */
+    float zbin_m; /**< height bin, metres, (0, 1000]; = cell_m for cubic voxels */
+    float
+        highpass_half_m; /**< half-width of the smoothing box, metres, [cell_m, 1e6] (ten 1 km cells and more) */
+    int32_t nz; /**< height bins, 1..TRN_MAX_ZBINS */
 } trn_terrain_cfg_t;
 
 /** One occupied voxel of a local map, relative to the rover's cell. */
 typedef struct {
-    int16_t x;  /**< cells east of the rover cell (column offset) */
-    int16_t y;  /**< cells along +row from the rover cell */
-    int16_t z;  /**< height bin, 0..nz-1 (same bins as the global map) */
+    int16_t x; /**< cells east of the rover cell (column offset) */
+    int16_t y; /**< cells along +row from the rover cell */
+    int16_t z; /**< height bin, 0..nz-1 (same bins as the global map) */
 } trn_point_t;
 
 /**
@@ -90,8 +91,8 @@ trn_status_t trn_occupancy(const trn_grid_f32_t *hp, const trn_terrain_cfg_t *cf
  * @retval TRN_E_NODATA nothing occupied.
  */
 trn_status_t trn_occupancy_points(const trn_grid_f32_t *hp, const trn_terrain_cfg_t *cfg,
-                                  int32_t rover_x, int32_t rover_y,
-                                  trn_point_t *pts, size_t capacity, size_t *n_points);
+                                  int32_t rover_x, int32_t rover_y, trn_point_t *pts,
+                                  size_t capacity, size_t *n_points);
 
 #ifdef __cplusplus
 }

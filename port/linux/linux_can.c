@@ -55,24 +55,17 @@ static int remaining_ms(int64_t deadline_ms)
 trn_status_t trn_lcan_status_from_errno(int err)
 {
     switch (err) {
-    case 0:
-        return TRN_OK;
+    case 0: return TRN_OK;
     case ETIMEDOUT:
-    case ECOMM:
-        return TRN_E_TIMEOUT;
-    case EILSEQ:
-        return TRN_E_SEQ;
-    case EBADMSG:
-        return TRN_E_FORMAT;
-    case EMSGSIZE:
-        return TRN_E_CAPACITY;
+    case ECOMM: return TRN_E_TIMEOUT;
+    case EILSEQ: return TRN_E_SEQ;
+    case EBADMSG: return TRN_E_FORMAT;
+    case EMSGSIZE: return TRN_E_CAPACITY;
     case ENETDOWN:
     case ENODEV:
     case ENXIO:
-    case ENETUNREACH:
-        return TRN_E_BUS;
-    default:
-        return TRN_E_IO;
+    case ENETUNREACH: return TRN_E_BUS;
+    default: return TRN_E_IO;
     }
 }
 
@@ -148,10 +141,7 @@ static int id_in_range(uint32_t id, uint8_t extended)
     return extended ? (id <= TRN_LCAN_EFF_MAX) : (id <= TRN_LCAN_SFF_MAX);
 }
 
-static int is_flag(uint8_t v)
-{
-    return v == 0u || v == 1u;
-}
+static int is_flag(uint8_t v) { return v == 0u || v == 1u; }
 
 static int timeout_ok(int32_t timeout_ms)
 {
@@ -504,10 +494,7 @@ trn_status_t trn_lcan_bus_status(const trn_lcan_t *can, trn_lcan_bus_t *bus)
 /* ------------------------------------------------------------------------ */
 /* ISO-TP                                                                    */
 
-static int stmin_ok(uint8_t s)
-{
-    return s <= 0x7Fu || (s >= 0xF1u && s <= 0xF9u);
-}
+static int stmin_ok(uint8_t s) { return s <= 0x7Fu || (s >= 0xF1u && s <= 0xF9u); }
 
 trn_status_t trn_lisotp_cfg_default(trn_lisotp_cfg_t *cfg)
 {

@@ -76,9 +76,8 @@ trn_status_t trn_lgpio_open(trn_lgpio_t *g, const trn_lgpio_cfg_t *cfg)
 
     /* Each line is kept in g only once requested, so close releases exactly those. */
     line = gpiod_chip_get_line(g->chip, cfg->power_offset);
-    if (line == NULL ||
-        gpiod_line_request_output_flags(line, cfg->consumer, active_low_flag(cfg->power_active_low),
-                                        0) != 0) {
+    if (line == NULL || gpiod_line_request_output_flags(
+                            line, cfg->consumer, active_low_flag(cfg->power_active_low), 0) != 0) {
         (void)trn_lgpio_close(g);
         return TRN_E_IO;
     }
@@ -94,9 +93,8 @@ trn_status_t trn_lgpio_open(trn_lgpio_t *g, const trn_lgpio_cfg_t *cfg)
     g->trigger = line;
 
     line = gpiod_chip_get_line(g->chip, cfg->deployed_offset);
-    if (line == NULL ||
-        gpiod_line_request_both_edges_events_flags(line, cfg->consumer,
-                                                   active_low_flag(cfg->deployed_active_low)) != 0) {
+    if (line == NULL || gpiod_line_request_both_edges_events_flags(
+                            line, cfg->consumer, active_low_flag(cfg->deployed_active_low)) != 0) {
         (void)trn_lgpio_close(g);
         return TRN_E_IO;
     }

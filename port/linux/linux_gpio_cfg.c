@@ -8,10 +8,7 @@
 
 #include <string.h>
 
-static int is_flag(uint8_t v)
-{
-    return v == 0u || v == 1u;
-}
+static int is_flag(uint8_t v) { return v == 0u || v == 1u; }
 
 trn_status_t trn_lgpio_cfg_default(trn_lgpio_cfg_t *cfg)
 {

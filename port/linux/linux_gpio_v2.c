@@ -228,8 +228,8 @@ static int is_open(const trn_lgpio_t *g)
 
 static int set_line(trn_lgpio_t *g, uint32_t offset, int active)
 {
-    return gpiod_line_request_set_value(g->request, offset,
-                                        active ? GPIOD_LINE_VALUE_ACTIVE : GPIOD_LINE_VALUE_INACTIVE);
+    return gpiod_line_request_set_value(
+        g->request, offset, active ? GPIOD_LINE_VALUE_ACTIVE : GPIOD_LINE_VALUE_INACTIVE);
 }
 
 trn_status_t trn_lgpio_set_power(trn_lgpio_t *g, int on)

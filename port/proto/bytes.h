@@ -35,10 +35,7 @@ static inline uint32_t trn_get_u32le(const uint8_t *p)
  * every int16_t value (C99 6.3.1.3: conversion to unsigned is modular; the
  * signed result is rebuilt arithmetically, not by an implementation-defined
  * conversion). */
-static inline void trn_put_i16le(uint8_t *p, int16_t v)
-{
-    trn_put_u16le(p, (uint16_t)v);
-}
+static inline void trn_put_i16le(uint8_t *p, int16_t v) { trn_put_u16le(p, (uint16_t)v); }
 
 static inline int16_t trn_get_i16le(const uint8_t *p)
 {

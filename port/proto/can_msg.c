@@ -74,10 +74,7 @@ trn_status_t trn_can_angle_to_raw(float rad, int16_t *raw)
     return TRN_OK;
 }
 
-float trn_can_angle_from_raw(int16_t raw)
-{
-    return (float)raw / 10000.0f;
-}
+float trn_can_angle_from_raw(int16_t raw) { return (float)raw / 10000.0f; }
 
 trn_status_t trn_can_mast_cmd_encode(const trn_mast_cmd_t *m, trn_can_frame_t *f)
 {
@@ -178,7 +175,8 @@ trn_status_t trn_can_heartbeat_encode(uint32_t id, const trn_heartbeat_t *m, trn
     if (m == NULL || f == NULL) {
         return TRN_E_NULL;
     }
-    if ((id != TRN_CAN_ID_MAST_HB && id != TRN_CAN_ID_STEREO_HB) || m->state > (uint8_t)TRN_NODE_FAULT) {
+    if ((id != TRN_CAN_ID_MAST_HB && id != TRN_CAN_ID_STEREO_HB) ||
+        m->state > (uint8_t)TRN_NODE_FAULT) {
         return TRN_E_ARG;
     }
     frame_init(f, id, (uint8_t)TRN_CAN_DLC_HEARTBEAT);
@@ -204,7 +202,4 @@ trn_status_t trn_can_heartbeat_decode(const trn_can_frame_t *f, trn_heartbeat_t 
     return TRN_OK;
 }
 
-uint8_t trn_can_counter_gap(uint8_t prev, uint8_t now)
-{
-    return (uint8_t)(now - prev - 1u);
-}
+uint8_t trn_can_counter_gap(uint8_t prev, uint8_t now) { return (uint8_t)(now - prev - 1u); }

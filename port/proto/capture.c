@@ -77,7 +77,8 @@ static trn_status_t err_status(trn_cap_err_t e)
     }
 }
 
-trn_status_t trn_capture_decode(const uint8_t *wire, size_t len, trn_capture_t *out, trn_cap_err_t *err)
+trn_status_t trn_capture_decode(const uint8_t *wire, size_t len, trn_capture_t *out,
+                                trn_cap_err_t *err)
 {
     size_t expected = 0u, body, i, off;
     trn_cap_err_t e;
@@ -141,8 +142,8 @@ trn_status_t trn_capture_segment_count(size_t wire_len, size_t seg_payload, uint
     return TRN_OK;
 }
 
-trn_status_t trn_capture_segment(const uint8_t *wire, size_t wire_len, size_t seg_payload, uint8_t index,
-                                 uint8_t *out, size_t cap, size_t *out_len)
+trn_status_t trn_capture_segment(const uint8_t *wire, size_t wire_len, size_t seg_payload,
+                                 uint8_t index, uint8_t *out, size_t cap, size_t *out_len)
 {
     uint8_t count = 0u;
     size_t off, take, i;
@@ -328,7 +329,8 @@ trn_status_t trn_capture_rx_segment(trn_capture_rx_t *rx, const uint8_t *seg, si
     return restarted;
 }
 
-trn_status_t trn_capture_points_m(const trn_capture_t *c, trn_vec3f_t *out, size_t capacity, size_t *n)
+trn_status_t trn_capture_points_m(const trn_capture_t *c, trn_vec3f_t *out, size_t capacity,
+                                  size_t *n)
 {
     size_t i;
     if (c == NULL || out == NULL || n == NULL) {

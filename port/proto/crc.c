@@ -21,10 +21,7 @@ uint32_t trn_crc32_update(uint32_t crc, const uint8_t *data, size_t n)
     return c;
 }
 
-uint32_t trn_crc32_final(uint32_t crc)
-{
-    return crc ^ 0xFFFFFFFFu;
-}
+uint32_t trn_crc32_final(uint32_t crc) { return crc ^ 0xFFFFFFFFu; }
 
 uint32_t trn_crc32(const uint8_t *data, size_t n)
 {

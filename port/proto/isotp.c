@@ -65,8 +65,7 @@ trn_status_t trn_isotp_decode(const uint8_t *data, uint8_t dlc, trn_isotp_frame_
         f.bs = data[1];
         f.stmin = data[2];
         break;
-    default:
-        return TRN_E_FORMAT;
+    default: return TRN_E_FORMAT;
     }
     *fr = f;
     return TRN_OK;
@@ -83,8 +82,8 @@ uint16_t trn_isotp_frame_count(size_t len)
     return (uint16_t)(1u + (len - TRN_ISOTP_FF_DATA + TRN_ISOTP_CF_DATA - 1u) / TRN_ISOTP_CF_DATA);
 }
 
-trn_status_t trn_isotp_encode_frame(const uint8_t *msg, size_t len, uint16_t index,
-                                    uint8_t out[8], uint8_t *dlc)
+trn_status_t trn_isotp_encode_frame(const uint8_t *msg, size_t len, uint16_t index, uint8_t out[8],
+                                    uint8_t *dlc)
 {
     uint16_t n;
     size_t i, off, take;
@@ -131,7 +130,8 @@ trn_status_t trn_isotp_encode_frame(const uint8_t *msg, size_t len, uint16_t ind
     return TRN_OK;
 }
 
-trn_status_t trn_isotp_encode_fc(uint8_t fs, uint8_t bs, uint8_t stmin, uint8_t out[8], uint8_t *dlc)
+trn_status_t trn_isotp_encode_fc(uint8_t fs, uint8_t bs, uint8_t stmin, uint8_t out[8],
+                                 uint8_t *dlc)
 {
     unsigned i;
     if (out == NULL || dlc == NULL) {
@@ -229,7 +229,8 @@ static void copy_in(trn_isotp_rx_t *rx, const uint8_t *src, uint8_t n)
 
 static int timed_out(const trn_isotp_rx_t *rx, uint32_t now_ms)
 {
-    return rx->state == (uint8_t)TRN_ISOTP_RX_RECEIVING && (uint32_t)(now_ms - rx->last_ms) > rx->n_cr_ms;
+    return rx->state == (uint8_t)TRN_ISOTP_RX_RECEIVING &&
+           (uint32_t)(now_ms - rx->last_ms) > rx->n_cr_ms;
 }
 
 trn_status_t trn_isotp_rx_poll(trn_isotp_rx_t *rx, uint32_t now_ms, trn_isotp_rx_result_t *res)
@@ -401,7 +402,8 @@ static void tx_idle(trn_isotp_tx_t *tx)
     tx->t_ref_us = 0u;
 }
 
-static void tx_error(trn_isotp_tx_t *tx, trn_isotp_tx_result_t *res, trn_isotp_tx_err_t err, int abort)
+static void tx_error(trn_isotp_tx_t *tx, trn_isotp_tx_result_t *res, trn_isotp_tx_err_t err,
+                     int abort)
 {
     tx->err_count[err] += 1u;
     res->events |= TRN_ISOTP_TX_EV_ERROR;
@@ -498,8 +500,7 @@ trn_status_t trn_isotp_tx_step(trn_isotp_tx_t *tx, uint32_t now_us, trn_isotp_tx
             }
         }
         return TRN_OK;
-    default: /* idle: nothing to do */
-        return TRN_OK;
+    default: /* idle: nothing to do */ return TRN_OK;
     }
 }
 

@@ -56,8 +56,8 @@ trn_status_t trn_link_mon_poll(trn_link_mon_t *m, uint32_t now_ms, uint8_t *even
     return TRN_OK;
 }
 
-trn_status_t trn_link_mon_frame(trn_link_mon_t *m, uint8_t counter, uint32_t now_ms, uint8_t *events,
-                                uint8_t *gap)
+trn_status_t trn_link_mon_frame(trn_link_mon_t *m, uint8_t counter, uint32_t now_ms,
+                                uint8_t *events, uint8_t *gap)
 {
     uint8_t ev = 0u, g = 0u;
     trn_status_t st = TRN_OK;

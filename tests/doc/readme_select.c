@@ -17,7 +17,8 @@
 #include "synth.h"
 #include "trn/trn.h"
 
-trn_status_t select_landmark(const trn_grid_f32_t *dem, float col, float row, trn_candidate_t *best);
+trn_status_t select_landmark(const trn_grid_f32_t *dem, float col, float row,
+                             trn_candidate_t *best);
 
 #include "readme_select_snippet.c"
 
@@ -55,7 +56,8 @@ static void test_readme_example_matches_select(void **state)
     ws = selworld_alloc(wsb);
     assert_non_null(c);
     assert_non_null(ws);
-    assert_int_equal(trn_select(&w.map, &w.k, &w.pg, &cfg, &rv, c, cap, &ranked, 1, &res, ws, wsb), TRN_OK);
+    assert_int_equal(trn_select(&w.map, &w.k, &w.pg, &cfg, &rv, c, cap, &ranked, 1, &res, ws, wsb),
+                     TRN_OK);
     assert_int_equal(got.x, c[res.best].x);
     assert_int_equal(got.y, c[res.best].y);
     assert_true(got.uncertainty_m == c[res.best].uncertainty_m);

@@ -20,7 +20,12 @@
 #include "can_log.h"
 #include "fuzz_input.h"
 
-#define FZ_CHECK(c) do { if (!(c)) { abort(); } } while (0)
+#define FZ_CHECK(c) \
+    do { \
+        if (!(c)) { \
+            abort(); \
+        } \
+    } while (0)
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
@@ -53,8 +58,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         return 0;
     }
     /* round trip of a data frame */
-    pos = snprintf(again, sizeof again, "(%" PRIu64 ".%06" PRIu32 ") %s %0*" PRIX32 "#", r.sec, r.usec,
-                   r.ifname, (r.frame.flags & TRN_CAN_FLAG_EXT) != 0u ? 8 : 3, r.frame.id);
+    pos = snprintf(again, sizeof again, "(%" PRIu64 ".%06" PRIu32 ") %s %0*" PRIX32 "#", r.sec,
+                   r.usec, r.ifname, (r.frame.flags & TRN_CAN_FLAG_EXT) != 0u ? 8 : 3, r.frame.id);
     FZ_CHECK(pos > 0 && (size_t)pos < sizeof again - 20u);
     for (k = 0; k < r.frame.dlc; ++k) {
         pos += snprintf(again + pos, sizeof again - (size_t)pos, "%02X", r.frame.data[k]);
@@ -62,7 +67,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     can_log_parse(again, &r2);
     FZ_CHECK(r2.kind == CAN_LOG_FRAME && r2.sec == r.sec && r2.usec == r.usec);
     FZ_CHECK(strcmp(r2.ifname, r.ifname) == 0);
-    FZ_CHECK(r2.frame.id == r.frame.id && r2.frame.flags == r.frame.flags && r2.frame.dlc == r.frame.dlc);
+    FZ_CHECK(r2.frame.id == r.frame.id && r2.frame.flags == r.frame.flags &&
+             r2.frame.dlc == r.frame.dlc);
     FZ_CHECK(memcmp(r2.frame.data, r.frame.data, r.frame.dlc) == 0);
     return 0;
 }

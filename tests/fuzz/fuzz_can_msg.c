@@ -22,7 +22,12 @@
 #include "fuzz_input.h"
 #include "trn_port/can_msg.h"
 
-#define FZ_CHECK(c) do { if (!(c)) { abort(); } } while (0)
+#define FZ_CHECK(c) \
+    do { \
+        if (!(c)) { \
+            abort(); \
+        } \
+    } while (0)
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
@@ -40,7 +45,7 @@ static int std_data(const trn_can_frame_t *f, uint32_t id, uint8_t dlc)
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    fz_t in = { data, size };
+    fz_t in = {data, size};
     trn_can_frame_t f, g;
     trn_can_msg_kind_t kind;
     trn_status_t st;
@@ -103,7 +108,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             ++ok_count;
             FZ_CHECK(std_data(&f, TRN_CAN_ID_MAST_STATUS, TRN_CAN_DLC_MAST_STATUS));
             FZ_CHECK(kind == TRN_CAN_MSG_MAST_STATUS);
-            FZ_CHECK((m.state & TRN_MAST_ST_RESERVED) == 0u && (m.faults & TRN_MAST_FLT_RESERVED) == 0u);
+            FZ_CHECK((m.state & TRN_MAST_ST_RESERVED) == 0u &&
+                     (m.faults & TRN_MAST_FLT_RESERVED) == 0u);
             FZ_CHECK(trn_can_mast_status_encode(&m, &g) == TRN_OK);
             same_frame(&f, &g);
         } else {
@@ -152,7 +158,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     FZ_CHECK(ok_count <= 1);
 
     /* the gap of a counter pair: (now - prev - 1) mod 256 */
-    FZ_CHECK(trn_can_counter_gap(f.data[0], f.data[1]) == (uint8_t)((unsigned)f.data[1] + 255u - f.data[0]));
+    FZ_CHECK(trn_can_counter_gap(f.data[0], f.data[1]) ==
+             (uint8_t)((unsigned)f.data[1] + 255u - f.data[0]));
 
     st = trn_can_angle_to_raw(rad, &raw);
     FZ_CHECK(st == TRN_OK || st == TRN_E_ARG);

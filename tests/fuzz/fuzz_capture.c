@@ -29,7 +29,12 @@
 #include "trn_port/capture.h"
 #include "trn_port/crc.h"
 
-#define FZ_CHECK(c) do { if (!(c)) { abort(); } } while (0)
+#define FZ_CHECK(c) \
+    do { \
+        if (!(c)) { \
+            abort(); \
+        } \
+    } while (0)
 #define MAX_SEGS 64
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
@@ -121,7 +126,8 @@ static void raw_mode(fz_t *in)
         (void)feed(seg, len);
         /* the same bytes as a whole capture */
         if (len > TRN_CAP_SEG_HEADER_BYTES) {
-            st = trn_capture_decode(&seg[TRN_CAP_SEG_HEADER_BYTES], len - TRN_CAP_SEG_HEADER_BYTES, &d, &e);
+            st = trn_capture_decode(&seg[TRN_CAP_SEG_HEADER_BYTES], len - TRN_CAP_SEG_HEADER_BYTES,
+                                    &d, &e);
             FZ_CHECK(st == status_of(e));
             if (st == TRN_OK) {
                 FZ_CHECK(len - TRN_CAP_SEG_HEADER_BYTES == TRN_CAP_WIRE_BYTES(d.n_points));
@@ -164,7 +170,8 @@ static void structured_mode(fz_t *in)
 
     for (k = 0; k < MAX_SEGS && in->n > 0u && next < count; ++k) {
         uint8_t op = fz_u8(in), which = next;
-        FZ_CHECK(trn_capture_segment(wire, wlen, seg_payload, which, seg, sizeof seg, &slen) == TRN_OK);
+        FZ_CHECK(trn_capture_segment(wire, wlen, seg_payload, which, seg, sizeof seg, &slen) ==
+                 TRN_OK);
         switch (op & 7u) {
         case 0: /* in order */
             got_it |= feed(seg, slen);
@@ -176,15 +183,16 @@ static void structured_mode(fz_t *in)
             break;
         case 2: /* the previous one again */
             if (next > 0u) {
-                FZ_CHECK(trn_capture_segment(wire, wlen, seg_payload, (uint8_t)(next - 1u), seg, sizeof seg,
-                                             &slen) == TRN_OK);
+                FZ_CHECK(trn_capture_segment(wire, wlen, seg_payload, (uint8_t)(next - 1u), seg,
+                                             sizeof seg, &slen) == TRN_OK);
             }
             got_it |= feed(seg, slen);
             edited = 1;
             break;
         case 3: /* an earlier one */
             which = (uint8_t)(fz_u8(in) % (next + 1u));
-            FZ_CHECK(trn_capture_segment(wire, wlen, seg_payload, which, seg, sizeof seg, &slen) == TRN_OK);
+            FZ_CHECK(trn_capture_segment(wire, wlen, seg_payload, which, seg, sizeof seg, &slen) ==
+                     TRN_OK);
             got_it |= feed(seg, slen);
             edited = 1;
             break;
@@ -217,21 +225,23 @@ static void structured_mode(fz_t *in)
         }
     }
     while (next < count) {
-        FZ_CHECK(trn_capture_segment(wire, wlen, seg_payload, next, seg, sizeof seg, &slen) == TRN_OK);
+        FZ_CHECK(trn_capture_segment(wire, wlen, seg_payload, next, seg, sizeof seg, &slen) ==
+                 TRN_OK);
         got_it |= feed(seg, slen);
         ++next;
     }
     if (!edited) {
         FZ_CHECK(got_it == 1);
-        FZ_CHECK(out.capture_id == built.capture_id && out.time_ms == built.time_ms &&
-                 out.n_points == built.n_points &&
-                 memcmp(out.points, built.points, (size_t)built.n_points * sizeof built.points[0]) == 0);
+        FZ_CHECK(
+            out.capture_id == built.capture_id && out.time_ms == built.time_ms &&
+            out.n_points == built.n_points &&
+            memcmp(out.points, built.points, (size_t)built.n_points * sizeof built.points[0]) == 0);
     }
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    fz_t in = { data, size };
+    fz_t in = {data, size};
     uint8_t mode = fz_u8(&in);
 
     memset(&sentinel, 0xA5, sizeof sentinel);

@@ -13,13 +13,18 @@
 #include "fuzz_input.h"
 #include "trn/trn.h"
 
-#define FZ_CHECK(c) do { if (!(c)) { abort(); } } while (0)
+#define FZ_CHECK(c) \
+    do { \
+        if (!(c)) { \
+            abort(); \
+        } \
+    } while (0)
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    fz_t f = { data, size };
+    fz_t f = {data, size};
     static float cells[64];
     static uint8_t vox[64];
     trn_map_cfg_t m;
@@ -55,7 +60,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     FZ_CHECK(fz_status_known(st));
     bytes = trn_map_bytes(&m, w, h);
     /* A size is given exactly for a valid configuration and dimensions. */
-    FZ_CHECK((bytes > 0u) == (st == TRN_OK && w >= 1 && h >= 1 && w <= TRN_MAX_DIM && h <= TRN_MAX_DIM));
+    FZ_CHECK((bytes > 0u) ==
+             (st == TRN_OK && w >= 1 && h >= 1 && w <= TRN_MAX_DIM && h <= TRN_MAX_DIM));
     (void)trn_highpass_workspace_bytes(w, h);
     (void)trn_pyramid_bytes(w, h, m.terrain.nz, m.levels);
 

@@ -62,9 +62,6 @@ static int32_t fz_range(fz_t *f, int32_t lo, int32_t hi)
 }
 
 /* A status any public function may return: the documented codes only. */
-static int fz_status_known(int st)
-{
-    return st <= 0 && st >= -15;
-}
+static int fz_status_known(int st) { return st <= 0 && st >= -15; }
 
 #endif /* TRN_FUZZ_INPUT_H */

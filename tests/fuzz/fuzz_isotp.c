@@ -30,7 +30,12 @@
 #include "fuzz_input.h"
 #include "trn_port/isotp.h"
 
-#define FZ_CHECK(c) do { if (!(c)) { abort(); } } while (0)
+#define FZ_CHECK(c) \
+    do { \
+        if (!(c)) { \
+            abort(); \
+        } \
+    } while (0)
 #define MAX_OPS 64
 /* whole messages (ops 2 and 3) per input: up to 586 frames each */
 #define MAX_MSGS 4
@@ -85,8 +90,7 @@ static void check_decode(const uint8_t *d, uint8_t dlc)
         FZ_CHECK(trn_isotp_encode_fc(fr.fs, fr.bs, fr.stmin, out, &odlc) == TRN_OK);
         FZ_CHECK(odlc == 3u && memcmp(out, d, 3) == 0);
         break;
-    default:
-        FZ_CHECK(0);
+    default: FZ_CHECK(0);
     }
 }
 
@@ -110,7 +114,8 @@ static void check_rx(const trn_isotp_rx_t *rx, trn_status_t st, const trn_isotp_
         FZ_CHECK(fr.type == (uint8_t)TRN_ISOTP_FC && fr.bs == rx->bs && fr.stmin == rx->stmin);
     }
     if ((res->events & TRN_ISOTP_EV_ERROR) != 0u) {
-        FZ_CHECK(res->error > (uint8_t)TRN_ISOTP_ERR_NONE && res->error < (uint8_t)TRN_ISOTP_ERR_COUNT);
+        FZ_CHECK(res->error > (uint8_t)TRN_ISOTP_ERR_NONE &&
+                 res->error < (uint8_t)TRN_ISOTP_ERR_COUNT);
         FZ_CHECK(st != TRN_OK);
     } else {
         FZ_CHECK(st == TRN_OK);
@@ -156,7 +161,8 @@ static void loopback(fz_t *in)
         st = trn_isotp_tx_step(&tx, t_us, &tres);
         FZ_CHECK(st == TRN_OK || st == TRN_E_TIMEOUT);
         if (st == TRN_E_TIMEOUT) {
-            FZ_CHECK(tres.error == (uint8_t)TRN_ISOTP_TX_ERR_TIMEOUT_BS && tx.state == TRN_ISOTP_TX_IDLE);
+            FZ_CHECK(tres.error == (uint8_t)TRN_ISOTP_TX_ERR_TIMEOUT_BS &&
+                     tx.state == TRN_ISOTP_TX_IDLE);
             aborted = 1;
             break;
         }
@@ -198,11 +204,12 @@ static void loopback(fz_t *in)
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    fz_t in = { data, size };
+    fz_t in = {data, size};
     trn_isotp_rx_t rx;
     trn_isotp_rx_result_t res;
     uint32_t now_ms = (uint32_t)fz_i32(&in);
-    uint16_t cap = (uint16_t)(7u + (uint16_t)(fz_u8(&in) | (fz_u8(&in) << 8)) % (TRN_ISOTP_MAX_MSG - 6u));
+    uint16_t cap = (uint16_t)(7u + (uint16_t)(fz_u8(&in) | (fz_u8(&in) << 8)) %
+                                       (TRN_ISOTP_MAX_MSG - 6u));
     uint8_t bs = fz_u8(&in) % 5u, stmin = pick_stmin(fz_u8(&in));
     uint32_t n_cr_ms = 1u + fz_u8(&in) * 4u;
     trn_status_t st;
@@ -239,7 +246,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             check_rx(&rx, st, &res);
             break;
         case 2: {
-            size_t len = 1u + (size_t)((uint16_t)(fz_u8(&in) | (fz_u8(&in) << 8)) % TRN_ISOTP_MAX_MSG);
+            size_t len = 1u +
+                         (size_t)((uint16_t)(fz_u8(&in) | (fz_u8(&in) << 8)) % TRN_ISOTP_MAX_MSG);
             uint8_t seed = fz_u8(&in), step = fz_u8(&in);
             uint16_t k, n = trn_isotp_frame_count(len);
             int delivered = 0, was_busy = rx.state == (uint8_t)TRN_ISOTP_RX_RECEIVING;
@@ -267,9 +275,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             (void)was_busy;
             break;
         }
-        default:
-            loopback(&in);
-            break;
+        default: loopback(&in); break;
         }
     }
     return 0;

@@ -11,7 +11,12 @@
 #include "fuzz_input.h"
 #include "trn/trn.h"
 
-#define FZ_CHECK(c) do { if (!(c)) { abort(); } } while (0)
+#define FZ_CHECK(c) \
+    do { \
+        if (!(c)) { \
+            abort(); \
+        } \
+    } while (0)
 #define GW 20
 #define LW 8
 
@@ -19,7 +24,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    fz_t f = { data, size };
+    fz_t f = {data, size};
     static float gbuf[GW * GW], lbuf[LW * LW];
     TRN_WORKSPACE_DECLARE(map_buf, 1u << 20);
     TRN_WORKSPACE_DECLARE(ws, 1u << 20);

@@ -26,7 +26,12 @@
 #include "fuzz_input.h"
 #include "trn/trn.h"
 
-#define FZ_CHECK(c) do { if (!(c)) { abort(); } } while (0)
+#define FZ_CHECK(c) \
+    do { \
+        if (!(c)) { \
+            abort(); \
+        } \
+    } while (0)
 #define MAXP 32
 #define MAXD 16
 
@@ -44,7 +49,7 @@ static float val(fz_t *in, int sane, float lo, float hi)
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    fz_t in = { data, size };
+    fz_t in = {data, size};
     const uint8_t mode = fz_u8(&in);
     const int sane = (mode & 1u) != 0u;
     trn_mast_geom_t g;
@@ -160,7 +165,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (cfg.row_north == 0) {
         cfg.row_north = 1;
     }
-    st = trn_grid_f32_init(&dem, cells, MAXD * MAXD, fz_range(&in, 1, MAXD), fz_range(&in, 1, MAXD));
+    st = trn_grid_f32_init(&dem, cells, MAXD * MAXD, fz_range(&in, 1, MAXD),
+                           fz_range(&in, 1, MAXD));
     FZ_CHECK(st == TRN_OK);
     used = 999u;
     st = trn_mast_local_dem(b, n, &pose, &cfg, &dem, &used);

@@ -9,13 +9,18 @@
 #include "fuzz_input.h"
 #include "trn/trn.h"
 
-#define FZ_CHECK(c) do { if (!(c)) { abort(); } } while (0)
+#define FZ_CHECK(c) \
+    do { \
+        if (!(c)) { \
+            abort(); \
+        } \
+    } while (0)
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    fz_t f = { data, size };
+    fz_t f = {data, size};
     double ll[9], p = -1.0, a, b;
     trn_peak_t pk;
     trn_status_t st;

@@ -13,7 +13,12 @@
 #include "fuzz_input.h"
 #include "trn/trn.h"
 
-#define FZ_CHECK(c) do { if (!(c)) { abort(); } } while (0)
+#define FZ_CHECK(c) \
+    do { \
+        if (!(c)) { \
+            abort(); \
+        } \
+    } while (0)
 #define MAXXY 16
 #define MAXZ 8
 #define MAXP 32
@@ -22,7 +27,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    fz_t f = { data, size };
+    fz_t f = {data, size};
     static uint8_t occ_buf[MAXXY * MAXXY * MAXZ], dist_buf[MAXXY * MAXXY * MAXZ];
     TRN_WORKSPACE_DECLARE(pyr_buf, 1 << 18);
     TRN_WORKSPACE_DECLARE(ws, 1 << 16);
@@ -39,7 +44,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     double k;
     int64_t sc;
     size_t i, n, nv, wsb;
-    const int32_t nx = fz_range(&f, 1, MAXXY), ny = fz_range(&f, 1, MAXXY), nz = fz_range(&f, 1, MAXZ);
+    const int32_t nx = fz_range(&f, 1, MAXXY), ny = fz_range(&f, 1, MAXXY),
+                  nz = fz_range(&f, 1, MAXZ);
     const int32_t levels = fz_range(&f, 1, 4);
 
     cfg.cell_m = 0.1f;

@@ -12,7 +12,12 @@
 #include "fuzz_input.h"
 #include "trn/trn.h"
 
-#define FZ_CHECK(c) do { if (!(c)) { abort(); } } while (0)
+#define FZ_CHECK(c) \
+    do { \
+        if (!(c)) { \
+            abort(); \
+        } \
+    } while (0)
 #define MAXW 24
 #define MAXZ 16
 
@@ -20,7 +25,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    fz_t f = { data, size };
+    fz_t f = {data, size};
     static float dem_buf[MAXW * MAXW], hp_buf[MAXW * MAXW];
     TRN_WORKSPACE_DECLARE(ws, ((MAXW * MAXW * 16 + 4096) / sizeof(double)) * sizeof(double));
     static uint8_t occ_buf[MAXW * MAXW * MAXZ];

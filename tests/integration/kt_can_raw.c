@@ -93,11 +93,11 @@ static void round_trip_with_filters(void)
     KT_ST(trn_lcan_open(&a, &ca), TRN_OK);
     KT_ST(trn_lcan_open(&b, &cb), TRN_OK);
 
-    sent[0] = mk(0x100u, 0u, 8u, 1u);        /* filtered out: other id */
-    sent[1] = mk(0x123u, 0u, 8u, 2u);        /* passes */
-    sent[2] = mk(0x123u, 1u, 3u, 3u);        /* extended 0x123: wrong format */
-    sent[3] = mk(0x1ABCDE42u, 1u, 5u, 4u);   /* passes the extended filter */
-    sent[4] = mk(0x124u, 0u, 0u, 5u);        /* filtered out, empty frame */
+    sent[0] = mk(0x100u, 0u, 8u, 1u);      /* filtered out: other id */
+    sent[1] = mk(0x123u, 0u, 8u, 2u);      /* passes */
+    sent[2] = mk(0x123u, 1u, 3u, 3u);      /* extended 0x123: wrong format */
+    sent[3] = mk(0x1ABCDE42u, 1u, 5u, 4u); /* passes the extended filter */
+    sent[4] = mk(0x124u, 0u, 0u, 5u);      /* filtered out, empty frame */
     for (i = 0; i < 5; ++i) {
         KT_ST(trn_lcan_send(&a, &sent[i], 100), TRN_OK);
     }
@@ -266,7 +266,8 @@ static void drops_counted(void)
         KT_CHECK(got.data[0] == 0xFFu && got.data[1] == 0xFFu);
     }
     trn_lcan_bus_status(&rx, &bus);
-    printf("drops: sent %d received %u dropped %u\n", N, (unsigned)received, (unsigned)bus.rx_drops);
+    printf("drops: sent %d received %u dropped %u\n", N, (unsigned)received,
+           (unsigned)bus.rx_drops);
     KT_CHECK(bus.rx_drops > 0u);
     KT_CHECK(received > 0u);
     KT_CHECK(received + bus.rx_drops == (uint32_t)N);
@@ -293,10 +294,7 @@ static void bad_arguments_and_states(void)
     KT_CHECK(a.fd == -1);
 }
 
-static int sh(const char *cmd)
-{
-    return system(cmd);
-}
+static int sh(const char *cmd) { return system(cmd); }
 
 static void interface_down_is_bus(void)
 {

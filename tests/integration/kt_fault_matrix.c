@@ -47,7 +47,7 @@
 #define ID_FC 0x1A1u   /* CAPTURE_FC:   rover -> stereo head */
 #define ID_CMD 0x120u  /* MAST_CMD, for the bus-state rows */
 #define SEG_PAYLOAD 300u
-#define N_POINTS 150u  /* 920 bytes of capture, 4 segments of <= 300 bytes */
+#define N_POINTS 150u /* 920 bytes of capture, 4 segments of <= 300 bytes */
 
 static const char *ifname;
 
@@ -60,7 +60,7 @@ static uint8_t segs[8][TRN_ISOTP_MAX_MSG];
 static size_t seg_len[8];
 static uint8_t n_segs;
 
-static uint16_t cap_points = N_POINTS;     /* size of the next capture */
+static uint16_t cap_points = N_POINTS; /* size of the next capture */
 static size_t cap_seg_payload = SEG_PAYLOAD;
 
 static void make_capture(uint16_t id)
@@ -81,16 +81,17 @@ static void make_capture(uint16_t id)
     KT_ST(trn_capture_segment_count(wire_len, cap_seg_payload, &n_segs), TRN_OK);
     KT_CHECK(n_segs >= 2u && n_segs <= 8u);
     for (i = 0; i < n_segs && i < 8u; ++i) {
-        KT_ST(trn_capture_segment(wire, wire_len, cap_seg_payload, (uint8_t)i, segs[i], sizeof segs[i],
-                                  &seg_len[i]),
+        KT_ST(trn_capture_segment(wire, wire_len, cap_seg_payload, (uint8_t)i, segs[i],
+                                  sizeof segs[i], &seg_len[i]),
               TRN_OK);
     }
 }
 
 static int same_capture(const trn_capture_t *a, const trn_capture_t *b)
 {
-    return a->capture_id == b->capture_id && a->time_ms == b->time_ms && a->pan_100urad == b->pan_100urad &&
-           a->tilt_100urad == b->tilt_100urad && a->n_points == b->n_points &&
+    return a->capture_id == b->capture_id && a->time_ms == b->time_ms &&
+           a->pan_100urad == b->pan_100urad && a->tilt_100urad == b->tilt_100urad &&
+           a->n_points == b->n_points &&
            memcmp(a->points, b->points, sizeof a->points[0] * a->n_points) == 0;
 }
 
@@ -99,7 +100,7 @@ static int same_capture(const trn_capture_t *a, const trn_capture_t *b)
 typedef struct {
     trn_lisotp_t tp;
     trn_capture_rx_t rx;
-    trn_capture_t out;     /* written only by a complete capture */
+    trn_capture_t out; /* written only by a complete capture */
     uint32_t transport_errors;
     trn_status_t last;
 } rover_t;
@@ -395,7 +396,8 @@ static void fm_error_passive(void)
     KT_CHECK(efd >= 0);
     bus_open(&can);
     rover_open();
-    KT_CHECK(write_error_frame(efd, CAN_ERR_CRTL, CAN_ERR_CRTL_RX_PASSIVE | CAN_ERR_CRTL_TX_PASSIVE) == 0);
+    KT_CHECK(write_error_frame(efd, CAN_ERR_CRTL,
+                               CAN_ERR_CRTL_RX_PASSIVE | CAN_ERR_CRTL_TX_PASSIVE) == 0);
     KT_ST(trn_lcan_recv(&can, &got, 1000), TRN_E_BUS);
     trn_lcan_bus_status(&can, &b);
     KT_CHECK(b.state == TRN_LCAN_ERROR_PASSIVE);
@@ -414,13 +416,13 @@ static void fm_error_passive(void)
 /* ---- the pure receiver on raw frames (bare-metal path) --------------------- */
 
 typedef struct {
-    trn_lcan_t can;        /* raw socket on ID_DATA */
+    trn_lcan_t can; /* raw socket on ID_DATA */
     trn_isotp_rx_t tp;
     uint8_t buf[TRN_ISOTP_MAX_MSG];
     trn_capture_rx_t rx;
     trn_capture_t out;
     uint32_t drops_seen;
-    int got_frame;         /* the last step received a frame */
+    int got_frame; /* the last step received a frame */
 } raw_rover_t;
 
 static raw_rover_t rr;
@@ -548,7 +550,7 @@ static void fm_rx_timeout_ncr(void)
     /* kernel receiver */
     rover_open();
     make_capture(31u);
-    stereo_send_segment(0u);         /* the first segment arrives whole ... */
+    stereo_send_segment(0u); /* the first segment arrives whole ... */
     KT_CHECK(rover_step(2000) == 0);
     KT_CHECK(rover.rx.active == 1u);
     /* ... the second stops after its first frame */
@@ -604,7 +606,8 @@ static void fm_wrong_sn(void)
 
     rover_open();
     make_capture(41u);
-    KT_ST(trn_capture_rx_segment(&rover.rx, segs[0], seg_len[0], &rover.out, &complete, NULL), TRN_OK);
+    KT_ST(trn_capture_rx_segment(&rover.rx, segs[0], seg_len[0], &rover.out, &complete, NULL),
+          TRN_OK);
     KT_ST(trn_isotp_encode_frame(segs[1], seg_len[1], 0u, fr, &dlc), TRN_OK);
     KT_CHECK(raw_send(raw, ID_DATA, fr, dlc) == 0);
     KT_CHECK(raw_recv(fcr, &f, NULL, 2000) == 0 && (f.data[0] & 0xF0u) == 0x30u);
@@ -790,8 +793,8 @@ static void peer_finish(pid_t pid, int pipe_r, long long *min_gap_us, long long 
 }
 
 /* Kernel sender against the peer: returns trn_lisotp_send's status. */
-static trn_status_t kernel_send(const uint8_t (*fcs)[3], int n_fc, int gap_ms, size_t len, long long *min_gap_us,
-                                long long *n_cf, long long *elapsed_ms)
+static trn_status_t kernel_send(const uint8_t (*fcs)[3], int n_fc, int gap_ms, size_t len,
+                                long long *min_gap_us, long long *n_cf, long long *elapsed_ms)
 {
     trn_lisotp_cfg_t c;
     trn_lisotp_t s;
@@ -821,8 +824,9 @@ static trn_status_t kernel_send(const uint8_t (*fcs)[3], int n_fc, int gap_ms, s
 /* Pure sender on raw frames against the peer: drives trn_isotp_tx_* with the
  * monotonic clock; returns the status of the step or FC that ended it. */
 static trn_isotp_tx_t ptx;
-static trn_status_t pure_send(const uint8_t (*fcs)[3], int n_fc, int gap_ms, size_t len, uint32_t n_bs_ms,
-                              uint8_t max_wft, long long *min_gap_us, long long *n_cf, long long *elapsed_ms)
+static trn_status_t pure_send(const uint8_t (*fcs)[3], int n_fc, int gap_ms, size_t len,
+                              uint32_t n_bs_ms, uint8_t max_wft, long long *min_gap_us,
+                              long long *n_cf, long long *elapsed_ms)
 {
     int p[2], fd = plain_socket((int)ID_FC), loops;
     pid_t pid;
@@ -896,7 +900,8 @@ static void fm_tx_invalid_fs(void)
     static const uint8_t bad[1][3] = {{0x35u, 0u, 0u}};
     long long g, n, ms;
     trn_status_t st = kernel_send(bad, 1, 0, 100u, &g, &n, &ms);
-    printf("KT-NOTE invalid-fs: kernel sender status %d (%s) after %lld ms\n", (int)st, trn_strerror(st), ms);
+    printf("KT-NOTE invalid-fs: kernel sender status %d (%s) after %lld ms\n", (int)st,
+           trn_strerror(st), ms);
     KT_ST(st, TRN_E_FORMAT);
     KT_CHECK(n == 0);
     KT_ST(pure_send(bad, 1, 0, 100u, 1000u, 0u, &g, &n, &ms), TRN_E_FORMAT);
@@ -924,16 +929,16 @@ static void fm_tx_fc_overflow(void)
  * stated in the matrix). */
 static void fm_tx_too_many_waits(void)
 {
-    static const uint8_t waits[5][3] = {{0x31u, 0u, 0u}, {0x31u, 0u, 0u}, {0x31u, 0u, 0u}, {0x31u, 0u, 0u},
-                                        {0x31u, 0u, 0u}};
+    static const uint8_t waits[5][3] = {
+        {0x31u, 0u, 0u}, {0x31u, 0u, 0u}, {0x31u, 0u, 0u}, {0x31u, 0u, 0u}, {0x31u, 0u, 0u}};
     long long g, n, ms;
     trn_status_t st;
     KT_ST(pure_send(waits, 3, 200, 100u, 1000u, 2u, &g, &n, &ms), TRN_E_SEQ);
     KT_CHECK(ptx.err_count[TRN_ISOTP_TX_ERR_WFT_OVERRUN] == 1u && ptx.state == TRN_ISOTP_TX_IDLE);
     KT_CHECK(n == 0);
     st = kernel_send(waits, 5, 200, 100u, &g, &n, &ms);
-    printf("KT-NOTE wait: kernel sender after 5 WAITs 200 ms apart: status %d (%s) after %lld ms\n", (int)st,
-           trn_strerror(st), ms);
+    printf("KT-NOTE wait: kernel sender after 5 WAITs 200 ms apart: status %d (%s) after %lld ms\n",
+           (int)st, trn_strerror(st), ms);
     KT_ST(st, TRN_E_TIMEOUT);
     KT_CHECK(n == 0);
     KT_CHECK(ms >= 1700); /* the WAITs kept it alive past one N_Bs */
@@ -958,7 +963,8 @@ static void fm_tx_stmin(void)
     KT_CHECK(n == want_cf && g >= 4700);
     KT_CHECK(ptx.n_messages == 1u);
     KT_ST(pure_send(cts500us, 1, 0, len, 1000u, 0u, &g, &n, &ms), TRN_OK);
-    printf("KT-NOTE stmin: pure sender, STmin 0xF5 (500 us): %lld CFs, smallest gap %lld us\n", n, g);
+    printf("KT-NOTE stmin: pure sender, STmin 0xF5 (500 us): %lld CFs, smallest gap %lld us\n", n,
+           g);
     KT_CHECK(n == want_cf && g >= 200);
 }
 

@@ -72,7 +72,7 @@ static void power_enable_seen_on_sim(void)
     trn_lgpio_t g;
     KT_CHECK(sim_pull(0u, 1) == 0); /* released line would read 1 */
     KT_ST(trn_lgpio_open(&g, &c), TRN_OK);
-    KT_CHECK(sim_read(0u) == 0);     /* requested inactive at start-up */
+    KT_CHECK(sim_read(0u) == 0); /* requested inactive at start-up */
     KT_CHECK(sim_read(1u) == 0);
     KT_ST(trn_lgpio_set_power(&g, 1), TRN_OK);
     KT_CHECK(sim_read(0u) == 1);
@@ -182,7 +182,7 @@ static void active_low_lines(void)
     c.trigger_pulse_us = 1000u;
     KT_CHECK(sim_pull(5u, 1) == 0); /* high = not deployed */
     KT_ST(trn_lgpio_open(&g, &c), TRN_OK);
-    KT_CHECK(sim_read(3u) == 1);    /* power off = high */
+    KT_CHECK(sim_read(3u) == 1); /* power off = high */
     KT_CHECK(sim_read(4u) == 1);
     KT_ST(trn_lgpio_set_power(&g, 1), TRN_OK);
     KT_CHECK(sim_read(3u) == 0);

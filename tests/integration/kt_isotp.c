@@ -93,20 +93,11 @@ static void round_trip(size_t len, uint8_t ext, uint8_t bs, uint8_t stmin, uint3
     trn_lisotp_close(&b);
 }
 
-static void round_trip_10k(void)
-{
-    round_trip(10000u, 0u, 0u, 0u, 1u);
-}
+static void round_trip_10k(void) { round_trip(10000u, 0u, 0u, 0u, 1u); }
 
-static void round_trip_extended_ids_with_blocks(void)
-{
-    round_trip(4095u, 1u, 8u, 0u, 2u);
-}
+static void round_trip_extended_ids_with_blocks(void) { round_trip(4095u, 1u, 8u, 0u, 2u); }
 
-static void round_trip_single_frame(void)
-{
-    round_trip(7u, 0u, 0u, 0u, 3u);
-}
+static void round_trip_single_frame(void) { round_trip(7u, 0u, 0u, 0u, 3u); }
 
 static void receive_timeout_and_sizes(void)
 {
@@ -169,7 +160,7 @@ static void wrong_sequence_number(void)
     raw_open(&raw, &fc_only);
     f = frame8(0x720u, ff);
     KT_ST(trn_lcan_send(&raw, &f, 100), TRN_OK);
-    KT_ST(trn_lcan_recv(&raw, &f, 2000), TRN_OK);       /* b's flow control */
+    KT_ST(trn_lcan_recv(&raw, &f, 2000), TRN_OK); /* b's flow control */
     KT_CHECK(f.id == 0x728u && (f.data[0] & 0xF0u) == 0x30u);
     f = frame8(0x720u, cf_bad);
     KT_ST(trn_lcan_send(&raw, &f, 100), TRN_OK);

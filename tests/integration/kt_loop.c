@@ -118,7 +118,8 @@ static void candump_stop(pid_t pid, uint16_t cap_id)
         line[strcspn(line, "\r\n")] = '\0';
         printf("KT-CANLOG %s\n", line);
         ++lines;
-        if (sscanf(line, "(%lf) %31s %63s", &t, ifn, frame) != 3 || (hash = strchr(frame, '#')) == NULL) {
+        if (sscanf(line, "(%lf) %31s %63s", &t, ifn, frame) != 3 ||
+            (hash = strchr(frame, '#')) == NULL) {
             continue;
         }
         id = (unsigned)strtoul(frame, NULL, 16);
@@ -136,16 +137,17 @@ static void candump_stop(pid_t pid, uint16_t cap_id)
         }
     }
     fclose(f);
-    printf("KT-INFO candump: %u lines; capture: %u data frames (0x1A0), %u data-field bytes, %u flow "
-           "controls (0x1A1, 3 bytes each), %u other frames, %.3f s from first to last data frame\n",
-           lines, data_frames, data_bytes, fc_frames, other, t_last - t_first);
+    printf(
+        "KT-INFO candump: %u lines; capture: %u data frames (0x1A0), %u data-field bytes, %u flow "
+        "controls (0x1A1, 3 bytes each), %u other frames, %.3f s from first to last data frame\n",
+        lines, data_frames, data_bytes, fc_frames, other, t_last - t_first);
     KT_CHECK(data_frames > 0u && fc_frames > 0u);
 }
 
 typedef struct {
     int ok;
-    double err_x_m, err_y_m;     /* estimate - truth */
-    double sig_x_m, sig_y_m;     /* localization's predicted sigma (eq. 6) */
+    double err_x_m, err_y_m;         /* estimate - truth */
+    double sig_x_m, sig_y_m;         /* localization's predicted sigma (eq. 6) */
     double sel_sig_x_m, sel_sig_y_m; /* the selection's prediction for the target */
     double range_m;
     unsigned points, used;
@@ -216,7 +218,8 @@ static loop_result_t one_run(int run, int record)
         free(ws);
         return out;
     }
-    KT_ST(trn_select(&g_w.map, &g_w.k, &g_w.pg, &scfg, &rv, cands, cap, ranked, 4, &sres, ws, wsb), TRN_OK);
+    KT_ST(trn_select(&g_w.map, &g_w.k, &g_w.pg, &scfg, &rv, cands, cap, ranked, 4, &sres, ws, wsb),
+          TRN_OK);
     free(ws);
     target.x = (float)(cands[ranked[0]].x * CELL);
     target.y = (float)(cands[ranked[0]].y * CELL);
@@ -259,8 +262,9 @@ static loop_result_t one_run(int run, int record)
         rover_outcome_t o = rover_capture(&g_rover, (uint16_t)(0x100 + run), 0u, &g_cap, &ce);
         KT_CHECK(o == ROVER_OK);
         if (o != ROVER_OK) {
-            printf("KT-INFO capture: outcome %s, capture error %s, transport %s\n", rover_outcome_name(o),
-                   trn_cap_err_name(ce), trn_strerror(g_rover.last_transport));
+            printf("KT-INFO capture: outcome %s, capture error %s, transport %s\n",
+                   rover_outcome_name(o), trn_cap_err_name(ce),
+                   trn_strerror(g_rover.last_transport));
         }
     }
     if (record) {
@@ -279,11 +283,13 @@ static loop_result_t one_run(int run, int record)
 
     /* to the map, local DEM, localize */
     known = believed;
-    known.x_m = 0.0f; /* the local map is built around the rover: only heading and height are used */
+    known.x_m =
+        0.0f; /* the local map is built around the rover: only heading and height are used */
     known.y_m = 0.0f;
     KT_ST(trn_capture_points_m(&g_cap, g_pts, TRN_PORT_MAX_CAPTURE_POINTS, &npts), TRN_OK);
     KT_ST(trn_mast_camera_to_map(&sc.geom, &known, trn_can_angle_from_raw(g_cap.pan_100urad),
-                                 trn_can_angle_from_raw(g_cap.tilt_100urad), &T), TRN_OK);
+                                 trn_can_angle_from_raw(g_cap.tilt_100urad), &T),
+          TRN_OK);
     KT_ST(trn_rigid_apply(&T, g_pts, npts, g_pts), TRN_OK);
     dcfg.cell_m = (float)CELL;
     dcfg.rover_col = L / 2;
@@ -292,19 +298,22 @@ static loop_result_t one_run(int run, int record)
     KT_ST(trn_grid_f32_init(&lg, g_ldem, (size_t)L * L, L, L), TRN_OK);
     /* each cell the mean of its points (the highest point biases the map
      * toward the rover: tests/test_sim_loop.c) */
-    KT_ST(trn_mast_local_dem_mean(g_pts, npts, &known, &dcfg, &lg, g_lcnt, (size_t)L * L, &used), TRN_OK);
+    KT_ST(trn_mast_local_dem_mean(g_pts, npts, &known, &dcfg, &lg, g_lcnt, (size_t)L * L, &used),
+          TRN_OK);
     out.used = (unsigned)used;
     win.x0 = bx - 15;
     win.x1 = bx + 15;
     win.y0 = by - 15;
     win.y1 = by + 15;
-    wsb = trn_localize_dem_workspace_bytes(&g_w.map, L, L, (size_t)L * L * g_w.cfg.terrain.nz, &win);
+    wsb = trn_localize_dem_workspace_bytes(&g_w.map, L, L, (size_t)L * L * g_w.cfg.terrain.nz,
+                                           &win);
     ws = selworld_alloc(wsb);
     KT_CHECK(ws != NULL);
     if (ws == NULL) {
         return out;
     }
-    st = trn_localize_dem(&g_w.map, &lg, L / 2, L / 2, (size_t)L * L * g_w.cfg.terrain.nz, &win, ws, wsb, &res);
+    st = trn_localize_dem(&g_w.map, &lg, L / 2, L / 2, (size_t)L * L * g_w.cfg.terrain.nz, &win, ws,
+                          wsb, &res);
     free(ws);
     KT_ST(st, TRN_OK);
     out.ok = st == TRN_OK;
@@ -312,12 +321,15 @@ static loop_result_t one_run(int run, int record)
     out.err_y_m = res.y * CELL - truth.y_m;
     out.sig_x_m = res.sigma_x_m;
     out.sig_y_m = res.sigma_y_m;
-    printf("KT-INFO loop run %d: truth (%.3f, %.3f) hdg %.2f, prior offset (%+.2f, %+.2f) m, target range "
-           "%.2f m pan %.4f tilt %.4f, %u points (%u used), estimate (%.3f, %.3f): error (%+.3f, %+.3f) m, "
+    printf("KT-INFO loop run %d: truth (%.3f, %.3f) hdg %.2f, prior offset (%+.2f, %+.2f) m, "
+           "target range "
+           "%.2f m pan %.4f tilt %.4f, %u points (%u used), estimate (%.3f, %.3f): error (%+.3f, "
+           "%+.3f) m, "
            "predicted sigma (%.3f, %.3f) m, selection predicted (%.3f, %.3f) m, P_fail %.3g\n",
-           run, truth.x_m, truth.y_m, truth.heading_rad, believed.x_m - truth.x_m, believed.y_m - truth.y_m,
-           out.range_m, pan, tilt, out.points, out.used, res.x * CELL, res.y * CELL, out.err_x_m, out.err_y_m,
-           out.sig_x_m, out.sig_y_m, out.sel_sig_x_m, out.sel_sig_y_m, res.failure_probability);
+           run, truth.x_m, truth.y_m, truth.heading_rad, believed.x_m - truth.x_m,
+           believed.y_m - truth.y_m, out.range_m, pan, tilt, out.points, out.used, res.x * CELL,
+           res.y * CELL, out.err_x_m, out.err_y_m, out.sig_x_m, out.sig_y_m, out.sel_sig_x_m,
+           out.sel_sig_y_m, res.failure_probability);
     return out;
 }
 
@@ -333,9 +345,11 @@ static void whole_loop(void)
         KT_CHECK(r.ok);
         KT_CHECK(fabs(r.err_x_m) <= 3.0 * sx);
         KT_CHECK(fabs(r.err_y_m) <= 3.0 * sy);
-        printf("KT-INFO loop run %d: |error| / sigma = %.2f (x), %.2f (y) with sigma = predicted (+) "
-               "cell/sqrt(12); %.2f, %.2f against the predicted sigma alone\n", run, fabs(r.err_x_m) / sx,
-               fabs(r.err_y_m) / sy, fabs(r.err_x_m) / r.sig_x_m, fabs(r.err_y_m) / r.sig_y_m);
+        printf(
+            "KT-INFO loop run %d: |error| / sigma = %.2f (x), %.2f (y) with sigma = predicted (+) "
+            "cell/sqrt(12); %.2f, %.2f against the predicted sigma alone\n",
+            run, fabs(r.err_x_m) / sx, fabs(r.err_y_m) / sy, fabs(r.err_x_m) / r.sig_x_m,
+            fabs(r.err_y_m) / r.sig_y_m);
         se += r.err_x_m * r.err_x_m + r.err_y_m * r.err_y_m;
     }
     printf("KT-INFO loop: RMS position error over %d runs %.3f m\n", RUNS, sqrt(se / RUNS));

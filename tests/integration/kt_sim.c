@@ -58,10 +58,7 @@ static int rover_up(void)
 }
 
 /* Sentinel capture: a failed capture must leave it untouched. */
-static void poison(void)
-{
-    memset(&g_cap, 0xA5, sizeof g_cap);
-}
+static void poison(void) { memset(&g_cap, 0xA5, sizeof g_cap); }
 
 static int untouched(void)
 {
@@ -89,11 +86,13 @@ static void heartbeats_and_status(void)
     f0 = g_rover.status_frames;
     t0 = kt_now_ms();
     KT_CHECK(rover_point(&g_rover, 0.5f, -0.3f, &at) == ROVER_OK);
-    printf("KT-INFO slew 0.5 rad: %lld ms, %u status frames\n", kt_now_ms() - t0, g_rover.status_frames - f0);
+    printf("KT-INFO slew 0.5 rad: %lld ms, %u status frames\n", kt_now_ms() - t0,
+           g_rover.status_frames - f0);
     KT_CHECK(kt_now_ms() - t0 >= 900);
     KT_CHECK(abs(at.pan_100urad - 5000) <= 20 && abs(at.tilt_100urad + 3000) <= 20);
     KT_CHECK(at.cmd_seq_ack == g_rover.seq);
-    KT_CHECK((at.state & TRN_MAST_ST_IN_POSITION) && !(at.state & TRN_MAST_ST_MOVING) && at.faults == 0u);
+    KT_CHECK((at.state & TRN_MAST_ST_IN_POSITION) && !(at.state & TRN_MAST_ST_MOVING) &&
+             at.faults == 0u);
     /* a second command, back */
     KT_CHECK(rover_point(&g_rover, 0.0f, -0.3f, &at) == ROVER_OK);
     KT_CHECK(abs(at.pan_100urad) <= 20 && at.cmd_seq_ack == g_rover.seq);
@@ -149,7 +148,8 @@ static void capture_round_trip(void)
     KT_CHECK(simrun_stop(&s) == 0);
     KT_CHECK(s.stats.captures_sent == 2u && s.stats.capture_cmds == 2u);
     KT_CHECK(s.stats.last_points == 500u);
-    KT_CHECK(s.stats.fc_received == s.stats.last_segments + (uint32_t)((TRN_CAP_WIRE_BYTES(pts_full) + 1019u) / 1020u));
+    KT_CHECK(s.stats.fc_received ==
+             s.stats.last_segments + (uint32_t)((TRN_CAP_WIRE_BYTES(pts_full) + 1019u) / 1020u));
     printf("KT-INFO capture: %u points full, %u data frames for both, %u flow controls\n", pts_full,
            s.stats.data_frames, s.stats.fc_received);
 }

@@ -22,37 +22,36 @@ static int kt_checks;
 static int kt_failed;
 static int kt_cases;
 
-#define KT_CHECK(cond)                                                         \
-    do {                                                                       \
-        ++kt_checks;                                                           \
-        if (!(cond)) {                                                         \
-            ++kt_failed;                                                       \
-            printf("KT-FAIL %s:%d: %s\n", __FILE__, __LINE__, #cond);          \
-            fflush(stdout);                                                    \
-        }                                                                      \
+#define KT_CHECK(cond) \
+    do { \
+        ++kt_checks; \
+        if (!(cond)) { \
+            ++kt_failed; \
+            printf("KT-FAIL %s:%d: %s\n", __FILE__, __LINE__, #cond); \
+            fflush(stdout); \
+        } \
     } while (0)
 
 /* Status check that prints both names when it fails. */
-#define KT_ST(got, want)                                                       \
-    do {                                                                       \
-        trn_status_t kt_g_ = (got);                                            \
-        trn_status_t kt_w_ = (want);                                           \
-        ++kt_checks;                                                           \
-        if (kt_g_ != kt_w_) {                                                  \
-            ++kt_failed;                                                       \
-            printf("KT-FAIL %s:%d: %s gave %d (%s), want %d (%s)\n", __FILE__, \
-                   __LINE__, #got, (int)kt_g_, trn_strerror(kt_g_), (int)kt_w_, \
-                   trn_strerror(kt_w_));                                       \
-            fflush(stdout);                                                    \
-        }                                                                      \
+#define KT_ST(got, want) \
+    do { \
+        trn_status_t kt_g_ = (got); \
+        trn_status_t kt_w_ = (want); \
+        ++kt_checks; \
+        if (kt_g_ != kt_w_) { \
+            ++kt_failed; \
+            printf("KT-FAIL %s:%d: %s gave %d (%s), want %d (%s)\n", __FILE__, __LINE__, #got, \
+                   (int)kt_g_, trn_strerror(kt_g_), (int)kt_w_, trn_strerror(kt_w_)); \
+            fflush(stdout); \
+        } \
     } while (0)
 
-#define KT_RUN(fn)                                                             \
-    do {                                                                       \
-        ++kt_cases;                                                            \
-        printf("KT-CASE %s\n", #fn);                                           \
-        fflush(stdout);                                                        \
-        fn();                                                                  \
+#define KT_RUN(fn) \
+    do { \
+        ++kt_cases; \
+        printf("KT-CASE %s\n", #fn); \
+        fflush(stdout); \
+        fn(); \
     } while (0)
 
 static inline int kt_finish(const char *prog)

@@ -16,8 +16,8 @@
 
 typedef struct {
     pid_t pid;
-    int rd;              /* read end of the counters pipe */
-    sim_stats_t stats;   /* filled by simrun_stop */
+    int rd;            /* read end of the counters pipe */
+    sim_stats_t stats; /* filled by simrun_stop */
 } simrun_t;
 
 static volatile sig_atomic_t simrun_stop_flag;

@@ -15,8 +15,8 @@ void *selworld_alloc(size_t bytes)
     return p;
 }
 
-trn_status_t selworld_init(selworld_t *w, int32_t n, const float *dem,
-                           const trn_sigma_model_t *gm, const trn_xy_t *sensors, size_t ns)
+trn_status_t selworld_init(selworld_t *w, int32_t n, const float *dem, const trn_sigma_model_t *gm,
+                           const trn_xy_t *sensors, size_t ns)
 {
     trn_status_t st;
     size_t mb, wb, nvox;

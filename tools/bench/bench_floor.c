@@ -82,8 +82,8 @@ static void apply_bwd(uint8_t *row, const uint8_t *t, size_t nx)
     }
 }
 
-void bench_relax_floor(const uint8_t *occ, uint8_t *v, size_t nx, size_t ny, size_t nz,
-                       uint8_t cap, uint8_t *scratch)
+void bench_relax_floor(const uint8_t *occ, uint8_t *v, size_t nx, size_t ny, size_t nz, uint8_t cap,
+                       uint8_t *scratch)
 {
     const size_t plane = nx * ny;
     size_t y, z, x;

@@ -18,6 +18,6 @@ size_t bench_relax_floor_scratch(size_t nx);
  * scratch: bench_relax_floor_scratch(nx)
  * bytes. Requires nx >= 18, ny >= 3, nz >= 2, cap <= 250.
  */
-void bench_relax_floor(const uint8_t *occ, uint8_t *v, size_t nx, size_t ny, size_t nz,
-                       uint8_t cap, uint8_t *scratch);
+void bench_relax_floor(const uint8_t *occ, uint8_t *v, size_t nx, size_t ny, size_t nz, uint8_t cap,
+                       uint8_t *scratch);
 #endif

@@ -42,8 +42,8 @@ static double bh_median(double *v, int n)
     return (n % 2) ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-int bench_heading_run(const trn_map_t *map, const trn_point_t *pts, size_t n_pts, int32_t px, int32_t py,
-                      int32_t w, int32_t n, int repeats, bench_heading_result_t *r)
+int bench_heading_run(const trn_map_t *map, const trn_point_t *pts, size_t n_pts, int32_t px,
+                      int32_t py, int32_t w, int32_t n, int repeats, bench_heading_result_t *r)
 {
     const trn_window_t win = {px - w, py - w, px + w, py + w};
     trn_heading_cfg_t hc = {0.0, 6.0 * BH_DEG, 0.0};
@@ -59,8 +59,8 @@ int bench_heading_run(const trn_map_t *map, const trn_point_t *pts, size_t n_pts
     trn_status_t st;
 
     memset(r, 0, sizeof *r);
-    if (turned == NULL || rot == NULL || hb == 0u || lb == 0u || posix_memalign(&hws, 16u, hb) != 0 ||
-        posix_memalign(&lws, 16u, lb) != 0 ||
+    if (turned == NULL || rot == NULL || hb == 0u || lb == 0u ||
+        posix_memalign(&hws, 16u, hb) != 0 || posix_memalign(&lws, 16u, lb) != 0 ||
         trn_points_rotate(pts, n_pts, -3.0 * BH_DEG, turned) != TRN_OK) {
         fprintf(stderr, "trn_bench: heading setup failed\n");
         goto done;
@@ -81,7 +81,8 @@ int bench_heading_run(const trn_map_t *map, const trn_point_t *pts, size_t n_pts
     r->steps = 2 * kk + 1;
     for (k = -kk; k <= kk; ++k) {
         trn_loc_result_t lr;
-        if (trn_points_rotate(turned, n_pts, hc.center_rad + (double)k * hr.step_rad, rot) != TRN_OK ||
+        if (trn_points_rotate(turned, n_pts, hc.center_rad + (double)k * hr.step_rad, rot) !=
+                TRN_OK ||
             trn_points_order(rot, n_pts, map->dist.nz) != TRN_OK) {
             goto done;
         }
@@ -108,22 +109,28 @@ int bench_heading_run(const trn_map_t *map, const trn_point_t *pts, size_t n_pts
         }
     }
     r->per_step_ms = sum_med / (double)r->steps;
-    work3 = (unsigned long long)hr.loc.stats.poses_scored + (unsigned long long)hr.loc.stats.blocks_bounded;
+    work3 = (unsigned long long)hr.loc.stats.poses_scored +
+            (unsigned long long)hr.loc.stats.blocks_bounded;
     r->ratio = r->heading_ms / sum_med;
-    r->wrong = !(hr.loc.ll_best == best_ll && hr.best_step == best_k && hr.loc.ix == bx && hr.loc.iy == by);
+    r->wrong = !(hr.loc.ll_best == best_ll && hr.best_step == best_k && hr.loc.ix == bx &&
+                 hr.loc.iy == by);
     {
         char note[200];
-        snprintf(note, sizeof note, "%d headings of %.2f deg, found %+.2f deg (true +3.00), sigma %.2f deg",
-                 (int)r->steps, hr.step_rad / BH_DEG, hr.heading_rad / BH_DEG, hr.sigma_heading_rad / BH_DEG);
-        printf("%-5d %-50s %4d %11.3f %11s  %s\n", (int)n, "heading +-6 deg: trn_localize_points_heading", reps,
-               r->heading_ms, "", note);
+        snprintf(note, sizeof note,
+                 "%d headings of %.2f deg, found %+.2f deg (true +3.00), sigma %.2f deg",
+                 (int)r->steps, hr.step_rad / BH_DEG, hr.heading_rad / BH_DEG,
+                 hr.sigma_heading_rad / BH_DEG);
+        printf("%-5d %-50s %4d %11.3f %11s  %s\n", (int)n,
+               "heading +-6 deg: trn_localize_points_heading", reps, r->heading_ms, "", note);
         snprintf(note, sizeof note, "%.3f ms a heading; best = 3-DOF answer: %s", r->per_step_ms,
                  r->wrong ? "NO" : "yes");
-        printf("%-5d %-50s %4d %11.3f %11s  %s\n", (int)n, "heading: trn_localize_points x every step", reps,
-               sum_med, "", note);
+        printf("%-5d %-50s %4d %11.3f %11s  %s\n", (int)n,
+               "heading: trn_localize_points x every step", reps, sum_med, "", note);
         printf("      ratio %-56s %8.3f  (goal <= 0.2)\n", "3-DOF / (2-DOF x steps)", r->ratio);
-        printf("      best-pose search work (poses scored + blocks bounded): 3-DOF %llu, 2-DOF x steps %llu "
-               "(%.3f)\n", work3, work2, (double)work3 / (double)work2);
+        printf("      best-pose search work (poses scored + blocks bounded): 3-DOF %llu, 2-DOF x "
+               "steps %llu "
+               "(%.3f)\n",
+               work3, work2, (double)work3 / (double)work2);
         fflush(stdout);
     }
     rc = 0;

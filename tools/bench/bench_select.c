@@ -124,7 +124,8 @@ static int run_pmap(void *p)
 {
     pmap_ctx_t *c = (pmap_ctx_t *)p;
     return trn_prob_global_map(c->k, &c->gm, &c->s, 1, c->map, &c->pg, c->ws, c->wsb) == TRN_OK
-               ? 0 : -1;
+               ? 0
+               : -1;
 }
 
 static int run_pmap_naive(void *p)
@@ -191,8 +192,8 @@ typedef struct {
 static int run_select(void *p)
 {
     sel_ctx_t *c = (sel_ctx_t *)p;
-    trn_status_t st = trn_select(c->map, c->k, c->pg, &c->cfg, &c->rv, c->c, c->cap, c->ranked,
-                                 8, &c->res, c->ws, c->wsb);
+    trn_status_t st = trn_select(c->map, c->k, c->pg, &c->cfg, &c->rv, c->c, c->cap, c->ranked, 8,
+                                 &c->res, c->ws, c->wsb);
     return (st == TRN_OK || st == TRN_E_NOTARGET) ? 0 : -1;
 }
 
@@ -207,8 +208,8 @@ static int run_select_naive(void *p)
     c->p.nx = roi->x1 - roi->x0 + 1;
     c->p.ny = roi->y1 - roi->y0 + 1;
     c->p.nz = D->nz;
-    if (trn_prob_local(c->k, &c->cfg.local_sigma, c->map->cfg.terrain.cell_m, c->rv.pos, c->pg,
-                       roi, &c->p, c->lws, c->lwsb) != TRN_OK) {
+    if (trn_prob_local(c->k, &c->cfg.local_sigma, c->map->cfg.terrain.cell_m, c->rv.pos, c->pg, roi,
+                       &c->p, c->lws, c->lwsb) != TRN_OK) {
         return -1;
     }
     c->naive_best = HUGE_VAL;
@@ -224,8 +225,9 @@ static int run_select_naive(void *p)
             for (z = 0; z < D->nz; ++z) {
                 for (y = c->c[i].y - half; y <= c->c[i].y + half; ++y) {
                     for (x = c->c[i].x - half; x <= c->c[i].x + half; ++x) {
-                        const float pv = c->p.data[((size_t)z * c->p.ny + (size_t)(y - roi->y0)) *
-                                                       c->p.nx + (size_t)(x - roi->x0)];
+                        const float pv =
+                            c->p.data[((size_t)z * c->p.ny + (size_t)(y - roi->y0)) * c->p.nx +
+                                      (size_t)(x - roi->x0)];
                         int32_t dv = D->data[TRN_VOL_IDX(D, x + dx, y + dy, z)];
                         dv = dv < cap ? dv : cap;
                         s += (double)pv * (double)c->map->lnp.lnp[dv];
@@ -265,7 +267,7 @@ typedef struct {
     size_t cap;
     void *sws;
     size_t swsb;
-    int fast;      /* run trn_field_fast (ws of its size) */
+    int fast; /* run trn_field_fast (ws of its size) */
 } field_ctx_t;
 
 static int run_field(void *p)
@@ -274,8 +276,8 @@ static int run_field(void *p)
     const size_t n = (size_t)c->g.width * (size_t)c->g.height;
     trn_status_t s;
     if (c->fast) {
-        s = trn_field_fast(c->map, c->k, c->pg, &c->scfg, &c->fcfg, 0.0f, &c->area, &c->g, c->ev,
-                           n, &c->st, c->ws, c->wsb);
+        s = trn_field_fast(c->map, c->k, c->pg, &c->scfg, &c->fcfg, 0.0f, &c->area, &c->g, c->ev, n,
+                           &c->st, c->ws, c->wsb);
     } else {
         s = trn_field(c->map, c->k, c->pg, &c->scfg, &c->fcfg, 0.0f, &c->area, &c->g, c->ev, n,
                       &c->st, c->ws, c->wsb);
@@ -350,8 +352,8 @@ static int run_field_block(void *p)
 /* Eq. 8: trn_prob_global_map against the naive scatter (and OpenCV's
  * separable filter when built with it); pc's buffers and *kidx are the
  * caller's to free. 0, or nonzero when the setup failed. */
-static int bench_pmap(pmap_ctx_t *pc, const trn_kernels_t *k, const trn_map_t *map, int32_t n, int repeats,
-                      uint8_t **kidx, bench_select_result_t *r)
+static int bench_pmap(pmap_ctx_t *pc, const trn_kernels_t *k, const trn_map_t *map, int32_t n,
+                      int repeats, uint8_t **kidx, bench_select_result_t *r)
 {
     bs_t t_p, t_pn;
     const size_t nvox = (size_t)map->dist.nx * map->dist.ny * map->dist.nz;
@@ -395,8 +397,10 @@ static int bench_pmap(pmap_ctx_t *pc, const trn_kernels_t *k, const trn_map_t *m
     for (i = 0; i < nvox; ++i) {
         worst = fmax(worst, fabs((double)pc->pg.data[i] - pc->naive[i]));
     }
-    snprintf(note, sizeof note, "eq. 8, sensor at the centre, kernels 0..%d (sigma up to %.2f "
-             "cells)", (int)jmax, (double)k->sigma_cells[jmax]);
+    snprintf(note, sizeof note,
+             "eq. 8, sensor at the centre, kernels 0..%d (sigma up to %.2f "
+             "cells)",
+             (int)jmax, (double)k->sigma_cells[jmax]);
     bs_row(n, "pmap: trn_prob_global_map", &t_p, note);
     snprintf(note, sizeof note, "direct 2-D scatter; max |separable - direct| %.3g", worst);
     bs_row(n, "pmap: naive position-variant 2-D scatter", &t_pn, note);
@@ -431,8 +435,8 @@ static int bench_pmap(pmap_ctx_t *pc, const trn_kernels_t *k, const trn_map_t *m
 /* All candidates of one rover position, default (paper-like) rules:
  * trn_select against the naive per-candidate sums; sc's buffers are the
  * caller's to free. 0, or nonzero when the setup failed. */
-static int bench_sel(sel_ctx_t *sc, const trn_kernels_t *k, const trn_map_t *map, const trn_vol_f32_t *pg,
-                     int32_t n, int repeats, bench_select_result_t *r)
+static int bench_sel(sel_ctx_t *sc, const trn_kernels_t *k, const trn_map_t *map,
+                     const trn_vol_f32_t *pg, int32_t n, int repeats, bench_select_result_t *r)
 {
     bs_t t_s, t_sn;
     char note[200];
@@ -463,8 +467,10 @@ static int bench_sel(sel_ctx_t *sc, const trn_kernels_t *k, const trn_map_t *map
     same = sc->res.n_informative > 0 &&
            (sc->naive_best_i == sc->res.best ||
             fabs(sc->naive_best - sc->c[sc->res.best].uncertainty_m) <= 1e-6 * sc->naive_best);
-    snprintf(note, sizeof note, "%zu candidates (%zu informative), region %dx%d; best (%d, %d) "
-             "%.4f m", sc->res.n_candidates, sc->res.n_informative,
+    snprintf(note, sizeof note,
+             "%zu candidates (%zu informative), region %dx%d; best (%d, %d) "
+             "%.4f m",
+             sc->res.n_candidates, sc->res.n_informative,
              (int)(sc->res.roi.x1 - sc->res.roi.x0 + 1), (int)(sc->res.roi.y1 - sc->res.roi.y0 + 1),
              sc->res.n_informative ? (int)sc->c[sc->res.best].x : -1,
              sc->res.n_informative ? (int)sc->c[sc->res.best].y : -1,
@@ -485,7 +491,8 @@ static int bench_sel(sel_ctx_t *sc, const trn_kernels_t *k, const trn_map_t *map
  * trn_field_fast; fc's buffers (allocated here) are the caller's to free.
  * 0, or nonzero when the setup failed. */
 static int bench_field_whole(field_ctx_t *fc, const trn_kernels_t *k, const trn_map_t *map,
-                             const trn_vol_f32_t *pg, int32_t n, int repeats, bench_select_result_t *r)
+                             const trn_vol_f32_t *pg, int32_t n, int repeats,
+                             bench_select_result_t *r)
 {
     bs_t t_f, t_fb, t_ff;
     size_t wso, wsn;
@@ -529,17 +536,21 @@ static int bench_field_whole(field_ctx_t *fc, const trn_kernels_t *k, const trn_
     r->field_evals = fc->st.evaluations;
     r->field_cells = fc->st.cells;
     r->field_naive_est_ms = t_fb.med * (double)n * (double)n / (32.0 * 32.0);
-    snprintf(note, sizeof note, "reach 0.5-2 m, 0.9 m patches; %u evaluations of %u cells "
-             "(%.1fx fewer); min %.4f m at (%d, %d)", fc->st.evaluations, fc->st.cells,
-             (double)fc->st.cells / fc->st.evaluations, fc->st.best_m, (int)fc->st.best_x,
-             (int)fc->st.best_y);
+    snprintf(note, sizeof note,
+             "reach 0.5-2 m, 0.9 m patches; %u evaluations of %u cells "
+             "(%.1fx fewer); min %.4f m at (%d, %d)",
+             fc->st.evaluations, fc->st.cells, (double)fc->st.cells / fc->st.evaluations,
+             fc->st.best_m, (int)fc->st.best_x, (int)fc->st.best_y);
     bs_row(n, "field: trn_field, whole map", &t_f, note);
-    snprintf(note, sizeof note, "brute force on a 32x32 block: %.3f ms per position; whole map "
-             "estimated %.0f ms", t_fb.med / 1024.0, r->field_naive_est_ms);
+    snprintf(note, sizeof note,
+             "brute force on a 32x32 block: %.3f ms per position; whole map "
+             "estimated %.0f ms",
+             t_fb.med / 1024.0, r->field_naive_est_ms);
     bs_row(n, "field: brute force, 32x32 block", &t_fb, note);
-    snprintf(note, sizeof note, "same field as trn_field: %s; workspace %.1f MB (trn_field "
-             "%.2f MB)", same ? "yes" : "NO", (double)wsn / 1048576.0,
-             (double)wso / 1048576.0);
+    snprintf(note, sizeof note,
+             "same field as trn_field: %s; workspace %.1f MB (trn_field "
+             "%.2f MB)",
+             same ? "yes" : "NO", (double)wsn / 1048576.0, (double)wso / 1048576.0);
     bs_row(n, "field: trn_field_fast (ground path), whole map", &t_ff, note);
     if (!same) {
         r->wrong = 1;
@@ -575,9 +586,10 @@ static int bench_field_paper(field_ctx_t *fc, int32_t n, bench_select_result_t *
     r->fpaper_evals = fc->st.evaluations;
     r->fpaper_ws = wso;
     r->fpaper_fast_ws = wsn;
-    snprintf(note, sizeof note, "1-10 m, 2 m patches, stride 2, coarse 16: %u evaluations of "
-             "4096 cells (%.2f ms each); workspace %.2f MB", fc->st.evaluations,
-             t_fo.med / fc->st.evaluations, (double)wso / 1048576.0);
+    snprintf(note, sizeof note,
+             "1-10 m, 2 m patches, stride 2, coarse 16: %u evaluations of "
+             "4096 cells (%.2f ms each); workspace %.2f MB",
+             fc->st.evaluations, t_fo.med / fc->st.evaluations, (double)wso / 1048576.0);
     bs_row(n, "field (paper): trn_field, 64x64 area", &t_fo, note);
     snprintf(note, sizeof note, "same field: %s (%.2f ms each); workspace %.1f MB",
              same ? "yes" : "NO", t_fn.med / fc->st.evaluations, (double)wsn / 1048576.0);
@@ -585,8 +597,7 @@ static int bench_field_paper(field_ctx_t *fc, int32_t n, bench_select_result_t *
     if (!same) {
         r->wrong = 1;
     }
-    bs_ratio("trn_field / trn_field_fast (paper defaults)", t_fo.med, t_fn.med,
-             "(target >= 10x)");
+    bs_ratio("trn_field / trn_field_fast (paper defaults)", t_fo.med, t_fn.med, "(target >= 10x)");
     return 0;
 }
 
@@ -606,8 +617,10 @@ int bench_select_run(const trn_map_t *map, int32_t n, int repeats, bench_select_
     if (trn_kernels_build(&k, TRN_KERNEL_SIGMA0_DEFAULT_CELLS) != TRN_OK) {
         return 3;
     }
-    if (bench_pmap(&pc, &k, map, n, repeats, &kidx, r) == 0 && bench_sel(&sc, &k, map, &pc.pg, n, repeats, r) == 0 &&
-        bench_field_whole(&fc, &k, map, &pc.pg, n, repeats, r) == 0 && bench_field_paper(&fc, n, r) == 0) {
+    if (bench_pmap(&pc, &k, map, n, repeats, &kidx, r) == 0 &&
+        bench_sel(&sc, &k, map, &pc.pg, n, repeats, r) == 0 &&
+        bench_field_whole(&fc, &k, map, &pc.pg, n, repeats, r) == 0 &&
+        bench_field_paper(&fc, n, r) == 0) {
         rc = 0;
     }
     if (rc != 0) {

@@ -11,11 +11,11 @@ typedef struct {
     double select_ms, select_naive_ms;
     double field_ms, field_naive_est_ms;
     unsigned field_evals, field_cells;
-    double field_fast_ms;                     /* trn_field_fast, same field as field_ms */
-    double fpaper_ms, fpaper_fast_ms;         /* paper defaults, 64 x 64 area: trn_field, trn_field_fast */
+    double field_fast_ms;             /* trn_field_fast, same field as field_ms */
+    double fpaper_ms, fpaper_fast_ms; /* paper defaults, 64 x 64 area: trn_field, trn_field_fast */
     unsigned fpaper_evals;
-    size_t fpaper_ws, fpaper_fast_ws;         /* workspace bytes of the two */
-    int wrong; /* a fast answer differed from the naive one */
+    size_t fpaper_ws, fpaper_fast_ws; /* workspace bytes of the two */
+    int wrong;                        /* a fast answer differed from the naive one */
 } bench_select_result_t;
 
 /* Run and print the rows for one map (size n). Returns 0, or 3 on a setup failure. */

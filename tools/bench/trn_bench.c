@@ -59,12 +59,12 @@
 
 #define PI 3.14159265358979323846
 #define CELL_M 0.1
-#define LOCAL_CELLS 64      /* local map side */
-#define PRIOR_ERR_CELLS 10  /* largest prior error per axis */
+#define LOCAL_CELLS 64     /* local map side */
+#define PRIOR_ERR_CELLS 10 /* largest prior error per axis */
 #define MAX_SIZES 8
 #define MAX_REPEATS 100
 #define N_WINDOWS 2
-#define NAIVE_BUDGET_S 3.0  /* the Dijkstra oracle stops repeating after this */
+#define NAIVE_BUDGET_S 3.0 /* the Dijkstra oracle stops repeating after this */
 #define NAIVE_BUDGET_TXT "3 s"
 
 static const int32_t k_windows[N_WINDOWS] = {25, 50};
@@ -110,8 +110,8 @@ static int parse_long(const char *name, const char *v, long lo, long hi, long *o
     errno = 0;
     x = strtol(v, &end, 10);
     if (errno != 0 || end == v || (rest == NULL && *end != '\0') || x < lo || x > hi) {
-        fprintf(stderr, "trn_bench: %s must be an integer in [%ld, %ld], got '%s'\n", name, lo,
-                hi, v);
+        fprintf(stderr, "trn_bench: %s must be an integer in [%ld, %ld], got '%s'\n", name, lo, hi,
+                v);
         return 0;
     }
     if (rest != NULL) {
@@ -211,9 +211,9 @@ static int parse(int argc, char **argv, opts_t *o)
 typedef int (*bench_fn_t)(void *ctx);
 
 typedef struct {
-    int reps;       /* timed runs */
-    double med_ms;  /* median */
-    double min_ms;  /* minimum */
+    int reps;      /* timed runs */
+    double med_ms; /* median */
+    double min_ms; /* minimum */
 } timing_t;
 
 static double now_s(void)
@@ -265,8 +265,8 @@ static int time_fn(bench_fn_t fn, void *ctx, int warmup, int reps, double budget
 
 static void print_header(void)
 {
-    printf("%-5s %-50s %4s %11s %11s  %s\n", "size", "measurement", "reps", "median ms",
-           "min ms", "notes");
+    printf("%-5s %-50s %4s %11s %11s  %s\n", "size", "measurement", "reps", "median ms", "min ms",
+           "notes");
     printf("%-5s %-50s %4s %11s %11s  %s\n", "-----",
            "--------------------------------------------------", "----", "-----------",
            "-----------", "-----");
@@ -312,8 +312,8 @@ static int run_chamfer(void *p)
 typedef struct {
     const uint8_t *occ;
     uint8_t *v;
-    size_t n;   /* voxels */
-    size_t nx;  /* row length (for the row-to-row variant) */
+    size_t n;  /* voxels */
+    size_t nx; /* row length (for the row-to-row variant) */
     uint8_t cap;
 } stream_ctx_t;
 
@@ -553,15 +553,19 @@ typedef struct {
 static int run_exhaustive(void *p)
 {
     search_ctx_t *c = (search_ctx_t *)p;
-    return trn_search_exhaustive(&c->map->dist, &c->map->lnp, c->pts, c->n, c->win, c->ex,
-                                 &c->best, &c->stats) == TRN_OK ? 0 : -1;
+    return trn_search_exhaustive(&c->map->dist, &c->map->lnp, c->pts, c->n, c->win, c->ex, &c->best,
+                                 &c->stats) == TRN_OK
+               ? 0
+               : -1;
 }
 
 static int run_bb(void *p)
 {
     search_ctx_t *c = (search_ctx_t *)p;
     return trn_search_bb(&c->map->pyr, &c->map->lnp, c->pts, c->n, c->win, c->ex, c->ws, c->wsb,
-                         &c->best, &c->stats) == TRN_OK ? 0 : -1;
+                         &c->best, &c->stats) == TRN_OK
+               ? 0
+               : -1;
 }
 
 /* The 8 neighbour scores trn_localize_points computes for the eq. 6 fit. */
@@ -624,14 +628,14 @@ static int run_localize(void *p)
 
 typedef struct {
     int32_t n;
-    int wrong;                /* a wrong answer was seen */
-    double chamfer_vs_stream; /* median trn_chamfer3d / median SIMD streaming passes */
-    double chamfer_vs_scan;   /* median trn_chamfer3d / median scalar scan passes */
-    double floor_vs_stream;   /* median relaxation floor / median SIMD streaming passes */
-    int32_t win[N_WINDOWS];   /* half-widths used (clamped on small maps) */
+    int wrong;                        /* a wrong answer was seen */
+    double chamfer_vs_stream;         /* median trn_chamfer3d / median SIMD streaming passes */
+    double chamfer_vs_scan;           /* median trn_chamfer3d / median scalar scan passes */
+    double floor_vs_stream;           /* median relaxation floor / median SIMD streaming passes */
+    int32_t win[N_WINDOWS];           /* half-widths used (clamped on small maps) */
     double search_speedup[N_WINDOWS]; /* median exhaustive / median branch-and-bound */
-    bench_select_result_t sel;/* landmark selection rows */
-    bench_heading_result_t head; /* the (x, y, heading) search row */
+    bench_select_result_t sel;        /* landmark selection rows */
+    bench_heading_result_t head;      /* the (x, y, heading) search row */
 } size_result_t;
 
 /* One global map size: its memory (freed in one place) and shared state. */
@@ -643,13 +647,13 @@ typedef struct {
     synth_terrain_t terrain;
     trn_grid_f32_t gdem, ghp, glocal, glhp;
     trn_vol_u8_t vocc, vdist;
-    map_ctx_t mc;         /* the prepared map the searches use */
-    timing_t t_hp, t_occ; /* global trn_highpass, trn_occupancy */
-    timing_t t_ch;        /* trn_chamfer3d */
-    timing_t t_lhp, t_pts;/* local trn_highpass, trn_occupancy_points */
-    double tx, ty;        /* true rover pose, cells */
-    int32_t px, py;       /* prior pose, cells */
-    int32_t wfit;         /* largest window half-width that fits the map */
+    map_ctx_t mc;          /* the prepared map the searches use */
+    timing_t t_hp, t_occ;  /* global trn_highpass, trn_occupancy */
+    timing_t t_ch;         /* trn_chamfer3d */
+    timing_t t_lhp, t_pts; /* local trn_highpass, trn_occupancy_points */
+    double tx, ty;         /* true rover pose, cells */
+    int32_t px, py;        /* prior pose, cells */
+    int32_t wfit;          /* largest window half-width that fits the map */
     /* heap memory */
     synth_rock_t *rocks;
     float *dem, *hp, *loc, *lhp;
@@ -785,7 +789,8 @@ static int bench_occupancy(world_t *w, const opts_t *o)
 /* trn_chamfer3d against the streaming passes, Dijkstra and OpenCV. */
 /* The memory-bound references of the chamfer transform: two streaming
  * passes (SIMD), the relaxation alone (the floor), a scalar scan. 0 or 3. */
-static int chamfer_refs(world_t *w, const opts_t *o, timing_t *t_rows, timing_t *t_floor, timing_t *t_scan)
+static int chamfer_refs(world_t *w, const opts_t *o, timing_t *t_rows, timing_t *t_floor,
+                        timing_t *t_scan)
 {
     const int32_t n = w->n;
     stream_ctx_t sc;
@@ -1014,8 +1019,8 @@ static int bench_local(world_t *w, const opts_t *o)
     ptc.cap = w->max_pts;
     ptc.n = 0u;
     if (time_fn(run_points, &ptc, 1, o->repeats, 0.0, &w->t_pts) != 0) {
-        return fail("trn_occupancy_points", trn_occupancy_points(ptc.hp, ptc.tc, half, half,
-                                                                 w->pts, w->max_pts, &ptc.n));
+        return fail("trn_occupancy_points",
+                    trn_occupancy_points(ptc.hp, ptc.tc, half, half, w->pts, w->max_pts, &ptc.n));
     }
     w->n_pts = ptc.n;
     /* as trn_localize_dem does: rare height bins first (same answers, the
@@ -1032,8 +1037,8 @@ static int bench_local(world_t *w, const opts_t *o)
 /* Exhaustive vs branch-and-bound and one trn_localize_dem, window k. */
 /* Exhaustive search against branch-and-bound over the window of half-side
  * W (entry k of k_windows); r->search_speedup[k]. 0 or 3. */
-static int window_search(world_t *w, const opts_t *o, int k, int32_t W, search_ctx_t *ex, search_ctx_t *bb,
-                         timing_t *t_ex, timing_t *t_bb, size_result_t *r)
+static int window_search(world_t *w, const opts_t *o, int k, int32_t W, search_ctx_t *ex,
+                         search_ctx_t *bb, timing_t *t_ex, timing_t *t_bb, size_result_t *r)
 {
     const int32_t n = w->n;
     int same;
@@ -1059,8 +1064,7 @@ static int window_search(world_t *w, const opts_t *o, int k, int32_t W, search_c
     snprintf(name, sizeof name, "search +-%d: trn_search_bb", (int)W);
     print_row(n, name, t_bb, note);
     if (!same) {
-        fprintf(stderr,
-                "trn_bench: branch-and-bound (%d, %d, %lld) != exhaustive (%d, %d, %lld)\n",
+        fprintf(stderr, "trn_bench: branch-and-bound (%d, %d, %lld) != exhaustive (%d, %d, %lld)\n",
                 (int)bb->best.x, (int)bb->best.y, (long long)bb->best.score, (int)ex->best.x,
                 (int)ex->best.y, (long long)ex->best.score);
         r->wrong = 1;
@@ -1100,11 +1104,10 @@ static int window_parts(world_t *w, const opts_t *o, const search_ctx_t *bb, con
     print_row(n, "localize:   trn_occupancy_points", &w->t_pts, note);
     snprintf(note, sizeof note, "%.0f %% (search row above)", 100.0 * t_bb->med_ms / t_loc->med_ms);
     print_row(n, "localize:   trn_search_bb, best pose", t_bb, note);
-    snprintf(note, sizeof note,
-             "%.0f %%; exclusion radius %d, %llu poses scored, %llu blocks bounded",
-             100.0 * t_sec.med_ms / t_loc->med_ms, (int)exz.radius,
-             (unsigned long long)sec.stats.poses_scored,
-             (unsigned long long)sec.stats.blocks_bounded);
+    snprintf(
+        note, sizeof note, "%.0f %%; exclusion radius %d, %llu poses scored, %llu blocks bounded",
+        100.0 * t_sec.med_ms / t_loc->med_ms, (int)exz.radius,
+        (unsigned long long)sec.stats.poses_scored, (unsigned long long)sec.stats.blocks_bounded);
     print_row(n, "localize:   trn_search_bb, second peak", &t_sec, note);
     snprintf(note, sizeof note, "%.0f %%", 100.0 * t_s9.med_ms / t_loc->med_ms);
     print_row(n, "localize:   8 x trn_score_pose (eq. 6 fit)", &t_s9, note);
@@ -1210,8 +1213,9 @@ static int bench_size(const opts_t *o, int32_t n, size_result_t *r)
         r->wrong |= r->sel.wrong;
     }
     if (rc == 0) {
-        rc = bench_heading_run(&w.mc.map, w.pts, w.n_pts, w.px, w.py, k_windows[0] < w.wfit ? k_windows[0] : w.wfit,
-                               n, o->repeats, &r->head);
+        rc = bench_heading_run(&w.mc.map, w.pts, w.n_pts, w.px, w.py,
+                               k_windows[0] < w.wfit ? k_windows[0] : w.wfit, n, o->repeats,
+                               &r->head);
         r->wrong |= r->head.wrong;
     }
     world_free(&w);
@@ -1311,15 +1315,16 @@ int main(int argc, char **argv)
                    b->pmap_cv_ms / b->pmap_ms);
         }
         printf("target all candidates of one rover position < 20 ms%s: %s (%d: %.2f ms)\n",
-               res[i].n >= 512 ? "" : " (info below 512)",
-               b->select_ms < 20.0 ? "PASS" : "MISS", (int)res[i].n, b->select_ms);
+               res[i].n >= 512 ? "" : " (info below 512)", b->select_ms < 20.0 ? "PASS" : "MISS",
+               (int)res[i].n, b->select_ms);
         printf("target trn_field_fast >= 10x trn_field (paper defaults, 64x64 area, same field): "
                "%s (%d: %.2fx; small reach, whole map: %.2fx)\n",
                b->fpaper_ms >= 10.0 * b->fpaper_fast_ms ? "PASS" : "MISS", (int)res[i].n,
                b->fpaper_ms / b->fpaper_fast_ms, b->field_ms / b->field_fast_ms);
     }
     for (i = 0; i < o.nsizes; ++i) {
-        printf("target (x, y, heading) search <= 0.2 of the 2-DOF search x headings: %s (%d: %.3f, %d headings)\n",
+        printf("target (x, y, heading) search <= 0.2 of the 2-DOF search x headings: %s (%d: %.3f, "
+               "%d headings)\n",
                res[i].head.ratio <= 0.2 ? "PASS" : "MISS", (int)res[i].n, res[i].head.ratio,
                (int)res[i].head.steps);
     }

@@ -19,8 +19,8 @@ static int g_first = 1;
 static void begin(const char *name, const trn_can_frame_t *f)
 {
     unsigned i;
-    printf("%s\n  {\"msg\": \"%s\", \"id\": %u, \"dlc\": %u, \"data\": \"", g_first ? "" : ",", name,
-           (unsigned)f->id, (unsigned)f->dlc);
+    printf("%s\n  {\"msg\": \"%s\", \"id\": %u, \"dlc\": %u, \"data\": \"", g_first ? "" : ",",
+           name, (unsigned)f->id, (unsigned)f->dlc);
     for (i = 0; i < f->dlc; ++i) {
         printf("%02x", f->data[i]);
     }
@@ -50,10 +50,10 @@ static int mast_cmd(const trn_mast_cmd_t *m)
 
 static int mast_status(const trn_mast_status_t *m)
 {
-    static const char *const st[6] = {"moving", "pan_lim_min", "pan_lim_max", "tilt_lim_min", "tilt_lim_max",
-                                      "in_position"};
-    static const char *const fl[6] = {"flt_pan_stall", "flt_tilt_stall", "flt_encoder", "flt_overcurrent",
-                                      "flt_overtemp", "flt_cmd_invalid"};
+    static const char *const st[6] = {"moving",       "pan_lim_min",  "pan_lim_max",
+                                      "tilt_lim_min", "tilt_lim_max", "in_position"};
+    static const char *const fl[6] = {"flt_pan_stall",   "flt_tilt_stall", "flt_encoder",
+                                      "flt_overcurrent", "flt_overtemp",   "flt_cmd_invalid"};
     trn_can_frame_t f;
     int b;
     if (trn_can_mast_status_encode(m, &f) != TRN_OK) {
@@ -126,8 +126,10 @@ int main(int argc, char **argv)
     printf("[");
     /* limits */
     {
-        const trn_mast_cmd_t c[3] = {{-32768, -32768, 0, 0, 0}, {32767, 32767, 65535, 255, 2}, {-1, 1, 1, 1, 1}};
-        const trn_mast_status_t s[3] = {{-32768, 32767, 0, 0, 0, 0}, {32767, -32768, 0x3F, 0x3F, 255, 255},
+        const trn_mast_cmd_t c[3] = {
+            {-32768, -32768, 0, 0, 0}, {32767, 32767, 65535, 255, 2}, {-1, 1, 1, 1, 1}};
+        const trn_mast_status_t s[3] = {{-32768, 32767, 0, 0, 0, 0},
+                                        {32767, -32768, 0x3F, 0x3F, 255, 255},
                                         {-1, 0, 0x15, 0x2A, 1, 128}};
         const trn_capture_cmd_t k[2] = {{0, 0}, {65535, 65535}};
         const trn_heartbeat_t h[2] = {{0, 0, 0}, {3, 255, 65535}};
@@ -142,13 +144,16 @@ int main(int argc, char **argv)
     }
     trn_rng_seed(&r, 2026);
     for (i = 0; i < 100; ++i) {
-        trn_mast_cmd_t c = {(int16_t)trn_rng_int(&r, -32768, 32767), (int16_t)trn_rng_int(&r, -32768, 32767),
+        trn_mast_cmd_t c = {(int16_t)trn_rng_int(&r, -32768, 32767),
+                            (int16_t)trn_rng_int(&r, -32768, 32767),
                             (uint16_t)trn_rng_int(&r, 0, 65535), (uint8_t)trn_rng_int(&r, 0, 255),
                             (uint8_t)trn_rng_int(&r, 0, 2)};
-        trn_mast_status_t s = {(int16_t)trn_rng_int(&r, -32768, 32767), (int16_t)trn_rng_int(&r, -32768, 32767),
-                               (uint8_t)trn_rng_int(&r, 0, 0x3F), (uint8_t)trn_rng_int(&r, 0, 0x3F),
-                               (uint8_t)trn_rng_int(&r, 0, 255), (uint8_t)trn_rng_int(&r, 0, 255)};
-        trn_capture_cmd_t k = {(uint16_t)trn_rng_int(&r, 0, 65535), (uint16_t)trn_rng_int(&r, 0, 65535)};
+        trn_mast_status_t s = {
+            (int16_t)trn_rng_int(&r, -32768, 32767), (int16_t)trn_rng_int(&r, -32768, 32767),
+            (uint8_t)trn_rng_int(&r, 0, 0x3F),       (uint8_t)trn_rng_int(&r, 0, 0x3F),
+            (uint8_t)trn_rng_int(&r, 0, 255),        (uint8_t)trn_rng_int(&r, 0, 255)};
+        trn_capture_cmd_t k = {(uint16_t)trn_rng_int(&r, 0, 65535),
+                               (uint16_t)trn_rng_int(&r, 0, 65535)};
         trn_heartbeat_t h = {(uint8_t)trn_rng_int(&r, 0, 3), (uint8_t)trn_rng_int(&r, 0, 255),
                              (uint16_t)trn_rng_int(&r, 0, 65535)};
         bad |= mast_cmd(&c) | mast_status(&s) | capture_cmd(&k);

@@ -154,13 +154,12 @@ static void on_frame(rover_link_t *r, const trn_lcan_frame_t *f, uint32_t t)
     case TRN_CAN_MSG_STEREO_HB: {
         trn_heartbeat_t hb;
         if (trn_can_heartbeat_decode(&pf, &hb) == TRN_OK) {
-            (void)trn_link_mon_frame(f->id == TRN_CAN_ID_MAST_HB ? &r->mast_hb : &r->stereo_hb, hb.counter, t,
-                                     NULL, NULL);
+            (void)trn_link_mon_frame(f->id == TRN_CAN_ID_MAST_HB ? &r->mast_hb : &r->stereo_hb,
+                                     hb.counter, t, NULL, NULL);
         }
         break;
     }
-    default:
-        break;
+    default: break;
     }
 }
 
@@ -238,14 +237,15 @@ rover_outcome_t rover_wait_alive(rover_link_t *r)
 }
 
 /* Build MAST_CMD (new seq) as a port frame. */
-static int make_cmd(rover_link_t *r, float pan_rad, float tilt_rad, uint8_t mode, trn_mast_cmd_t *cmd,
-                    trn_lcan_frame_t *f)
+static int make_cmd(rover_link_t *r, float pan_rad, float tilt_rad, uint8_t mode,
+                    trn_mast_cmd_t *cmd, trn_lcan_frame_t *f)
 {
     trn_can_frame_t pf;
     float rate = r->cfg.rate_rad_s * 1e4f;
     memset(cmd, 0, sizeof *cmd);
     if (trn_can_angle_to_raw(pan_rad, &cmd->pan_100urad) != TRN_OK ||
-        trn_can_angle_to_raw(tilt_rad, &cmd->tilt_100urad) != TRN_OK || !(rate >= 0.0f && rate <= 65535.0f)) {
+        trn_can_angle_to_raw(tilt_rad, &cmd->tilt_100urad) != TRN_OK ||
+        !(rate >= 0.0f && rate <= 65535.0f)) {
         return 0;
     }
     cmd->rate_100urad_s = (uint16_t)(rate + 0.5f);
@@ -268,7 +268,8 @@ rover_outcome_t rover_move_nowait(rover_link_t *r, float pan_rad, float tilt_rad
     if (r == NULL) {
         return ROVER_E_IO;
     }
-    if (!make_cmd(r, pan_rad, tilt_rad, TRN_MAST_MODE_MOVE, &cmd, &f) || trn_lcan_send(&r->can, &f, 100) != TRN_OK) {
+    if (!make_cmd(r, pan_rad, tilt_rad, TRN_MAST_MODE_MOVE, &cmd, &f) ||
+        trn_lcan_send(&r->can, &f, 100) != TRN_OK) {
         return done(r, ROVER_E_IO);
     }
     return ROVER_OK;
@@ -282,7 +283,8 @@ rover_outcome_t rover_stop(rover_link_t *r, trn_mast_status_t *at)
     if (r == NULL) {
         return ROVER_E_IO;
     }
-    if (!make_cmd(r, 0.0f, 0.0f, TRN_MAST_MODE_STOP, &cmd, &f) || trn_lcan_send(&r->can, &f, 100) != TRN_OK) {
+    if (!make_cmd(r, 0.0f, 0.0f, TRN_MAST_MODE_STOP, &cmd, &f) ||
+        trn_lcan_send(&r->can, &f, 100) != TRN_OK) {
         return done(r, ROVER_E_IO);
     }
     t0 = now_ms();

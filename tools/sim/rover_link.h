@@ -40,16 +40,16 @@ typedef enum {
 
 /** Configuration. */
 typedef struct {
-    const char *ifname;           /**< CAN interface */
-    const char *gpio_chip;        /**< chip of the trigger line, or NULL: no GPIO (CAN only) */
-    uint32_t trigger_offset;      /**< stereo trigger output */
-    uint32_t power_offset;        /**< mast power enable output */
-    uint32_t deployed_offset;     /**< mast deployed input */
-    uint32_t trigger_pulse_us;    /**< pulse width */
-    float rate_rad_s;             /**< MAST_CMD rate_max, rad/s; 0 = the mast's default */
-    uint32_t alive_timeout_ms;    /**< wait for both heartbeats */
-    uint32_t move_timeout_ms;     /**< wait for in_position */
-    uint32_t capture_timeout_ms;  /**< wait for the capture */
+    const char *ifname;          /**< CAN interface */
+    const char *gpio_chip;       /**< chip of the trigger line, or NULL: no GPIO (CAN only) */
+    uint32_t trigger_offset;     /**< stereo trigger output */
+    uint32_t power_offset;       /**< mast power enable output */
+    uint32_t deployed_offset;    /**< mast deployed input */
+    uint32_t trigger_pulse_us;   /**< pulse width */
+    float rate_rad_s;            /**< MAST_CMD rate_max, rad/s; 0 = the mast's default */
+    uint32_t alive_timeout_ms;   /**< wait for both heartbeats */
+    uint32_t move_timeout_ms;    /**< wait for in_position */
+    uint32_t capture_timeout_ms; /**< wait for the capture */
 } rover_cfg_t;
 
 /** The link (caller-owned; large: holds a capture reassembler). */
@@ -60,13 +60,13 @@ typedef struct {
     trn_lgpio_t gpio;
     int gpio_open;
     trn_link_mon_t mast_hb, stereo_hb;
-    trn_mast_status_t status;      /**< latest MAST_STATUS */
+    trn_mast_status_t status; /**< latest MAST_STATUS */
     int have_status;
     uint32_t status_frames;
     uint8_t seq;
     trn_capture_rx_t caprx;
     trn_cap_err_t last_cap_err;
-    trn_status_t last_transport;   /**< status of the last failed ISO-TP receive */
+    trn_status_t last_transport; /**< status of the last failed ISO-TP receive */
     uint32_t outcome_count[ROVER_E_COUNT];
 } rover_link_t;
 

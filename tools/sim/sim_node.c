@@ -35,12 +35,12 @@ static uint8_t g_seg[TRN_ISOTP_MAX_MSG];
 
 typedef struct {
     /* mast */
-    float pan, tilt;            /* true joint angles */
+    float pan, tilt; /* true joint angles */
     float pan_cmd, tilt_cmd;
-    float rate;                 /* current command's rate */
+    float rate; /* current command's rate */
     int moving;
     uint8_t seq_ack, faults, status_counter, mast_hb_counter, stereo_hb_counter;
-    uint32_t cmd_ms;            /* time of the last accepted MOVE */
+    uint32_t cmd_ms;               /* time of the last accepted MOVE */
     trn_mast_status_t last_status; /* what the last MAST_STATUS said */
     /* trigger */
     int trig_level;
@@ -64,7 +64,7 @@ typedef struct {
     uint32_t tick_ms;
     int sent_this_tick;
     /* faults */
-    int off_bus;               /* silent or bus-off: nothing is sent any more */
+    int off_bus; /* silent or bus-off: nothing is sent any more */
 } sim_state_t;
 
 static uint64_t now_us64(void)
@@ -103,7 +103,8 @@ const char *sim_fault_name(sim_fault_t f)
     }
 }
 
-static int send_frame(trn_lcan_t *can, sim_state_t *s, uint32_t id, const uint8_t *data, uint8_t len)
+static int send_frame(trn_lcan_t *can, sim_state_t *s, uint32_t id, const uint8_t *data,
+                      uint8_t len)
 {
     trn_lcan_frame_t f;
     if (s->off_bus) {
@@ -145,7 +146,8 @@ static trn_mast_status_t make_status(const sim_cfg_t *cfg, sim_state_t *s)
     if (s->tilt >= cfg->geom.tilt_max_rad) {
         st.state |= TRN_MAST_ST_TILT_LIM_MAX;
     }
-    if (fabsf(s->pan - s->pan_cmd) <= cfg->tol_rad && fabsf(s->tilt - s->tilt_cmd) <= cfg->tol_rad) {
+    if (fabsf(s->pan - s->pan_cmd) <= cfg->tol_rad &&
+        fabsf(s->tilt - s->tilt_cmd) <= cfg->tol_rad) {
         st.state |= TRN_MAST_ST_IN_POSITION;
     }
     st.faults = s->faults;
@@ -175,8 +177,8 @@ static void slew(const sim_cfg_t *cfg, sim_state_t *s, float dt_s, uint32_t now_
     }
 }
 
-static void on_mast_cmd(const sim_cfg_t *cfg, sim_state_t *s, const trn_mast_cmd_t *m, uint32_t now_ms,
-                        sim_stats_t *stats)
+static void on_mast_cmd(const sim_cfg_t *cfg, sim_state_t *s, const trn_mast_cmd_t *m,
+                        uint32_t now_ms, sim_stats_t *stats)
 {
     float p = trn_can_angle_from_raw(m->pan_100urad), t = trn_can_angle_from_raw(m->tilt_100urad);
     if (m->mode == TRN_MAST_MODE_STOP) {
@@ -267,8 +269,8 @@ static void render_step(const sim_cfg_t *cfg, sim_state_t *s, sim_rng_t *rng, si
     if (r1 > cfg->cam.rows) {
         r1 = cfg->cam.rows;
     }
-    if (sim_render_rows(&cfg->dem, &cfg->cam, &s->render_T, rng, s->render_row, r1, g_render, SIM_RENDER_MAX,
-                        &s->render_n) != TRN_OK) {
+    if (sim_render_rows(&cfg->dem, &cfg->cam, &s->render_T, rng, s->render_row, r1, g_render,
+                        SIM_RENDER_MAX, &s->render_n) != TRN_OK) {
         s->rendering = 0;
         return;
     }
@@ -320,8 +322,8 @@ static void render_step(const sim_cfg_t *cfg, sim_state_t *s, sim_rng_t *rng, si
 static int start_segment(const sim_cfg_t *cfg, sim_state_t *s)
 {
     size_t len = 0u;
-    if (trn_capture_segment(g_wire, s->wire_len, cfg->seg_payload, s->seg_index, g_seg, sizeof g_seg,
-                            &len) != TRN_OK) {
+    if (trn_capture_segment(g_wire, s->wire_len, cfg->seg_payload, s->seg_index, g_seg,
+                            sizeof g_seg, &len) != TRN_OK) {
         return 0;
     }
     return trn_isotp_tx_start(&s->tx, g_seg, len) == TRN_OK;
@@ -353,7 +355,8 @@ static int pump_tx(const sim_cfg_t *cfg, sim_state_t *s, trn_lcan_t *can, uint32
                 return 0;
             }
         }
-        if (trn_isotp_tx_step(&s->tx, (uint32_t)t, &res) != TRN_OK || (res.events & TRN_ISOTP_TX_EV_ERROR)) {
+        if (trn_isotp_tx_step(&s->tx, (uint32_t)t, &res) != TRN_OK ||
+            (res.events & TRN_ISOTP_TX_EV_ERROR)) {
             s->sending = 0;
             ++stats->tx_errors;
             return 0;
@@ -403,7 +406,8 @@ static void send_periodic(const sim_cfg_t *cfg, sim_state_t *s, trn_lcan_t *can,
     if (el >= *next_status) {
         trn_mast_status_t ms = make_status(cfg, s);
         s->last_status = ms;
-        if (!s->off_bus && trn_can_mast_status_encode(&ms, &pf) == TRN_OK && send_proto(can, s, &pf)) {
+        if (!s->off_bus && trn_can_mast_status_encode(&ms, &pf) == TRN_OK &&
+            send_proto(can, s, &pf)) {
             ++s->status_counter;
         }
         *next_status += SIM_STATUS_MS;
@@ -411,7 +415,8 @@ static void send_periodic(const sim_cfg_t *cfg, sim_state_t *s, trn_lcan_t *can,
     if (el >= *next_hb) {
         trn_heartbeat_t hb;
         hb.state = (uint8_t)((s->faults & (uint8_t)~TRN_MAST_FLT_CMD_INVALID) != 0u ? TRN_NODE_FAULT
-                             : s->moving ? TRN_NODE_BUSY : TRN_NODE_READY);
+                             : s->moving                                            ? TRN_NODE_BUSY
+                                         : TRN_NODE_READY);
         hb.counter = s->mast_hb_counter;
         hb.uptime_s = (uint16_t)(el / 1000u);
         if (!s->off_bus && trn_can_heartbeat_encode(TRN_CAN_ID_MAST_HB, &hb, &pf) == TRN_OK &&
@@ -446,8 +451,8 @@ static void poll_trigger(const sim_cfg_t *cfg, sim_state_t *s, uint32_t now_ms, 
 }
 
 /* One received frame: a mast command, a capture command or a flow control. */
-static void on_frame(const sim_cfg_t *cfg, sim_state_t *s, trn_lcan_t *can, const trn_lcan_frame_t *f,
-                     uint32_t now_ms, sim_stats_t *stats)
+static void on_frame(const sim_cfg_t *cfg, sim_state_t *s, trn_lcan_t *can,
+                     const trn_lcan_frame_t *f, uint32_t now_ms, sim_stats_t *stats)
 {
     trn_can_frame_t pf;
     memset(&pf, 0, sizeof pf);
@@ -485,16 +490,17 @@ static void on_frame(const sim_cfg_t *cfg, sim_state_t *s, trn_lcan_t *can, cons
         }
         break;
     }
-    default:
-        break;
+    default: break;
     }
 }
 
 static int sim_cfg_ok(const sim_cfg_t *cfg)
 {
-    return !(cfg->dem.heights == NULL || trn_mast_geom_check(&cfg->geom) != TRN_OK || !(cfg->rate_rad_s > 0.0f) ||
-             !(cfg->tol_rad > 0.0f) || cfg->seg_payload == 0u || cfg->seg_payload > TRN_CAP_SEG_PAYLOAD_MAX ||
-             (size_t)cfg->cam.cols * (size_t)cfg->cam.rows > SIM_RENDER_MAX || cfg->fault >= SIM_FAULT_COUNT);
+    return !(cfg->dem.heights == NULL || trn_mast_geom_check(&cfg->geom) != TRN_OK ||
+             !(cfg->rate_rad_s > 0.0f) || !(cfg->tol_rad > 0.0f) || cfg->seg_payload == 0u ||
+             cfg->seg_payload > TRN_CAP_SEG_PAYLOAD_MAX ||
+             (size_t)cfg->cam.cols * (size_t)cfg->cam.rows > SIM_RENDER_MAX ||
+             cfg->fault >= SIM_FAULT_COUNT);
 }
 
 trn_status_t sim_run(const sim_cfg_t *cfg, const volatile sig_atomic_t *stop, sim_stats_t *stats)

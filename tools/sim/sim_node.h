@@ -34,9 +34,9 @@ extern "C" {
 /** Faults the simulator injects (one per run). */
 typedef enum {
     SIM_FAULT_NONE = 0,
-    SIM_FAULT_DROP,      /**< data frame number fault_arg (0 = first) of each capture is not sent */
-    SIM_FAULT_CORRUPT,   /**< capture byte fault_arg (mod length) is XORed with 0x01 after the CRC */
-    SIM_FAULT_SILENT,    /**< both nodes stop sending and answering fault_arg ms after start */
+    SIM_FAULT_DROP,    /**< data frame number fault_arg (0 = first) of each capture is not sent */
+    SIM_FAULT_CORRUPT, /**< capture byte fault_arg (mod length) is XORed with 0x01 after the CRC */
+    SIM_FAULT_SILENT,  /**< both nodes stop sending and answering fault_arg ms after start */
     SIM_FAULT_STUCK_PAN, /**< the pan axis does not move; stall fault bit after 200 ms */
     SIM_FAULT_BUS_OFF,   /**< on CAPTURE_CMD: a bus-off error frame, then nothing more is sent */
     SIM_FAULT_COUNT
@@ -44,40 +44,40 @@ typedef enum {
 
 /** Configuration (start from sim_cfg_default). */
 typedef struct {
-    const char *ifname;        /**< CAN interface */
-    sim_dem_t dem;             /**< true terrain */
-    sim_camera_t cam;          /**< stereo camera */
-    trn_mast_geom_t geom;      /**< mast geometry and limits */
-    trn_rover_pose_t pose;     /**< true rover pose */
-    float rate_rad_s;          /**< default slew rate per axis, > 0 */
-    float tol_rad;             /**< in-position tolerance, > 0 */
-    uint64_t seed;             /**< range noise seed */
-    uint32_t run_ms;           /**< run time, ms (0 = until *stop) */
-    uint32_t seg_payload;      /**< capture bytes per segment, 1..4091 */
-    uint16_t max_points;       /**< the head's own maximum (CAPTURE_CMD 0) */
-    sim_fault_t fault;         /**< injected fault */
-    uint32_t fault_arg;        /**< its argument (see sim_fault_t) */
-    const char *trigger_path;  /**< gpio-sim `value` file of the trigger line, or NULL */
+    const char *ifname;       /**< CAN interface */
+    sim_dem_t dem;            /**< true terrain */
+    sim_camera_t cam;         /**< stereo camera */
+    trn_mast_geom_t geom;     /**< mast geometry and limits */
+    trn_rover_pose_t pose;    /**< true rover pose */
+    float rate_rad_s;         /**< default slew rate per axis, > 0 */
+    float tol_rad;            /**< in-position tolerance, > 0 */
+    uint64_t seed;            /**< range noise seed */
+    uint32_t run_ms;          /**< run time, ms (0 = until *stop) */
+    uint32_t seg_payload;     /**< capture bytes per segment, 1..4091 */
+    uint16_t max_points;      /**< the head's own maximum (CAPTURE_CMD 0) */
+    sim_fault_t fault;        /**< injected fault */
+    uint32_t fault_arg;       /**< its argument (see sim_fault_t) */
+    const char *trigger_path; /**< gpio-sim `value` file of the trigger line, or NULL */
 } sim_cfg_t;
 
 /** What a run did. */
 typedef struct {
-    uint32_t cmds;              /**< MAST_CMD frames accepted */
-    uint32_t capture_cmds;      /**< CAPTURE_CMD frames received */
-    uint32_t captures_sent;     /**< captures whose last frame went out */
-    uint32_t triggers;          /**< rising edges seen on the trigger line */
+    uint32_t cmds;                /**< MAST_CMD frames accepted */
+    uint32_t capture_cmds;        /**< CAPTURE_CMD frames received */
+    uint32_t captures_sent;       /**< captures whose last frame went out */
+    uint32_t triggers;            /**< rising edges seen on the trigger line */
     uint32_t triggered_exposures; /**< captures exposed at a trigger edge */
-    uint32_t data_frames;       /**< ISO-TP data frames sent */
-    uint32_t dropped_frames;    /**< frames not sent (DROP) */
-    uint32_t corrupted;         /**< captures corrupted (CORRUPT) */
-    uint32_t error_frames;      /**< error frames written (BUS_OFF) */
-    uint32_t fc_received;       /**< flow-control frames */
-    uint32_t tx_errors;         /**< ISO-TP sender errors (N_Bs, overflow, ...) */
-    uint32_t last_points;       /**< points of the last capture */
-    uint32_t last_bytes;        /**< its capture bytes */
-    uint32_t last_segments;     /**< its segments */
-    int16_t last_pan_100urad;   /**< its pan at exposure */
-    int16_t last_tilt_100urad;  /**< its tilt at exposure */
+    uint32_t data_frames;         /**< ISO-TP data frames sent */
+    uint32_t dropped_frames;      /**< frames not sent (DROP) */
+    uint32_t corrupted;           /**< captures corrupted (CORRUPT) */
+    uint32_t error_frames;        /**< error frames written (BUS_OFF) */
+    uint32_t fc_received;         /**< flow-control frames */
+    uint32_t tx_errors;           /**< ISO-TP sender errors (N_Bs, overflow, ...) */
+    uint32_t last_points;         /**< points of the last capture */
+    uint32_t last_bytes;          /**< its capture bytes */
+    uint32_t last_segments;       /**< its segments */
+    int16_t last_pan_100urad;     /**< its pan at exposure */
+    int16_t last_tilt_100urad;    /**< its tilt at exposure */
 } sim_stats_t;
 
 /** @brief Defaults: "vcan0", no DEM, 60 x 45 deg camera 64 x 48 rays,

@@ -7,10 +7,7 @@
 
 #define SIM_BISECTIONS 30
 
-static int finite_f(float v)
-{
-    return v == v && v - v == 0.0f;
-}
+static int finite_f(float v) { return v == v && v - v == 0.0f; }
 
 static uint64_t rng_u64(sim_rng_t *r)
 {
@@ -40,7 +37,8 @@ static int dem_h(const sim_dem_t *d, double x, double y, double *h)
     int32_t i, j;
     double ax, ay;
     const float *p;
-    if (!(fx >= 0.0 && fy >= 0.0 && fx <= (double)(d->width - 1) && fy <= (double)(d->height - 1))) {
+    if (!(fx >= 0.0 && fy >= 0.0 && fx <= (double)(d->width - 1) &&
+          fy <= (double)(d->height - 1))) {
         return 0;
     }
     i = (int32_t)fx;
@@ -112,7 +110,8 @@ static int cast_ray(const sim_dem_t *dem, const sim_camera_t *cam, const trn_rig
     int found = 0, s;
     /* march: above the surface at r0, first sample at or below at r1 */
     r0 = (double)cam->min_range_m;
-    if (!dem_h(dem, (double)cam_to_map->t.x + r0 * dm[0], (double)cam_to_map->t.y + r0 * dm[1], &h) ||
+    if (!dem_h(dem, (double)cam_to_map->t.x + r0 * dm[0], (double)cam_to_map->t.y + r0 * dm[1],
+               &h) ||
         (double)cam_to_map->t.z + r0 * dm[2] <= h) {
         return 0; /* starts off the DEM or under the ground */
     }
@@ -122,7 +121,8 @@ static int cast_ray(const sim_dem_t *dem, const sim_camera_t *cam, const trn_rig
         if (r1 > (double)cam->max_range_m) {
             r1 = (double)cam->max_range_m;
         }
-        if (!dem_h(dem, (double)cam_to_map->t.x + r1 * dm[0], (double)cam_to_map->t.y + r1 * dm[1], &h)) {
+        if (!dem_h(dem, (double)cam_to_map->t.x + r1 * dm[0], (double)cam_to_map->t.y + r1 * dm[1],
+                   &h)) {
             break; /* left the DEM */
         }
         if ((double)cam_to_map->t.z + r1 * dm[2] <= h) {
@@ -136,7 +136,8 @@ static int cast_ray(const sim_dem_t *dem, const sim_camera_t *cam, const trn_rig
     }
     for (s = 0; s < SIM_BISECTIONS; ++s) {
         double rm = 0.5 * (r0 + r1);
-        (void)dem_h(dem, (double)cam_to_map->t.x + rm * dm[0], (double)cam_to_map->t.y + rm * dm[1], &h);
+        (void)dem_h(dem, (double)cam_to_map->t.x + rm * dm[0], (double)cam_to_map->t.y + rm * dm[1],
+                    &h);
         if ((double)cam_to_map->t.z + rm * dm[2] <= h) {
             r1 = rm;
         } else {
@@ -147,16 +148,16 @@ static int cast_ray(const sim_dem_t *dem, const sim_camera_t *cam, const trn_rig
     return 1;
 }
 
-trn_status_t sim_render_rows(const sim_dem_t *dem, const sim_camera_t *cam, const trn_rigid_t *cam_to_map,
-                             sim_rng_t *rng, int32_t row0, int32_t row1, trn_vec3f_t *out, size_t capacity,
-                             size_t *n)
+trn_status_t sim_render_rows(const sim_dem_t *dem, const sim_camera_t *cam,
+                             const trn_rigid_t *cam_to_map, sim_rng_t *rng, int32_t row0,
+                             int32_t row1, trn_vec3f_t *out, size_t capacity, size_t *n)
 {
     double step, tx, ty;
     int32_t i, j, k, nsteps;
     size_t cnt;
     const float *R;
-    if (dem == NULL || cam == NULL || cam_to_map == NULL || rng == NULL || out == NULL || n == NULL ||
-        dem->heights == NULL) {
+    if (dem == NULL || cam == NULL || cam_to_map == NULL || rng == NULL || out == NULL ||
+        n == NULL || dem->heights == NULL) {
         return TRN_E_NULL;
     }
     cnt = *n;
@@ -186,7 +187,8 @@ trn_status_t sim_render_rows(const sim_dem_t *dem, const sim_camera_t *cam, cons
             }
             for (k = 0; k < 3; ++k) {
                 const size_t row = (size_t)3 * (size_t)k;
-                dm[k] = (double)R[row] * dc[0] + (double)R[row + 1u] * dc[1] + (double)R[row + 2u] * dc[2];
+                dm[k] = (double)R[row] * dc[0] + (double)R[row + 1u] * dc[1] +
+                        (double)R[row + 2u] * dc[2];
             }
             if (!cast_ray(dem, cam, cam_to_map, dm, nsteps, step, &rr)) {
                 continue;
@@ -208,8 +210,9 @@ trn_status_t sim_render_rows(const sim_dem_t *dem, const sim_camera_t *cam, cons
     return TRN_OK;
 }
 
-trn_status_t sim_render(const sim_dem_t *dem, const sim_camera_t *cam, const trn_rigid_t *cam_to_map,
-                        sim_rng_t *rng, trn_vec3f_t *out, size_t capacity, size_t *n)
+trn_status_t sim_render(const sim_dem_t *dem, const sim_camera_t *cam,
+                        const trn_rigid_t *cam_to_map, sim_rng_t *rng, trn_vec3f_t *out,
+                        size_t capacity, size_t *n)
 {
     if (n == NULL || cam == NULL) {
         return TRN_E_NULL;

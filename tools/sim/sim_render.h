@@ -38,19 +38,19 @@ extern "C" {
 /** A terrain DEM in the map frame: cell (i, j) = heights[j * width + i] is
  * the height at (x0_m + i cell_m, y0_m + j cell_m) (row index grows north). */
 typedef struct {
-    const float *heights; /**< width * height finite values */
+    const float *heights;  /**< width * height finite values */
     int32_t width, height; /**< cells, >= 2 each */
-    float cell_m;         /**< > 0 */
-    float x0_m, y0_m;     /**< map position of cell (0, 0) */
+    float cell_m;          /**< > 0 */
+    float x0_m, y0_m;      /**< map position of cell (0, 0) */
 } sim_dem_t;
 
 /** The stereo camera. */
 typedef struct {
-    float hfov_rad, vfov_rad;  /**< full fields of view, (0, 3) */
-    int32_t cols, rows;        /**< rays per side, 1..SIM_MAX_RAYS_SIDE */
-    float min_range_m;         /**< nearest range, >= 0 */
-    float max_range_m;         /**< farthest range, > min_range_m */
-    float noise_k_per_m;       /**< range sigma = k r^2, >= 0 (0: exact ranges) */
+    float hfov_rad, vfov_rad; /**< full fields of view, (0, 3) */
+    int32_t cols, rows;       /**< rays per side, 1..SIM_MAX_RAYS_SIDE */
+    float min_range_m;        /**< nearest range, >= 0 */
+    float max_range_m;        /**< farthest range, > min_range_m */
+    float noise_k_per_m;      /**< range sigma = k r^2, >= 0 (0: exact ranges) */
 } sim_camera_t;
 
 /** Seeded noise generator (splitmix64). */
@@ -90,8 +90,9 @@ trn_status_t sim_dem_height(const sim_dem_t *dem, float x_m, float y_m, float *h
  *         steps above SIM_MAX_STEPS)
  * @retval TRN_E_CAPACITY more points than capacity (the first capacity are written)
  */
-trn_status_t sim_render(const sim_dem_t *dem, const sim_camera_t *cam, const trn_rigid_t *cam_to_map,
-                        sim_rng_t *rng, trn_vec3f_t *out, size_t capacity, size_t *n);
+trn_status_t sim_render(const sim_dem_t *dem, const sim_camera_t *cam,
+                        const trn_rigid_t *cam_to_map, sim_rng_t *rng, trn_vec3f_t *out,
+                        size_t capacity, size_t *n);
 
 /**
  * @brief sim_render for the ray rows [row0, row1) only, appending to out
@@ -102,9 +103,9 @@ trn_status_t sim_render(const sim_dem_t *dem, const sim_camera_t *cam, const trn
  * @param[in,out] n  points already in out; points added on return.
  * @retval as sim_render, plus TRN_E_RANGE (rows out of order or range, or *n > capacity)
  */
-trn_status_t sim_render_rows(const sim_dem_t *dem, const sim_camera_t *cam, const trn_rigid_t *cam_to_map,
-                             sim_rng_t *rng, int32_t row0, int32_t row1, trn_vec3f_t *out, size_t capacity,
-                             size_t *n);
+trn_status_t sim_render_rows(const sim_dem_t *dem, const sim_camera_t *cam,
+                             const trn_rigid_t *cam_to_map, sim_rng_t *rng, int32_t row0,
+                             int32_t row1, trn_vec3f_t *out, size_t capacity, size_t *n);
 
 /** @brief Standard normal draw (Box-Muller on two splitmix64 draws).
  * @param[in,out] rng the generator. */

@@ -27,9 +27,11 @@ static void on_signal(int sig)
 
 static int usage(void)
 {
-    fprintf(stderr, "usage: trn_sim [--if IF] [--seed N] [--terrain-seed N] [--size CELLS] [--cell M]\n"
-                    "               [--pose X,Y,HEADING] [--run-ms MS] [--trigger VALUE_FILE]\n"
-                    "               [--fault none|drop|corrupt|silent|stuck-pan|bus-off] [--fault-arg N]\n");
+    fprintf(
+        stderr,
+        "usage: trn_sim [--if IF] [--seed N] [--terrain-seed N] [--size CELLS] [--cell M]\n"
+        "               [--pose X,Y,HEADING] [--run-ms MS] [--trigger VALUE_FILE]\n"
+        "               [--fault none|drop|corrupt|silent|stuck-pan|bus-off] [--fault-arg N]\n");
     return 2;
 }
 
@@ -131,11 +133,12 @@ int main(int argc, char **argv)
     signal(SIGINT, on_signal);
     signal(SIGTERM, on_signal);
     st = sim_run(&cfg, &g_stop, &stats);
-    printf("trn_sim: %s; cmds=%u capture_cmds=%u captures=%u data_frames=%u dropped=%u corrupted=%u "
-           "error_frames=%u triggers=%u last: points=%u bytes=%u segments=%u\n",
-           trn_strerror(st), stats.cmds, stats.capture_cmds, stats.captures_sent, stats.data_frames,
-           stats.dropped_frames, stats.corrupted, stats.error_frames, stats.triggers, stats.last_points,
-           stats.last_bytes, stats.last_segments);
+    printf(
+        "trn_sim: %s; cmds=%u capture_cmds=%u captures=%u data_frames=%u dropped=%u corrupted=%u "
+        "error_frames=%u triggers=%u last: points=%u bytes=%u segments=%u\n",
+        trn_strerror(st), stats.cmds, stats.capture_cmds, stats.captures_sent, stats.data_frames,
+        stats.dropped_frames, stats.corrupted, stats.error_frames, stats.triggers,
+        stats.last_points, stats.last_bytes, stats.last_segments);
     free(dem);
     return st == TRN_OK ? 0 : 1;
 }

@@ -66,8 +66,7 @@ static uint32_t heap_pop(ref_heap_t *h)
     return top;
 }
 
-void ref_chamfer3d_dijkstra(const uint8_t *occ, uint8_t *dist, int nx, int ny, int nz,
-                            unsigned cap)
+void ref_chamfer3d_dijkstra(const uint8_t *occ, uint8_t *dist, int nx, int ny, int nz, unsigned cap)
 {
     const size_t n = (size_t)nx * (size_t)ny * (size_t)nz;
     const uint32_t inf = 0xFFFFFFFFu;
@@ -101,8 +100,7 @@ void ref_chamfer3d_dijkstra(const uint8_t *occ, uint8_t *dist, int nx, int ny, i
                     int m = abs(ox) + abs(oy) + abs(oz); /* 1 face, 2 edge, 3 corner */
                     int qx = x + ox, qy = y + oy, qz = z + oz;
                     uint32_t q, nd;
-                    if (m == 0 || qx < 0 || qy < 0 || qz < 0 || qx >= nx || qy >= ny ||
-                        qz >= nz) {
+                    if (m == 0 || qx < 0 || qy < 0 || qz < 0 || qx >= nx || qy >= ny || qz >= nz) {
                         continue;
                     }
                     q = ((uint32_t)qz * (uint32_t)ny + (uint32_t)qy) * (uint32_t)nx + (uint32_t)qx;

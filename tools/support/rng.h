@@ -5,7 +5,9 @@
 #define TRN_SUPPORT_RNG_H
 #include <stdint.h>
 
-typedef struct { uint64_t s; } trn_rng_t;
+typedef struct {
+    uint64_t s;
+} trn_rng_t;
 
 static inline void trn_rng_seed(trn_rng_t *r, uint64_t seed) { r->s = seed; }
 

@@ -6,9 +6,8 @@
 
 #include "rng.h"
 
-void synth_make(synth_terrain_t *t, synth_rock_t *rocks, size_t n, double extent_m,
-                double rmin_m, double rmax_m, double height_ratio, double bg_amp_m,
-                uint64_t seed)
+void synth_make(synth_terrain_t *t, synth_rock_t *rocks, size_t n, double extent_m, double rmin_m,
+                double rmax_m, double height_ratio, double bg_amp_m, uint64_t seed)
 {
     trn_rng_t r;
     size_t i;
@@ -32,8 +31,8 @@ static double background(const synth_terrain_t *t, double x, double y)
 {
     double k = 6.283185307179586 / t->bg_wave_m;
     return t->bg_amp_m * (sin(k * x + t->phase[0]) * cos(0.7 * k * y + t->phase[1]) +
-                          0.5 * sin(1.9 * k * (x + y) + t->phase[2]) +
-                          0.05 * x / t->bg_wave_m + 0.03 * y / t->bg_wave_m);
+                          0.5 * sin(1.9 * k * (x + y) + t->phase[2]) + 0.05 * x / t->bg_wave_m +
+                          0.03 * y / t->bg_wave_m);
 }
 
 static double rock_at(const synth_rock_t *rk, double x, double y)
@@ -72,10 +71,18 @@ void synth_render(const synth_terrain_t *t, float *out, int w, int h, double ox_
         int i1 = (int)ceil((rk->x_m + rk->r_m - ox_m) / cell_m) + 1;
         int j0 = (int)floor((rk->y_m - rk->r_m - oy_m) / cell_m) - 1;
         int j1 = (int)ceil((rk->y_m + rk->r_m - oy_m) / cell_m) + 1;
-        if (i0 < 0) { i0 = 0; }
-        if (j0 < 0) { j0 = 0; }
-        if (i1 > w - 1) { i1 = w - 1; }
-        if (j1 > h - 1) { j1 = h - 1; }
+        if (i0 < 0) {
+            i0 = 0;
+        }
+        if (j0 < 0) {
+            j0 = 0;
+        }
+        if (i1 > w - 1) {
+            i1 = w - 1;
+        }
+        if (j1 > h - 1) {
+            j1 = h - 1;
+        }
         for (j = j0; j <= j1; ++j) {
             for (i = i0; i <= i1; ++i) {
                 float v = (float)rock_at(rk, ox_m + i * cell_m, oy_m + j * cell_m);
@@ -88,8 +95,8 @@ void synth_render(const synth_terrain_t *t, float *out, int w, int h, double ox_
     }
     for (j = 0; j < h; ++j) {
         for (i = 0; i < w; ++i) {
-            out[(size_t)j * (size_t)w + (size_t)i] +=
-                (float)background(t, ox_m + i * cell_m, oy_m + j * cell_m);
+            out[(size_t)j * (size_t)w + (size_t)i] += (float)background(t, ox_m + i * cell_m,
+                                                                        oy_m + j * cell_m);
         }
     }
 }

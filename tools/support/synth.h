@@ -16,16 +16,15 @@ typedef struct {
 typedef struct {
     synth_rock_t *rocks; /* caller array */
     size_t n_rocks;
-    double bg_amp_m;     /* amplitude of the rolling background */
-    double bg_wave_m;    /* its wavelength */
+    double bg_amp_m;  /* amplitude of the rolling background */
+    double bg_wave_m; /* its wavelength */
     double phase[4];
 } synth_terrain_t;
 
 /* n rocks uniformly over [0, extent_m]^2, radii uniform in [rmin, rmax],
  * height = height_ratio * diameter. */
-void synth_make(synth_terrain_t *t, synth_rock_t *rocks, size_t n, double extent_m,
-                double rmin_m, double rmax_m, double height_ratio, double bg_amp_m,
-                uint64_t seed);
+void synth_make(synth_terrain_t *t, synth_rock_t *rocks, size_t n, double extent_m, double rmin_m,
+                double rmax_m, double height_ratio, double bg_amp_m, uint64_t seed);
 
 /* Height at a map position, metres. */
 double synth_height(const synth_terrain_t *t, double x_m, double y_m);

@@ -15,20 +15,20 @@
 #include "trn_port/can_msg.h"
 
 typedef enum {
-  CAN_LOG_FRAME = 0, /* a classic CAN data or remote frame: see frame */
-  CAN_LOG_FD,        /* a CAN FD frame (not ours: the mast bus is classic CAN) */
-  CAN_LOG_ERROR,     /* an error frame (CAN_ERR_FLAG in the id): bus errors, bus-off */
-  CAN_LOG_SKIP,      /* blank line or comment ('#' first) */
-  CAN_LOG_MALFORMED  /* see reason */
+    CAN_LOG_FRAME = 0, /* a classic CAN data or remote frame: see frame */
+    CAN_LOG_FD,        /* a CAN FD frame (not ours: the mast bus is classic CAN) */
+    CAN_LOG_ERROR,     /* an error frame (CAN_ERR_FLAG in the id): bus errors, bus-off */
+    CAN_LOG_SKIP,      /* blank line or comment ('#' first) */
+    CAN_LOG_MALFORMED  /* see reason */
 } can_log_kind_t;
 
 typedef struct {
-  can_log_kind_t kind;
-  uint64_t sec;         /* timestamp seconds */
-  uint32_t usec;        /* timestamp microseconds (fraction scaled to 6 digits) */
-  char ifname[17];      /* interface name */
-  trn_can_frame_t frame;
-  const char *reason;   /* static text when MALFORMED */
+    can_log_kind_t kind;
+    uint64_t sec;    /* timestamp seconds */
+    uint32_t usec;   /* timestamp microseconds (fraction scaled to 6 digits) */
+    char ifname[17]; /* interface name */
+    trn_can_frame_t frame;
+    const char *reason; /* static text when MALFORMED */
 } can_log_line_t;
 
 /* Parse one line (without or with its trailing newline). Always fills out. */

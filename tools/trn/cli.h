@@ -31,12 +31,12 @@
 #define CLI_HELP (-1) /* cli_parse: --help was printed; exit 0 */
 
 typedef enum {
-  CLI_FLAG,   /* no value; dst is int, set to 1 */
-  CLI_STRING, /* dst is const char *, points into argv */
-  CLI_LONG,   /* dst is long, integer in [lo, hi] */
-  CLI_U64,    /* dst is uint64_t, decimal, any value 0..2^64-1 */
-  CLI_DOUBLE, /* dst is double, finite, in [lo, hi] */
-  CLI_XY      /* dst is double[2], "X,Y" both finite (range not checked) */
+    CLI_FLAG,   /* no value; dst is int, set to 1 */
+    CLI_STRING, /* dst is const char *, points into argv */
+    CLI_LONG,   /* dst is long, integer in [lo, hi] */
+    CLI_U64,    /* dst is uint64_t, decimal, any value 0..2^64-1 */
+    CLI_DOUBLE, /* dst is double, finite, in [lo, hi] */
+    CLI_XY      /* dst is double[2], "X,Y" both finite (range not checked) */
 } cli_kind_t;
 
 /* An entry whose name does not start with '-' ("LOG") is a positional
@@ -46,23 +46,23 @@ typedef enum {
  * (only for a command with positional entries). A command without them
  * rejects every non-option argument as before ("unexpected argument"). */
 typedef struct {
-  const char *name;    /* "--out", or "LOG" for a positional argument */
-  cli_kind_t kind;
-  void *dst;
-  double lo, hi;       /* range of CLI_LONG / CLI_DOUBLE (inclusive) */
-  int required;
-  const char *metavar; /* "FILE.tif", "N", "X,Y" */
-  const char *help;    /* one line; --help appends " (default V)" from *dst as it
+    const char *name; /* "--out", or "LOG" for a positional argument */
+    cli_kind_t kind;
+    void *dst;
+    double lo, hi; /* range of CLI_LONG / CLI_DOUBLE (inclusive) */
+    int required;
+    const char *metavar; /* "FILE.tif", "N", "X,Y" */
+    const char *help;    /* one line; --help appends " (default V)" from *dst as it
                           was before parsing, unless the text says "default" */
-  int seen;            /* set by cli_parse */
+    int seen;            /* set by cli_parse */
 } cli_opt_t;
 
 typedef struct {
-  const char *name;     /* "terrain" */
-  const char *summary;  /* one line */
-  const char *details;  /* extra paragraph after the options, or NULL */
-  cli_opt_t *opts;
-  size_t n_opts;
+    const char *name;    /* "terrain" */
+    const char *summary; /* one line */
+    const char *details; /* extra paragraph after the options, or NULL */
+    cli_opt_t *opts;
+    size_t n_opts;
 } cli_cmd_t;
 
 /* Parse argv (argv[0] is the subcommand name). Returns CLI_OK, CLI_HELP
@@ -105,15 +105,15 @@ int cli_parse_xy(const char *s, double *x, double *y);
 
 /* ---- JSON writer: one object on one line, keys in call order. ---------- */
 typedef struct {
-  FILE *out;
-  int depth;
-  int first[8]; /* nothing written yet at this depth */
+    FILE *out;
+    int depth;
+    int first[8]; /* nothing written yet at this depth */
 } json_t;
 
-void json_begin(json_t *j, FILE *out);          /* {"version": TRN_VERSION_STRING */
-void json_end(json_t *j);                       /* "}\n" */
-void json_obj(json_t *j, const char *key);      /* "key": { */
-void json_obj_end(json_t *j);                   /* } */
+void json_begin(json_t *j, FILE *out);     /* {"version": TRN_VERSION_STRING */
+void json_end(json_t *j);                  /* "}\n" */
+void json_obj(json_t *j, const char *key); /* "key": { */
+void json_obj_end(json_t *j);              /* } */
 /* Arrays: json_arr(j, "key") "[", elements with key NULL (json_obj(j, NULL),
  * json_num(j, NULL, v) ...), json_arr_end "]". */
 void json_arr(json_t *j, const char *key);
@@ -127,10 +127,10 @@ void json_write_string(FILE *out, const char *s);
 
 /* ---- progress bar on stderr, drawn only when stderr is a terminal ------- */
 typedef struct {
-  int active;       /* isatty(2) */
-  const char *label;
-  long total;
-  int last_permille;
+    int active; /* isatty(2) */
+    const char *label;
+    long total;
+    int last_permille;
 } progress_t;
 
 void progress_begin(progress_t *p, const char *label, long total);
@@ -143,9 +143,9 @@ void progress_end(progress_t *p);
  * begins it with label and total, then updates; progress_lazy_end ends it if
  * it was begun. */
 typedef struct {
-  progress_t bar;
-  const char *label;
-  int begun;
+    progress_t bar;
+    const char *label;
+    int begun;
 } progress_lazy_t;
 
 void progress_lazy_init(progress_lazy_t *p, const char *label);

@@ -19,393 +19,461 @@
 #include "selmap.h"
 
 /* The map configuration from the options (exp_params_t.map_cfg); ctx: the result. */
-static int map_cfg_cb(void *ctx, const float *dem, int width, int height, double cell_m, trn_map_cfg_t *cfg,
-                      char *err, size_t err_len) {
-  cmd_experiment_result_t *r = ctx;
-  return mapopt_config(r->mo, dem, width, height, cell_m, cfg, &r->sigma_h, err, err_len);
+static int map_cfg_cb(void *ctx, const float *dem, int width, int height, double cell_m,
+                      trn_map_cfg_t *cfg, char *err, size_t err_len)
+{
+    cmd_experiment_result_t *r = ctx;
+    return mapopt_config(r->mo, dem, width, height, cell_m, cfg, &r->sigma_h, err, err_len);
 }
 
-static int on_progress(void *ctx, long done, long total) {
-  progress_lazy_update(ctx, done, total);
-  return 0;
+static int on_progress(void *ctx, long done, long total)
+{
+    progress_lazy_update(ctx, done, total);
+    return 0;
 }
 
-static void json_ci(json_t *j, const char *key, const double ci[2]) {
-  /* "key": [low, high] (null for a non-finite bound) */
-  fprintf(j->out, "%s", j->first[j->depth] ? "" : ", ");
-  j->first[j->depth] = 0;
-  json_write_string(j->out, key);
-  if (isfinite(ci[0]) && isfinite(ci[1])) {
-    fprintf(j->out, ": [%.17g, %.17g]", ci[0], ci[1]);
-  } else {
-    fprintf(j->out, ": [null, null]");
-  }
+static void json_ci(json_t *j, const char *key, const double ci[2])
+{
+    /* "key": [low, high] (null for a non-finite bound) */
+    fprintf(j->out, "%s", j->first[j->depth] ? "" : ", ");
+    j->first[j->depth] = 0;
+    json_write_string(j->out, key);
+    if (isfinite(ci[0]) && isfinite(ci[1])) {
+        fprintf(j->out, ": [%.17g, %.17g]", ci[0], ci[1]);
+    } else {
+        fprintf(j->out, ": [null, null]");
+    }
 }
 
-static void json_u64(json_t *j, const char *key, uint64_t v) {
-  /* json_int takes a signed value: seeds above 2^63 would print negative */
-  fprintf(j->out, "%s", j->first[j->depth] ? "" : ", ");
-  j->first[j->depth] = 0;
-  json_write_string(j->out, key);
-  fprintf(j->out, ": %llu", (unsigned long long)v);
+static void json_u64(json_t *j, const char *key, uint64_t v)
+{
+    /* json_int takes a signed value: seeds above 2^63 would print negative */
+    fprintf(j->out, "%s", j->first[j->depth] ? "" : ", ");
+    j->first[j->depth] = 0;
+    json_write_string(j->out, key);
+    fprintf(j->out, ": %llu", (unsigned long long)v);
 }
 
-static void json_arm(json_t *j, const char *key, const exp_arm_t *a, long trials) {
-  json_obj(j, key);
-  json_int(j, "localizations", a->localizations);
-  json_int(j, "localizations_per_trial", a->localizations / trials);
-  json_int(j, "successes", a->successes);
-  json_num(j, "success_rate", a->st.rate);
-  json_ci(j, "ci95", a->st.rate_ci);
-  json_num(j, "effective_n", a->st.n_eff);
-  json_num(j, "mean_error_m", a->st.mean);
-  json_ci(j, "mean_error_ci95", a->st.mean_ci);
-  json_num(j, "sd_error_m", a->st.sd);
-  json_num(j, "success_rate_1_cell", (double)a->success_1cell / (double)a->localizations);
-  json_num(j, "success_rate_5_cells", (double)a->success_5cells / (double)a->localizations);
-  json_int(j, "no_target", a->no_target);
-  json_int(j, "empty_local_maps", a->no_points);
-  json_int(j, "ill_conditioned", a->ill_conditioned);
-  json_num(j, "mean_local_points", a->mean_points);
-  json_num(j, "mean_target_range_m", a->mean_range_m);
-  json_obj_end(j);
+static void json_arm(json_t *j, const char *key, const exp_arm_t *a, long trials)
+{
+    json_obj(j, key);
+    json_int(j, "localizations", a->localizations);
+    json_int(j, "localizations_per_trial", a->localizations / trials);
+    json_int(j, "successes", a->successes);
+    json_num(j, "success_rate", a->st.rate);
+    json_ci(j, "ci95", a->st.rate_ci);
+    json_num(j, "effective_n", a->st.n_eff);
+    json_num(j, "mean_error_m", a->st.mean);
+    json_ci(j, "mean_error_ci95", a->st.mean_ci);
+    json_num(j, "sd_error_m", a->st.sd);
+    json_num(j, "success_rate_1_cell", (double)a->success_1cell / (double)a->localizations);
+    json_num(j, "success_rate_5_cells", (double)a->success_5cells / (double)a->localizations);
+    json_int(j, "no_target", a->no_target);
+    json_int(j, "empty_local_maps", a->no_points);
+    json_int(j, "ill_conditioned", a->ill_conditioned);
+    json_num(j, "mean_local_points", a->mean_points);
+    json_num(j, "mean_target_range_m", a->mean_range_m);
+    json_obj_end(j);
 }
 
-static void print_arm(const char *name, const exp_arm_t *a) {
-  printf("%-18s %6ld %7ld  %6.1f %%  [%5.1f, %5.1f]   %6.3f m  [%.3f, %.3f]\n", name, a->localizations,
-         a->successes, 100.0 * a->st.rate, 100.0 * a->st.rate_ci[0], 100.0 * a->st.rate_ci[1], a->st.mean,
-         a->st.mean_ci[0], a->st.mean_ci[1]);
+static void print_arm(const char *name, const exp_arm_t *a)
+{
+    printf("%-18s %6ld %7ld  %6.1f %%  [%5.1f, %5.1f]   %6.3f m  [%.3f, %.3f]\n", name,
+           a->localizations, a->successes, 100.0 * a->st.rate, 100.0 * a->st.rate_ci[0],
+           100.0 * a->st.rate_ci[1], a->st.mean, a->st.mean_ci[0], a->st.mean_ci[1]);
 }
 
-void cmd_experiment_params_default(cmd_experiment_params_t *p) {
-  exp_params_t e;
-  memset(p, 0, sizeof *p);
-  exp_params_default(&e);
-  selmap_opts_default(&p->so, 2);
-  p->band = 1;
-  p->foot = -1.0;
-  p->sensor = "prob";
-  p->trials = e.trials;
-  p->seed = e.seed;
-  p->tseed = e.terrain_seed;
-  p->k = e.coverage_k;
-  p->relief = e.relief_m;
-  p->size = e.size_cells;
-  p->window = e.window_m;
-  p->prior = e.prior_error_m;
-  p->spacing = e.grid_spacing_m;
-  p->succ = e.success_cells;
+void cmd_experiment_params_default(cmd_experiment_params_t *p)
+{
+    exp_params_t e;
+    memset(p, 0, sizeof *p);
+    exp_params_default(&e);
+    selmap_opts_default(&p->so, 2);
+    p->band = 1;
+    p->foot = -1.0;
+    p->sensor = "prob";
+    p->trials = e.trials;
+    p->seed = e.seed;
+    p->tseed = e.terrain_seed;
+    p->k = e.coverage_k;
+    p->relief = e.relief_m;
+    p->size = e.size_cells;
+    p->window = e.window_m;
+    p->prior = e.prior_error_m;
+    p->spacing = e.grid_spacing_m;
+    p->succ = e.success_cells;
 }
 
 /* The usage rules between options: the terrain's options without --dem, --global-error with it. */
-static int experiment_usage(cmd_experiment_params_t *p, cli_opt_t *opts, size_t n_opts) {
-  static const char *const synth[] = {"--coverage", "--terrain-seed", "--min-diameter-m", "--relief-m", "--size-cells"};
-  size_t i;
-  if (p->dem_path != NULL) {
-    for (i = 0; i < sizeof synth / sizeof synth[0]; ++i) {
-      if (cli_find(opts, n_opts, synth[i])->seen) {
-        fprintf(stderr, "trn experiment: %s shapes the generated terrain; it does not apply with --dem\n", synth[i]);
+static int experiment_usage(cmd_experiment_params_t *p, cli_opt_t *opts, size_t n_opts)
+{
+    static const char *const synth[] = {"--coverage", "--terrain-seed", "--min-diameter-m",
+                                        "--relief-m", "--size-cells"};
+    size_t i;
+    if (p->dem_path != NULL) {
+        for (i = 0; i < sizeof synth / sizeof synth[0]; ++i) {
+            if (cli_find(opts, n_opts, synth[i])->seen) {
+                fprintf(stderr,
+                        "trn experiment: %s shapes the generated terrain; it does not apply with "
+                        "--dem\n",
+                        synth[i]);
+                return CLI_USAGE;
+            }
+        }
+        if (!cli_find(opts, n_opts, "--map-config")->seen) {
+            p->so.mo.config = "auto";
+        }
+    } else if (p->so.gerr != NULL) {
+        fprintf(stderr,
+                "trn experiment: --global-error needs --dem (the raster lies on the DEM's grid)\n");
         return CLI_USAGE;
-      }
     }
-    if (!cli_find(opts, n_opts, "--map-config")->seen) {
-      p->so.mo.config = "auto";
-    }
-  } else if (p->so.gerr != NULL) {
-    fprintf(stderr, "trn experiment: --global-error needs --dem (the raster lies on the DEM's grid)\n");
-    return CLI_USAGE;
-  }
-  p->seen_tseed = cli_find(opts, n_opts, "--terrain-seed")->seen;
-  p->seen_dmin = cli_find(opts, n_opts, "--min-diameter-m")->seen;
-  p->seen_window = cli_find(opts, n_opts, "--window-m")->seen;
-  p->seen_prior = cli_find(opts, n_opts, "--prior-error-m")->seen;
-  p->seen_spacing = cli_find(opts, n_opts, "--grid-spacing-m")->seen;
-  return CLI_OK;
+    p->seen_tseed = cli_find(opts, n_opts, "--terrain-seed")->seen;
+    p->seen_dmin = cli_find(opts, n_opts, "--min-diameter-m")->seen;
+    p->seen_window = cli_find(opts, n_opts, "--window-m")->seen;
+    p->seen_prior = cli_find(opts, n_opts, "--prior-error-m")->seen;
+    p->seen_spacing = cli_find(opts, n_opts, "--grid-spacing-m")->seen;
+    return CLI_OK;
 }
 
 /* argv -> p. Returns CLI_OK, CLI_HELP (usage printed) or the usage / bad input status (message printed). */
-static int experiment_parse(int argc, char **argv, cmd_experiment_params_t *p) {
-  char h[4][112];
+static int experiment_parse(int argc, char **argv, cmd_experiment_params_t *p)
+{
+    char h[4][112];
 #define EXP_N_OWN 20
-  cli_opt_t own[EXP_N_OWN] = {
-      {"--trials", CLI_LONG, &p->trials, 1, 1000000, 0, "N", "trials", 0},
-      {"--seed", CLI_U64, &p->seed, 0, 0, 0, "S", "seed of the trials and, unless --terrain-seed, of the terrain", 0},
-      {"--dem", CLI_STRING, &p->dem_path, 0, 0, 0, "FILE", "run on this DEM (projected, metres; at most 1024 x 1024) instead of a generated terrain", 0},
-      {"--band", CLI_LONG, &p->band, 1, 65535, 0, "N", "band of --dem", 0},
-      {"--coverage", CLI_DOUBLE, &p->k, 0.01, 0.5, 0, "K", "rock coverage k of the terrain (as `trn terrain`)", 0},
-      {"--terrain-seed", CLI_U64, &p->tseed, 0, 0, 0, "S", "seed of the terrain (default: --seed)", 0},
-      {"--min-diameter-m", CLI_DOUBLE, &p->dmin, 0.1, 10.0, 0, "D", "smallest rock of the terrain (default 2 cells, as `trn terrain`)", 0},
-      {"--relief-m", CLI_DOUBLE, &p->relief, 0.0, 10.0, 0, "A", "RMS of the terrain's smooth background relief (as `trn terrain`)", 0},
-      {"--size-cells", CLI_LONG, &p->size, 64, 1024, 0, "N", "terrain side, cells of 0.1 m (as `trn terrain`)", 0},
-      {"--window-m", CLI_DOUBLE, &p->window, 1e-6, 1e6, 0, "R", "localization window: prior +-R m per axis (at 0.1 m cells; scaled on a --dem)", 0},
-      {"--prior-error-m", CLI_DOUBLE, &p->prior, 0.0, 1e6, 0, "E", "prior offset from the truth, uniform in +-E m per axis (at 0.1 m cells; scaled on a --dem)", 0},
-      {"--grid-spacing-m", CLI_DOUBLE, &p->spacing, 0.0, 1e6, 0, "G", "spacing of the nine targets without selection (one patch at 0.1 m cells; scaled on a --dem)", 0},
-      {"--min-range-m", CLI_DOUBLE, &p->minr, 1e-6, 1e6, 0, "R", h[0], 0},
-      {"--max-range-m", CLI_DOUBLE, &p->maxr, 1e-6, 1e6, 0, "R", h[1], 0},
-      {"--patch-m", CLI_DOUBLE, &p->patch, 1e-6, 1e6, 0, "S", h[2], 0},
-      {"--footprint-m", CLI_DOUBLE, &p->foot, 0.0, 1e6, 0, "R", h[3], 0},
-      {"--success-cells", CLI_DOUBLE, &p->succ, 0.1, 100.0, 0, "C", "success: error <= C cells", 0},
-      {"--sensor", CLI_STRING, &p->sensor, 0, 0, 0, "prob|dem", "local-map model: prob = sampled from the probability map (the paper's, default); dem = the true DEM with height noise (diagnostic)", 0},
-      {"--height-noise-m", CLI_DOUBLE, &p->hnoise, 0.0, 1.0, 0, "H", "with --sensor dem: Gaussian height noise per cell, m", 0},
-      {"--json", CLI_FLAG, &p->json, 0, 0, 0, NULL, "print one JSON object instead of the table", 0},
-  };
-  cli_opt_t opts[EXP_N_OWN + SELMAP_N_GERR_OPTS + MAPOPT_N];
-  const size_t n_opts = sizeof opts / sizeof opts[0];
-  cli_cmd_t cmd = {"experiment",
-                   "The paper's section 5 Monte Carlo: localization success and accuracy with and without "
-                   "landmark selection.",
-                   "Terrain: `trn terrain --coverage K --seed S` (256 x 256 cells of 0.1 m), or --dem FILE.\n"
-                   "Per trial: random start and finish, the rover at the finish with a prior off by up to\n"
-                   "--prior-error-m; with selection it senses trn_select's best target, without it senses the\n"
-                   "target midway between start and prior and the eight around it (each a localization of its\n"
-                   "own). Local maps are sampled from the probability map (eqs. 8-9), localized in the prior\n"
-                   "window; success = error <= --success-cells. Rates with Wilson 95 % intervals, mean error of\n"
-                   "the successes with t intervals (docs/method.md section 8). Seeded: the same options give\n"
-                   "the same output.\n"
-                   "Every length defaults to its value at the paper's 0.1 m cells scaled by cell / 0.1 m (the\n"
-                   "same experiment in cells), and so do the error models (constant x cell/0.1, r^2 term /\n"
-                   "(cell/0.1)); on the generated terrain the factor is 1. Map configuration: --map-config\n"
-                   "" SELMAP_MAP_CONFIG_DEFAULT " on the generated terrain, auto with --dem.",
-                   opts, 0};
-  int rc;
+    cli_opt_t own[EXP_N_OWN] = {
+        {"--trials", CLI_LONG, &p->trials, 1, 1000000, 0, "N", "trials", 0},
+        {"--seed", CLI_U64, &p->seed, 0, 0, 0, "S",
+         "seed of the trials and, unless --terrain-seed, of the terrain", 0},
+        {"--dem", CLI_STRING, &p->dem_path, 0, 0, 0, "FILE",
+         "run on this DEM (projected, metres; at most 1024 x 1024) instead of a generated terrain",
+         0},
+        {"--band", CLI_LONG, &p->band, 1, 65535, 0, "N", "band of --dem", 0},
+        {"--coverage", CLI_DOUBLE, &p->k, 0.01, 0.5, 0, "K",
+         "rock coverage k of the terrain (as `trn terrain`)", 0},
+        {"--terrain-seed", CLI_U64, &p->tseed, 0, 0, 0, "S",
+         "seed of the terrain (default: --seed)", 0},
+        {"--min-diameter-m", CLI_DOUBLE, &p->dmin, 0.1, 10.0, 0, "D",
+         "smallest rock of the terrain (default 2 cells, as `trn terrain`)", 0},
+        {"--relief-m", CLI_DOUBLE, &p->relief, 0.0, 10.0, 0, "A",
+         "RMS of the terrain's smooth background relief (as `trn terrain`)", 0},
+        {"--size-cells", CLI_LONG, &p->size, 64, 1024, 0, "N",
+         "terrain side, cells of 0.1 m (as `trn terrain`)", 0},
+        {"--window-m", CLI_DOUBLE, &p->window, 1e-6, 1e6, 0, "R",
+         "localization window: prior +-R m per axis (at 0.1 m cells; scaled on a --dem)", 0},
+        {"--prior-error-m", CLI_DOUBLE, &p->prior, 0.0, 1e6, 0, "E",
+         "prior offset from the truth, uniform in +-E m per axis (at 0.1 m cells; scaled on a "
+         "--dem)",
+         0},
+        {"--grid-spacing-m", CLI_DOUBLE, &p->spacing, 0.0, 1e6, 0, "G",
+         "spacing of the nine targets without selection (one patch at 0.1 m cells; scaled on a "
+         "--dem)",
+         0},
+        {"--min-range-m", CLI_DOUBLE, &p->minr, 1e-6, 1e6, 0, "R", h[0], 0},
+        {"--max-range-m", CLI_DOUBLE, &p->maxr, 1e-6, 1e6, 0, "R", h[1], 0},
+        {"--patch-m", CLI_DOUBLE, &p->patch, 1e-6, 1e6, 0, "S", h[2], 0},
+        {"--footprint-m", CLI_DOUBLE, &p->foot, 0.0, 1e6, 0, "R", h[3], 0},
+        {"--success-cells", CLI_DOUBLE, &p->succ, 0.1, 100.0, 0, "C", "success: error <= C cells",
+         0},
+        {"--sensor", CLI_STRING, &p->sensor, 0, 0, 0, "prob|dem",
+         "local-map model: prob = sampled from the probability map (the paper's, default); dem = "
+         "the true DEM with height noise (diagnostic)",
+         0},
+        {"--height-noise-m", CLI_DOUBLE, &p->hnoise, 0.0, 1.0, 0, "H",
+         "with --sensor dem: Gaussian height noise per cell, m", 0},
+        {"--json", CLI_FLAG, &p->json, 0, 0, 0, NULL, "print one JSON object instead of the table",
+         0},
+    };
+    cli_opt_t opts[EXP_N_OWN + SELMAP_N_GERR_OPTS + MAPOPT_N];
+    const size_t n_opts = sizeof opts / sizeof opts[0];
+    cli_cmd_t cmd = {
+        "experiment",
+        "The paper's section 5 Monte Carlo: localization success and accuracy with and without "
+        "landmark selection.",
+        "Terrain: `trn terrain --coverage K --seed S` (256 x 256 cells of 0.1 m), or --dem FILE.\n"
+        "Per trial: random start and finish, the rover at the finish with a prior off by up to\n"
+        "--prior-error-m; with selection it senses trn_select's best target, without it senses "
+        "the\n"
+        "target midway between start and prior and the eight around it (each a localization of "
+        "its\n"
+        "own). Local maps are sampled from the probability map (eqs. 8-9), localized in the prior\n"
+        "window; success = error <= --success-cells. Rates with Wilson 95 % intervals, mean error "
+        "of\n"
+        "the successes with t intervals (docs/method.md section 8). Seeded: the same options give\n"
+        "the same output.\n"
+        "Every length defaults to its value at the paper's 0.1 m cells scaled by cell / 0.1 m "
+        "(the\n"
+        "same experiment in cells), and so do the error models (constant x cell/0.1, r^2 term /\n"
+        "(cell/0.1)); on the generated terrain the factor is 1. Map configuration: --map-config\n"
+        "" SELMAP_MAP_CONFIG_DEFAULT " on the generated terrain, auto with --dem.",
+        opts, 0};
+    int rc;
 
-  /* the selection lengths default to the core's (trn_select_cfg_default, in so), scaled by cell / 0.1 m */
-  snprintf(h[0], sizeof h[0], "nearest target (default %g m at 0.1 m cells; scaled on a --dem)", p->so.min_range_m);
-  snprintf(h[1], sizeof h[1], "farthest target (default %g m at 0.1 m cells; scaled on a --dem)", p->so.max_range_m);
-  snprintf(h[2], sizeof h[2], "side of the sensed patch (default %g m at 0.1 m cells; scaled on a --dem)",
-           p->so.patch_m);
-  snprintf(h[3], sizeof h[3], "rover footprint radius no patch may touch (default %g m at 0.1 m cells; scaled on a --dem)",
-           p->so.footprint_m);
-  memcpy(opts, own, (EXP_N_OWN) * sizeof own[0]);
-  selmap_gerr_opts(&p->so, opts + EXP_N_OWN);
-  mapopt_cli(&p->so.mo, opts + EXP_N_OWN + SELMAP_N_GERR_OPTS);
-  cli_find(opts, n_opts, "--map-config")->help = "map configuration: paper (as in the paper, scaled to the cell; default on the generated terrain) "
-                    "or auto (from the DEM, docs/method.md 9; default with --dem)";
-  cmd.n_opts = n_opts;
-  rc = cli_parse(&cmd, argc, argv);
-  return rc != CLI_OK ? rc : experiment_usage(p, opts, n_opts);
+    /* the selection lengths default to the core's (trn_select_cfg_default, in so), scaled by cell / 0.1 m */
+    snprintf(h[0], sizeof h[0], "nearest target (default %g m at 0.1 m cells; scaled on a --dem)",
+             p->so.min_range_m);
+    snprintf(h[1], sizeof h[1], "farthest target (default %g m at 0.1 m cells; scaled on a --dem)",
+             p->so.max_range_m);
+    snprintf(h[2], sizeof h[2],
+             "side of the sensed patch (default %g m at 0.1 m cells; scaled on a --dem)",
+             p->so.patch_m);
+    snprintf(h[3], sizeof h[3],
+             "rover footprint radius no patch may touch (default %g m at 0.1 m cells; scaled on a "
+             "--dem)",
+             p->so.footprint_m);
+    memcpy(opts, own, (EXP_N_OWN) * sizeof own[0]);
+    selmap_gerr_opts(&p->so, opts + EXP_N_OWN);
+    mapopt_cli(&p->so.mo, opts + EXP_N_OWN + SELMAP_N_GERR_OPTS);
+    cli_find(opts, n_opts, "--map-config")->help =
+        "map configuration: paper (as in the paper, scaled to the cell; default on the generated "
+        "terrain) "
+        "or auto (from the DEM, docs/method.md 9; default with --dem)";
+    cmd.n_opts = n_opts;
+    rc = cli_parse(&cmd, argc, argv);
+    return rc != CLI_OK ? rc : experiment_usage(p, opts, n_opts);
 }
 
 /* --dem and --global-error into r, the experiment's DEM fields of r->p. */
-static int experiment_dem(const cmd_experiment_params_t *p, cmd_experiment_result_t *r, char *err, size_t err_len) {
-  char why[768];
-  size_t i;
-  if (dem_read(p->dem_path, (int)p->band, 1024, &r->dem, why, sizeof why) != 0) {
-    snprintf(err, err_len, "--dem: %s", why);
-    return CLI_BAD_INPUT;
-  }
-  if (p->so.gerr != NULL && selmap_read_error(p->so.gerr, &r->dem, &r->gerr, err, err_len) != 0) {
-    return CLI_BAD_INPUT;
-  }
-  for (i = 0; i < (size_t)r->dem.width * (size_t)r->dem.height; ++i) {
-    r->n_nodata += !isfinite(r->dem.data[i]);
-  }
-  r->p.dem = r->dem.data;
-  r->p.dem_width = r->dem.width;
-  r->p.dem_height = r->dem.height;
-  r->p.cell_m = r->dem.cell_m;
-  r->p.global_error = r->gerr.data;
-  r->f = r->dem.cell_m / 0.1;
-  return CLI_OK;
+static int experiment_dem(const cmd_experiment_params_t *p, cmd_experiment_result_t *r, char *err,
+                          size_t err_len)
+{
+    char why[768];
+    size_t i;
+    if (dem_read(p->dem_path, (int)p->band, 1024, &r->dem, why, sizeof why) != 0) {
+        snprintf(err, err_len, "--dem: %s", why);
+        return CLI_BAD_INPUT;
+    }
+    if (p->so.gerr != NULL && selmap_read_error(p->so.gerr, &r->dem, &r->gerr, err, err_len) != 0) {
+        return CLI_BAD_INPUT;
+    }
+    for (i = 0; i < (size_t)r->dem.width * (size_t)r->dem.height; ++i) {
+        r->n_nodata += !isfinite(r->dem.data[i]);
+    }
+    r->p.dem = r->dem.data;
+    r->p.dem_width = r->dem.width;
+    r->p.dem_height = r->dem.height;
+    r->p.cell_m = r->dem.cell_m;
+    r->p.global_error = r->gerr.data;
+    r->f = r->dem.cell_m / 0.1;
+    return CLI_OK;
 }
 
 /* The experiment's parameters (r->p) from the options; lengths scaled by r->f unless given. */
-static void experiment_fill(const cmd_experiment_params_t *p, cmd_experiment_result_t *r) {
-  exp_params_t *e = &r->p;
-  e->trials = p->trials;
-  e->seed = p->seed;
-  e->terrain_seed = p->seen_tseed ? p->tseed : p->seed;
-  e->coverage_k = p->k;
-  e->d_min_m = p->seen_dmin ? p->dmin : 0.0;
-  e->relief_m = p->relief;
-  e->size_cells = (int)p->size;
-  e->window_m = p->seen_window ? p->window : p->window * r->f;
-  e->prior_error_m = p->seen_prior ? p->prior : p->prior * r->f;
-  e->grid_spacing_m = p->seen_spacing ? p->spacing : p->spacing * r->f;
-  e->min_range_m = p->minr;
-  e->max_range_m = p->maxr;
-  e->patch_m = p->patch;
-  e->footprint_m = p->foot;
-  e->success_cells = p->succ;
-  e->height_noise_m = p->hnoise;
-  e->global_sigma_m = p->so.gsig_m;
-  e->global_sigma_k = p->so.gsig_k;
-  r->mo = &p->so.mo;
-  r->sigma_h = NAN;
-  e->map_cfg = map_cfg_cb;
-  e->map_cfg_ctx = r;
+static void experiment_fill(const cmd_experiment_params_t *p, cmd_experiment_result_t *r)
+{
+    exp_params_t *e = &r->p;
+    e->trials = p->trials;
+    e->seed = p->seed;
+    e->terrain_seed = p->seen_tseed ? p->tseed : p->seed;
+    e->coverage_k = p->k;
+    e->d_min_m = p->seen_dmin ? p->dmin : 0.0;
+    e->relief_m = p->relief;
+    e->size_cells = (int)p->size;
+    e->window_m = p->seen_window ? p->window : p->window * r->f;
+    e->prior_error_m = p->seen_prior ? p->prior : p->prior * r->f;
+    e->grid_spacing_m = p->seen_spacing ? p->spacing : p->spacing * r->f;
+    e->min_range_m = p->minr;
+    e->max_range_m = p->maxr;
+    e->patch_m = p->patch;
+    e->footprint_m = p->foot;
+    e->success_cells = p->succ;
+    e->height_noise_m = p->hnoise;
+    e->global_sigma_m = p->so.gsig_m;
+    e->global_sigma_k = p->so.gsig_k;
+    r->mo = &p->so.mo;
+    r->sigma_h = NAN;
+    e->map_cfg = map_cfg_cb;
+    e->map_cfg_ctx = r;
 }
 
-int cmd_experiment_run(const cmd_experiment_params_t *p, cmd_experiment_result_t *r, char *err, size_t err_len) {
-  struct timespec t0, t1;
-  const char *why;
-  int rc;
+int cmd_experiment_run(const cmd_experiment_params_t *p, cmd_experiment_result_t *r, char *err,
+                       size_t err_len)
+{
+    struct timespec t0, t1;
+    const char *why;
+    int rc;
 
-  memset(r, 0, sizeof *r);
-  exp_params_default(&r->p);
-  r->f = 1.0;
-  if (strcmp(p->sensor, "prob") == 0) {
-    r->p.sensor = EXP_SENSOR_PROB;
-  } else if (strcmp(p->sensor, "dem") == 0) {
-    r->p.sensor = EXP_SENSOR_DEM;
-  } else {
-    snprintf(err, err_len, "--sensor: '%s' is not prob or dem", p->sensor);
-    return CLI_BAD_INPUT;
-  }
-  if (p->dem_path != NULL && (rc = experiment_dem(p, r, err, err_len)) != CLI_OK) {
-    return rc;
-  }
-  experiment_fill(p, r);
-  if ((why = exp_params_check(&r->p)) != NULL) {
-    snprintf(err, err_len, "%s", why);
-    return CLI_BAD_INPUT;
-  }
-  clock_gettime(CLOCK_MONOTONIC, &t0);
-  if (p->progress != NULL) {
-    p->progress(p->progress_ctx, 0, p->trials);
-  }
-  rc = exp_run(&r->p, &r->r, p->progress, p->progress_ctx, err, err_len);
-  clock_gettime(CLOCK_MONOTONIC, &t1);
-  if (rc != 0) {
-    if (p->dem_path != NULL) {
-      char why2[CMD_ERR_LEN];
-      snprintf(why2, sizeof why2, "%s", err);
-      snprintf(err, err_len, "--dem: %s", why2);
+    memset(r, 0, sizeof *r);
+    exp_params_default(&r->p);
+    r->f = 1.0;
+    if (strcmp(p->sensor, "prob") == 0) {
+        r->p.sensor = EXP_SENSOR_PROB;
+    } else if (strcmp(p->sensor, "dem") == 0) {
+        r->p.sensor = EXP_SENSOR_DEM;
+    } else {
+        snprintf(err, err_len, "--sensor: '%s' is not prob or dem", p->sensor);
+        return CLI_BAD_INPUT;
     }
-    return CLI_BAD_INPUT;
-  }
-  r->secs = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
-  r->gain = 1.0 - r->r.with.st.mean / r->r.without.st.mean;
-  return CLI_OK;
+    if (p->dem_path != NULL && (rc = experiment_dem(p, r, err, err_len)) != CLI_OK) {
+        return rc;
+    }
+    experiment_fill(p, r);
+    if ((why = exp_params_check(&r->p)) != NULL) {
+        snprintf(err, err_len, "%s", why);
+        return CLI_BAD_INPUT;
+    }
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    if (p->progress != NULL) {
+        p->progress(p->progress_ctx, 0, p->trials);
+    }
+    rc = exp_run(&r->p, &r->r, p->progress, p->progress_ctx, err, err_len);
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    if (rc != 0) {
+        if (p->dem_path != NULL) {
+            char why2[CMD_ERR_LEN];
+            snprintf(why2, sizeof why2, "%s", err);
+            snprintf(err, err_len, "--dem: %s", why2);
+        }
+        return CLI_BAD_INPUT;
+    }
+    r->secs = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+    r->gain = 1.0 - r->r.with.st.mean / r->r.without.st.mean;
+    return CLI_OK;
 }
 
-void cmd_experiment_result_free(cmd_experiment_result_t *r) {
-  dem_free(&r->dem);
-  dem_free(&r->gerr);
+void cmd_experiment_result_free(cmd_experiment_result_t *r)
+{
+    dem_free(&r->dem);
+    dem_free(&r->gerr);
 }
 
-static void experiment_json_terrain(json_t *j, const cmd_experiment_params_t *p, const cmd_experiment_result_t *r) {
-  json_obj(j, "terrain");
-  if (p->dem_path != NULL) {
-    json_str(j, "dem", p->dem_path);
-    json_int(j, "width", r->dem.width);
-    json_int(j, "height", r->dem.height);
-    json_num(j, "cell_m", r->p.cell_m);
-    json_int(j, "no_data_cells", (long long)r->n_nodata);
-    json_num(j, "scale", r->f);
-  } else {
-    json_int(j, "size_cells", p->size);
-    json_num(j, "cell_m", r->p.cell_m);
-    json_num(j, "coverage_k", p->k);
-    json_u64(j, "seed", r->p.terrain_seed);
-    json_num(j, "d_min_m", r->r.d_min_m);
-    json_num(j, "relief_m", r->p.relief_m);
-    json_int(j, "rocks", (long long)r->r.rocks);
-  }
-  json_obj_end(j);
+static void experiment_json_terrain(json_t *j, const cmd_experiment_params_t *p,
+                                    const cmd_experiment_result_t *r)
+{
+    json_obj(j, "terrain");
+    if (p->dem_path != NULL) {
+        json_str(j, "dem", p->dem_path);
+        json_int(j, "width", r->dem.width);
+        json_int(j, "height", r->dem.height);
+        json_num(j, "cell_m", r->p.cell_m);
+        json_int(j, "no_data_cells", (long long)r->n_nodata);
+        json_num(j, "scale", r->f);
+    } else {
+        json_int(j, "size_cells", p->size);
+        json_num(j, "cell_m", r->p.cell_m);
+        json_num(j, "coverage_k", p->k);
+        json_u64(j, "seed", r->p.terrain_seed);
+        json_num(j, "d_min_m", r->r.d_min_m);
+        json_num(j, "relief_m", r->p.relief_m);
+        json_int(j, "rocks", (long long)r->r.rocks);
+    }
+    json_obj_end(j);
 }
 
-static void experiment_json_parameters(json_t *j, const cmd_experiment_result_t *r) {
-  const exp_params_t *e = &r->p;
-  const exp_result_t *x = &r->r;
-  json_obj(j, "parameters");
-  json_int(j, "patch_cells", x->patch_cells);
-  json_num(j, "window_m", e->window_m);
-  json_num(j, "min_range_m", x->scfg.min_range_m);
-  json_num(j, "max_range_m", x->scfg.max_range_m);
-  json_num(j, "patch_m", x->scfg.patch_m);
-  json_num(j, "footprint_m", x->scfg.footprint_radius_m);
-  json_num(j, "local_sigma_m", x->scfg.local_sigma.sigma_min_m);
-  json_num(j, "local_sigma_k_per_m", x->scfg.local_sigma.k_per_m);
-  json_int(j, "window_cells", x->window_cells);
-  json_num(j, "prior_error_m", e->prior_error_m);
-  json_num(j, "grid_spacing_m", x->grid_cells * e->cell_m);
-  json_num(j, "success_radius_m", x->success_radius_m);
-  json_str(j, "sensor", e->sensor == EXP_SENSOR_PROB ? "prob" : "dem");
-  json_str(j, "sensor_model", e->sensor == EXP_SENSOR_PROB
-                                  ? "each voxel of the sensed patch occupied with probability min(P, 1), eqs. 8-9"
-                                  : "true DEM + Gaussian height noise per cell, high-passed and binned on its own");
-  json_num(j, "height_noise_m", e->height_noise_m);
-  json_str(j, "global_sensing_position", "map centre");
-  json_obj_end(j);
+static void experiment_json_parameters(json_t *j, const cmd_experiment_result_t *r)
+{
+    const exp_params_t *e = &r->p;
+    const exp_result_t *x = &r->r;
+    json_obj(j, "parameters");
+    json_int(j, "patch_cells", x->patch_cells);
+    json_num(j, "window_m", e->window_m);
+    json_num(j, "min_range_m", x->scfg.min_range_m);
+    json_num(j, "max_range_m", x->scfg.max_range_m);
+    json_num(j, "patch_m", x->scfg.patch_m);
+    json_num(j, "footprint_m", x->scfg.footprint_radius_m);
+    json_num(j, "local_sigma_m", x->scfg.local_sigma.sigma_min_m);
+    json_num(j, "local_sigma_k_per_m", x->scfg.local_sigma.k_per_m);
+    json_int(j, "window_cells", x->window_cells);
+    json_num(j, "prior_error_m", e->prior_error_m);
+    json_num(j, "grid_spacing_m", x->grid_cells * e->cell_m);
+    json_num(j, "success_radius_m", x->success_radius_m);
+    json_str(j, "sensor", e->sensor == EXP_SENSOR_PROB ? "prob" : "dem");
+    json_str(j, "sensor_model",
+             e->sensor == EXP_SENSOR_PROB
+                 ? "each voxel of the sensed patch occupied with probability min(P, 1), eqs. 8-9"
+                 : "true DEM + Gaussian height noise per cell, high-passed and binned on its own");
+    json_num(j, "height_noise_m", e->height_noise_m);
+    json_str(j, "global_sensing_position", "map centre");
+    json_obj_end(j);
 }
 
-static void experiment_report_json(const cmd_experiment_params_t *p, const cmd_experiment_result_t *r) {
-  selmap_opts_t g = p->so;
-  json_t j;
-  json_begin(&j, stdout);
-  json_int(&j, "trials", p->trials);
-  json_u64(&j, "seed", p->seed);
-  experiment_json_terrain(&j, p, r);
-  experiment_json_parameters(&j, r);
-  g.gsig_m = r->r.global_sigma.sigma_min_m; /* the model used (scaled when not given) */
-  g.gsig_k = r->r.global_sigma.k_per_m;
-  selmap_json_config(&j, &g, &r->r.map_cfg, r->sigma_h);
-  json_int(&j, "draws", r->r.draws);
-  json_num(&j, "mean_traverse_m", r->r.mean_traverse_m);
-  json_arm(&j, "with_selection", &r->r.with, p->trials);
-  json_arm(&j, "without_selection", &r->r.without, p->trials);
-  json_num(&j, "accuracy_gain", r->gain);
-  json_end(&j);
+static void experiment_report_json(const cmd_experiment_params_t *p,
+                                   const cmd_experiment_result_t *r)
+{
+    selmap_opts_t g = p->so;
+    json_t j;
+    json_begin(&j, stdout);
+    json_int(&j, "trials", p->trials);
+    json_u64(&j, "seed", p->seed);
+    experiment_json_terrain(&j, p, r);
+    experiment_json_parameters(&j, r);
+    g.gsig_m = r->r.global_sigma.sigma_min_m; /* the model used (scaled when not given) */
+    g.gsig_k = r->r.global_sigma.k_per_m;
+    selmap_json_config(&j, &g, &r->r.map_cfg, r->sigma_h);
+    json_int(&j, "draws", r->r.draws);
+    json_num(&j, "mean_traverse_m", r->r.mean_traverse_m);
+    json_arm(&j, "with_selection", &r->r.with, p->trials);
+    json_arm(&j, "without_selection", &r->r.without, p->trials);
+    json_num(&j, "accuracy_gain", r->gain);
+    json_end(&j);
 }
 
-static void experiment_report_text(const cmd_experiment_params_t *p, const cmd_experiment_result_t *r) {
-  const exp_params_t *e = &r->p;
-  const exp_result_t *x = &r->r;
-  if (p->dem_path != NULL) {
-    printf("trn experiment: %ld trials, seed %llu; DEM %s, %d x %d cells of %g m (%zu no-data), lengths x %g\n",
-           p->trials, (unsigned long long)p->seed, p->dem_path, r->dem.width, r->dem.height, e->cell_m, r->n_nodata,
-           r->f);
-  } else {
-    printf("trn experiment: %ld trials, seed %llu; terrain %ld x %ld cells of %g m, k = %g, seed %llu, %zu rocks\n",
-           p->trials, (unsigned long long)p->seed, p->size, p->size, e->cell_m, p->k,
-           (unsigned long long)e->terrain_seed, x->rocks);
-  }
-  printf("sensor: %s\n", e->sensor == EXP_SENSOR_PROB ? "local maps sampled from the probability map (eqs. 8-9)"
-                                                       : "true DEM + height noise (diagnostic, not the paper's)");
-  printf("patch %d cells, window +-%g m, prior error +-%g m, grid %g m, success <= %g m; mean traverse %.2f m\n",
-         x->patch_cells, e->window_m, e->prior_error_m, x->grid_cells * e->cell_m, x->success_radius_m,
-         x->mean_traverse_m);
-  printf("targets %g..%g m, footprint %g m; map %s: bin %.4g m x %d, high-pass %.4g m, s %.4g m; "
-         "global error %.4g m + %.4g/m r^2%s\n\n",
-         (double)x->scfg.min_range_m, (double)x->scfg.max_range_m, (double)x->scfg.footprint_radius_m,
-         p->so.mo.config, (double)x->map_cfg.terrain.zbin_m, (int)x->map_cfg.terrain.nz,
-         (double)x->map_cfg.terrain.highpass_half_m, (double)x->map_cfg.sigma_m,
-         (double)x->global_sigma.sigma_min_m, (double)x->global_sigma.k_per_m,
-         p->so.gerr != NULL ? " (per-cell raster where it has data)" : "");
-  printf("%-18s %6s %7s  %8s  %14s   %8s  %s\n", "", "locs", "success", "rate", "95 % CI", "mean err",
-         "95 % CI (successes)");
-  print_arm("with selection", &x->with);
-  print_arm("without selection", &x->without);
-  printf("\nsuccessful localizations %.1f %% more accurate with selection (paper: 97.8 %% vs 29.5 %%, 15.3 %%)\n",
-         100.0 * r->gain);
-  printf("elapsed %.1f s\n", r->secs);
+static void experiment_report_text(const cmd_experiment_params_t *p,
+                                   const cmd_experiment_result_t *r)
+{
+    const exp_params_t *e = &r->p;
+    const exp_result_t *x = &r->r;
+    if (p->dem_path != NULL) {
+        printf("trn experiment: %ld trials, seed %llu; DEM %s, %d x %d cells of %g m (%zu "
+               "no-data), lengths x %g\n",
+               p->trials, (unsigned long long)p->seed, p->dem_path, r->dem.width, r->dem.height,
+               e->cell_m, r->n_nodata, r->f);
+    } else {
+        printf("trn experiment: %ld trials, seed %llu; terrain %ld x %ld cells of %g m, k = %g, "
+               "seed %llu, %zu rocks\n",
+               p->trials, (unsigned long long)p->seed, p->size, p->size, e->cell_m, p->k,
+               (unsigned long long)e->terrain_seed, x->rocks);
+    }
+    printf("sensor: %s\n", e->sensor == EXP_SENSOR_PROB
+                               ? "local maps sampled from the probability map (eqs. 8-9)"
+                               : "true DEM + height noise (diagnostic, not the paper's)");
+    printf("patch %d cells, window +-%g m, prior error +-%g m, grid %g m, success <= %g m; mean "
+           "traverse %.2f m\n",
+           x->patch_cells, e->window_m, e->prior_error_m, x->grid_cells * e->cell_m,
+           x->success_radius_m, x->mean_traverse_m);
+    printf("targets %g..%g m, footprint %g m; map %s: bin %.4g m x %d, high-pass %.4g m, s %.4g m; "
+           "global error %.4g m + %.4g/m r^2%s\n\n",
+           (double)x->scfg.min_range_m, (double)x->scfg.max_range_m,
+           (double)x->scfg.footprint_radius_m, p->so.mo.config, (double)x->map_cfg.terrain.zbin_m,
+           (int)x->map_cfg.terrain.nz, (double)x->map_cfg.terrain.highpass_half_m,
+           (double)x->map_cfg.sigma_m, (double)x->global_sigma.sigma_min_m,
+           (double)x->global_sigma.k_per_m,
+           p->so.gerr != NULL ? " (per-cell raster where it has data)" : "");
+    printf("%-18s %6s %7s  %8s  %14s   %8s  %s\n", "", "locs", "success", "rate", "95 % CI",
+           "mean err", "95 % CI (successes)");
+    print_arm("with selection", &x->with);
+    print_arm("without selection", &x->without);
+    printf("\nsuccessful localizations %.1f %% more accurate with selection (paper: 97.8 %% vs "
+           "29.5 %%, 15.3 %%)\n",
+           100.0 * r->gain);
+    printf("elapsed %.1f s\n", r->secs);
 }
 
-int trn_cmd_experiment(int argc, char **argv) {
-  cmd_experiment_params_t p;
-  cmd_experiment_result_t r;
-  progress_lazy_t prog;
-  char err[CMD_ERR_LEN];
-  int rc;
+int trn_cmd_experiment(int argc, char **argv)
+{
+    cmd_experiment_params_t p;
+    cmd_experiment_result_t r;
+    progress_lazy_t prog;
+    char err[CMD_ERR_LEN];
+    int rc;
 
-  cmd_experiment_params_default(&p);
-  rc = experiment_parse(argc, argv, &p);
-  if (rc != CLI_OK) {
-    return rc == CLI_HELP ? 0 : rc;
-  }
-  progress_lazy_init(&prog, "experiment");
-  p.progress = on_progress;
-  p.progress_ctx = &prog;
-  rc = cmd_experiment_run(&p, &r, err, sizeof err);
-  progress_lazy_end(&prog);
-  if (rc != CLI_OK) {
-    cli_fail("experiment", "%s", err);
-  } else if (p.json) {
-    experiment_report_json(&p, &r);
-  } else {
-    experiment_report_text(&p, &r);
-  }
-  cmd_experiment_result_free(&r);
-  return rc;
+    cmd_experiment_params_default(&p);
+    rc = experiment_parse(argc, argv, &p);
+    if (rc != CLI_OK) {
+        return rc == CLI_HELP ? 0 : rc;
+    }
+    progress_lazy_init(&prog, "experiment");
+    p.progress = on_progress;
+    p.progress_ctx = &prog;
+    rc = cmd_experiment_run(&p, &r, err, sizeof err);
+    progress_lazy_end(&prog);
+    if (rc != CLI_OK) {
+        cli_fail("experiment", "%s", err);
+    } else if (p.json) {
+        experiment_report_json(&p, &r);
+    } else {
+        experiment_report_text(&p, &r);
+    }
+    cmd_experiment_result_free(&r);
+    return rc;
 }

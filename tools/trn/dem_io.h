@@ -21,12 +21,12 @@
 #include <stddef.h>
 
 typedef struct {
-  float *data;    /* width*height heights, row-major, NaN = not seen */
-  int width;      /* columns */
-  int height;     /* rows */
-  double gt[6];   /* GDAL geotransform in metres, north-up after normalisation */
-  double cell_m;  /* gt[1] = -gt[5] */
-  char *srs_wkt;  /* the file's CRS as WKT (in metres when converted), or NULL when it had none */
+    float *data;   /* width*height heights, row-major, NaN = not seen */
+    int width;     /* columns */
+    int height;    /* rows */
+    double gt[6];  /* GDAL geotransform in metres, north-up after normalisation */
+    double cell_m; /* gt[1] = -gt[5] */
+    char *srs_wkt; /* the file's CRS as WKT (in metres when converted), or NULL when it had none */
 } dem_t;
 
 /* Read band `band` (1-based) of anything GDAL opens, in metres. Not seen

@@ -38,13 +38,13 @@
 
 /* ---- seeded random numbers (splitmix64) ------------------------------- */
 typedef struct {
-  uint64_t s;
+    uint64_t s;
 } exp_rng_t;
 
 /* Stream of trial `index` of a run seeded with `seed`. */
 void exp_rng_seed(exp_rng_t *r, uint64_t seed, uint64_t index);
 uint64_t exp_rng_u64(exp_rng_t *r);
-double exp_rng_unit(exp_rng_t *r);              /* [0, 1), 53 bits */
+double exp_rng_unit(exp_rng_t *r);                  /* [0, 1), 53 bits */
 long exp_rng_range(exp_rng_t *r, long lo, long hi); /* integer in [lo, hi] */
 
 /* ---- the sensor model: a local map sampled from a probability map ------ */
@@ -82,47 +82,47 @@ double exp_t_quantile(double conf, long df);
  *              linearized between-cluster variance, df = clusters with a
  *              success - 1. NaN when df < 1. */
 typedef struct {
-  double rate, rate_ci[2], n_eff;
-  double mean, mean_ci[2], sd;
+    double rate, rate_ci[2], n_eff;
+    double mean, mean_ci[2], sd;
 } exp_stats_t;
 
-void exp_cluster_stats(const long *m, const long *k, const double *e, const double *e2, long n_clusters,
-                       exp_stats_t *out);
+void exp_cluster_stats(const long *m, const long *k, const double *e, const double *e2,
+                       long n_clusters, exp_stats_t *out);
 
 /* ---- the experiment ---------------------------------------------------- */
 typedef struct {
-  int size_cells;        /* terrain side, cells (default 256) */
-  double cell_m;         /* 0.1 */
-  double coverage_k;     /* rock coverage k (0.1) */
-  uint64_t terrain_seed; /* `trn terrain --seed` (1) */
-  double d_min_m;        /* smallest rock drawn, m (0: 2 cells, as `trn terrain`) */
-  double relief_m;       /* RMS of the smooth background relief (0.05, as `trn terrain`) */
-  long trials;           /* 1000 */
-  uint64_t seed;         /* trial streams (1) */
-  double window_m;       /* prior window half-width per axis (2.0) */
-  double prior_error_m;  /* prior offset bound per axis (1.0) */
-  double grid_spacing_m; /* spacing of the nine fixed targets (2.0 = one patch) */
-  double success_cells;  /* success radius, cells (2.0) */
-  int sensor;            /* EXP_SENSOR_PROB (the paper's) or EXP_SENSOR_DEM (diagnostic) */
-  double height_noise_m; /* EXP_SENSOR_DEM: per-cell Gaussian height noise, m (0) */
-  /* A given DEM instead of the generated terrain (NULL: generate). Not
+    int size_cells;        /* terrain side, cells (default 256) */
+    double cell_m;         /* 0.1 */
+    double coverage_k;     /* rock coverage k (0.1) */
+    uint64_t terrain_seed; /* `trn terrain --seed` (1) */
+    double d_min_m;        /* smallest rock drawn, m (0: 2 cells, as `trn terrain`) */
+    double relief_m;       /* RMS of the smooth background relief (0.05, as `trn terrain`) */
+    long trials;           /* 1000 */
+    uint64_t seed;         /* trial streams (1) */
+    double window_m;       /* prior window half-width per axis (2.0) */
+    double prior_error_m;  /* prior offset bound per axis (1.0) */
+    double grid_spacing_m; /* spacing of the nine fixed targets (2.0 = one patch) */
+    double success_cells;  /* success radius, cells (2.0) */
+    int sensor;            /* EXP_SENSOR_PROB (the paper's) or EXP_SENSOR_DEM (diagnostic) */
+    double height_noise_m; /* EXP_SENSOR_DEM: per-cell Gaussian height noise, m (0) */
+    /* A given DEM instead of the generated terrain (NULL: generate). Not
    * copied into the result; read during exp_run only. width x height cells of
    * cell_m, north-up rows, NaN = no data (a sensed patch or the finish never
    * lies on one). */
-  const float *dem;
-  int dem_width, dem_height;
-  /* The map configuration: NULL = the paper's scaled to the cell (bins and s
+    const float *dem;
+    int dem_width, dem_height;
+    /* The map configuration: NULL = the paper's scaled to the cell (bins and s
    * one cell, high-pass 10 cells); else called once with the DEM. */
-  int (*map_cfg)(void *ctx, const float *dem, int width, int height, double cell_m, trn_map_cfg_t *cfg,
-                 char *err, size_t err_len);
-  void *map_cfg_ctx;
-  /* Ranges in metres; 0 (footprint: < 0) = trn_select_cfg_default's, scaled
+    int (*map_cfg)(void *ctx, const float *dem, int width, int height, double cell_m,
+                   trn_map_cfg_t *cfg, char *err, size_t err_len);
+    void *map_cfg_ctx;
+    /* Ranges in metres; 0 (footprint: < 0) = trn_select_cfg_default's, scaled
    * by cell_m / 0.1 (the same cells as the paper's 0.1 m: 10-100 cells, a
    * 21-cell patch, a 5-cell footprint). The local error model (eq. 9) and the
    * default global one (eq. 8) scale likewise: constant x f, r^2 term / f. */
-  double min_range_m, max_range_m, patch_m, footprint_m;
-  double global_sigma_m, global_sigma_k; /* eq. 8 model; < 0: default (scaled) */
-  const float *global_error; /* per-cell eq. 8 sigma, m, the DEM's grid (NaN: model) or NULL */
+    double min_range_m, max_range_m, patch_m, footprint_m;
+    double global_sigma_m, global_sigma_k; /* eq. 8 model; < 0: default (scaled) */
+    const float *global_error; /* per-cell eq. 8 sigma, m, the DEM's grid (NaN: model) or NULL */
 } exp_params_t;
 
 /* Sensor models. PROB: the paper's, voxels sampled from the probability map
@@ -140,28 +140,28 @@ const char *exp_params_check(const exp_params_t *p);
 
 /* One strategy's results. */
 typedef struct {
-  long localizations;    /* trials (with) or 9 x trials (without) */
-  long successes;
-  long no_target;        /* trn_select found no informative target (counted as failures) */
-  long no_points;        /* a sampled local map came out empty (failures) */
-  long ill_conditioned;  /* localizations whose eq. 6 fit failed (integer pose used) */
-  long success_1cell, success_5cells; /* sensitivity of the threshold */
-  exp_stats_t st;
-  double mean_points;    /* sampled local voxels per localization */
-  double mean_range_m;   /* rover-target distance */
+    long localizations; /* trials (with) or 9 x trials (without) */
+    long successes;
+    long no_target;       /* trn_select found no informative target (counted as failures) */
+    long no_points;       /* a sampled local map came out empty (failures) */
+    long ill_conditioned; /* localizations whose eq. 6 fit failed (integer pose used) */
+    long success_1cell, success_5cells; /* sensitivity of the threshold */
+    exp_stats_t st;
+    double mean_points;  /* sampled local voxels per localization */
+    double mean_range_m; /* rover-target distance */
 } exp_arm_t;
 
 typedef struct {
-  exp_arm_t with, without;
-  size_t rocks;
-  double d_min_m;         /* smallest rock drawn */
-  long draws;            /* (S, F, offset) draws, accepted ones included */
-  double mean_traverse_m;/* |S - F| of the accepted trials */
-  int patch_cells, grid_cells, window_cells, prior_cells;
-  double success_radius_m;
-  trn_map_cfg_t map_cfg;        /* the map configuration used */
-  trn_sigma_model_t global_sigma; /* eq. 8's model used (raster aside) */
-  trn_select_cfg_t scfg;        /* the selection rules used (ranges in metres) */
+    exp_arm_t with, without;
+    size_t rocks;
+    double d_min_m;         /* smallest rock drawn */
+    long draws;             /* (S, F, offset) draws, accepted ones included */
+    double mean_traverse_m; /* |S - F| of the accepted trials */
+    int patch_cells, grid_cells, window_cells, prior_cells;
+    double success_radius_m;
+    trn_map_cfg_t map_cfg;          /* the map configuration used */
+    trn_sigma_model_t global_sigma; /* eq. 8's model used (raster aside) */
+    trn_select_cfg_t scfg;          /* the selection rules used (ranges in metres) */
 } exp_result_t;
 
 /* Progress and cancel callback: trials done of total, after every trial;
@@ -170,7 +170,7 @@ typedef int (*exp_progress_fn)(void *ctx, long done, long total);
 
 /* Run the experiment. Returns 0, or -1 with a one-line reason in err
  * (also when the progress callback cancelled it). */
-int exp_run(const exp_params_t *p, exp_result_t *out, exp_progress_fn progress, void *ctx, char *err,
-            size_t err_len);
+int exp_run(const exp_params_t *p, exp_result_t *out, exp_progress_fn progress, void *ctx,
+            char *err, size_t err_len);
 
 #endif /* TRN_TOOLS_EXPERIMENT_H */

@@ -12,9 +12,9 @@
 #include "trn/version.h"
 
 typedef struct {
-  const char *name;
-  int (*run)(int argc, char **argv);
-  const char *summary;
+    const char *name;
+    int (*run)(int argc, char **argv);
+    const char *summary;
 } command_t;
 
 static int cmd_version(int argc, char **argv);
@@ -28,42 +28,48 @@ static const command_t k_commands[] = {
 
 #define N_COMMANDS (sizeof k_commands / sizeof k_commands[0])
 
-static void usage(FILE *out) {
-  size_t i;
-  fprintf(out, "usage: trn <command> [options]   (trn <command> --help for its options)\n\ncommands:\n");
-  for (i = 0; i < N_COMMANDS; ++i) {
-    fprintf(out, "  %-12s %s\n", k_commands[i].name, k_commands[i].summary);
-  }
-  fprintf(out, "\noptions:\n  --version    print the trn version (also `trn version`)\n"
-               "  --help       this text\n\n");
-  cli_exit_status_help(NULL, out);
-}
-
-static int cmd_version(int argc, char **argv) {
-  (void)argc;
-  (void)argv;
-  printf("trn %s\n", TRN_VERSION_STRING);
-  return 0;
-}
-
-int main(int argc, char **argv) {
-  size_t i;
-  if (argc < 2) {
-    usage(stderr);
-    return 2;
-  }
-  if (strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0 || strcmp(argv[1], "help") == 0) {
-    usage(stdout);
-    return 0;
-  }
-  if (strcmp(argv[1], "--version") == 0) {
-    return cmd_version(argc - 1, argv + 1);
-  }
-  for (i = 0; i < N_COMMANDS; ++i) {
-    if (strcmp(argv[1], k_commands[i].name) == 0) {
-      return k_commands[i].run(argc - 1, argv + 1);
+static void usage(FILE *out)
+{
+    size_t i;
+    fprintf(
+        out,
+        "usage: trn <command> [options]   (trn <command> --help for its options)\n\ncommands:\n");
+    for (i = 0; i < N_COMMANDS; ++i) {
+        fprintf(out, "  %-12s %s\n", k_commands[i].name, k_commands[i].summary);
     }
-  }
-  fprintf(stderr, "trn: unknown command '%s' (trn --help lists them)\n", argv[1]);
-  return 2;
+    fprintf(out, "\noptions:\n  --version    print the trn version (also `trn version`)\n"
+                 "  --help       this text\n\n");
+    cli_exit_status_help(NULL, out);
+}
+
+static int cmd_version(int argc, char **argv)
+{
+    (void)argc;
+    (void)argv;
+    printf("trn %s\n", TRN_VERSION_STRING);
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    size_t i;
+    if (argc < 2) {
+        usage(stderr);
+        return 2;
+    }
+    if (strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0 ||
+        strcmp(argv[1], "help") == 0) {
+        usage(stdout);
+        return 0;
+    }
+    if (strcmp(argv[1], "--version") == 0) {
+        return cmd_version(argc - 1, argv + 1);
+    }
+    for (i = 0; i < N_COMMANDS; ++i) {
+        if (strcmp(argv[1], k_commands[i].name) == 0) {
+            return k_commands[i].run(argc - 1, argv + 1);
+        }
+    }
+    fprintf(stderr, "trn: unknown command '%s' (trn --help lists them)\n", argv[1]);
+    return 2;
 }

@@ -22,18 +22,18 @@
 #define MAPOPT_N 12 /* cli_opt_t entries mapopt_cli writes */
 
 typedef struct {
-  const char *config;   /* "auto" | "paper" */
-  double zbin_m;        /* height bin, metres; 0 = from the configuration */
-  long nz;              /* height bins; 0 = from the configuration */
-  double highpass_m;    /* high-pass half-width, metres; 0 = 10 cells */
-  double sigma_m;       /* inlier sigma s, metres; 0 = one cell */
-  double inlier_prob;   /* a; 0 = 0.95 */
-  double noise_m;       /* local height noise, constant part, metres; 0 = 0.01 */
-  double noise_k;       /* local height noise, r^2 part, 1/m; < 0 = 0.0004 / cell */
-  const char *local_hp; /* NULL = from the configuration; "box" | "map" */
-  long refine;          /* -1 = from the configuration; 0 | 1 */
-  const char *match;    /* NULL = from the configuration; "voxel" | "heights" */
-  double max_failure_prob; /* acceptance limit; 0 = from the configuration */
+    const char *config;      /* "auto" | "paper" */
+    double zbin_m;           /* height bin, metres; 0 = from the configuration */
+    long nz;                 /* height bins; 0 = from the configuration */
+    double highpass_m;       /* high-pass half-width, metres; 0 = 10 cells */
+    double sigma_m;          /* inlier sigma s, metres; 0 = one cell */
+    double inlier_prob;      /* a; 0 = 0.95 */
+    double noise_m;          /* local height noise, constant part, metres; 0 = 0.01 */
+    double noise_k;          /* local height noise, r^2 part, 1/m; < 0 = 0.0004 / cell */
+    const char *local_hp;    /* NULL = from the configuration; "box" | "map" */
+    long refine;             /* -1 = from the configuration; 0 | 1 */
+    const char *match;       /* NULL = from the configuration; "voxel" | "heights" */
+    double max_failure_prob; /* acceptance limit; 0 = from the configuration */
 } mapopt_t;
 
 /* Defaults (everything from the configuration, --map-config auto). */

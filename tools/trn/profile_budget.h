@@ -24,15 +24,15 @@
 #define PB_MAX_STAGES 16
 
 typedef struct {
-  double scale;                    /* host-to-target factor */
-  double budget_ms[PB_MAX_STAGES]; /* per stage index; < 0 = no budget */
+    double scale;                    /* host-to-target factor */
+    double budget_ms[PB_MAX_STAGES]; /* per stage index; < 0 = no budget */
 } pb_budget_t;
 
 /* Parse text (NUL-terminated) of the file `path` against the stage names
  * names[0..n). Returns 0 on success; otherwise 1 with a one-line reason
  * ("path:line: ...") in err. */
-int pb_parse(const char *text, const char *path, const char *const *names, size_t n, pb_budget_t *out,
-             char *err, size_t err_len);
+int pb_parse(const char *text, const char *path, const char *const *names, size_t n,
+             pb_budget_t *out, char *err, size_t err_len);
 
 /* Read and parse a file (at most 1 MiB). Same return convention. */
 int pb_load(const char *path, const char *const *names, size_t n, pb_budget_t *out, char *err,

@@ -30,17 +30,18 @@
 /* Options common to select and field; the option table entries are made by
  * selmap_opts (SELMAP_N_OPTS of them). */
 typedef struct {
-  long band;
-  double heading_deg;  /* map frame, CCW from east */
-  double heading_sigma_deg; /* the heading's 1-sigma uncertainty, degrees (trn_select_cfg_t.sigma_heading_rad) */
-  double pan_deg[2];   /* min,max relative to the heading, map frame */
-  double min_range_m, max_range_m, footprint_m, patch_m, separation_m;
-  long stride_cells;
-  const char *sensors; /* "X,Y[;X,Y...]" map metres, or NULL: the DEM's centre */
-  mapopt_t mo;         /* the map configuration (mapopt.h) */
-  double gsig_m;       /* global map's error at its sensor, m; < 0: trn_sigma_global_default */
-  double gsig_k;       /* its growth with squared range, 1/m; < 0: trn_sigma_global_default */
-  const char *gerr;    /* per-cell error raster (m, the DEM's grid), or NULL */
+    long band;
+    double heading_deg; /* map frame, CCW from east */
+    double
+        heading_sigma_deg; /* the heading's 1-sigma uncertainty, degrees (trn_select_cfg_t.sigma_heading_rad) */
+    double pan_deg[2]; /* min,max relative to the heading, map frame */
+    double min_range_m, max_range_m, footprint_m, patch_m, separation_m;
+    long stride_cells;
+    const char *sensors; /* "X,Y[;X,Y...]" map metres, or NULL: the DEM's centre */
+    mapopt_t mo;         /* the map configuration (mapopt.h) */
+    double gsig_m;       /* global map's error at its sensor, m; < 0: trn_sigma_global_default */
+    double gsig_k;       /* its growth with squared range, 1/m; < 0: trn_sigma_global_default */
+    const char *gerr;    /* per-cell error raster (m, the DEM's grid), or NULL */
 } selmap_opts_t;
 
 /* The selection options (11), the global map's error model (3), the map
@@ -75,7 +76,8 @@ int selmap_prob_global(const selmap_opts_t *o, const dem_t *dem, const trn_kerne
 void selmap_print_config(const selmap_opts_t *o, const trn_map_cfg_t *cfg);
 
 /* Write "global_error" (model and raster) and the map configuration as JSON. */
-void selmap_json_config(json_t *j, const selmap_opts_t *o, const trn_map_cfg_t *cfg, double sigma_h);
+void selmap_json_config(json_t *j, const selmap_opts_t *o, const trn_map_cfg_t *cfg,
+                        double sigma_h);
 
 /* Defaults (trn_select_cfg_default in map terms, heading 0, stride given). */
 void selmap_opts_default(selmap_opts_t *o, long stride_cells);
@@ -85,18 +87,18 @@ void selmap_opts(selmap_opts_t *o, cli_opt_t *dst);
 
 /* A prepared global DEM. */
 typedef struct {
-  dem_t dem;
-  trn_map_cfg_t cfg;
-  trn_map_t map;
-  trn_kernels_t k;
-  trn_vol_f32_t pg;
-  trn_select_cfg_t scfg;
-  trn_xy_t sensors[TRN_SPREAD_MAX_SENSORS]; /* global cells */
-  size_t n_sensors;
-  double sensors_m[TRN_SPREAD_MAX_SENSORS][2]; /* map metres */
-  float heading_grid_rad;
-  double sigma_h;  /* the DEM's high-passed height spread (auto), else NaN */
-  void *mraw, *pgraw;
+    dem_t dem;
+    trn_map_cfg_t cfg;
+    trn_map_t map;
+    trn_kernels_t k;
+    trn_vol_f32_t pg;
+    trn_select_cfg_t scfg;
+    trn_xy_t sensors[TRN_SPREAD_MAX_SENSORS]; /* global cells */
+    size_t n_sensors;
+    double sensors_m[TRN_SPREAD_MAX_SENSORS][2]; /* map metres */
+    float heading_grid_rad;
+    double sigma_h; /* the DEM's high-passed height spread (auto), else NaN */
+    void *mraw, *pgraw;
 } selmap_t;
 
 /* Read the DEM, check the options, build the map (configuration from
@@ -104,7 +106,8 @@ typedef struct {
  * positions and the global error model or raster. Prints nothing: on failure
  * returns CLI_BAD_INPUT with the one-line reason in err (w is freed); 0 on
  * success. */
-int selmap_prepare(selmap_t *w, const char *dem_path, const selmap_opts_t *o, char *err, size_t err_len);
+int selmap_prepare(selmap_t *w, const char *dem_path, const selmap_opts_t *o, char *err,
+                   size_t err_len);
 
 void selmap_free(selmap_t *w);
 

@@ -37,26 +37,26 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#define TG_BIN_M 0.001                  /* diameter bin width */
+#define TG_BIN_M 0.001 /* diameter bin width */
 #define TG_RELIEF_WAVES 12
 #define TG_RELIEF_MIN_WAVELENGTH_M 4.0
 #define TG_RELIEF_MAX_WAVELENGTH_M 64.0
 
 typedef struct {
-  int width, height;     /* cells */
-  double cell_m;         /* cell size */
-  double coverage_k;     /* k of the model, (0, 1) */
-  double height_ratio;   /* rock height / diameter */
-  double d_min_m;        /* smallest rock drawn */
-  double d_max_m;        /* largest rock drawn (tg_default: F_k(d_max) = 1e-4 k) */
-  double relief_m;       /* RMS of the background relief */
-  uint64_t seed;
+    int width, height;   /* cells */
+    double cell_m;       /* cell size */
+    double coverage_k;   /* k of the model, (0, 1) */
+    double height_ratio; /* rock height / diameter */
+    double d_min_m;      /* smallest rock drawn */
+    double d_max_m;      /* largest rock drawn (tg_default: F_k(d_max) = 1e-4 k) */
+    double relief_m;     /* RMS of the background relief */
+    uint64_t seed;
 } tg_params_t;
 
 typedef struct {
-  double x_m, y_m; /* centre, grid metres (may lie in the margin outside the map) */
-  double d_m;      /* diameter */
-  double h_m;      /* height */
+    double x_m, y_m; /* centre, grid metres (may lie in the margin outside the map) */
+    double d_m;      /* diameter */
+    double h_m;      /* height */
 } tg_rock_t;
 
 /* Defaults for a width x height map of cell_m cells: k = 0.1,
@@ -70,7 +70,7 @@ double tg_auto_d_max(double k);
 /* NULL if p is valid, else a one-line reason. */
 const char *tg_check(const tg_params_t *p);
 
-double tg_q(double k);                /* q(k) = 1.79 + 0.152 / k */
+double tg_q(double k);                    /* q(k) = 1.79 + 0.152 / k */
 double tg_cum_area(double k, double d_m); /* F_k(D) */
 
 /* Draw the rocks. With rocks == NULL only counts them. Returns the number of

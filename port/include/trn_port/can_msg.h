@@ -26,29 +26,29 @@ extern "C" {
 #endif
 
 /* ---- identifiers (11-bit) ----------------------------------------------- */
-#define TRN_CAN_ID_MAST_CMD     0x120u /**< rover -> mast: pan-tilt position command */
-#define TRN_CAN_ID_MAST_STATUS  0x121u /**< mast -> all: actual angles, flags, counter */
-#define TRN_CAN_ID_CAPTURE_CMD  0x130u /**< rover -> stereo head: take one capture */
+#define TRN_CAN_ID_MAST_CMD 0x120u     /**< rover -> mast: pan-tilt position command */
+#define TRN_CAN_ID_MAST_STATUS 0x121u  /**< mast -> all: actual angles, flags, counter */
+#define TRN_CAN_ID_CAPTURE_CMD 0x130u  /**< rover -> stereo head: take one capture */
 #define TRN_CAN_ID_CAPTURE_DATA 0x1A0u /**< stereo head -> rover: ISO-TP data (SF/FF/CF) */
-#define TRN_CAN_ID_CAPTURE_FC   0x1A1u /**< rover -> stereo head: ISO-TP flow control */
-#define TRN_CAN_ID_MAST_HB      0x701u /**< mast heartbeat */
-#define TRN_CAN_ID_STEREO_HB    0x702u /**< stereo-head heartbeat */
+#define TRN_CAN_ID_CAPTURE_FC 0x1A1u   /**< rover -> stereo head: ISO-TP flow control */
+#define TRN_CAN_ID_MAST_HB 0x701u      /**< mast heartbeat */
+#define TRN_CAN_ID_STEREO_HB 0x702u    /**< stereo-head heartbeat */
 
 /* ---- DLCs ---------------------------------------------------------------- */
-#define TRN_CAN_DLC_MAST_CMD    8u
+#define TRN_CAN_DLC_MAST_CMD 8u
 #define TRN_CAN_DLC_MAST_STATUS 8u
 #define TRN_CAN_DLC_CAPTURE_CMD 4u
-#define TRN_CAN_DLC_HEARTBEAT   4u
+#define TRN_CAN_DLC_HEARTBEAT 4u
 
 /** One angle count: 1e-4 rad (100 microradians); int16 spans +-3.2767 rad. */
 #define TRN_CAN_ANGLE_RAD_PER_COUNT 1.0e-4f
 
 /** A classic CAN frame as the port layer sees it (no FD). */
 typedef struct {
-    uint32_t id;      /**< 11-bit (or 29-bit with TRN_CAN_FLAG_EXT) identifier */
-    uint8_t dlc;      /**< data length, 0..8 */
-    uint8_t flags;    /**< TRN_CAN_FLAG_* */
-    uint8_t data[8];  /**< payload; bytes >= dlc are don't-care */
+    uint32_t id;     /**< 11-bit (or 29-bit with TRN_CAN_FLAG_EXT) identifier */
+    uint8_t dlc;     /**< data length, 0..8 */
+    uint8_t flags;   /**< TRN_CAN_FLAG_* */
+    uint8_t data[8]; /**< payload; bytes >= dlc are don't-care */
 } trn_can_frame_t;
 
 #define TRN_CAN_FLAG_EXT 0x01u /**< 29-bit identifier */
@@ -63,44 +63,45 @@ typedef enum {
 
 /** MAST_CMD (0x120, DLC 8). */
 typedef struct {
-    int16_t pan_100urad;       /**< commanded pan, 1e-4 rad, + = left (counterclockwise seen from above) */
-    int16_t tilt_100urad;      /**< commanded tilt, 1e-4 rad, + = up */
-    uint16_t rate_100urad_s;   /**< largest axis rate, 1e-4 rad/s; 0 = the mast's default */
-    uint8_t seq;               /**< command sequence, incremented per new command (wraps) */
-    uint8_t mode;              /**< trn_mast_mode_t */
+    int16_t
+        pan_100urad; /**< commanded pan, 1e-4 rad, + = left (counterclockwise seen from above) */
+    int16_t tilt_100urad;    /**< commanded tilt, 1e-4 rad, + = up */
+    uint16_t rate_100urad_s; /**< largest axis rate, 1e-4 rad/s; 0 = the mast's default */
+    uint8_t seq;             /**< command sequence, incremented per new command (wraps) */
+    uint8_t mode;            /**< trn_mast_mode_t */
 } trn_mast_cmd_t;
 
 /* MAST_STATUS state bits (byte 4) */
-#define TRN_MAST_ST_MOVING      0x01u /**< an axis is moving */
-#define TRN_MAST_ST_PAN_LIM_MIN 0x02u /**< pan at its minimum limit switch */
-#define TRN_MAST_ST_PAN_LIM_MAX 0x04u /**< pan at its maximum limit switch */
+#define TRN_MAST_ST_MOVING 0x01u       /**< an axis is moving */
+#define TRN_MAST_ST_PAN_LIM_MIN 0x02u  /**< pan at its minimum limit switch */
+#define TRN_MAST_ST_PAN_LIM_MAX 0x04u  /**< pan at its maximum limit switch */
 #define TRN_MAST_ST_TILT_LIM_MIN 0x08u /**< tilt at its minimum limit switch */
 #define TRN_MAST_ST_TILT_LIM_MAX 0x10u /**< tilt at its maximum limit switch */
-#define TRN_MAST_ST_IN_POSITION 0x20u /**< both axes within tolerance of the last command */
-#define TRN_MAST_ST_RESERVED    0xC0u /**< must be zero */
+#define TRN_MAST_ST_IN_POSITION 0x20u  /**< both axes within tolerance of the last command */
+#define TRN_MAST_ST_RESERVED 0xC0u     /**< must be zero */
 /* MAST_STATUS fault bits (byte 5) */
-#define TRN_MAST_FLT_PAN_STALL  0x01u /**< pan commanded but not moving (stuck axis) */
-#define TRN_MAST_FLT_TILT_STALL 0x02u /**< tilt commanded but not moving */
-#define TRN_MAST_FLT_ENCODER    0x04u /**< an angle encoder failed; angles invalid */
+#define TRN_MAST_FLT_PAN_STALL 0x01u   /**< pan commanded but not moving (stuck axis) */
+#define TRN_MAST_FLT_TILT_STALL 0x02u  /**< tilt commanded but not moving */
+#define TRN_MAST_FLT_ENCODER 0x04u     /**< an angle encoder failed; angles invalid */
 #define TRN_MAST_FLT_OVERCURRENT 0x08u /**< motor overcurrent, drives off */
-#define TRN_MAST_FLT_OVERTEMP   0x10u /**< motor or driver overtemperature */
+#define TRN_MAST_FLT_OVERTEMP 0x10u    /**< motor or driver overtemperature */
 #define TRN_MAST_FLT_CMD_INVALID 0x20u /**< last command rejected (outside limits, bad mode) */
-#define TRN_MAST_FLT_RESERVED   0xC0u /**< must be zero */
+#define TRN_MAST_FLT_RESERVED 0xC0u    /**< must be zero */
 
 /** MAST_STATUS (0x121, DLC 8). */
 typedef struct {
-    int16_t pan_100urad;   /**< measured pan, 1e-4 rad */
-    int16_t tilt_100urad;  /**< measured tilt, 1e-4 rad */
-    uint8_t state;         /**< TRN_MAST_ST_* bits */
-    uint8_t faults;        /**< TRN_MAST_FLT_* bits */
-    uint8_t cmd_seq_ack;   /**< seq of the last accepted MAST_CMD */
-    uint8_t counter;       /**< +1 per status frame (wraps); gaps = lost frames */
+    int16_t pan_100urad;  /**< measured pan, 1e-4 rad */
+    int16_t tilt_100urad; /**< measured tilt, 1e-4 rad */
+    uint8_t state;        /**< TRN_MAST_ST_* bits */
+    uint8_t faults;       /**< TRN_MAST_FLT_* bits */
+    uint8_t cmd_seq_ack;  /**< seq of the last accepted MAST_CMD */
+    uint8_t counter;      /**< +1 per status frame (wraps); gaps = lost frames */
 } trn_mast_status_t;
 
 /** CAPTURE_CMD (0x130, DLC 4). */
 typedef struct {
-    uint16_t capture_id;   /**< echoed in the capture; 0 is valid */
-    uint16_t max_points;   /**< most points to send; 0 = the head's own maximum */
+    uint16_t capture_id; /**< echoed in the capture; 0 is valid */
+    uint16_t max_points; /**< most points to send; 0 = the head's own maximum */
 } trn_capture_cmd_t;
 
 /** Heartbeat node state. */
@@ -113,19 +114,19 @@ typedef enum {
 
 /** MAST_HB (0x701) and STEREO_HB (0x702), DLC 4. */
 typedef struct {
-    uint8_t state;       /**< trn_node_state_t */
-    uint8_t counter;     /**< +1 per heartbeat (wraps) */
-    uint16_t uptime_s;   /**< seconds since node boot (wraps after 18.2 h) */
+    uint8_t state;     /**< trn_node_state_t */
+    uint8_t counter;   /**< +1 per heartbeat (wraps) */
+    uint16_t uptime_s; /**< seconds since node boot (wraps after 18.2 h) */
 } trn_heartbeat_t;
 
 /** Which of our messages a frame is. */
 typedef enum {
-    TRN_CAN_MSG_NONE = 0,      /**< not one of ours */
+    TRN_CAN_MSG_NONE = 0, /**< not one of ours */
     TRN_CAN_MSG_MAST_CMD,
     TRN_CAN_MSG_MAST_STATUS,
     TRN_CAN_MSG_CAPTURE_CMD,
-    TRN_CAN_MSG_CAPTURE_DATA,  /**< ISO-TP data frame of a capture (isotp.h, capture.h) */
-    TRN_CAN_MSG_CAPTURE_FC,    /**< ISO-TP flow control (isotp.h) */
+    TRN_CAN_MSG_CAPTURE_DATA, /**< ISO-TP data frame of a capture (isotp.h, capture.h) */
+    TRN_CAN_MSG_CAPTURE_FC,   /**< ISO-TP flow control (isotp.h) */
     TRN_CAN_MSG_MAST_HB,
     TRN_CAN_MSG_STEREO_HB
 } trn_can_msg_kind_t;

@@ -65,26 +65,26 @@ typedef struct {
 /** A decoded, validated capture. */
 typedef struct {
     uint16_t capture_id;
-    uint32_t time_ms;          /**< stereo-head clock at exposure */
-    int16_t pan_100urad;       /**< mast pan at exposure, 1e-4 rad */
-    int16_t tilt_100urad;      /**< mast tilt at exposure, 1e-4 rad */
-    uint8_t mast_state;        /**< TRN_MAST_ST_* at exposure */
-    uint8_t mast_faults;       /**< TRN_MAST_FLT_* at exposure */
-    uint16_t n_points;         /**< valid entries of points */
-    uint32_t crc;              /**< the CRC-32 carried (and verified) */
+    uint32_t time_ms;     /**< stereo-head clock at exposure */
+    int16_t pan_100urad;  /**< mast pan at exposure, 1e-4 rad */
+    int16_t tilt_100urad; /**< mast tilt at exposure, 1e-4 rad */
+    uint8_t mast_state;   /**< TRN_MAST_ST_* at exposure */
+    uint8_t mast_faults;  /**< TRN_MAST_FLT_* at exposure */
+    uint16_t n_points;    /**< valid entries of points */
+    uint32_t crc;         /**< the CRC-32 carried (and verified) */
     trn_cap_point_t points[TRN_PORT_MAX_CAPTURE_POINTS];
 } trn_capture_t;
 
 /** Named capture errors (index into trn_capture_rx_t.err_count). */
 typedef enum {
     TRN_CAP_ERR_NONE = 0,
-    TRN_CAP_ERR_SHORT_SEGMENT,   /**< segment shorter than its header + 1 byte */
-    TRN_CAP_ERR_SEG_COUNT,       /**< seg_count 0, seg_index >= seg_count, or seg_count changed */
-    TRN_CAP_ERR_ID_MISMATCH,     /**< segment of another capture_id mid-capture, or header id != segment id */
-    TRN_CAP_ERR_MISSING,         /**< a segment was skipped (index above the expected one) */
-    TRN_CAP_ERR_DUPLICATE,       /**< the previous segment again */
-    TRN_CAP_ERR_OUT_OF_ORDER,    /**< an earlier segment (not the previous) */
-    TRN_CAP_ERR_RESTARTED,       /**< segment 0 of a capture while another was incomplete (old one dropped) */
+    TRN_CAP_ERR_SHORT_SEGMENT, /**< segment shorter than its header + 1 byte */
+    TRN_CAP_ERR_SEG_COUNT,     /**< seg_count 0, seg_index >= seg_count, or seg_count changed */
+    TRN_CAP_ERR_ID_MISMATCH, /**< segment of another capture_id mid-capture, or header id != segment id */
+    TRN_CAP_ERR_MISSING,      /**< a segment was skipped (index above the expected one) */
+    TRN_CAP_ERR_DUPLICATE,    /**< the previous segment again */
+    TRN_CAP_ERR_OUT_OF_ORDER, /**< an earlier segment (not the previous) */
+    TRN_CAP_ERR_RESTARTED, /**< segment 0 of a capture while another was incomplete (old one dropped) */
     TRN_CAP_ERR_VERSION,         /**< unknown version or reserved flags set */
     TRN_CAP_ERR_TOO_MANY_POINTS, /**< n_points above TRN_PORT_MAX_CAPTURE_POINTS */
     TRN_CAP_ERR_OVERFLOW,        /**< more bytes than the header announces (wrong length) */
@@ -100,13 +100,13 @@ typedef enum {
  * Initialize with trn_capture_rx_init.
  */
 typedef struct {
-    uint8_t wire[TRN_CAP_WIRE_MAX]; /**< capture bytes received so far */
-    size_t got;                     /**< bytes in wire */
-    uint16_t capture_id;            /**< of the capture in progress */
-    uint8_t next_index;             /**< next expected segment index */
-    uint8_t seg_count;              /**< of the capture in progress */
-    uint8_t active;                 /**< 1 while a capture is in progress */
-    uint32_t n_complete;            /**< captures delivered */
+    uint8_t wire[TRN_CAP_WIRE_MAX];        /**< capture bytes received so far */
+    size_t got;                            /**< bytes in wire */
+    uint16_t capture_id;                   /**< of the capture in progress */
+    uint8_t next_index;                    /**< next expected segment index */
+    uint8_t seg_count;                     /**< of the capture in progress */
+    uint8_t active;                        /**< 1 while a capture is in progress */
+    uint32_t n_complete;                   /**< captures delivered */
     uint32_t err_count[TRN_CAP_ERR_COUNT]; /**< per trn_cap_err_t */
 } trn_capture_rx_t;
 
@@ -133,7 +133,8 @@ trn_status_t trn_capture_encode(const trn_capture_t *c, uint8_t *wire, size_t ca
  * @retval TRN_E_CAPACITY TOO_MANY_POINTS
  * @retval TRN_E_CRC      CRC
  */
-trn_status_t trn_capture_decode(const uint8_t *wire, size_t len, trn_capture_t *out, trn_cap_err_t *err);
+trn_status_t trn_capture_decode(const uint8_t *wire, size_t len, trn_capture_t *out,
+                                trn_cap_err_t *err);
 
 /**
  * @brief Number of segments of a capture of wire_len bytes when each
@@ -155,8 +156,8 @@ trn_status_t trn_capture_segment_count(size_t wire_len, size_t seg_payload, uint
  *         wire_len < TRN_CAP_HEADER_BYTES), TRN_E_SIZE, TRN_E_RANGE (index
  *         >= count), TRN_E_WORKSPACE (cap too small)
  */
-trn_status_t trn_capture_segment(const uint8_t *wire, size_t wire_len, size_t seg_payload, uint8_t index,
-                                 uint8_t *out, size_t cap, size_t *out_len);
+trn_status_t trn_capture_segment(const uint8_t *wire, size_t wire_len, size_t seg_payload,
+                                 uint8_t index, uint8_t *out, size_t cap, size_t *out_len);
 
 /**
  * @brief Reset a reassembler: idle, counters zero. @retval TRN_OK, TRN_E_NULL
@@ -201,7 +202,8 @@ trn_status_t trn_capture_rx_abort(trn_capture_rx_t *rx);
  * @retval TRN_OK, TRN_E_NULL, TRN_E_CAPACITY (capacity < n_points, nothing
  *         written), TRN_E_SIZE (c->n_points above TRN_PORT_MAX_CAPTURE_POINTS)
  */
-trn_status_t trn_capture_points_m(const trn_capture_t *c, trn_vec3f_t *out, size_t capacity, size_t *n);
+trn_status_t trn_capture_points_m(const trn_capture_t *c, trn_vec3f_t *out, size_t capacity,
+                                  size_t *n);
 
 /**
  * @brief Short constant name of an error ("CRC", ...). Never NULL.

@@ -53,74 +53,71 @@ typedef enum {
 
 /** Flow status of a flow-control frame. */
 typedef enum {
-    TRN_ISOTP_FS_CTS = 0,   /**< continue to send */
-    TRN_ISOTP_FS_WAIT = 1,  /**< wait for another FC */
-    TRN_ISOTP_FS_OVFLW = 2  /**< overflow: the receiver cannot take the message; abort */
+    TRN_ISOTP_FS_CTS = 0,  /**< continue to send */
+    TRN_ISOTP_FS_WAIT = 1, /**< wait for another FC */
+    TRN_ISOTP_FS_OVFLW = 2 /**< overflow: the receiver cannot take the message; abort */
 } trn_isotp_fs_t;
 
 /** A decoded frame: its PCI fields and where its payload lies. */
 typedef struct {
-    uint8_t type;      /**< trn_isotp_type_t */
-    uint16_t msg_len;  /**< SF: payload bytes 1..7; FF: message length 8..4095; else 0 */
-    uint8_t sn;        /**< CF: sequence number 0..15 */
-    uint8_t fs;        /**< FC: trn_isotp_fs_t */
-    uint8_t bs;        /**< FC: block size (0 = no further FC) */
-    uint8_t stmin;     /**< FC: STmin raw byte (trn_isotp_stmin_us) */
-    uint8_t data_off;  /**< SF/FF/CF: index of the first payload byte in the frame */
-    uint8_t data_len;  /**< SF/FF/CF: payload bytes in this frame (CF: all after the PCI) */
+    uint8_t type;     /**< trn_isotp_type_t */
+    uint16_t msg_len; /**< SF: payload bytes 1..7; FF: message length 8..4095; else 0 */
+    uint8_t sn;       /**< CF: sequence number 0..15 */
+    uint8_t fs;       /**< FC: trn_isotp_fs_t */
+    uint8_t bs;       /**< FC: block size (0 = no further FC) */
+    uint8_t stmin;    /**< FC: STmin raw byte (trn_isotp_stmin_us) */
+    uint8_t data_off; /**< SF/FF/CF: index of the first payload byte in the frame */
+    uint8_t data_len; /**< SF/FF/CF: payload bytes in this frame (CF: all after the PCI) */
 } trn_isotp_frame_t;
 
 /** Named receiver errors (index into trn_isotp_rx_t.err_count). */
 typedef enum {
     TRN_ISOTP_ERR_NONE = 0,
-    TRN_ISOTP_ERR_BAD_FRAME,      /**< undecodable: DLC 0, reserved PCI type, bad SF/FF length, short FC */
-    TRN_ISOTP_ERR_UNEXPECTED_CF,  /**< consecutive frame while idle (ignored) */
-    TRN_ISOTP_ERR_WRONG_SN,       /**< consecutive frame with the wrong sequence number: message aborted */
-    TRN_ISOTP_ERR_OVERFLOW,       /**< FF length above the buffer: FC overflow sent, message refused */
-    TRN_ISOTP_ERR_INTERRUPTED,    /**< SF or FF during a reception: the old message is dropped, the new one processed */
-    TRN_ISOTP_ERR_TIMEOUT_CR,     /**< N_Cr: no consecutive frame within n_cr_ms: message aborted */
-    TRN_ISOTP_ERR_UNEXPECTED_FC,  /**< flow control on the data ID (ignored) */
-    TRN_ISOTP_ERR_SHORT_CF,       /**< a consecutive frame other than the last with < 7 data bytes: message aborted */
+    TRN_ISOTP_ERR_BAD_FRAME, /**< undecodable: DLC 0, reserved PCI type, bad SF/FF length, short FC */
+    TRN_ISOTP_ERR_UNEXPECTED_CF, /**< consecutive frame while idle (ignored) */
+    TRN_ISOTP_ERR_WRONG_SN, /**< consecutive frame with the wrong sequence number: message aborted */
+    TRN_ISOTP_ERR_OVERFLOW, /**< FF length above the buffer: FC overflow sent, message refused */
+    TRN_ISOTP_ERR_INTERRUPTED, /**< SF or FF during a reception: the old message is dropped, the new one processed */
+    TRN_ISOTP_ERR_TIMEOUT_CR,    /**< N_Cr: no consecutive frame within n_cr_ms: message aborted */
+    TRN_ISOTP_ERR_UNEXPECTED_FC, /**< flow control on the data ID (ignored) */
+    TRN_ISOTP_ERR_SHORT_CF, /**< a consecutive frame other than the last with < 7 data bytes: message aborted */
     TRN_ISOTP_ERR_COUNT
 } trn_isotp_err_t;
 
 /** Result flags of one receiver step. */
 #define TRN_ISOTP_EV_MESSAGE 0x01u /**< a complete message is in buf[0..msg_len) */
 #define TRN_ISOTP_EV_SEND_FC 0x02u /**< transmit fc[0..fc_dlc) on the flow-control ID now */
-#define TRN_ISOTP_EV_ERROR   0x04u /**< error holds what went wrong (counted) */
+#define TRN_ISOTP_EV_ERROR 0x04u   /**< error holds what went wrong (counted) */
 
 /** What one receiver step produced. */
 typedef struct {
-    uint8_t events;     /**< TRN_ISOTP_EV_* */
-    uint8_t error;      /**< trn_isotp_err_t (when EV_ERROR) */
-    uint16_t msg_len;   /**< when EV_MESSAGE */
-    uint8_t fc[8];      /**< when EV_SEND_FC */
-    uint8_t fc_dlc;     /**< when EV_SEND_FC: 3 */
+    uint8_t events;   /**< TRN_ISOTP_EV_* */
+    uint8_t error;    /**< trn_isotp_err_t (when EV_ERROR) */
+    uint16_t msg_len; /**< when EV_MESSAGE */
+    uint8_t fc[8];    /**< when EV_SEND_FC */
+    uint8_t fc_dlc;   /**< when EV_SEND_FC: 3 */
 } trn_isotp_rx_result_t;
 
 /** Receiver states. */
-typedef enum {
-    TRN_ISOTP_RX_IDLE = 0,
-    TRN_ISOTP_RX_RECEIVING = 1
-} trn_isotp_rx_state_t;
+typedef enum { TRN_ISOTP_RX_IDLE = 0, TRN_ISOTP_RX_RECEIVING = 1 } trn_isotp_rx_state_t;
 
 /**
  * A receiver: configuration, state and counters, all owned by the caller.
  * Initialize with trn_isotp_rx_init; do not write the fields afterwards.
  */
 typedef struct {
-    uint8_t *buf;          /**< caller memory of cap bytes; holds the message being received */
-    uint16_t cap;          /**< buffer bytes, 7..4095 */
-    uint8_t bs;            /**< block size we announce (0 = all CFs without further FC) */
-    uint8_t stmin;         /**< STmin raw byte we announce */
-    uint32_t n_cr_ms;      /**< N_Cr timeout: longest gap between frames of a message */
-    uint8_t state;         /**< trn_isotp_rx_state_t */
-    uint8_t next_sn;       /**< expected CF sequence number */
-    uint8_t block_left;    /**< CFs left in the current block (bs > 0) */
-    uint16_t msg_len;      /**< length of the message being received */
-    uint16_t got;          /**< bytes received so far */
-    uint32_t last_ms;      /**< time of the last accepted frame */
-    uint32_t n_messages;   /**< complete messages delivered */
+    uint8_t *buf;        /**< caller memory of cap bytes; holds the message being received */
+    uint16_t cap;        /**< buffer bytes, 7..4095 */
+    uint8_t bs;          /**< block size we announce (0 = all CFs without further FC) */
+    uint8_t stmin;       /**< STmin raw byte we announce */
+    uint32_t n_cr_ms;    /**< N_Cr timeout: longest gap between frames of a message */
+    uint8_t state;       /**< trn_isotp_rx_state_t */
+    uint8_t next_sn;     /**< expected CF sequence number */
+    uint8_t block_left;  /**< CFs left in the current block (bs > 0) */
+    uint16_t msg_len;    /**< length of the message being received */
+    uint16_t got;        /**< bytes received so far */
+    uint32_t last_ms;    /**< time of the last accepted frame */
+    uint32_t n_messages; /**< complete messages delivered */
     uint32_t err_count[TRN_ISOTP_ERR_COUNT]; /**< per trn_isotp_err_t */
 } trn_isotp_rx_t;
 
@@ -157,8 +154,8 @@ uint16_t trn_isotp_frame_count(size_t len);
  * @param[out] dlc   bytes used in out.
  * @retval TRN_OK, TRN_E_NULL, TRN_E_SIZE (len 0 or > 4095), TRN_E_RANGE (index too large)
  */
-trn_status_t trn_isotp_encode_frame(const uint8_t *msg, size_t len, uint16_t index,
-                                    uint8_t out[8], uint8_t *dlc);
+trn_status_t trn_isotp_encode_frame(const uint8_t *msg, size_t len, uint16_t index, uint8_t out[8],
+                                    uint8_t *dlc);
 
 /**
  * @brief Encode a flow-control frame (3 bytes).
@@ -169,7 +166,8 @@ trn_status_t trn_isotp_encode_frame(const uint8_t *msg, size_t len, uint16_t ind
  * @param[out] dlc   3.
  * @retval TRN_OK, TRN_E_NULL, TRN_E_ARG (fs > 2)
  */
-trn_status_t trn_isotp_encode_fc(uint8_t fs, uint8_t bs, uint8_t stmin, uint8_t out[8], uint8_t *dlc);
+trn_status_t trn_isotp_encode_fc(uint8_t fs, uint8_t bs, uint8_t stmin, uint8_t out[8],
+                                 uint8_t *dlc);
 
 /**
  * @brief STmin byte to microseconds: 0x00..0x7F are milliseconds,
@@ -230,10 +228,10 @@ const char *trn_isotp_err_name(trn_isotp_err_t err);
 /** Named sender errors (index into trn_isotp_tx_t.err_count). */
 typedef enum {
     TRN_ISOTP_TX_ERR_NONE = 0,
-    TRN_ISOTP_TX_ERR_TIMEOUT_BS,    /**< N_Bs: no flow control within n_bs_ms: message aborted */
-    TRN_ISOTP_TX_ERR_WFT_OVERRUN,   /**< more consecutive FC WAIT than max_wft: message aborted */
-    TRN_ISOTP_TX_ERR_OVERFLOW,      /**< the receiver answered FC overflow: message aborted */
-    TRN_ISOTP_TX_ERR_INVALID_FC,    /**< undecodable FC (reserved flow status, short): message aborted */
+    TRN_ISOTP_TX_ERR_TIMEOUT_BS,  /**< N_Bs: no flow control within n_bs_ms: message aborted */
+    TRN_ISOTP_TX_ERR_WFT_OVERRUN, /**< more consecutive FC WAIT than max_wft: message aborted */
+    TRN_ISOTP_TX_ERR_OVERFLOW,    /**< the receiver answered FC overflow: message aborted */
+    TRN_ISOTP_TX_ERR_INVALID_FC, /**< undecodable FC (reserved flow status, short): message aborted */
     TRN_ISOTP_TX_ERR_UNEXPECTED_FC, /**< FC while not waiting for one (ignored) */
     TRN_ISOTP_TX_ERR_COUNT
 } trn_isotp_tx_err_t;
@@ -248,16 +246,17 @@ typedef enum {
 
 /** Result flags of one sender step. */
 #define TRN_ISOTP_TX_EV_FRAME 0x01u /**< transmit frame[0..dlc) on the data ID now */
-#define TRN_ISOTP_TX_EV_DONE  0x02u /**< the last frame of the message is in this result */
-#define TRN_ISOTP_TX_EV_ERROR 0x04u /**< error holds what went wrong (counted); message aborted unless UNEXPECTED_FC */
+#define TRN_ISOTP_TX_EV_DONE 0x02u  /**< the last frame of the message is in this result */
+#define TRN_ISOTP_TX_EV_ERROR \
+    0x04u /**< error holds what went wrong (counted); message aborted unless UNEXPECTED_FC */
 
 /** What one sender step produced. */
 typedef struct {
-    uint8_t events;    /**< TRN_ISOTP_TX_EV_* */
-    uint8_t error;     /**< trn_isotp_tx_err_t */
-    uint8_t frame[8];  /**< when EV_FRAME */
-    uint8_t dlc;       /**< when EV_FRAME */
-    uint32_t wake_us;  /**< when nothing was sent: the earliest time the next step can act */
+    uint8_t events;   /**< TRN_ISOTP_TX_EV_* */
+    uint8_t error;    /**< trn_isotp_tx_err_t */
+    uint8_t frame[8]; /**< when EV_FRAME */
+    uint8_t dlc;      /**< when EV_FRAME */
+    uint32_t wake_us; /**< when nothing was sent: the earliest time the next step can act */
 } trn_isotp_tx_result_t;
 
 /**
@@ -266,20 +265,20 @@ typedef struct {
  * Time is the caller's microsecond clock (wraps handled; 71 min period).
  */
 typedef struct {
-    uint32_t n_bs_us;       /**< N_Bs timeout waiting for an FC */
-    uint8_t max_wft;        /**< most consecutive FC WAIT accepted */
-    uint8_t state;          /**< trn_isotp_tx_state_t */
-    const uint8_t *msg;     /**< the message being sent */
-    uint16_t len;           /**< its length */
-    uint16_t n_frames;      /**< trn_isotp_frame_count(len) */
-    uint16_t next;          /**< next frame index */
-    uint8_t bs;             /**< block size of the last FC CTS */
-    uint8_t block_left;     /**< CFs left in the block (bs > 0) */
-    uint8_t wft;            /**< consecutive FC WAIT so far */
-    uint8_t paced;          /**< 1 when the next CF must respect STmin */
-    uint32_t stmin_us;      /**< separation time of the last FC CTS */
-    uint32_t t_ref_us;      /**< FF/block end time (WAIT_FC) or last CF time (SENDING) */
-    uint32_t n_messages;    /**< messages sent completely */
+    uint32_t n_bs_us;    /**< N_Bs timeout waiting for an FC */
+    uint8_t max_wft;     /**< most consecutive FC WAIT accepted */
+    uint8_t state;       /**< trn_isotp_tx_state_t */
+    const uint8_t *msg;  /**< the message being sent */
+    uint16_t len;        /**< its length */
+    uint16_t n_frames;   /**< trn_isotp_frame_count(len) */
+    uint16_t next;       /**< next frame index */
+    uint8_t bs;          /**< block size of the last FC CTS */
+    uint8_t block_left;  /**< CFs left in the block (bs > 0) */
+    uint8_t wft;         /**< consecutive FC WAIT so far */
+    uint8_t paced;       /**< 1 when the next CF must respect STmin */
+    uint32_t stmin_us;   /**< separation time of the last FC CTS */
+    uint32_t t_ref_us;   /**< FF/block end time (WAIT_FC) or last CF time (SENDING) */
+    uint32_t n_messages; /**< messages sent completely */
     uint32_t err_count[TRN_ISOTP_TX_ERR_COUNT]; /**< per trn_isotp_tx_err_t */
 } trn_isotp_tx_t;
 

@@ -22,31 +22,27 @@ extern "C" {
 #endif
 
 /** Monitor states. */
-typedef enum {
-    TRN_LINK_NEVER_SEEN = 0,
-    TRN_LINK_ALIVE = 1,
-    TRN_LINK_SILENT = 2
-} trn_link_state_t;
+typedef enum { TRN_LINK_NEVER_SEEN = 0, TRN_LINK_ALIVE = 1, TRN_LINK_SILENT = 2 } trn_link_state_t;
 
 /** Event flags of one call. */
-#define TRN_LINK_EV_FIRST     0x01u /**< first frame ever */
-#define TRN_LINK_EV_GAP       0x02u /**< frames were lost before this one (see gap) */
-#define TRN_LINK_EV_REPEAT    0x04u /**< the same counter again (a repeated frame) */
-#define TRN_LINK_EV_SILENT    0x08u /**< the node just became silent */
+#define TRN_LINK_EV_FIRST 0x01u     /**< first frame ever */
+#define TRN_LINK_EV_GAP 0x02u       /**< frames were lost before this one (see gap) */
+#define TRN_LINK_EV_REPEAT 0x04u    /**< the same counter again (a repeated frame) */
+#define TRN_LINK_EV_SILENT 0x08u    /**< the node just became silent */
 #define TRN_LINK_EV_RECOVERED 0x10u /**< a frame after a silence */
 
 /** A monitor; fields are read-only for the caller after init. */
 typedef struct {
-    uint32_t timeout_ms;    /**< silence threshold */
-    uint8_t state;          /**< trn_link_state_t */
-    uint8_t last_counter;   /**< counter of the last frame */
-    uint32_t last_ms;       /**< time of the last frame */
-    uint32_t n_frames;      /**< frames fed */
-    uint32_t n_lost;        /**< frames lost, summed over gaps (while alive) */
-    uint32_t n_gaps;        /**< gap events */
-    uint32_t n_repeats;     /**< repeat events */
-    uint32_t n_silences;    /**< silent events */
-    uint32_t n_recoveries;  /**< recovered events */
+    uint32_t timeout_ms;   /**< silence threshold */
+    uint8_t state;         /**< trn_link_state_t */
+    uint8_t last_counter;  /**< counter of the last frame */
+    uint32_t last_ms;      /**< time of the last frame */
+    uint32_t n_frames;     /**< frames fed */
+    uint32_t n_lost;       /**< frames lost, summed over gaps (while alive) */
+    uint32_t n_gaps;       /**< gap events */
+    uint32_t n_repeats;    /**< repeat events */
+    uint32_t n_silences;   /**< silent events */
+    uint32_t n_recoveries; /**< recovered events */
 } trn_link_mon_t;
 
 /**
@@ -66,8 +62,8 @@ trn_status_t trn_link_mon_init(trn_link_mon_t *m, uint32_t timeout_ms);
  * @retval TRN_E_NULL  m NULL
  * @retval TRN_E_SEQ   GAP or REPEAT
  */
-trn_status_t trn_link_mon_frame(trn_link_mon_t *m, uint8_t counter, uint32_t now_ms, uint8_t *events,
-                                uint8_t *gap);
+trn_status_t trn_link_mon_frame(trn_link_mon_t *m, uint8_t counter, uint32_t now_ms,
+                                uint8_t *events, uint8_t *gap);
 
 /**
  * @brief Advance time: ALIVE becomes SILENT (once) after timeout_ms without

@@ -43,18 +43,18 @@ extern "C" {
 
 /** One classic CAN data frame (remote frames are not used by trn). */
 typedef struct {
-    uint32_t id;       /**< identifier: <= TRN_LCAN_SFF_MAX, or <= TRN_LCAN_EFF_MAX if extended */
-    uint8_t extended;  /**< 1: 29-bit identifier, 0: 11-bit */
-    uint8_t len;       /**< data bytes, 0..8 */
-    uint8_t data[8];   /**< payload; bytes past len are unspecified on receive */
+    uint32_t id;      /**< identifier: <= TRN_LCAN_SFF_MAX, or <= TRN_LCAN_EFF_MAX if extended */
+    uint8_t extended; /**< 1: 29-bit identifier, 0: 11-bit */
+    uint8_t len;      /**< data bytes, 0..8 */
+    uint8_t data[8];  /**< payload; bytes past len are unspecified on receive */
 } trn_lcan_frame_t;
 
 /** Acceptance filter: a frame passes if (frame id & mask) == (id & mask) and
  * its format (standard/extended) equals `extended`. */
 typedef struct {
-    uint32_t id;       /**< identifier to match, in range for its format */
-    uint32_t mask;     /**< bits that must match, in range for its format */
-    uint8_t extended;  /**< 1: match extended frames only, 0: standard only */
+    uint32_t id;      /**< identifier to match, in range for its format */
+    uint32_t mask;    /**< bits that must match, in range for its format */
+    uint8_t extended; /**< 1: match extended frames only, 0: standard only */
 } trn_lcan_filter_t;
 
 /** Controller state as told by error frames (ISO 11898-1 fault confinement). */
@@ -67,23 +67,23 @@ typedef enum {
 
 /** What the port knows about the bus; updated by every receive call. */
 typedef struct {
-    trn_lcan_state_t state;    /**< state after the last error frame */
-    uint32_t error_frames;     /**< error frames received since open */
-    uint32_t last_error_class; /**< CAN_ERR_* class bits (linux/can/error.h) of the last one */
-    uint8_t last_error_data[8];/**< its 8 data bytes (controller / protocol detail) */
-    uint32_t rx_drops;         /**< frames the kernel dropped on this socket (SO_RXQ_OVFL) */
-    uint32_t ctrl_overflows;   /**< error frames reporting a controller rx/tx overflow */
+    trn_lcan_state_t state;     /**< state after the last error frame */
+    uint32_t error_frames;      /**< error frames received since open */
+    uint32_t last_error_class;  /**< CAN_ERR_* class bits (linux/can/error.h) of the last one */
+    uint8_t last_error_data[8]; /**< its 8 data bytes (controller / protocol detail) */
+    uint32_t rx_drops;          /**< frames the kernel dropped on this socket (SO_RXQ_OVFL) */
+    uint32_t ctrl_overflows;    /**< error frames reporting a controller rx/tx overflow */
 } trn_lcan_bus_t;
 
 /** Configuration of a raw CAN socket. A zeroed struct is not valid (ifname
  * NULL); start from trn_lcan_cfg_default(). */
 typedef struct {
-    const char *ifname;                  /**< interface, e.g. "can0"; 1..TRN_LCAN_IFNAME_MAX chars */
-    const trn_lcan_filter_t *filters;    /**< n_filters filters; NULL with 0 = every data frame */
-    size_t n_filters;                    /**< 0..TRN_LCAN_MAX_FILTERS */
-    int32_t rcvbuf_bytes;                /**< SO_RCVBUF; 0 = kernel default, else 1..(1 << 24) */
-    uint8_t recv_own;                    /**< 1: also receive frames this socket sent (tests) */
-    uint8_t error_frames;                /**< 1 (default): subscribe to all error frames */
+    const char *ifname;               /**< interface, e.g. "can0"; 1..TRN_LCAN_IFNAME_MAX chars */
+    const trn_lcan_filter_t *filters; /**< n_filters filters; NULL with 0 = every data frame */
+    size_t n_filters;                 /**< 0..TRN_LCAN_MAX_FILTERS */
+    int32_t rcvbuf_bytes;             /**< SO_RCVBUF; 0 = kernel default, else 1..(1 << 24) */
+    uint8_t recv_own;                 /**< 1: also receive frames this socket sent (tests) */
+    uint8_t error_frames;             /**< 1 (default): subscribe to all error frames */
 } trn_lcan_cfg_t;
 
 /** An open raw CAN socket. Owned by the caller; open fills it, close empties it. */

@@ -65,13 +65,13 @@ typedef struct {
 /** The open lines (libgpiod 2: one request for the three). Owned by the
  * caller; open fills it, close empties it. */
 typedef struct {
-    struct gpiod_chip *chip;                 /**< NULL when closed */
-    struct gpiod_line_request *request;      /**< power, trigger (outputs), deployed (edges) */
-    struct gpiod_edge_event_buffer *events;  /**< one event, read by wait_deployed */
-    uint32_t power_offset;                   /**< the lines' offsets on the chip */
+    struct gpiod_chip *chip;                /**< NULL when closed */
+    struct gpiod_line_request *request;     /**< power, trigger (outputs), deployed (edges) */
+    struct gpiod_edge_event_buffer *events; /**< one event, read by wait_deployed */
+    uint32_t power_offset;                  /**< the lines' offsets on the chip */
     uint32_t trigger_offset;
     uint32_t deployed_offset;
-    uint32_t pulse_us;                       /**< trigger pulse width */
+    uint32_t pulse_us; /**< trigger pulse width */
 } trn_lgpio_t;
 #else
 /** The open lines. Owned by the caller; open fills it, close empties it. */
