@@ -13,6 +13,7 @@ success radius), the human table, every bad-input class (exit 1 or 2, one line
 experiment) when matplotlib is there. Exit status 0 when every check passes.
 """
 import json
+import math
 import os
 import shutil
 import subprocess
@@ -123,6 +124,36 @@ expect_error(1, "--height-noise-m", "--sensor", "dem", "--height-noise-m", 2)
 expect_error(2, "unknown option", "--bogus")
 expect_error(2, "--trials", "--trials")
 
+
+# ---- heading error (issue 14, item 6) ----------------------------------------------------
+# 0 is the paper's run bit for bit; S > 0 adds the 3-DOF arms on the same localizations,
+# selection counts the lever arm, the window is 3 S by default
+rc, out0, _ = run(*SMALL, "--seed", 5, "--heading-error-deg", 0, "--json")
+check(rc == 0 and out0 == out1, "--heading-error-deg 0 is the default run bit for bit")
+check("heading" not in r, "no heading block without a heading error")
+rc, outh, errh = run(*SMALL, "--seed", 5, "--heading-error-deg", 3, "--json")
+try:
+    rh = json.loads(outh)
+except ValueError:
+    rh = {}
+    check(False, f"heading run: not one JSON object: {outh!r} {errh!r}")
+hd = rh.get("heading", {})
+check(abs(hd.get("error_deg", 0) - 3) < 1e-12 and abs(hd.get("window_deg", 0) - 9) < 1e-9,
+      f"heading block: error 3, window 3 x 3 = 9 deg ({hd})")
+check(abs(hd.get("selection_sigma_heading_rad", 0) - math.radians(3)) < 1e-7, "selection's sigma_heading is the error")
+for arm, base in (("with_selection_3dof", "with_selection"), ("without_selection_3dof", "without_selection")):
+    a3, a2 = hd.get(arm, {}), rh.get(base, {})
+    check(a3.get("localizations") == a2.get("localizations") and a3.get("localizations", 0) > 0,
+          f"{arm}: the same localizations as {base} ({a3.get('localizations')}, {a2.get('localizations')})")
+    check(0 <= a3.get("successes", -1) <= a3.get("localizations", 0), f"{arm}: successes within the localizations")
+rc, outw, _ = run(*SMALL, "--seed", 5, "--heading-error-deg", 3, "--heading-window-deg", 4, "--json")
+check(rc == 0 and abs(json.loads(outw).get("heading", {}).get("window_deg", 0) - 4) < 1e-12, "--heading-window-deg 4")
+rc, outt, _ = run(*SMALL, "--seed", 5, "--heading-error-deg", 3)
+check(rc == 0 and "3-DOF" in outt, "the table shows the 3-DOF arms")
+expect_error(1, "--heading-error-deg", "--heading-error-deg", -1)
+expect_error(1, "--heading-error-deg", "--heading-error-deg", 31)
+expect_error(1, "--heading-error-deg", "--heading-error-deg", "nan")
+expect_error(1, "--heading-window-deg", "--heading-window-deg", 181)
 
 # ---- --dem: the experiment on a given DEM (issue 12, item 7) ----------------------------
 # The generated terrain written by `trn terrain` and handed back as --dem with the

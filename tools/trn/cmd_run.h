@@ -174,6 +174,8 @@ typedef struct {
     long trials, size, band;
     uint64_t seed, tseed;
     double k, dmin, relief, window, prior, spacing, succ, minr, maxr, patch, foot, hnoise;
+    double heading_err,
+        heading_win;      /* --heading-error-deg, --heading-window-deg (0: none, 3 x the error) */
     const char *sensor;   /* "prob" or "dem" */
     const char *dem_path; /* a given DEM, or NULL: the generated terrain */
     int json;

@@ -308,6 +308,13 @@ const char *exp_params_check(const exp_params_t *p)
     if (!(p->success_cells > 0.0 && p->success_cells <= 100.0)) {
         return "success radius must be in (0, 100] cells";
     }
+    if (!(p->heading_error_deg >= 0.0 && p->heading_error_deg <= 30.0)) {
+        return "heading error must be in [0, 30] degrees";
+    }
+    if (!(p->heading_window_deg >= 0.0 &&
+          p->heading_window_deg <= TRN_HEADING_MAX_WINDOW_RAD * 180.0 / EXP_PI)) {
+        return "heading window must be in [0, 180] degrees";
+    }
     return NULL;
 }
 
@@ -337,6 +344,9 @@ typedef struct {
     size_t cap;
     void *sws, *lws, *pws, *lws_raw;
     size_t sws_b, lws_b, pws_b;
+    void *h3ws, *h3ws_raw; /* the 3-DOF search's workspace, grown on demand */
+    size_t h3ws_b;
+    double h3win_rad; /* its half-window; 0: no 3-DOF search */
     float *pvol;
     trn_point_t *pts;
     size_t pts_cap;
@@ -396,6 +406,8 @@ typedef struct {
     int illcond;
     double err_m;
     size_t n_points;
+    double err3_m; /* the 3-DOF search's error (w->h3win_rad > 0) */
+    int illcond3;
 } sense_t;
 
 /* Standard normal from two uniforms (Box-Muller, cosine branch). */
@@ -454,10 +466,48 @@ static int dem_sensor(world_t *w, const trn_window_t *roi, int fx, int fy, exp_r
     return 0;
 }
 
+/* The 3-DOF search (trn_localize_points_heading, +-w->h3win_rad around the
+ * believed heading) on the points just localized in x-y: s->err3_m. */
+static int localize_3dof(world_t *w, size_t n, const trn_window_t *win, int fx, int fy, sense_t *s,
+                         char *err, size_t err_len)
+{
+    trn_heading_cfg_t hc;
+    trn_heading_result_t hr;
+    trn_status_t st;
+    size_t need = trn_localize_heading_workspace_bytes(&w->map, n, win);
+    double ex, ey;
+    if (need == 0) {
+        snprintf(err, err_len, "internal error: 3-DOF workspace refused for %zu points", n);
+        return -1;
+    }
+    if (need > w->h3ws_b) {
+        free(w->h3ws_raw);
+        w->h3ws = alloc16(need, &w->h3ws_raw);
+        w->h3ws_b = w->h3ws == NULL ? 0 : need;
+        if (w->h3ws == NULL) {
+            snprintf(err, err_len, "out of memory for %zu bytes of 3-DOF workspace", need);
+            return -1;
+        }
+    }
+    hc.center_rad = 0.0;
+    hc.window_rad = w->h3win_rad;
+    hc.step_rad = 0.0;
+    st = trn_localize_points_heading(&w->map, w->pts, n, win, &hc, w->h3ws, w->h3ws_b, &hr);
+    if (st != TRN_OK && st != TRN_E_ILLCOND) {
+        snprintf(err, err_len, "trn_localize_points_heading: %s", trn_strerror(st));
+        return -1;
+    }
+    s->illcond3 = st == TRN_E_ILLCOND;
+    ex = (st == TRN_OK ? hr.loc.x : (double)hr.loc.ix) - fx;
+    ey = (st == TRN_OK ? hr.loc.y : (double)hr.loc.iy) - fy;
+    s->err3_m = sqrt(ex * ex + ey * ey) * w->cellf;
+    return 0;
+}
+
 /* Sense the patch centred on (cx, cy) (global cells, the patch actually seen)
  * from the true rover cell (fx, fy), localize in the window around (px, py). */
 static int sense_and_localize(world_t *w, int cx, int cy, int fx, int fy, int px, int py,
-                              exp_rng_t *r, sense_t *s, char *err, size_t err_len)
+                              double dtheta, exp_rng_t *r, sense_t *s, char *err, size_t err_len)
 {
     trn_window_t roi, win;
     trn_vol_f32_t pv;
@@ -507,6 +557,11 @@ sensed:
         s->no_points = 1;
         return 0;
     }
+    /* the heading error: the sensed points turned about the rover */
+    if (dtheta != 0.0 && (st = trn_points_rotate(w->pts, n, dtheta, w->pts)) != TRN_OK) {
+        snprintf(err, err_len, "trn_points_rotate: %s", trn_strerror(st));
+        return -1;
+    }
     if ((st = trn_points_order(w->pts, n, w->pg.nz)) != TRN_OK) {
         snprintf(err, err_len, "trn_points_order: %s", trn_strerror(st));
         return -1;
@@ -539,10 +594,23 @@ sensed:
     ey = (st == TRN_OK ? res.y : (double)res.iy) - fy;
     s->err_m = sqrt(ex * ex + ey * ey) * w->cellf;
     s->ok = 1;
-    return 0;
+    return w->h3win_rad > 0.0 ? localize_3dof(w, n, &win, fx, fy, s, err, err_len) : 0;
 }
 
 /* Tally one localization into an arm and its trial's cluster. */
+static void tally(exp_arm_t *a, const sense_t *s, double success_m, double cell, long *k, double *e,
+                  double *e2);
+
+/* The same localization's 3-DOF result into its arm. */
+static void tally3(exp_arm_t *a, const sense_t *s, double success_m, double cell, long *k,
+                   double *e, double *e2)
+{
+    sense_t s3 = *s;
+    s3.err_m = s->err3_m;
+    s3.illcond = s->illcond3;
+    tally(a, &s3, success_m, cell, k, e, e2);
+}
+
 static void tally(exp_arm_t *a, const sense_t *s, double success_m, double cell, long *k, double *e,
                   double *e2)
 {
@@ -759,6 +827,20 @@ static int world_rules(world_t *w, const exp_params_t *p, exp_result_t *out, cha
     w->scfg.min_separation_m = (float)((double)w->scfg.min_separation_m * f);
     w->scfg.local_sigma.sigma_min_m = (float)((double)w->scfg.local_sigma.sigma_min_m * f);
     w->scfg.local_sigma.k_per_m = (float)((double)w->scfg.local_sigma.k_per_m / f);
+    if (p->heading_error_deg > 0.0) {
+        /* the heading error is known in distribution: selection counts its
+         * lever arm (at most the core's 0.5 rad), and the 3-DOF arms search
+         * +-3 sigma unless a window is given */
+        double s = p->heading_error_deg * EXP_PI / 180.0;
+        w->scfg.sigma_heading_rad = (float)(s < (double)TRN_SELECT_MAX_SIGMA_HEADING_RAD
+                                                ? s
+                                                : (double)TRN_SELECT_MAX_SIGMA_HEADING_RAD);
+        w->h3win_rad = p->heading_window_deg > 0.0 ? p->heading_window_deg * EXP_PI / 180.0
+                                                   : 3.0 * s;
+        w->h3win_rad = w->h3win_rad < TRN_HEADING_MAX_WINDOW_RAD ? w->h3win_rad
+                                                                 : TRN_HEADING_MAX_WINDOW_RAD;
+        out->heading_window_deg = w->h3win_rad * 180.0 / EXP_PI;
+    }
     out->scfg = w->scfg;
     if ((st = trn_select_cfg_check(&w->scfg, w->cellf)) != TRN_OK) {
         snprintf(err, err_len,
@@ -860,6 +942,8 @@ static int build_world(world_t *w, const exp_params_t *p, exp_result_t *out, voi
 typedef struct {
     long *mw, *kw, *mo, *ko;
     double *ew, *e2w, *eo, *e2o;
+    long *kw3, *ko3; /* the 3-DOF arms (same localizations per trial) */
+    double *ew3, *e2w3, *eo3, *e2o3;
 } clusters_t;
 
 static int clusters_alloc(clusters_t *c, size_t nt)
@@ -872,7 +956,14 @@ static int clusters_alloc(clusters_t *c, size_t nt)
     c->e2w = calloc(nt, sizeof *c->e2w);
     c->eo = calloc(nt, sizeof *c->eo);
     c->e2o = calloc(nt, sizeof *c->e2o);
-    return c->mw && c->kw && c->mo && c->ko && c->ew && c->e2w && c->eo && c->e2o;
+    c->kw3 = calloc(nt, sizeof *c->kw3);
+    c->ko3 = calloc(nt, sizeof *c->ko3);
+    c->ew3 = calloc(nt, sizeof *c->ew3);
+    c->e2w3 = calloc(nt, sizeof *c->e2w3);
+    c->eo3 = calloc(nt, sizeof *c->eo3);
+    c->e2o3 = calloc(nt, sizeof *c->e2o3);
+    return c->mw && c->kw && c->mo && c->ko && c->ew && c->e2w && c->eo && c->e2o && c->kw3 &&
+           c->ko3 && c->ew3 && c->e2w3 && c->eo3 && c->e2o3;
 }
 
 static void clusters_free(clusters_t *c)
@@ -885,11 +976,18 @@ static void clusters_free(clusters_t *c)
     free(c->e2w);
     free(c->eo);
     free(c->e2o);
+    free(c->kw3);
+    free(c->ko3);
+    free(c->ew3);
+    free(c->e2w3);
+    free(c->eo3);
+    free(c->e2o3);
 }
 
 /* One trial's draw: start S, finish F, prior P = F + O, the midpoint M of S and P (cells). */
 typedef struct {
     int sx, sy, fx, fy, px, py, mx, my, ox, oy;
+    double dtheta; /* the heading error of the trial's sensing, rad (0 without one) */
 } trial_t;
 
 /* 1-2: start, finish, prior; the nine fixed targets must be sensible. 1 if
@@ -951,6 +1049,10 @@ static int trial_with(world_t *w, const trial_t *d, long t, exp_rng_t *r, exp_re
     if (st == TRN_E_NOTARGET) {
         out->with.no_target++;
         out->with.localizations++;
+        if (w->h3win_rad > 0.0) {
+            out->with3.no_target++;
+            out->with3.localizations++;
+        }
         return 0;
     }
     if (st != TRN_OK) {
@@ -964,12 +1066,16 @@ static int trial_with(world_t *w, const trial_t *d, long t, exp_rng_t *r, exp_re
         return -1;
     }
     out->with.mean_range_m += (double)cand->range_m;
-    if (sense_and_localize(w, cand->x - d->ox, cand->y - d->oy, d->fx, d->fy, d->px, d->py, r, &s,
-                           err, err_len) != 0) {
+    if (sense_and_localize(w, cand->x - d->ox, cand->y - d->oy, d->fx, d->fy, d->px, d->py,
+                           d->dtheta, r, &s, err, err_len) != 0) {
         return -1;
     }
     tally(&out->with, &s, p->success_cells * p->cell_m, p->cell_m, &c->kw[t], &c->ew[t],
           &c->e2w[t]);
+    if (w->h3win_rad > 0.0) {
+        tally3(&out->with3, &s, p->success_cells * p->cell_m, p->cell_m, &c->kw3[t], &c->ew3[t],
+               &c->e2w3[t]);
+    }
     return 0;
 }
 
@@ -986,12 +1092,16 @@ static int trial_without(world_t *w, const trial_t *d, long t, exp_rng_t *r, exp
         out->without.mean_range_m += sqrt((double)(tx - d->px) * (tx - d->px) +
                                           (double)(ty - d->py) * (ty - d->py)) *
                                      p->cell_m;
-        if (sense_and_localize(w, tx - d->ox, ty - d->oy, d->fx, d->fy, d->px, d->py, r, &s, err,
-                               err_len) != 0) {
+        if (sense_and_localize(w, tx - d->ox, ty - d->oy, d->fx, d->fy, d->px, d->py, d->dtheta, r,
+                               &s, err, err_len) != 0) {
             return -1;
         }
         tally(&out->without, &s, p->success_cells * p->cell_m, p->cell_m, &c->ko[t], &c->eo[t],
               &c->e2o[t]);
+        if (w->h3win_rad > 0.0) {
+            tally3(&out->without3, &s, p->success_cells * p->cell_m, p->cell_m, &c->ko3[t],
+                   &c->eo3[t], &c->e2o3[t]);
+        }
     }
     return 0;
 }
@@ -1009,6 +1119,14 @@ static void exp_summarise(const exp_params_t *p, const clusters_t *c, double sum
     out->without.mean_range_m /= (double)out->without.localizations;
     out->without.mean_points /= (double)out->without.localizations;
     out->mean_traverse_m = sum_trav / (double)p->trials;
+    if (out->with3.localizations > 0) {
+        exp_cluster_stats(c->mw, c->kw3, c->ew3, c->e2w3, p->trials, &out->with3.st);
+        exp_cluster_stats(c->mo, c->ko3, c->eo3, c->e2o3, p->trials, &out->without3.st);
+        out->with3.mean_range_m = out->with.mean_range_m;
+        out->with3.mean_points = out->with.mean_points;
+        out->without3.mean_range_m = out->without.mean_range_m;
+        out->without3.mean_points = out->without.mean_points;
+    }
 }
 
 int exp_run(const exp_params_t *p, exp_result_t *out, exp_progress_fn progress, void *ctx,
@@ -1050,6 +1168,9 @@ int exp_run(const exp_params_t *p, exp_result_t *out, exp_progress_fn progress, 
                      t, (long)EXP_MAX_DRAWS, w.has_nodata ? ", or too much of it no-data" : "");
             goto done;
         }
+        if (p->heading_error_deg > 0.0) {
+            d.dtheta = rng_normal(&r) * p->heading_error_deg * EXP_PI / 180.0;
+        }
         sum_trav += sqrt((double)(d.sx - d.fx) * (d.sx - d.fx) +
                          (double)(d.sy - d.fy) * (d.sy - d.fy)) *
                     p->cell_m;
@@ -1073,6 +1194,7 @@ done:
     free(w.ldem);
     free(w.lhp);
     free(w.lws_raw);
+    free(w.h3ws_raw);
     free(w.cands);
     free(w.pts);
     clusters_free(&c);

@@ -123,6 +123,14 @@ typedef struct {
     double min_range_m, max_range_m, patch_m, footprint_m;
     double global_sigma_m, global_sigma_k; /* eq. 8 model; < 0: default (scaled) */
     const float *global_error; /* per-cell eq. 8 sigma, m, the DEM's grid (NaN: model) or NULL */
+    /* Heading error (issue 14): each trial's local maps are turned about the
+     * rover by an error drawn N(0, heading_error_deg) before matching; besides
+     * the x-y search (the paper's, the arms with / without), the 3-DOF search
+     * trn_localize_points_heading over +-heading_window_deg (0: 3 x the error,
+     * at most TRN_HEADING_MAX_WINDOW_RAD) localizes the same points (arms
+     * with3 / without3). 0 (the default): no error, no 3-DOF arms; the
+     * paper's experiment bit for bit. */
+    double heading_error_deg, heading_window_deg;
 } exp_params_t;
 
 /* Sensor models. PROB: the paper's, voxels sampled from the probability map
@@ -153,6 +161,8 @@ typedef struct {
 
 typedef struct {
     exp_arm_t with, without;
+    exp_arm_t with3, without3; /* the 3-DOF search on the same points (heading_error_deg > 0) */
+    double heading_window_deg; /* the 3-DOF search's half-window used (0 without a heading error) */
     size_t rocks;
     double d_min_m;         /* smallest rock drawn */
     long draws;             /* (S, F, offset) draws, accepted ones included */
