@@ -236,6 +236,27 @@ r = run_json("localize", "--dem", p("flat.tif"), "--local", p("flat_local.tif"),
 check(r.get("status") == "ill_conditioned" and r.get("sigma_x_m", 0) is None and r.get("sigma_y_m", 0) is None,
       f"localize on a plain: ill_conditioned with null sigmas: {r}")
 
+# A map that repeats every 3 cells east-west: the match is as good 3 cells either side, the
+# failure probability about 2/3, so the default acceptance limit (0.05 with auto) answers
+# "ambiguous" (exit 0, everything reported); --max-failure-prob 1 accepts the same answer.
+yy, xx = np.mgrid[0:96, 0:96]
+per = (0.3 * np.sin(2 * np.pi * xx / 3.0) + 0.4 * np.sin(0.37 * yy) + 0.15 * np.cos(0.61 * yy)).astype(np.float32)
+write_raster(p("periodic.tif"), per, (0.0, CELL, 0.0, 9.6, 0.0, -CELL))
+write_raster(p("periodic_local.tif"), per[28:69, 28:69].copy(), (-2.05, CELL, 0.0, 2.05, 0.0, -CELL))
+pargs = ["--dem", p("periodic.tif"), "--local", p("periodic_local.tif"), "--prior", "4.85,4.75", "--window-m", "0.4"]
+ra = run_json("localize", *pargs, "--json")
+check(ra.get("status") == "ambiguous" and 0.05 < ra.get("failure_probability", 0) < 0.9,
+      f"localize on a periodic map: ambiguous: {ra.get('status')} {ra.get('failure_probability')}")
+check(abs(ra.get("map_config", {}).get("max_failure_prob", 0) - 0.05) < 1e-7, "auto's acceptance limit 0.05 in the JSON")
+ro = run_json("localize", *pargs, "--max-failure-prob", "1", "--json")
+check(ro.get("status") == "ok" and ro.get("x_m") == ra.get("x_m") and
+      ro.get("failure_probability") == ra.get("failure_probability"),
+      f"--max-failure-prob 1 accepts the same answer: {ro.get('status')}")
+rp = run_json("localize", *pargs, "--map-config", "paper", "--json")
+check(rp.get("map_config", {}).get("max_failure_prob") == 1, "the paper's configuration never flags (limit 1)")
+for bad, why in (("0", "out of range"), ("1.5", "out of range"), ("nan", "not a finite number")):
+    expect_error(1, why, "localize", *pargs, "--max-failure-prob", bad)
+
 # ---- localize: bad input ------------------------------------------------------
 common = ["--local", local_tif, "--prior", prior]
 expect_error(1, "--dem: cannot read", "localize", "--dem", p("missing.tif"), *common)
