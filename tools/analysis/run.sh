@@ -8,10 +8,13 @@
 #   2. cppcheck without MISRA over the rest of port/ (OS code).
 #   3. clang-tidy (Debian, LLVM 14) over src/ and port/ with the checks in
 #      CHECKS below.
-#   3b. the host tools (every C file under tools/: trn, support, bench, sim,
-#      can, stack's test fixture): cppcheck without MISRA (host programs, not
-#      flight code) and clang-tidy with the same CHECKS less the deviations
-#      scoped to tools/ (deviations.txt), one process per file.
+#   3b. host code, every other C file of the tree: the host tools (tools/:
+#      trn, support, bench, sim, can, stack's test fixture), the tests
+#      (tests/**: unit, support, cli, fuzz, integration, consumer, abi, doc)
+#      and the Python extension (python/trn_py.c): cppcheck without MISRA
+#      (host programs, not flight code) and clang-tidy with the same CHECKS
+#      less the deviations scoped to a path under tools/, tests/ or python/
+#      (deviations.txt), one process per file.
 #   4. no assert()/NDEBUG in the core: argument checks are plain code,
 #      compiled in every build type.
 #   5. tools/analysis/retval_audit.py: every status a public header documents
