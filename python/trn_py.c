@@ -35,10 +35,10 @@
 #include "trn/version.h"
 
 typedef struct {
-  cmd_localize_ctx_t loc;
-  char *loc_key; /* NULL: loc not prepared */
-  selmap_t sel;
-  char *sel_key; /* NULL: sel not prepared */
+    cmd_localize_ctx_t loc;
+    char *loc_key; /* NULL: loc not prepared */
+    selmap_t sel;
+    char *sel_key; /* NULL: sel not prepared */
 } trn_py_map_t;
 
 /* Declared here: the ABI is this file (the Python side mirrors it). */
@@ -46,10 +46,13 @@ const char *trn_py_version(void);
 trn_py_map_t *trn_py_map_new(void);
 void trn_py_map_free(trn_py_map_t *m);
 void trn_py_free(char *s);
-int trn_py_localize(trn_py_map_t *m, int argc, char **argv, const char *key, char **json, char *err, size_t err_len);
-int trn_py_select(trn_py_map_t *m, int argc, char **argv, const char *key, char **json, char *err, size_t err_len);
-int trn_py_field(trn_py_map_t *m, int argc, char **argv, const char *key, trn_field_progress_fn_t progress,
-                 void *progress_user, char **json, char *err, size_t err_len);
+int trn_py_localize(trn_py_map_t *m, int argc, char **argv, const char *key, char **json, char *err,
+                    size_t err_len);
+int trn_py_select(trn_py_map_t *m, int argc, char **argv, const char *key, char **json, char *err,
+                  size_t err_len);
+int trn_py_field(trn_py_map_t *m, int argc, char **argv, const char *key,
+                 trn_field_progress_fn_t progress, void *progress_user, char **json, char *err,
+                 size_t err_len);
 
 enum { PY_LOCALIZE, PY_SELECT, PY_FIELD };
 
@@ -59,179 +62,191 @@ const char *trn_py_version(void) { return TRN_VERSION_STRING; }
 
 trn_py_map_t *trn_py_map_new(void) { return calloc(1, sizeof(trn_py_map_t)); }
 
-static void drop_loc(trn_py_map_t *m) {
-  if (m->loc_key != NULL) {
-    cmd_localize_ctx_free(&m->loc);
-    free(m->loc_key);
-    m->loc_key = NULL;
-  }
+static void drop_loc(trn_py_map_t *m)
+{
+    if (m->loc_key != NULL) {
+        cmd_localize_ctx_free(&m->loc);
+        free(m->loc_key);
+        m->loc_key = NULL;
+    }
 }
 
-static void drop_sel(trn_py_map_t *m) {
-  if (m->sel_key != NULL) {
-    selmap_free(&m->sel);
-    free(m->sel_key);
-    m->sel_key = NULL;
-  }
+static void drop_sel(trn_py_map_t *m)
+{
+    if (m->sel_key != NULL) {
+        selmap_free(&m->sel);
+        free(m->sel_key);
+        m->sel_key = NULL;
+    }
 }
 
-void trn_py_map_free(trn_py_map_t *m) {
-  if (m != NULL) {
-    drop_loc(m);
-    drop_sel(m);
-    free(m);
-  }
+void trn_py_map_free(trn_py_map_t *m)
+{
+    if (m != NULL) {
+        drop_loc(m);
+        drop_sel(m);
+        free(m);
+    }
 }
 
 void trn_py_free(char *s) { free(s); }
 
 /* The message text without "trn <cmd>: " and the trailing newline, into err. */
-static void set_message(const char *msg, char *err, size_t err_len) {
-  const char *s = msg;
-  size_t n;
-  if (strncmp(s, "trn ", 4) == 0 && strstr(s, ": ") != NULL) {
-    s = strstr(s, ": ") + 2;
-  }
-  n = strcspn(s, "\n");
-  if (n >= err_len) {
-    n = err_len - 1;
-  }
-  memcpy(err, s, n);
-  err[n] = '\0';
+static void set_message(const char *msg, char *err, size_t err_len)
+{
+    const char *s = msg;
+    size_t n;
+    if (strncmp(s, "trn ", 4) == 0 && strstr(s, ": ") != NULL) {
+        s = strstr(s, ": ") + 2;
+    }
+    n = strcspn(s, "\n");
+    if (n >= err_len) {
+        n = err_len - 1;
+    }
+    memcpy(err, s, n);
+    err[n] = '\0';
 }
 
 /* The command's parser into p (defaults first), its messages caught. */
-static int parse_cmd(int which, int argc, char **argv, void *p, char *err, size_t err_len) {
-  char *buf = NULL;
-  size_t n = 0;
-  FILE *f;
-  int rc;
-  pthread_mutex_lock(&parse_lock);
-  f = open_memstream(&buf, &n);
-  cli_set_message_stream(f);
-  if (which == PY_LOCALIZE) {
-    cmd_localize_params_default(p);
-    rc = cmd_localize_parse(argc, argv, p);
-  } else if (which == PY_SELECT) {
-    cmd_select_params_default(p);
-    rc = cmd_select_parse(argc, argv, p);
-  } else {
-    cmd_field_params_default(p);
-    rc = cmd_field_parse(argc, argv, p);
-  }
-  cli_set_message_stream(NULL);
-  if (f != NULL) {
-    fclose(f);
-  }
-  pthread_mutex_unlock(&parse_lock);
-  if (rc == CLI_HELP) {
-    snprintf(err, err_len, "--help is not an option here");
-    rc = CLI_USAGE;
-  } else if (rc != CLI_OK) {
-    set_message(buf != NULL && n > 0 ? buf : "invalid arguments", err, err_len);
-  }
-  free(buf);
-  return rc;
+static int parse_cmd(int which, int argc, char **argv, void *p, char *err, size_t err_len)
+{
+    char *buf = NULL;
+    size_t n = 0;
+    FILE *f;
+    int rc;
+    pthread_mutex_lock(&parse_lock);
+    f = open_memstream(&buf, &n);
+    cli_set_message_stream(f);
+    if (which == PY_LOCALIZE) {
+        cmd_localize_params_default(p);
+        rc = cmd_localize_parse(argc, argv, p);
+    } else if (which == PY_SELECT) {
+        cmd_select_params_default(p);
+        rc = cmd_select_parse(argc, argv, p);
+    } else {
+        cmd_field_params_default(p);
+        rc = cmd_field_parse(argc, argv, p);
+    }
+    cli_set_message_stream(NULL);
+    if (f != NULL) {
+        fclose(f);
+    }
+    pthread_mutex_unlock(&parse_lock);
+    if (rc == CLI_HELP) {
+        snprintf(err, err_len, "--help is not an option here");
+        rc = CLI_USAGE;
+    } else if (rc != CLI_OK) {
+        set_message(buf != NULL && n > 0 ? buf : "invalid arguments", err, err_len);
+    }
+    free(buf);
+    return rc;
 }
 
 /* A memory stream for a JSON report; *json gets the text after close_json. */
-static FILE *open_json(char **json, size_t *n, char *err, size_t err_len) {
-  FILE *f;
-  *json = NULL;
-  f = open_memstream(json, n);
-  if (f == NULL) {
-    snprintf(err, err_len, "cannot open a memory stream for the result");
-  }
-  return f;
+static FILE *open_json(char **json, size_t *n, char *err, size_t err_len)
+{
+    FILE *f;
+    *json = NULL;
+    f = open_memstream(json, n);
+    if (f == NULL) {
+        snprintf(err, err_len, "cannot open a memory stream for the result");
+    }
+    return f;
 }
 
 int trn_py_localize(trn_py_map_t *m, int argc, char **argv, const char *key, char **json, char *err,
-                    size_t err_len) {
-  cmd_localize_params_t p;
-  cmd_localize_out_t o;
-  size_t n;
-  FILE *f;
-  int rc = parse_cmd(PY_LOCALIZE, argc, argv, &p, err, err_len);
-  *json = NULL;
-  if (rc != CLI_OK) {
-    return rc;
-  }
-  if (p.batch_path != NULL) {
-    snprintf(err, err_len, "--batch is for the command line; call localize once per case");
-    return CLI_USAGE;
-  }
-  if (m->loc_key == NULL || strcmp(m->loc_key, key) != 0) {
-    drop_loc(m);
-    rc = cmd_localize_prepare(&p, &m->loc, err, err_len);
-    m->loc_key = rc == CLI_OK ? strdup(key) : NULL;
-    if (rc != CLI_OK || m->loc_key == NULL) {
-      cmd_localize_ctx_free(&m->loc);
-      return rc != CLI_OK ? rc : CLI_BAD_INPUT;
+                    size_t err_len)
+{
+    cmd_localize_params_t p;
+    cmd_localize_out_t o;
+    size_t n;
+    FILE *f;
+    int rc = parse_cmd(PY_LOCALIZE, argc, argv, &p, err, err_len);
+    *json = NULL;
+    if (rc != CLI_OK) {
+        return rc;
     }
-  }
-  rc = cmd_localize_run(&m->loc, p.local_path, p.prior, p.window_m, &o, err, err_len);
-  if (rc == CLI_OK && (f = open_json(json, &n, err, err_len)) != NULL) {
-    cmd_localize_report_json(f, &m->loc, p.local_path, p.prior, p.window_m, &o, 0);
-    fclose(f);
-  }
-  return rc == CLI_OK && *json == NULL ? CLI_BAD_INPUT : rc;
+    if (p.batch_path != NULL) {
+        snprintf(err, err_len, "--batch is for the command line; call localize once per case");
+        return CLI_USAGE;
+    }
+    if (m->loc_key == NULL || strcmp(m->loc_key, key) != 0) {
+        drop_loc(m);
+        rc = cmd_localize_prepare(&p, &m->loc, err, err_len);
+        m->loc_key = rc == CLI_OK ? strdup(key) : NULL;
+        if (rc != CLI_OK || m->loc_key == NULL) {
+            cmd_localize_ctx_free(&m->loc);
+            return rc != CLI_OK ? rc : CLI_BAD_INPUT;
+        }
+    }
+    rc = cmd_localize_run(&m->loc, p.local_path, p.prior, p.window_m, &o, err, err_len);
+    if (rc == CLI_OK && (f = open_json(json, &n, err, err_len)) != NULL) {
+        cmd_localize_report_json(f, &m->loc, p.local_path, p.prior, p.window_m, &o, 0);
+        fclose(f);
+    }
+    return rc == CLI_OK && *json == NULL ? CLI_BAD_INPUT : rc;
 }
 
 /* The selection map for dem_path and so, prepared again when key changed. */
-static int ensure_sel(trn_py_map_t *m, const char *dem_path, const selmap_opts_t *so, const char *key, char *err,
-                      size_t err_len) {
-  if (m->sel_key != NULL && strcmp(m->sel_key, key) == 0) {
+static int ensure_sel(trn_py_map_t *m, const char *dem_path, const selmap_opts_t *so,
+                      const char *key, char *err, size_t err_len)
+{
+    if (m->sel_key != NULL && strcmp(m->sel_key, key) == 0) {
+        return CLI_OK;
+    }
+    drop_sel(m);
+    if (selmap_prepare(&m->sel, dem_path, so, err, err_len) != 0) {
+        return CLI_BAD_INPUT;
+    }
+    m->sel_key = strdup(key);
+    if (m->sel_key == NULL) {
+        selmap_free(&m->sel);
+        snprintf(err, err_len, "out of memory");
+        return CLI_BAD_INPUT;
+    }
     return CLI_OK;
-  }
-  drop_sel(m);
-  if (selmap_prepare(&m->sel, dem_path, so, err, err_len) != 0) {
-    return CLI_BAD_INPUT;
-  }
-  m->sel_key = strdup(key);
-  if (m->sel_key == NULL) {
-    selmap_free(&m->sel);
-    snprintf(err, err_len, "out of memory");
-    return CLI_BAD_INPUT;
-  }
-  return CLI_OK;
 }
 
-int trn_py_select(trn_py_map_t *m, int argc, char **argv, const char *key, char **json, char *err, size_t err_len) {
-  cmd_select_params_t p;
-  cmd_select_result_t r;
-  size_t n;
-  FILE *f;
-  int rc = parse_cmd(PY_SELECT, argc, argv, &p, err, err_len);
-  *json = NULL;
-  if (rc != CLI_OK || (rc = ensure_sel(m, p.dem_path, &p.so, key, err, err_len)) != CLI_OK) {
-    return rc;
-  }
-  rc = cmd_select_run_prepared(&p, &m->sel, &r, err, err_len);
-  if (rc == CLI_OK && (f = open_json(json, &n, err, err_len)) != NULL) {
-    cmd_select_report_json(f, &p, &r);
-    fclose(f);
-  }
-  cmd_select_result_release(&r);
-  return rc == CLI_OK && *json == NULL ? CLI_BAD_INPUT : rc;
+int trn_py_select(trn_py_map_t *m, int argc, char **argv, const char *key, char **json, char *err,
+                  size_t err_len)
+{
+    cmd_select_params_t p;
+    cmd_select_result_t r;
+    size_t n;
+    FILE *f;
+    int rc = parse_cmd(PY_SELECT, argc, argv, &p, err, err_len);
+    *json = NULL;
+    if (rc != CLI_OK || (rc = ensure_sel(m, p.dem_path, &p.so, key, err, err_len)) != CLI_OK) {
+        return rc;
+    }
+    rc = cmd_select_run_prepared(&p, &m->sel, &r, err, err_len);
+    if (rc == CLI_OK && (f = open_json(json, &n, err, err_len)) != NULL) {
+        cmd_select_report_json(f, &p, &r);
+        fclose(f);
+    }
+    cmd_select_result_release(&r);
+    return rc == CLI_OK && *json == NULL ? CLI_BAD_INPUT : rc;
 }
 
-int trn_py_field(trn_py_map_t *m, int argc, char **argv, const char *key, trn_field_progress_fn_t progress,
-                 void *progress_user, char **json, char *err, size_t err_len) {
-  cmd_field_params_t p;
-  cmd_field_result_t r;
-  size_t n;
-  FILE *f;
-  int rc = parse_cmd(PY_FIELD, argc, argv, &p, err, err_len);
-  *json = NULL;
-  if (rc != CLI_OK || (rc = ensure_sel(m, p.dem_path, &p.so, key, err, err_len)) != CLI_OK) {
-    return rc;
-  }
-  p.progress = progress;
-  p.progress_user = progress_user;
-  rc = cmd_field_run_prepared(&p, &m->sel, &r, err, err_len);
-  if (rc == CLI_OK && (f = open_json(json, &n, err, err_len)) != NULL) {
-    cmd_field_report_json(f, &p, &r);
-    fclose(f);
-  }
-  return rc == CLI_OK && *json == NULL ? CLI_BAD_INPUT : rc;
+int trn_py_field(trn_py_map_t *m, int argc, char **argv, const char *key,
+                 trn_field_progress_fn_t progress, void *progress_user, char **json, char *err,
+                 size_t err_len)
+{
+    cmd_field_params_t p;
+    cmd_field_result_t r;
+    size_t n;
+    FILE *f;
+    int rc = parse_cmd(PY_FIELD, argc, argv, &p, err, err_len);
+    *json = NULL;
+    if (rc != CLI_OK || (rc = ensure_sel(m, p.dem_path, &p.so, key, err, err_len)) != CLI_OK) {
+        return rc;
+    }
+    p.progress = progress;
+    p.progress_user = progress_user;
+    rc = cmd_field_run_prepared(&p, &m->sel, &r, err, err_len);
+    if (rc == CLI_OK && (f = open_json(json, &n, err, err_len)) != NULL) {
+        cmd_field_report_json(f, &p, &r);
+        fclose(f);
+    }
+    return rc == CLI_OK && *json == NULL ? CLI_BAD_INPUT : rc;
 }

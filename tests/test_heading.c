@@ -381,7 +381,7 @@ static void test_equals_exhaustive(void **state)
     (void)state;
     trn_rng_seed(&r, 77);
     for (seed = 0; seed < 3; ++seed) {
-        world_build((uint64_t)(11 + seed), 0);
+        world_build(11u + (uint64_t)seed, 0);
         for (cases = 0; cases < 8; ++cases) {
             const double rx = 40.0 + 48.0 * trn_rng_unit(&r), ry = 40.0 + 48.0 * trn_rng_unit(&r);
             const double delta = (trn_rng_unit(&r) - 0.5) * 16.0 * DEG;
@@ -466,13 +466,13 @@ static void test_calibration(void **state)
     int t, k, n = 0, wrong = 0, ch[3] = {0, 0, 0}, cp[3] = {0, 0, 0}, fields = 5;
     const char *env = getenv("TRN_HEADING_CAL_CASES");
     (void)state;
-    if (env != NULL && atoi(env) >= 40) {
-        fields = atoi(env) / 40;
+    if (env != NULL && strtol(env, NULL, 10) >= 40) {
+        fields = (int)(strtol(env, NULL, 10) / 40);
     }
     trn_rng_seed(&r, 2026);
     g_noise_m = 0.01;
     for (t = 0; t < fields; ++t) {
-        world_build((uint64_t)(300 + t), 0);
+        world_build(300u + (uint64_t)t, 0);
         for (k = 0; k < 40; ++k) {
             const double rx = 36.0 + 56.0 * trn_rng_unit(&r), ry = 36.0 + 56.0 * trn_rng_unit(&r);
             const double delta = (trn_rng_unit(&r) - 0.5) * 12.0 * DEG;

@@ -289,10 +289,12 @@ static void test_round_trip_boresight(void **state)
         }
         dist = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
         assert_true(c[2] > 0.0f);
-        if (fabs(c[0]) / dist > worst)
+        if (fabs(c[0]) / dist > worst) {
             worst = fabs(c[0]) / dist;
-        if (fabs(c[1]) / dist > worst)
+        }
+        if (fabs(c[1]) / dist > worst) {
             worst = fabs(c[1]) / dist;
+        }
         /* off-axis error, as an angle: float rounding only */
         assert_true(fabsf(c[0]) < 1e-4f * dist + 1e-4f);
         assert_true(fabsf(c[1]) < 1e-4f * dist + 1e-4f);
@@ -414,10 +416,11 @@ static void test_end_to_end_terrain(void **state)
     assert_int_equal(trn_mast_camera_to_map(&g, &p, pan, tilt, &T), TRN_OK);
     for (y = 0; y < 48; ++y) {
         for (x = 0; x < 64; ++x) {
-            double mx = p.x_m + (x - cfg.rover_col) * cfg.cell_m;
-            double my = p.y_m + (y - cfg.rover_row) * cfg.cell_m;
+            double mx = p.x_m + (float)(x - cfg.rover_col) * cfg.cell_m;
+            double my = p.y_m + (float)(y - cfg.rover_row) * cfg.cell_m;
             double h = synth_height(&terr, mx, my);
-            double d[3] = {mx - T.t.x, my - T.t.y, h - T.t.z}, c[3];
+            const double d[3] = {mx - T.t.x, my - T.t.y, h - T.t.z};
+            double c[3];
             int k;
             for (k = 0; k < 3; ++k) {
                 c[k] = T.r[k] * d[0] + T.r[3 + k] * d[1] + T.r[6 + k] * d[2];
@@ -492,7 +495,8 @@ static void test_localize_from_mast_views(void **state)
     known.y_m = 0.0f;
     known.z_m = 0.0f;
     for (view = 0; view < 4; ++view) {
-        double a = truth.heading_rad + view * PI / 2, ix, iy;
+        double a = truth.heading_rad + view * PI / 2;
+        int kx, ky;
         trn_vec3f_t target;
         trn_rigid_t Ttrue, Tknown;
         float pan, tilt;
@@ -511,8 +515,10 @@ static void test_localize_from_mast_views(void **state)
             trn_mast_camera_to_map(&geo, &known, pan_raw * 1e-4f, tilt_raw * 1e-4f, &Tknown),
             TRN_OK);
         /* stereo footprint: terrain within 1.6 m of the target, 4 cm spacing */
-        for (iy = -1.6; iy <= 1.6; iy += 0.04) {
-            for (ix = -1.6; ix <= 1.6; ix += 0.04) {
+        for (ky = 0; ky < 80; ++ky) { /* -1.6 to 1.56 m */
+            const double iy = -1.6 + 0.04 * ky;
+            for (kx = 0; kx < 80; ++kx) {
+                const double ix = -1.6 + 0.04 * kx;
                 double mx = target.x + ix, my = target.y + iy, h, d[3], c[3];
                 int k;
                 if (ix * ix + iy * iy > 1.6 * 1.6) {

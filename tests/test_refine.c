@@ -355,17 +355,19 @@ static double brute_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int px,
     /* K from the local spread, dz and m^2 as documented (all points, then clipped) */
     int x, y, cx = LW / 2, n = 0, pass;
     double s1 = 0, s2 = 0, ref = 0, k, dz = 0, m2 = 0, ll = 0;
-    for (y = 0; y < LW; ++y)
+    for (y = 0; y < LW; ++y) {
         for (x = 0; x < LW; ++x) {
             double h = TRN_GRID_AT(l, x, y);
             if (isfinite(h)) {
-                if (n == 0)
+                if (n == 0) {
                     ref = h;
+                }
                 s1 += h - ref;
                 s2 += (h - ref) * (h - ref);
                 ++n;
             }
         }
+    }
     k = 1.0 / (10.0 * fmax(sqrt(fmax(s2 / n - (s1 / n) * (s1 / n), 0.0)), c->noise_m));
     /* dz: precision-weighted mean; m2: weighted moments (weights the squared
      * precision at the previous m2); twice over every point, then over those
@@ -373,17 +375,19 @@ static double brute_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int px,
     for (pass = 0; pass < 3; ++pass) {
         double sw = 0, swr = 0, sq = 0, sqr = 0, sqrr = 0, sqv = 0, d0 = dz, m0 = m2;
         int m = 0;
-        for (y = 0; y < LW; ++y)
+        for (y = 0; y < LW; ++y) {
             for (x = 0; x < LW; ++x) {
                 double h = TRN_GRID_AT(l, x, y), rm, v, r, q;
                 int gx = px + x - cx, gy = py + y - cx;
-                if (!isfinite(h) || gx < 0 || gy < 0 || gx >= GW || gy >= GW)
+                if (!isfinite(h) || gx < 0 || gy < 0 || gx >= GW || gy >= GW) {
                     continue;
+                }
                 rm = c->cell_m * sqrt((double)((x - cx) * (x - cx) + (y - cx) * (y - cx)));
                 v = pow(c->noise_m + c->noise_k_per_m * rm * rm, 2);
                 r = h - TRN_GRID_AT(g, gx, gy);
-                if (pass == 2 && fabs(r - d0) > 3.0 * sqrt(v + m0))
+                if (pass == 2 && fabs(r - d0) > 3.0 * sqrt(v + m0)) {
                     continue;
+                }
                 sw += 1 / (v + m0);
                 swr += r / (v + m0);
                 q = 1 / ((v + m0) * (v + m0));
@@ -393,17 +397,20 @@ static double brute_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int px,
                 sqv += q * v;
                 ++m;
             }
-        if (m == 0)
+        }
+        if (m == 0) {
             break;
+        }
         dz = swr / sw;
         m2 = fmax(0.0, (sqrr - 2 * dz * sqr + dz * dz * sq - sqv) / sq);
     }
-    for (y = 0; y < LW; ++y)
+    for (y = 0; y < LW; ++y) {
         for (x = 0; x < LW; ++x) {
             double h = TRN_GRID_AT(l, x, y), rm, v, u;
             int gx = px + x - cx, gy = py + y - cx;
-            if (!isfinite(h))
+            if (!isfinite(h)) {
                 continue;
+            }
             if (gx < 0 || gy < 0 || gx >= GW || gy >= GW) {
                 ll += log((1 - a) * k);
                 continue;
@@ -413,6 +420,7 @@ static double brute_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int px,
             u = h - dz - TRN_GRID_AT(g, gx, gy);
             ll += log(a * exp(-0.5 * u * u / v) / sqrt(6.283185307179586 * v) + (1 - a) * k);
         }
+    }
     return ll;
 }
 
@@ -433,7 +441,7 @@ static void test_height_search(void **state)
     make_local(&l, 30.4, 29.7, 12.0, 1.0, &c, &r);
     assert_int_equal(
         trn_height_search(&g, &l, LW / 2, LW / 2, &win, NULL, &c, 0.95f, 1.0, grid, &b), TRN_OK);
-    for (y = win.y0; y <= win.y1; ++y)
+    for (y = win.y0; y <= win.y1; ++y) {
         for (x = win.x0; x <= win.x1; ++x) {
             double ll = brute_ll(&g, &l, x, y, &c, 0.95);
             if (ll > bll) {
@@ -442,6 +450,7 @@ static void test_height_search(void **state)
                 by = y;
             }
         }
+    }
     assert_int_equal(b.x, bx);
     assert_int_equal(b.y, by);
     assert_true(fabs(b.ll - bll) < 1e-6 * fabs(bll));

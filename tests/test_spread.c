@@ -158,7 +158,7 @@ static void test_varying_sigma_and_mass(void **state)
             double d2 = HUGE_VAL, sig, best = HUGE_VAL, jj;
             int k, bj = 0;
             for (k = 0; k < 2; ++k) {
-                const double ex = x - s[k].x_cells, ey = y - s[k].y_cells;
+                const double ex = (float)x - s[k].x_cells, ey = (float)y - s[k].y_cells;
                 d2 = fmin(d2, ex * ex + ey * ey);
             }
             sig = (0.02 + 0.004 * d2 * 0.01) / 0.1;
@@ -438,7 +438,7 @@ static void test_raster_equals_direct_scatter(void **state)
             }
             sg[y * n + x] = v;
             if (isnan(v)) {
-                const double ex = x - s.x_cells, ey = y - s.y_cells;
+                const double ex = (float)x - s.x_cells, ey = (float)y - s.y_cells;
                 sig = (0.02 + 0.004 * (ex * ex + ey * ey) * 0.01) / 0.1;
             } else {
                 sig = (double)v / (double)cell;

@@ -66,9 +66,10 @@ static void test_wilson_ends(void **state)
 /* ---- Student t ---------------------------------------------------------- */
 static void test_t_cdf_closed_forms(void **state)
 {
-    double t;
+    int i;
     (void)state;
-    for (t = 0.0; t < 40.0; t += 0.37) {
+    for (i = 0; i < 109; ++i) { /* t = 0, 0.37, ..., 39.96 */
+        const double t = 0.37 * i;
         double th3 = atan(t / sqrt(3.0));
         /* df 1: Cauchy; df 2: t / sqrt(2 + t^2); df 3: 2 F - 1 with
      * F = 1/2 + (t / (sqrt 3 (1 + t^2/3)) + atan(t / sqrt 3)) / pi. */

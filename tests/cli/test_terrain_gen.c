@@ -233,7 +233,7 @@ static void test_relief_rms(void **state)
         s += d[i];
         s2 += (double)d[i] * d[i];
     }
-    rms = sqrt(s2 / ncell - (s / ncell) * (s / ncell));
+    rms = sqrt(s2 / (double)ncell - (s / (double)ncell) * (s / (double)ncell));
     print_message("relief RMS %.4f m (asked 0.2)\n", rms);
     /* 12 waves over 256 m: the sample RMS of a few-wave field varies. */
     assert_true(rms > 0.14 && rms < 0.26);

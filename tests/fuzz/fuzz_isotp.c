@@ -143,7 +143,7 @@ static void loopback(fz_t *in)
     uint32_t n_bs_ms = 1u + fz_u8(in), n_cr_ms = 1u + fz_u8(in);
     uint32_t t_us = 0u, saved_events = n_events_msg;
     uint32_t quarter_us = 1000u * (n_cr_ms < n_bs_ms ? n_cr_ms : n_bs_ms) / 4u;
-    int steps, delivered = 0, done = 0, slow, aborted = 0;
+    int steps, delivered = 0, done = 0, slow;
     trn_status_t st;
 
     slow = (n_cr_ms < 8u || n_bs_ms < 8u || trn_isotp_stmin_us(stmin) >= quarter_us) ? 1 : 0;
@@ -152,7 +152,7 @@ static void loopback(fz_t *in)
     FZ_CHECK(trn_isotp_rx_init(&rx, rxbuf2, TRN_ISOTP_MAX_MSG, bs, stmin, n_cr_ms) == TRN_OK);
     FZ_CHECK(trn_isotp_tx_start(&tx, msg, len) == TRN_OK);
     n_events_msg = 0u;
-    for (steps = 0; steps < 4000 && !done && !aborted; ++steps) {
+    for (steps = 0; steps < 4000 && !done; ++steps) {
         uint32_t delay_us = (uint32_t)fz_u8(in) * 40u; /* 0..10.2 ms per step */
         if (delay_us >= quarter_us) {
             slow = 1;
@@ -163,8 +163,7 @@ static void loopback(fz_t *in)
         if (st == TRN_E_TIMEOUT) {
             FZ_CHECK(tres.error == (uint8_t)TRN_ISOTP_TX_ERR_TIMEOUT_BS &&
                      tx.state == TRN_ISOTP_TX_IDLE);
-            aborted = 1;
-            break;
+            break; /* aborted */
         }
         if ((tres.events & TRN_ISOTP_TX_EV_FRAME) == 0u) {
             /* nothing due yet: STmin pacing jumps to the wake time */

@@ -52,10 +52,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     rx = fz_range(&f, -2, LW + 1);
     ry = fz_range(&f, -2, LW + 1);
     maxp = fz_range(&f, 0, LW * LW * 16);
-    for (i = 0; i < (size_t)(gw * gh); ++i) {
+    for (i = 0; i < (size_t)gw * (size_t)gh; ++i) {
         gbuf[i] = fz_f32(&f);
     }
-    for (i = 0; i < (size_t)(lw * lh); ++i) {
+    for (i = 0; i < (size_t)lw * (size_t)lh; ++i) {
         lbuf[i] = fz_f32(&f);
     }
     FZ_CHECK(trn_grid_f32_init(&g, gbuf, GW * GW, gw, gh) == TRN_OK);

@@ -51,7 +51,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         cfg.highpass_half_m = 0.1f * (float)fz_range(&f, 1, 8);
         cfg.nz = fz_range(&f, 1, MAXZ);
     }
-    for (i = 0; i < (size_t)(w * h); ++i) {
+    for (i = 0; i < (size_t)w * (size_t)h; ++i) {
         dem_buf[i] = fz_f32(&f);
     }
     FZ_CHECK(trn_grid_f32_init(&dem, dem_buf, MAXW * MAXW, w, h) == TRN_OK);
@@ -64,13 +64,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (st != TRN_OK) {
         return 0;
     }
-    for (i = 0; i < (size_t)(w * h); ++i) {
+    for (i = 0; i < (size_t)w * (size_t)h; ++i) {
         FZ_CHECK(!isinf(hp_buf[i]));
     }
     FZ_CHECK(trn_vol_u8_init(&occ, occ_buf, sizeof occ_buf, w, h, cfg.nz) == TRN_OK);
     st = trn_occupancy(&hp, &cfg, &occ, &n_occ);
     FZ_CHECK(st == TRN_OK || st == TRN_E_NODATA);
-    for (i = 0; i < (size_t)(w * h * cfg.nz); ++i) {
+    for (i = 0; i < (size_t)w * (size_t)h * (size_t)cfg.nz; ++i) {
         FZ_CHECK(occ_buf[i] <= 1u);
         count += occ_buf[i];
     }

@@ -39,7 +39,7 @@ static trn_lcan_frame_t mk(uint32_t id, uint8_t ext, uint8_t len, uint8_t seed)
     f.id = id;
     f.extended = ext;
     f.len = len;
-    for (i = 0; i < len; ++i) {
+    for (i = 0; i < len && i < sizeof f.data; ++i) { /* len 9: the refused frame */
         f.data[i] = (uint8_t)(seed * 31u + i * 7u + 1u);
     }
     return f;

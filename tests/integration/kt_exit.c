@@ -11,7 +11,7 @@
 
 int main(int argc, char **argv)
 {
-    int code = argc > 1 ? atoi(argv[1]) : 1;
+    int code = argc > 1 ? (int)strtol(argv[1], NULL, 10) : 1;
     if (ioperm(0xf4, 4, 1) != 0) {
         perror("kt_exit: ioperm");
         return 2;

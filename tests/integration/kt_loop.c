@@ -114,11 +114,16 @@ static void candump_stop(pid_t pid, uint16_t cap_id)
         double t = 0.0;
         char ifn[32], frame[64];
         unsigned id = 0;
-        char *hash;
+        char *hash, *end;
         line[strcspn(line, "\r\n")] = '\0';
         printf("KT-CANLOG %s\n", line);
         ++lines;
-        if (sscanf(line, "(%lf) %31s %63s", &t, ifn, frame) != 3 ||
+        /* "(time) ifname id#data" */
+        if (line[0] != '(') {
+            continue;
+        }
+        t = strtod(line + 1, &end);
+        if (end == line + 1 || *end != ')' || sscanf(end + 1, "%31s %63s", ifn, frame) != 2 ||
             (hash = strchr(frame, '#')) == NULL) {
             continue;
         }

@@ -27,8 +27,8 @@ static int kt_cases;
         ++kt_checks; \
         if (!(cond)) { \
             ++kt_failed; \
-            printf("KT-FAIL %s:%d: %s\n", __FILE__, __LINE__, #cond); \
-            fflush(stdout); \
+            (void)printf("KT-FAIL %s:%d: %s\n", __FILE__, __LINE__, #cond); \
+            (void)fflush(stdout); \
         } \
     } while (0)
 
@@ -40,24 +40,25 @@ static int kt_cases;
         ++kt_checks; \
         if (kt_g_ != kt_w_) { \
             ++kt_failed; \
-            printf("KT-FAIL %s:%d: %s gave %d (%s), want %d (%s)\n", __FILE__, __LINE__, #got, \
-                   (int)kt_g_, trn_strerror(kt_g_), (int)kt_w_, trn_strerror(kt_w_)); \
-            fflush(stdout); \
+            (void)printf("KT-FAIL %s:%d: %s gave %d (%s), want %d (%s)\n", __FILE__, __LINE__, \
+                         #got, (int)kt_g_, trn_strerror(kt_g_), (int)kt_w_, trn_strerror(kt_w_)); \
+            (void)fflush(stdout); \
         } \
     } while (0)
 
 #define KT_RUN(fn) \
     do { \
         ++kt_cases; \
-        printf("KT-CASE %s\n", #fn); \
-        fflush(stdout); \
+        (void)printf("KT-CASE %s\n", #fn); \
+        (void)fflush(stdout); \
         fn(); \
     } while (0)
 
 static inline int kt_finish(const char *prog)
 {
-    printf("KT-RESULT %s cases=%d checks=%d failed=%d\n", prog, kt_cases, kt_checks, kt_failed);
-    fflush(stdout);
+    (void)printf("KT-RESULT %s cases=%d checks=%d failed=%d\n", prog, kt_cases, kt_checks,
+                 kt_failed);
+    (void)fflush(stdout);
     return kt_failed == 0 && kt_checks > 0 ? 0 : 1;
 }
 

@@ -4,7 +4,7 @@
 # (.clang-format at the top of the tree, clang-format 14).
 #
 # Checks every C file of the tree (*.c and *.h under src, include, port,
-# tools and tests; nothing under build/) against `clang-format --style=file`:
+# tools, tests and python; nothing under build/) against `clang-format --style=file`:
 # lists each file that differs with the number of its lines that would
 # change, and exits 1 when any differs. --fix rewrites those files in place.
 # Exits 77 (CTest SKIP_RETURN_CODE) when clang-format 14 is not installed
@@ -33,7 +33,7 @@ fi
 [ -f .clang-format ] || { echo "format: no .clang-format in $(pwd)" >&2; exit 2; }
 
 dirs=()
-for d in src include port tools tests; do
+for d in src include port tools tests python; do
   [ -d "$d" ] && dirs+=("$d")
 done
 mapfile -t files < <(find "${dirs[@]}" -path '*/build' -prune -o -type f \( -name '*.c' -o -name '*.h' \) -print |
