@@ -349,6 +349,7 @@ def main(argv=None):
     p.add_argument("--area-m", default=None, help="X0,Y0,X1,Y1 map metres (default: the whole DTM)")
     p.add_argument("--sensors", default=None, help="X,Y[;X,Y..] map metres (default: the DTM's centre)")
     p.add_argument("--outlier-density", type=float, default=None)
+    p.add_argument("--report", default=None, help="also write the full report (each tile's timing) as JSON here")
     p.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
                    help="a `trn field` option, e.g. max_range_m=1.5 (repeatable)")
     a = p.parse_args(argv)
@@ -364,6 +365,9 @@ def main(argv=None):
     except trn.TrnError as e:
         print(f"trn.dask_field: {e.message}", file=sys.stderr)
         return 1
+    if a.report:
+        with open(a.report, "w") as f:
+            json.dump(r, f)
     r.pop("tile_stats")
     print(json.dumps(r))
     return 0
