@@ -149,3 +149,11 @@ def test_missing_file(tmp_path):
     with pytest.raises(trn.TrnError) as e:
         dask_field.whole_map_outlier_density(tmp_path / "missing.tif")
     assert "no such file" in e.value.message
+
+
+def test_scheduler_address(client, t256, tmp_path):
+    """The same code against a scheduler given by its address (as a multi-machine one would be)."""
+    area = (1005.0, 2005.0, 1015.0, 2015.0)
+    r = tiled_field(t256, tmp_path / "a.tif", tile=64, area=area, scheduler=client.scheduler.address, **FAST)
+    assert r["tiles"] == 4
+    assert np.array_equal(bits(read(tmp_path / "a.tif")["a"]), bits(whole(t256, area=area)["field"]))
