@@ -17,6 +17,9 @@ import trn
 from trn import dask_field
 from trn.dask_field import halo_cells, plan_tiles, tiled_field
 
+# Debian's tornado 6.2 under distributed 2022.12 warns at every LocalCluster start
+pytestmark = pytest.mark.filterwarnings("ignore:make_current is deprecated:DeprecationWarning")
+
 FAST = dict(min_range_m=0.5, max_range_m=1.0, patch_m=0.3, footprint_m=0.2)
 
 
