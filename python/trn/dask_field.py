@@ -268,8 +268,6 @@ def tiled_field(dtm, out, tile=512, workers=2, scheduler=None, client=None, area
     if bad:
         raise trn.TrnError("usage", f"tiled_field: {', '.join(bad)} is not an option of the tiled field "
                                     "(it evaluates every position; the area, sensors and density are arguments)")
-    if map_config != "paper" and outlier_density is None:
-        pass
     if map_config != "paper":
         raise trn.TrnError("bad_input", "tiled_field: map_config 'auto' is made from the whole DTM's statistics; "
                                         "the tiled field takes 'paper' (with explicit zbin_m, nz, ...)")
