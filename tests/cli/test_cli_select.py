@@ -283,6 +283,18 @@ if "evaluations" in fj:
     Fr = read(p("field_ref.tif"))[1]
     check(Fr.tobytes() == F.tobytes(), "field --reference: the same raster, bit for bit")
     check(read(p("ev_ref.tif"))[1].tobytes() == read(p("ev.tif"))[1].tobytes(), "field --reference: same evaluated mask")
+    # --outlier-density (a tile of a larger map takes that map's K): its own K gives the same raster bit for
+    # bit; another K another ln p table, so another field; K must be positive
+    k = fj.get("outlier_density_per_m", 0.0)
+    check(k > 0 and math.isfinite(k), f"field --json reports the map's outlier density: {k}")
+    fk = run_json("field", "--dem", g_tif, "--out", p("field_k.tif"), *FCFG, "--outlier-density", repr(k), "--json")
+    check(fk.get("outlier_density_per_m") == k and read(p("field_k.tif"))[1].tobytes() == F.tobytes(),
+          "field --outlier-density <its own K>: the same raster, bit for bit")
+    run_json("field", "--dem", g_tif, "--out", p("field_k2.tif"), *FCFG, "--outlier-density", repr(20 * k), "--json")
+    check(read(p("field_k2.tif"))[1].tobytes() != F.tobytes(), "field --outlier-density 20 K: another field")
+    for bad in ("0", "-1", "nan"):
+        rc, _, err = run("field", "--dem", g_tif, "--out", p("field_k3.tif"), *FCFG, "--outlier-density", bad)
+        check(rc == 1 and "--outlier-density" in err, f"field --outlier-density {bad}: refused ({rc}, {err!r})")
 rc, out, err = run("field", "--dem", g_tif, "--out", p("field2.tif"), *FCFG)
 check(rc == 0 and out.startswith("wrote ") and "evaluated" in out and err == "",
       f"field human summary, quiet stderr off a terminal: {err!r}")

@@ -468,6 +468,7 @@ void cmd_field_report_json(FILE *out, const cmd_field_params_t *p, const cmd_fie
     json_str(&j, "algorithm", p->reference ? "trn_field" : "trn_field_fast");
     json_int(&j, "workspace_bytes", (long long)r->wsb);
     json_num(&j, "heading_sigma_deg", p->so.heading_sigma_deg);
+    json_num(&j, "outlier_density_per_m", r->w.map.lnp.k_per_m);
     selmap_json_config(&j, &p->so, &r->w.cfg, r->w.sigma_h);
     json_end(&j);
 }

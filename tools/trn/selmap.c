@@ -223,6 +223,10 @@ void selmap_opts(selmap_opts_t *o, cli_opt_t *d)
          "least distance between ranked targets, m", 0},
         {"--sensors", CLI_STRING, &o->sensors, 0, 0, 0, "X,Y[;X,Y..]",
          "where the global map was sensed from, map m, up to 64 (default: the DEM's centre)", 0},
+        {"--outlier-density", CLI_DOUBLE, &o->outlier_k, 1e-30, 1e30, 0, "K",
+         "the map's outlier density K of ln p, 1/m (default: from the DEM; a tile of a larger map "
+         "takes the whole map's, the JSON's outlier_density_per_m)",
+         0},
     };
     size_t i;
     memcpy(d, t, sizeof t);
@@ -361,6 +365,17 @@ static int build_map(selmap_t *w, const selmap_opts_t *o, char *err, size_t err_
     if ((st = trn_map_build(&w->map, &w->cfg, &gg, mbuf, mb)) != TRN_OK) {
         snprintf(err, err_len, "--dem: cannot prepare the map: %s", trn_strerror(st));
         return -1;
+    }
+    if (o->outlier_k > 0.0) { /* a tile of a larger map: that map's K, not the tile's */
+        trn_lik_cfg_t lik;
+        lik.cell_m = w->cfg.terrain.cell_m;
+        lik.sigma_m = w->cfg.sigma_m;
+        lik.inlier_prob = w->cfg.inlier_prob;
+        lik.cap = w->cfg.cap;
+        if ((st = trn_lnp_table_build(&w->map.lnp, &lik, o->outlier_k)) != TRN_OK) {
+            snprintf(err, err_len, "--outlier-density %g: %s", o->outlier_k, trn_strerror(st));
+            return -1;
+        }
     }
     if ((st = trn_kernels_build(&w->k, TRN_KERNEL_SIGMA0_DEFAULT_CELLS)) != TRN_OK) {
         snprintf(err, err_len, "kernels: %s", trn_strerror(st));

@@ -38,15 +38,17 @@ typedef struct {
     double min_range_m, max_range_m, footprint_m, patch_m, separation_m;
     long stride_cells;
     const char *sensors; /* "X,Y[;X,Y...]" map metres, or NULL: the DEM's centre */
+    double outlier_k;    /* the map's outlier density K (1/m) for ln p; 0: from the DEM (a tiled
+                            field passes the whole map's, python/trn/dask_field.py) */
     mapopt_t mo;         /* the map configuration (mapopt.h) */
     double gsig_m;       /* global map's error at its sensor, m; < 0: trn_sigma_global_default */
     double gsig_k;       /* its growth with squared range, 1/m; < 0: trn_sigma_global_default */
     const char *gerr;    /* per-cell error raster (m, the DEM's grid), or NULL */
 } selmap_opts_t;
 
-/* The selection options (11), the global map's error model (3), the map
+/* The selection options (12), the global map's error model (3), the map
  * configuration (MAPOPT_N), in that order. */
-#define SELMAP_N_SEL_OPTS 11
+#define SELMAP_N_SEL_OPTS 12
 #define SELMAP_N_GERR_OPTS 3
 #define SELMAP_N_OPTS (SELMAP_N_SEL_OPTS + SELMAP_N_GERR_OPTS + MAPOPT_N)
 
