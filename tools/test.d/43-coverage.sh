@@ -6,7 +6,7 @@
 #
 #   src/          lines >= 95 %, branches >= 95 %   (the core)
 #   port/proto/   lines and branches 100 %          (protocol, reassembly)
-#   port/         lines >= 81 %, branches >= 76 %   (OS code; rest of port/)
+#   port/         lines >= 80 %, branches >= 76 %   (OS code; rest of port/)
 #
 # The OS code's floor is what the host can reach: argument checks, the
 # framing, error-frame and timeout logic through a Unix socket pair, failing
@@ -58,5 +58,8 @@ floor() {
 }
 floor 'src/' 'core src/' 95 95
 floor 'port/proto/' 'port/proto/' 100 100
-floor 'port/(?!proto/)' 'port/ (OS code)' 81 76
+# 80, not 81: a few of its lines run or not by timing (remaining_ms's
+# expired deadline in linux_can.c); measured 80.8-81.1 % on the same code
+# (2026-12-02), so a floor of 81 failed one run in three.
+floor 'port/(?!proto/)' 'port/ (OS code)' 80 76
 exit $fail
