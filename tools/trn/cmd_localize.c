@@ -11,7 +11,6 @@
  * rover's map position is that point minus the cell centre's offset from the
  * rover. */
 #define _POSIX_C_SOURCE 200112L /* clock_gettime */
-#include <errno.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -274,42 +273,38 @@ void cmd_localize_report_json(FILE *out, const cmd_localize_ctx_t *c, const char
 }
 
 /* The fields of a --batch line, "LOCAL PRIOR_X PRIOR_Y [WINDOW_M]": the path
- * into local (at most cap - 1 characters), the numbers by strtod (a number
- * out of range or not finite makes the line bad). Returns how many fields
- * were read, 5 if there are more than four, 0 for a bad one. */
+ * into local (at most cap - 1 characters), each number by cli_parse_double
+ * (a number out of range or not finite makes the line bad). Returns how
+ * many fields were read, 5 if there are more than four, 0 for a bad one. */
 static int batch_fields(const char *line, char *local, size_t cap, double prior[2], double *w)
 {
-    const char *p = line + strspn(line, " \t\r\n");
-    size_t len = strcspn(p, " \t\r\n");
+    const char *p = line;
     double *dst[3];
     int n;
     dst[0] = &prior[0];
     dst[1] = &prior[1];
     dst[2] = w;
-    if (len == 0 || len >= cap) {
-        return 0;
-    }
-    memcpy(local, p, len);
-    local[len] = '\0';
-    p += len;
-    for (n = 1; n < 5; ++n) {
-        char *end;
-        double v;
+    for (n = 0; n < 5; ++n) {
+        char tok[128];
+        char *out = n == 0 ? local : tok; /* the path, then each number's text */
+        size_t room = n == 0 ? cap : sizeof tok, len;
         p += strspn(p, " \t\r\n");
-        if (*p == '\0') {
+        len = strcspn(p, " \t\r\n");
+        if (len == 0) {
             return n;
         }
         if (n == 4) {
             return 5;
         }
-        errno = 0;
-        v = strtod(p, &end);
-        if (end == p || errno == ERANGE || !isfinite(v) ||
-            (*end != '\0' && strchr(" \t\r\n", *end) == NULL)) {
+        if (len >= room) {
             return 0;
         }
-        *dst[n - 1] = v;
-        p = end;
+        memcpy(out, p, len);
+        out[len] = '\0';
+        if (n > 0 && !cli_parse_double(tok, dst[n - 1])) {
+            return 0;
+        }
+        p += len;
     }
     return n;
 }

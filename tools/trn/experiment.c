@@ -329,6 +329,24 @@ static void *alloc16(size_t n, void **raw)
     return q + ((16u - ((uintptr_t)q & 15u)) & 15u);
 }
 
+/* A workspace *ws of *have bytes grown to need (contents not kept): 0, or -1
+ * with the reason naming what. */
+static int grow_ws(void **ws, void **raw, size_t *have, size_t need, const char *what, char *err,
+                   size_t err_len)
+{
+    if (need <= *have) {
+        return 0;
+    }
+    free(*raw);
+    *ws = alloc16(need, raw);
+    *have = *ws == NULL ? 0 : need;
+    if (*ws == NULL) {
+        snprintf(err, err_len, "out of memory for %zu bytes of %s workspace", need, what);
+        return -1;
+    }
+    return 0;
+}
+
 typedef struct {
     const exp_params_t *p;
     int nx, ny;     /* map size, cells */
@@ -480,14 +498,8 @@ static int localize_3dof(world_t *w, size_t n, const trn_window_t *win, int fx, 
         snprintf(err, err_len, "internal error: 3-DOF workspace refused for %zu points", n);
         return -1;
     }
-    if (need > w->h3ws_b) {
-        free(w->h3ws_raw);
-        w->h3ws = alloc16(need, &w->h3ws_raw);
-        w->h3ws_b = w->h3ws == NULL ? 0 : need;
-        if (w->h3ws == NULL) {
-            snprintf(err, err_len, "out of memory for %zu bytes of 3-DOF workspace", need);
-            return -1;
-        }
+    if (grow_ws(&w->h3ws, &w->h3ws_raw, &w->h3ws_b, need, "3-DOF", err, err_len) != 0) {
+        return -1;
     }
     hc.center_rad = 0.0;
     hc.window_rad = w->h3win_rad;
@@ -575,14 +587,9 @@ sensed:
         snprintf(err, err_len, "internal error: window rejected by trn_localize_workspace_bytes");
         return -1;
     }
-    if (need > w->lws_b) { /* grow (a clipped window never needs more, but do not rely on it) */
-        free(w->lws_raw);
-        w->lws = alloc16(need, &w->lws_raw);
-        w->lws_b = w->lws == NULL ? 0 : need;
-        if (w->lws == NULL) {
-            snprintf(err, err_len, "out of memory for %zu bytes of localization workspace", need);
-            return -1;
-        }
+    /* grow (a clipped window never needs more, but do not rely on it) */
+    if (grow_ws(&w->lws, &w->lws_raw, &w->lws_b, need, "localization", err, err_len) != 0) {
+        return -1;
     }
     st = trn_localize_points(&w->map, w->pts, n, &win, w->lws, w->lws_b, &res);
     if (st != TRN_OK && st != TRN_E_ILLCOND) {
