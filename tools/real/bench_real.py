@@ -7,11 +7,11 @@
         [--trn PATH] [--trn-mode auto|batch|single]
         [--out DIR] [--keep-cases] [--no-plot] [-- TRN_ARGS...]
 
-For each DEM of tools/real/dems.py (default: all; made or found under build/real/),
-N seeded cases (tools/real/cases.py: a rover at a random off-centre position, its
-(2R+1)^2 rover-frame local DEM with a height offset, range-dependent noise and a
-120 deg field of view; a prior within +-4 cells; a +-6 cell search window) are
-localized by
+For each DEM of tools/real/dems.py (default: all but the fresh ones, dems.DEFAULT; made or
+found under build/real/), N seeded cases (tools/real/cases.py: a rover at a random
+off-centre position, its (2R+1)^2 rover-frame local DEM with a height offset,
+range-dependent noise and a 120 deg field of view; a prior within +-4 cells; a +-6 cell
+search window) are localized by
 
 * trn: `trn localize --dem G.tif --batch LIST --json [TRN_ARGS]` (one map build,
   one JSON line per case) when this trn has --batch, else one `trn localize --dem G
@@ -82,7 +82,8 @@ def parse_args(argv):
         k = argv.index("--")
         argv, trn_extra = argv[:k], argv[k + 1:]
     ap = Parser(prog="bench_real.py", description=__doc__.split("\n\n")[0])
-    ap.add_argument("--dem", action="append", help="DEM id of tools/real/dems.py (repeatable; default all)")
+    ap.add_argument("--dem", action="append",
+                    help="DEM id of tools/real/dems.py (repeatable; default all but the fresh ones)")
     ap.add_argument("--cases", type=int, default=200, help="cases per DEM (default 200)")
     ap.add_argument("--seed", type=int, default=1, help="seed (default 1)")
     ap.add_argument("--radius", type=int, default=20, help="local map radius R, cells (default 20)")
@@ -103,7 +104,7 @@ def parse_args(argv):
                     help="one extra argument for trn localize (repeatable; or put them after --)")
     a = ap.parse_args(argv)
     a.trn_extra = a.trn_arg + trn_extra
-    a.dem = a.dem or [d.id for d in dems.REGISTRY]
+    a.dem = a.dem or list(dems.DEFAULT)
     for d in a.dem:
         if d not in dems.BY_ID:
             raise Fail(f"unknown DEM '{d}' (known: {', '.join(dems.BY_ID)})")

