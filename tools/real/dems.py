@@ -433,6 +433,17 @@ def make_grand_canyon(out):
     return cell
 
 
+def make_anatolia(out):
+    """PyPI `demcompare` 0.6.1 sdist (CNES, Apache-2.0): data_samples/srtm_ref.tif, its
+    reference sample, int16 SRTM 3 arc-second heights of the eastern Anatolian highlands,
+    Turkey (40.00-40.83 E, 39.17-40.00 N, between Erzincan, Bayburt and Erzurum: ranges
+    and high valleys, 1111-3270 m), 1000 x 1000 cells, WGS 84, no-data -32768 (none in
+    it). Warped to UTM 37N at 81 m (native 71 x 93 m). The sdist is 72 MB."""
+    with tempfile.TemporaryDirectory() as tmp:
+        src = pip_member("demcompare==0.6.1", "demcompare-0.6.1/data_samples/srtm_ref.tif", tmp, sdist=True)
+        return warp_geographic_file(src, out)
+
+
 def make_rockfield(out):
     """Not real: the paper's synthetic Mars terrain from `trn terrain` (section 6 of
     docs/method.md; defaults: 0.1 m cells, rock coverage k = 0.1, hemispherical rocks,
@@ -475,6 +486,8 @@ REGISTRY = [
         "the Owens Valley, 80 m (UTM 11N)", "mountains", True, make_sierra, fresh=True),
     Dem("grand_canyon", "PyPI pymartini 0.6.0 sdist: AWS Terrain Tiles Terrarium tile z11 of the Grand "
         "Canyon, Arizona, 62 m (UTM 12N)", "canyon", True, make_grand_canyon, fresh=True),
+    Dem("anatolia", "PyPI demcompare 0.6.1 sdist: SRTM 3 arc-second of the eastern Anatolian highlands, "
+        "Turkey, 81 m (UTM 37N)", "mountains", True, make_anatolia, fresh=True),
     Dem("rockfield", "synthetic (not real): trn terrain's Mars rock field, 512 x 512 cells of 0.1 m, seed 5",
         "synthetic", False, make_rockfield),
 ]
