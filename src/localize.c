@@ -438,7 +438,7 @@ trn_status_t trn_localize_points(const trn_map_t *map, const trn_point_t *pts, s
 /* Layout of trn_localize_dem's workspace: [hp grid | highpass ws | points | search ws | ln L grid
  * (TRN_MATCH_HEIGHTS only)]. */
 typedef struct {
-    size_t hp, hpws, pts, search, llgrid, total;
+    size_t hp, hpws, pts, search, llgrid, cand, total;
 } loc_layout_t;
 
 static int loc_layout(const trn_map_t *map, int32_t w, int32_t h, size_t max_points,
@@ -456,10 +456,12 @@ static int loc_layout(const trn_map_t *map, int32_t w, int32_t h, size_t max_poi
     lay->hpws = trn_ws_offset(&ws, hpws);
     lay->pts = trn_ws_offset(&ws, max_points * sizeof(trn_point_t));
     lay->search = trn_ws_offset(&ws, sw);
-    lay->llgrid = ws.total;
+    lay->llgrid = lay->cand = ws.total;
     if (map->cfg.match == TRN_MATCH_HEIGHTS) { /* every pose's ln L (trn_height_search) */
-        (void)trn_ws_offset(&ws, (size_t)(win->x1 - win->x0 + 1) * (size_t)(win->y1 - win->y0 + 1) *
-                                     sizeof(double));
+        lay->llgrid = trn_ws_offset(&ws, (size_t)(win->x1 - win->x0 + 1) *
+                                             (size_t)(win->y1 - win->y0 + 1) * sizeof(double));
+        /* a refinement from a neighbouring start (refine_result) */
+        lay->cand = trn_ws_offset(&ws, sizeof(trn_refine_t));
     }
     lay->total = ws.total;
     return 1;
@@ -527,20 +529,52 @@ static trn_status_t highpass_by_map(const trn_map_t *map, const trn_grid_f32_t *
     return TRN_OK;
 }
 
-/* trn_refine_pose from the search's integer pose; on success its pose and
- * covariance replace eq. 6's. */
+/* 1 if the integer pose (sx, sy) is a start for the refinement beside the
+ * best one: inside the window, its ln L in the grid within
+ * TRN_REFINE_START_NATS of the best's. */
+static int refine_start(const trn_window_t *win, const double *ll_grid, double ll_best, int32_t sx,
+                        int32_t sy)
+{
+    if (sx < win->x0 || sx > win->x1 || sy < win->y0 || sy > win->y1) {
+        return 0;
+    }
+    return ll_grid[(size_t)(sy - win->y0) * (size_t)(win->x1 - win->x0 + 1) +
+                   (size_t)(sx - win->x0)] > ll_best - TRN_REFINE_START_NATS;
+}
+
+/* trn_refine_pose from the search's integer pose, and from each neighbour
+ * refine_start takes (with the ln L grid of the height search): on terrain
+ * a cell or two wide the best integer pose can lie in the basin of a lesser
+ * sub-cell peak. The refinement with the highest refined ln L is kept (ties:
+ * the best integer pose's); on success its pose and covariance replace
+ * eq. 6's. */
 static void refine_result(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
+                          const trn_window_t *win, const double *ll_grid, trn_refine_t *cand,
                           trn_loc_result_t *out)
 {
     trn_refine_cfg_t rc;
     double cell = (double)map->cfg.terrain.cell_m;
+    int32_t found, k;
     rc.cell_m = map->cfg.terrain.cell_m;
     rc.noise_m = map->cfg.noise_m;
     rc.noise_k_per_m = map->cfg.noise_k_per_m;
+    rc.inlier_prob = map->cfg.inlier_prob;
     out->refined = 0;
     out->misfit = 0;
-    if (trn_refine_pose(&map->heights, local, rx, ry, out->ix, out->iy, &rc, &out->refinement) !=
-        TRN_OK) {
+    found = trn_refine_pose(&map->heights, local, rx, ry, out->ix, out->iy, &rc,
+                            &out->refinement) == TRN_OK;
+    for (k = 0; k < 9 && cand != NULL; ++k) {
+        int32_t sx = out->ix + k % 3 - 1, sy = out->iy + k / 3 - 1;
+        if (k == 4 || !refine_start(win, ll_grid, out->ll_best, sx, sy)) {
+            continue;
+        }
+        if (trn_refine_pose(&map->heights, local, rx, ry, sx, sy, &rc, cand) == TRN_OK &&
+            (!found || cand->ll > out->refinement.ll)) {
+            out->refinement = *cand;
+            found = 1;
+        }
+    }
+    if (!found) {
         return;
     }
     out->refined = 1;
@@ -561,7 +595,7 @@ static void refine_result(const trn_map_t *map, const trn_grid_f32_t *local, int
 /* TRN_MATCH_HEIGHTS: height search, refinement, competing hypothesis. */
 static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
                                      int32_t ry, const trn_window_t *win, double *ll_grid,
-                                     trn_loc_result_t *out)
+                                     trn_refine_t *cand, trn_loc_result_t *out)
 {
     trn_status_t st;
     trn_height_best_t best, second;
@@ -573,6 +607,7 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
     rc.cell_m = map->cfg.terrain.cell_m;
     rc.noise_m = map->cfg.noise_m;
     rc.noise_k_per_m = map->cfg.noise_k_per_m;
+    rc.inlier_prob = map->cfg.inlier_prob;
     if ((st = trn_height_search(&map->heights, local, rx, ry, win, NULL, &rc, map->cfg.inlier_prob,
                                 1.0, ll_grid, &best)) != TRN_OK) {
         return st;
@@ -593,7 +628,7 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
     out->rho = 0.0;
     out->cov_m2[0] = out->cov_m2[1] = (double)INFINITY;
     out->cov_m2[2] = 0.0;
-    refine_result(map, local, rx, ry, out);
+    refine_result(map, local, rx, ry, win, ll_grid, cand, out);
     out->n_points = (size_t)(out->refinement.n_seen > 0 ? out->refinement.n_seen : 0);
     /* The zone is min_exclusion_cells, not 4 sigma as for eq. 6: the failure
      * probability is the posterior mass of poses that far from the answer,
@@ -672,7 +707,8 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
     }
     if (map->cfg.match == TRN_MATCH_HEIGHTS) {
         st = localize_heights(map, local_dem, rover_x, rover_y, win,
-                              (double *)(void *)(b + lay.llgrid), out);
+                              (double *)(void *)(b + lay.llgrid),
+                              (trn_refine_t *)(void *)(b + lay.cand), out);
         return accept(map, st, out);
     }
     pts = (trn_point_t *)(void *)(b + lay.pts);
@@ -710,7 +746,7 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
         st = trn_localize_points(map, pts, n, win, b + lay.search, ws_bytes - lay.search, out);
     }
     if ((st == TRN_OK || st == TRN_E_ILLCOND) && map->cfg.refine != 0) {
-        refine_result(map, local_dem, rover_x, rover_y, out);
+        refine_result(map, local_dem, rover_x, rover_y, win, NULL, NULL, out);
         /* No consistent height match around the voxel optimum: flag it. */
         st = out->refined && !out->misfit ? TRN_OK : TRN_E_ILLCOND;
     }

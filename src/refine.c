@@ -5,6 +5,7 @@
 #include <math.h>
 #include <stdlib.h>
 
+
 /* Bilinear height at fractional cell (x, y) (centres at integers) and its
  * exact gradient (per cell) inside the containing cell; 0 when a corner is
  * off the grid or missing. */
@@ -111,8 +112,31 @@ typedef struct {
     double ss;           /* sum of squared normalized residuals of the inliers */
     double rr, noise2;   /* sums of q r^2 and of q s^2 over the inliers, q = 1 / (s^2 + m^2)^2 */
     double q;            /* sum of q */
+    double al[3], all;   /* the interpolants' mix column: its cross terms and its own term */
+    double bl;           /* its right-hand side */
     int32_t n_in, n_all; /* inliers, points with a global height */
 } accum_t;
+
+/* Height and gradient of the mixed interpolant B + lam (C - B) at (x, y)
+ * (B bilinear, C bicubic; they agree where the 4 x 4 support is
+ * incomplete: there C - B = 0), and C - B, the derivative in lam. */
+static int sample_mix(const trn_grid_f32_t *g, double x, double y, double lam, double out[3],
+                      double *dcb)
+{
+    double b3[3];
+    int32_t k;
+    if (!sample(g, x, y, out)) {
+        return 0;
+    }
+    *dcb = 0.0;
+    if (sample_bilinear(g, x, y, b3)) {
+        *dcb = out[0] - b3[0];
+        for (k = 0; k < 3; ++k) {
+            out[k] = b3[k] + lam * (out[k] - b3[k]);
+        }
+    }
+    return 1;
+}
 
 /* Height noise of the local cell (x, y), variance. */
 static double noise_var(const trn_refine_cfg_t *cfg, int32_t x, int32_t y, int32_t rx, int32_t ry)
@@ -127,27 +151,28 @@ static double noise_var(const trn_refine_cfg_t *cfg, int32_t x, int32_t y, int32
  * pose (x, y) and offset dz: normal equations of the points within clip (in
  * normalized residual units). */
 static void accumulate_rect(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
-                            int32_t ry, double x, double y, double dz, double clip, double model2,
-                            const trn_refine_cfg_t *cfg, int32_t i0, int32_t j0, int32_t i1,
-                            int32_t j1, accum_t *acc)
+                            int32_t ry, double x, double y, double dz, double lam, double clip,
+                            double model2, const trn_refine_cfg_t *cfg, int32_t i0, int32_t j0,
+                            int32_t i1, int32_t j1, accum_t *acc)
 {
     int32_t i, j;
     for (i = 0; i < 9; ++i) {
         acc->a[i] = 0.0;
     }
     acc->b[0] = acc->b[1] = acc->b[2] = 0.0;
+    acc->al[0] = acc->al[1] = acc->al[2] = acc->all = acc->bl = 0.0;
     acc->ss = acc->rr = acc->noise2 = acc->q = 0.0;
     acc->n_in = acc->n_all = 0;
     for (j = j0; j < j1; ++j) {
         for (i = i0; i < i1; ++i) {
-            double h = (double)TRN_GRID_AT(local, i, j), s3[3], px, py, sd, w, res, u, jv[3];
+            double h = (double)TRN_GRID_AT(local, i, j), s3[3], px, py, sd, w, res, u, jv[3], dcb;
             int32_t p, q;
             if (!isfinite(h)) {
                 continue;
             }
             px = (double)(i - rx);
             py = (double)(j - ry);
-            if (!sample(global, x + px, y + py, s3)) {
+            if (!sample_mix(global, x + px, y + py, lam, s3, &dcb)) {
                 continue;
             }
             acc->n_all += 1;
@@ -176,7 +201,10 @@ static void accumulate_rect(const trn_grid_f32_t *global, const trn_grid_f32_t *
                     acc->a[p * 3 + q] += w * jv[p] * jv[q];
                 }
                 acc->b[p] += w * jv[p] * res;
+                acc->al[p] += w * jv[p] * dcb;
             }
+            acc->all += w * dcb * dcb;
+            acc->bl += w * dcb * res;
             acc->ss += u * u;
             acc->n_in += 1;
         }
@@ -184,11 +212,34 @@ static void accumulate_rect(const trn_grid_f32_t *global, const trn_grid_f32_t *
 }
 
 static void accumulate(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
-                       int32_t ry, double x, double y, double dz, double clip, double model2,
-                       const trn_refine_cfg_t *cfg, accum_t *acc)
+                       int32_t ry, double x, double y, double dz, double lam, double clip,
+                       double model2, const trn_refine_cfg_t *cfg, accum_t *acc)
 {
-    accumulate_rect(global, local, rx, ry, x, y, dz, clip, model2, cfg, 0, 0, local->width,
+    accumulate_rect(global, local, rx, ry, x, y, dz, lam, clip, model2, cfg, 0, 0, local->width,
                     local->height, acc);
+}
+
+/* Fold the mix out of the normal equations of (x, y, dz, mix) (Schur
+ * complement), its prior (mean TRN_REFINE_MIX_MEAN, sd TRN_REFINE_MIX_SD)
+ * added: a and b become those of (x, y, dz) with the mix at its
+ * conditional best, so inv(a) is the marginal covariance of (x, y, dz).
+ * g = al / all' (the mix's coupling). Returns the mix's step at d = 0;
+ * for a step d of (x, y, dz) it is that minus g . d. */
+static double fold_mix(accum_t *acc, double lam, double g[3])
+{
+    double pw = 1.0 / (TRN_REFINE_MIX_SD * TRN_REFINE_MIX_SD);
+    double all = acc->all + pw, bl = acc->bl + pw * (TRN_REFINE_MIX_MEAN - lam);
+    int32_t p, q;
+    for (p = 0; p < 3; ++p) {
+        g[p] = acc->al[p] / all;
+    }
+    for (p = 0; p < 3; ++p) {
+        for (q = 0; q < 3; ++q) {
+            acc->a[p * 3 + q] -= acc->al[p] * g[q];
+        }
+        acc->b[p] -= g[p] * bl;
+    }
+    return bl / all;
 }
 
 /* One Gauss-Newton pass of the bilinear surface at (bx, by, bz) onto the
@@ -301,8 +352,8 @@ static void interp_shift(const trn_grid_f32_t *global, const trn_grid_f32_t *loc
  * correlated within a block (the global DEM's interpolation error is smooth
  * over about a cell) add up there instead of averaging out. */
 static void block_meat(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
-                       int32_t ry, double x, double y, double dz, double model2,
-                       const trn_refine_cfg_t *cfg, double meat[9])
+                       int32_t ry, double x, double y, double dz, double lam, const double g[3],
+                       double model2, const trn_refine_cfg_t *cfg, double meat[9])
 {
     int32_t bi, bj, p, q;
     accum_t acc;
@@ -315,8 +366,11 @@ static void block_meat(const trn_grid_f32_t *global, const trn_grid_f32_t *local
                                                               : local->width;
             int32_t j1 = bj + TRN_REFINE_BLOCK < local->height ? bj + TRN_REFINE_BLOCK
                                                                : local->height;
-            accumulate_rect(global, local, rx, ry, x, y, dz, TRN_REFINE_CLIP, model2, cfg, bi, bj,
-                            i1, j1, &acc);
+            accumulate_rect(global, local, rx, ry, x, y, dz, lam, TRN_REFINE_CLIP, model2, cfg, bi,
+                            bj, i1, j1, &acc);
+            for (p = 0; p < 3; ++p) {
+                acc.b[p] -= g[p] * acc.bl; /* the score with the mix profiled out */
+            }
             for (p = 0; p < 3; ++p) {
                 for (q = 0; q < 3; ++q) {
                     meat[p * 3 + q] += acc.b[p] * acc.b[q];
@@ -336,6 +390,38 @@ static double next_model2(const accum_t *acc)
     return m > 0.0 ? m : 0.0;
 }
 
+static double local_spread(const trn_grid_f32_t *local, int32_t *n_seen);
+
+/* The mixture log-likelihood of trn_height_search at a continuous pose,
+ * the mixed interpolant's heights, offset dz and model variance model2. */
+static double refined_ll(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
+                         int32_t ry, double x, double y, double dz, double lam, double model2,
+                         const trn_refine_cfg_t *cfg)
+{
+    double a = (double)cfg->inlier_prob;
+    const double two_pi = 6.283185307179586;
+    int32_t i, j, n_seen = 0;
+    double spread = local_spread(local, &n_seen), floor_m = (double)cfg->noise_m, k, lout, ll = 0.0;
+    k = 1.0 / (10.0 * (spread > floor_m ? spread : floor_m));
+    lout = log((1.0 - a) * k);
+    for (j = 0; j < local->height; ++j) {
+        for (i = 0; i < local->width; ++i) {
+            double h = (double)TRN_GRID_AT(local, i, j), s3[3], dcb, v, u;
+            if (!isfinite(h)) {
+                continue;
+            }
+            if (!sample_mix(global, x + (double)(i - rx), y + (double)(j - ry), lam, s3, &dcb)) {
+                ll += lout;
+                continue;
+            }
+            v = noise_var(cfg, i, j, rx, ry) + model2;
+            u = h - dz - s3[0];
+            ll += log(a * exp(-0.5 * u * u / v) / sqrt(two_pi * v) + (1.0 - a) * k);
+        }
+    }
+    return ll;
+}
+
 static void set_fail(trn_refine_t *out, int32_t ix, int32_t iy)
 {
     out->x = (double)ix;
@@ -344,6 +430,9 @@ static void set_fail(trn_refine_t *out, int32_t ix, int32_t iy)
     out->cov_cells[2] = 0.0;
     out->inflation = 1.0;
     out->interp_shift[0] = out->interp_shift[1] = 0.0;
+    out->interp_mix = TRN_REFINE_MIX_MEAN;
+    out->sys_weight = 0.0;
+    out->ll = -(double)INFINITY;
 }
 
 trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
@@ -352,7 +441,10 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
 {
     trn_status_t st;
     accum_t acc;
-    double x = (double)ix, y = (double)iy, dz = 0.0, model2 = 0.0, inv[9], d[3], chi2;
+    double x = (double)ix, y = (double)iy, dz = 0.0, model2 = 0.0, inv[9], d[3], chi2, g[3];
+    double lam = TRN_REFINE_MIX_MEAN;
+    const double lam_lo = TRN_REFINE_MIX_MEAN - 2.0 * TRN_REFINE_MIX_SD;
+    const double lam_hi = TRN_REFINE_MIX_MEAN + 2.0 * TRN_REFINE_MIX_SD;
     int32_t it;
 
     if (global == NULL || local == NULL || cfg == NULL || out == NULL) {
@@ -363,7 +455,8 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
     }
     if (!(cfg->cell_m > 0.0f && cfg->cell_m <= 1000.0f) ||
         !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
-        !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f) || rover_x < -TRN_MAX_DIM ||
+        !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f) ||
+        !(cfg->inlier_prob > 0.0f && cfg->inlier_prob < 1.0f) || rover_x < -TRN_MAX_DIM ||
         rover_y < -TRN_MAX_DIM || rover_x > local->width - 1 + TRN_MAX_DIM ||
         rover_y > local->height - 1 + TRN_MAX_DIM) {
         return TRN_E_ARG;
@@ -381,14 +474,14 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
      * (what the residuals hold beyond the noise model: the global DEM's own
      * interpolation error, a stale map) from the residuals, re-estimated at
      * every step, so the weights and the clip follow the data. */
-    accumulate(global, local, rover_x, rover_y, x, y, 0.0, (double)INFINITY, 0.0, cfg, &acc);
+    accumulate(global, local, rover_x, rover_y, x, y, 0.0, lam, (double)INFINITY, 0.0, cfg, &acc);
     out->n_seen = acc.n_all;
     if (acc.n_all < 8) {
         return TRN_E_NODATA;
     }
     dz = acc.b[2] / acc.a[8];
     for (it = 0; it < 3; ++it) {
-        accumulate(global, local, rover_x, rover_y, x, y, dz,
+        accumulate(global, local, rover_x, rover_y, x, y, dz, lam,
                    it == 0 ? (double)INFINITY : TRN_REFINE_CLIP, model2, cfg, &acc);
         if (acc.n_in < 8) {
             break;
@@ -397,7 +490,11 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
         dz += acc.b[2] / acc.a[8];
     }
     for (it = 0; it < TRN_REFINE_MAX_ITER; ++it) {
-        accumulate(global, local, rover_x, rover_y, x, y, dz, TRN_REFINE_CLIP, model2, cfg, &acc);
+        double dl;
+        accumulate(global, local, rover_x, rover_y, x, y, dz, lam, TRN_REFINE_CLIP, model2, cfg,
+                   &acc);
+        model2 = next_model2(&acc);
+        dl = fold_mix(&acc, lam, g);
         if (acc.n_in < 8 || !inv3(acc.a, inv)) {
             set_fail(out, ix, iy);
             out->n_used = acc.n_in;
@@ -411,7 +508,10 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
         x += d[0];
         y += d[1];
         dz += d[2];
-        model2 = next_model2(&acc);
+        lam += dl - (g[0] * d[0] + g[1] * d[1] + g[2] * d[2]);
+        /* within two prior sds: beyond, the "mix" would be a free
+         * sharpening that fits the map to anything */
+        lam = lam > lam_hi ? lam_hi : lam < lam_lo ? lam_lo : lam;
         out->iterations = it + 1;
         if (fabs(x - (double)ix) > TRN_REFINE_MAX_SHIFT ||
             fabs(y - (double)iy) > TRN_REFINE_MAX_SHIFT) {
@@ -423,62 +523,67 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
         }
     }
     /* Covariance at the final pose. */
-    accumulate(global, local, rover_x, rover_y, x, y, dz, TRN_REFINE_CLIP, model2, cfg, &acc);
+    accumulate(global, local, rover_x, rover_y, x, y, dz, lam, TRN_REFINE_CLIP, model2, cfg, &acc);
+    (void)fold_mix(&acc, lam, g);
     if (acc.n_in < 8 || 2 * acc.n_in < acc.n_all || !inv3(acc.a, inv)) {
         set_fail(out, ix, iy);
         out->n_used = acc.n_in;
         return TRN_E_ILLCOND;
     }
-    chi2 = acc.ss / (double)(acc.n_in - 3);
+    chi2 = acc.ss / (double)(acc.n_in - 4);
     out->chi2_dof = chi2;
     chi2 = chi2 > 1.0 ? chi2 : 1.0;
     out->x = x;
     out->y = y;
     out->dz_m = dz;
     out->model_m = sqrt(model2);
+    out->interp_mix = lam;
+    out->ll = refined_ll(global, local, rover_x, rover_y, x, y, dz, lam, model2, cfg);
     /* Sandwich A^-1 B A^-1 (B from blocks); the model-based A^-1 (times the
      * chi-square floor) is a lower bound on each variance: the block
      * estimate is noisy, and independent errors must not shrink it. */
     {
-        double meat[9], t[9], sw[9];
+        double meat[9], f, sw[2];
         int32_t p, q, r;
-        block_meat(global, local, rover_x, rover_y, x, y, dz, model2, cfg, meat);
-        for (p = 0; p < 3; ++p) {
+        block_meat(global, local, rover_x, rover_y, x, y, dz, lam, g, model2, cfg, meat);
+        /* the sandwich's two position variances, (inv meat inv)[pp] */
+        for (p = 0; p < 2; ++p) {
+            sw[p] = 0.0;
             for (q = 0; q < 3; ++q) {
-                t[p * 3 + q] = 0.0;
                 for (r = 0; r < 3; ++r) {
-                    t[p * 3 + q] += inv[p * 3 + r] * meat[r * 3 + q];
-                }
-            }
-        }
-        for (p = 0; p < 3; ++p) {
-            for (q = 0; q < 3; ++q) {
-                sw[p * 3 + q] = 0.0;
-                for (r = 0; r < 3; ++r) {
-                    sw[p * 3 + q] += t[p * 3 + r] * inv[r * 3 + q];
+                    sw[p] += inv[p * 3 + q] * meat[q * 3 + r] * inv[r * 3 + p];
                 }
             }
         }
         {
-            double fx = sw[0] / (inv[0] * chi2), fy = sw[4] / (inv[4] * chi2), f;
-            /* one inflation factor for the position block, so the ellipse keeps
-             * the model's shape: the larger of the two variance ratios */
+            /* one inflation factor for the position block, so the ellipse
+             * keeps the model's shape: the larger of the two variance ratios */
+            double fx = sw[0] / (inv[0] * chi2), fy = sw[1] / (inv[4] * chi2);
             f = fx > fy ? fx : fy;
             f = f > 1.0 ? f : 1.0;
-            out->inflation = f;
-            out->cov_cells[0] = inv[0] * chi2 * f;
-            out->cov_cells[1] = inv[4] * chi2 * f;
-            out->cov_cells[2] = inv[1] * chi2 * f;
         }
+        out->inflation = f;
+        out->cov_cells[0] = inv[0] * chi2 * f;
+        out->cov_cells[1] = inv[4] * chi2 * f;
+        out->cov_cells[2] = inv[1] * chi2 * f;
+        out->n_used = acc.n_in;
         {
-            double sh[3];
-            out->n_used = acc.n_in;
+            /* The interpolants' disagreement, weighted by the share of the
+             * model variance in the residuals' (precision-squared weighted)
+             * variance: where a mix of the two interpolants explains the
+             * data (m^2 ~ 0) the mix's own uncertainty is in inv already;
+             * where the data show a misfit beyond the noise, the map runs
+             * between its samples in a way neither interpolant follows, a
+             * systematic error the residuals cannot show. */
+            /* q > 0: at least 8 inliers, each noise variance > 0 */
+            double sh[3], vbar = acc.noise2 / acc.q, w = TRN_REFINE_SYS * model2 / (model2 + vbar);
             interp_shift(global, local, rover_x, rover_y, x, y, dz, model2, cfg, &acc, inv, sh);
             out->interp_shift[0] = sh[0];
             out->interp_shift[1] = sh[1];
-            out->cov_cells[0] += TRN_REFINE_SYS * sh[0] * sh[0];
-            out->cov_cells[1] += TRN_REFINE_SYS * sh[1] * sh[1];
-            out->cov_cells[2] += TRN_REFINE_SYS * sh[0] * sh[1];
+            out->sys_weight = w;
+            out->cov_cells[0] += w * sh[0] * sh[0];
+            out->cov_cells[1] += w * sh[1] * sh[1];
+            out->cov_cells[2] += w * sh[0] * sh[1];
         }
     }
     return TRN_OK;

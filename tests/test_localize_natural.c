@@ -1193,6 +1193,7 @@ static trn_refine_cfg_t rcfg(float k)
     c.cell_m = 1.0f;
     c.noise_m = 0.01f;
     c.noise_k_per_m = k;
+    c.inlier_prob = 0.95f;
     return c;
 }
 
@@ -1345,7 +1346,8 @@ static void test_refine_inlier_majority(void **state)
  * its optimum in the other cell) under bilinear sampling, so the steps cycle
  * and the iteration ends at TRN_REFINE_MAX_ITER near the kink; under a
  * smooth (bicubic) sampling it converges there. Either way: within 0.1. A
- * start 6 rows off leaves the neighbourhood in y: TRN_E_ILLCOND. */
+ * start 7 rows off leaves the neighbourhood in y: TRN_E_ILLCOND (from 6
+ * rows off, the interpolants' mix at its bound holds it at 2 cells). */
 static void test_refine_iteration_limits(void **state)
 {
     trn_grid_f32_t g, l;
@@ -1374,8 +1376,8 @@ static void test_refine_iteration_limits(void **state)
     assert_true(out.iterations >= 1 && out.iterations <= TRN_REFINE_MAX_ITER);
     assert_true(fabs(out.x - 40.0) < 0.1 && fabs(out.y - 40.0) < 0.1);
     (void)make_wedge(&l, 40.0, 40.0, 0.0, PI / 2.0);
-    assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 46, &c, &out), TRN_E_ILLCOND);
-    assert_true(out.x == 40.0 && out.y == 46.0 && isinf(out.cov_cells[1]) && out.iterations > 0);
+    assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 47, &c, &out), TRN_E_ILLCOND);
+    assert_true(out.x == 40.0 && out.y == 47.0 && isinf(out.cov_cells[1]) && out.iterations > 0);
 }
 
 /* trn_refine_pose's argument checks, one clause at a time, with their
@@ -1413,6 +1415,15 @@ static void test_refine_args(void **state)
     b = c;
     b.noise_k_per_m = -1.0f;
     assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 40, &b, &out), TRN_E_ARG);
+    b = c;
+    b.inlier_prob = 0.0f;
+    assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 40, &b, &out), TRN_E_ARG);
+    b.inlier_prob = 1.0f;
+    assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 40, &b, &out), TRN_E_ARG);
+    b.inlier_prob = NAN;
+    assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 40, &b, &out), TRN_E_ARG);
+    b.inlier_prob = 0.999f;
+    assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 40, &b, &out), TRN_OK);
     assert_int_equal(trn_refine_pose(&g, &l, -TRN_MAX_DIM, LR, 40, 40, &c, &out), TRN_E_NODATA);
     assert_int_equal(trn_refine_pose(&g, &l, -TRN_MAX_DIM - 1, LR, 40, 40, &c, &out), TRN_E_ARG);
     assert_int_equal(trn_refine_pose(&g, &l, LR, -TRN_MAX_DIM, 40, 40, &c, &out), TRN_E_NODATA);

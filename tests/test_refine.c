@@ -76,20 +76,32 @@ static double bilin(double x, double y)
     return v;
 }
 
-/* Local DEM seen from pose (tx, ty): offset dz, noise of cfg times `noise`. */
-static void make_local(trn_grid_f32_t *l, double tx, double ty, double dz, double noise,
-                       const trn_refine_cfg_t *cfg, trn_rng_t *r)
+static double lin(double x, double y);
+
+/* Local DEM seen from pose (tx, ty): the mix B + mix (C - B) of the global
+ * DEM's bilinear B and bicubic C heights, offset dz, noise of cfg times
+ * `noise`. */
+static void make_local_mix(trn_grid_f32_t *l, double tx, double ty, double dz, double noise,
+                           double mix, const trn_refine_cfg_t *cfg, trn_rng_t *r)
 {
     int x, y, c = LW / 2;
     for (y = 0; y < LW; ++y) {
         for (x = 0; x < LW; ++x) {
             double rm = cfg->cell_m * sqrt((double)((x - c) * (x - c) + (y - c) * (y - c)));
             double s = cfg->noise_m + cfg->noise_k_per_m * rm * rm;
-            l_data[y * LW + x] = (float)(bilin(tx + x - c, ty + y - c) + dz + noise * s * gauss(r));
+            double b = lin(tx + x - c, ty + y - c), cc = bilin(tx + x - c, ty + y - c);
+            l_data[y * LW + x] = (float)(b + mix * (cc - b) + dz + noise * s * gauss(r));
         }
     }
     l_data[c * LW + c] = NAN; /* the rover's own cell is never seen */
     assert_int_equal(trn_grid_f32_init(l, l_data, LW * LW, LW, LW), TRN_OK);
+}
+
+/* The same with the bicubic heights (mix 1). */
+static void make_local(trn_grid_f32_t *l, double tx, double ty, double dz, double noise,
+                       const trn_refine_cfg_t *cfg, trn_rng_t *r)
+{
+    make_local_mix(l, tx, ty, dz, noise, 1.0, cfg, r);
 }
 
 static trn_refine_cfg_t cfg_of(void)
@@ -98,6 +110,7 @@ static trn_refine_cfg_t cfg_of(void)
     c.cell_m = 1.0f;
     c.noise_m = 0.01f;
     c.noise_k_per_m = 0.0004f;
+    c.inlier_prob = 0.95f;
     return c;
 }
 
@@ -223,6 +236,99 @@ static void test_interp_shift(void **state)
     assert_true(least > 5e-3);
 }
 
+/* The mixture ln L of trn_height_search at a continuous pose, written out:
+ * the mixed interpolant, K = 1 / (10 sd of the seen local heights). */
+static double slow_ll(const trn_refine_cfg_t *c, const trn_refine_t *o)
+{
+    int i, j, m = LW / 2, n = 0;
+    double mean = 0.0, var = 0.0, k, a = (double)c->inlier_prob, ll = 0.0;
+    for (j = 0; j < LW * LW; ++j) {
+        if (isfinite(l_data[j])) {
+            mean += l_data[j];
+            ++n;
+        }
+    }
+    mean /= n;
+    for (j = 0; j < LW * LW; ++j) {
+        if (isfinite(l_data[j])) {
+            var += (l_data[j] - mean) * (l_data[j] - mean);
+        }
+    }
+    k = 1.0 / (10.0 * fmax(sqrt(var / n), (double)c->noise_m));
+    for (j = 0; j < LW; ++j) {
+        for (i = 0; i < LW; ++i) {
+            double rm, s, v, b, cc, u;
+            if (!isfinite(l_data[j * LW + i])) {
+                continue;
+            }
+            rm = c->cell_m * sqrt((double)((i - m) * (i - m) + (j - m) * (j - m)));
+            s = c->noise_m + c->noise_k_per_m * rm * rm;
+            v = s * s + o->model_m * o->model_m;
+            b = lin(o->x + i - m, o->y + j - m);
+            cc = bilin(o->x + i - m, o->y + j - m);
+            u = l_data[j * LW + i] - o->dz_m - (b + o->interp_mix * (cc - b));
+            ll += log(a * exp(-0.5 * u * u / v) / sqrt(6.283185307179586 * v) + (1.0 - a) * k);
+        }
+    }
+    return ll;
+}
+
+/* The interpolants' mix is estimated with the pose: local DEMs made with
+ * the mix 0 (bilinear), 0.3, 1 (bicubic) and 1.8 (sharper than bicubic)
+ * give the pose and the mix back when noise-free; with noise, ll is the
+ * mixture ln L written out (slow_ll), and a mix that the data cannot pin
+ * (a bilinear surface, where the interpolants agree) stays at the prior's
+ * mean. */
+static void test_mix(void **state)
+{
+    trn_grid_f32_t g, l;
+    trn_refine_cfg_t c = cfg_of();
+    trn_refine_t out;
+    trn_rng_t r;
+    const double mixes[4] = {0.0, 0.3, 1.0, 1.8};
+    int k, i;
+    double worst = 0.0, worst_mix = 0.0, worst_ll = 0.0;
+    (void)state;
+    trn_rng_seed(&r, 21);
+    make_global(&g);
+    for (k = 0; k < 4; ++k) {
+        for (i = 0; i < 6; ++i) {
+            double tx = 24.0 + 12.0 * trn_rng_unit(&r), ty = 24.0 + 12.0 * trn_rng_unit(&r);
+            make_local_mix(&l, tx, ty, 2.0, 0.0, mixes[k], &c, &r);
+            assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, (int)floor(tx + 0.5),
+                                             (int)floor(ty + 0.5), &c, &out),
+                             TRN_OK);
+            worst = fmax(worst, fmax(fabs(out.x - tx), fabs(out.y - ty)));
+            worst_mix = fmax(worst_mix, fabs(out.interp_mix - mixes[k]));
+            make_local_mix(&l, tx, ty, 2.0, 1.0, mixes[k], &c, &r);
+            assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, (int)floor(tx + 0.5),
+                                             (int)floor(ty + 0.5), &c, &out),
+                             TRN_OK);
+            worst_ll = fmax(worst_ll, fabs(out.ll - slow_ll(&c, &out)));
+        }
+    }
+    printf("mix: worst pose error %.2e cells, worst mix error %.2e (noise-free, 24 poses); "
+           "ll against the slow sum %.2e nats\n",
+           worst, worst_mix, worst_ll);
+    assert_true(worst < 1e-3);
+    assert_true(worst_mix < 1e-2);
+    assert_true(worst_ll < 1e-6);
+    {
+        /* a bilinear surface (x y, x, y terms), which both interpolants
+         * reproduce: they agree, the mix has no information */
+        int x, y;
+        for (y = 0; y < GW; ++y) {
+            for (x = 0; x < GW; ++x) {
+                g_data[y * GW + x] = (float)(0.02 * x * y + 0.5 * x - 0.25 * y);
+            }
+        }
+        make_local(&l, 30.3, 30.6, 1.0, 0.0, &c, &r);
+        assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, 30, 31, &c, &out), TRN_OK);
+        assert_true(fabs(out.interp_mix - TRN_REFINE_MIX_MEAN) < 1e-3);
+        assert_true(fabs(out.x - 30.3) < 1e-3 && fabs(out.y - 30.6) < 1e-3);
+    }
+}
+
 /* With the documented noise the errors fall inside the 1/2/3-sigma ellipses
  * of the statistical part of the covariance as a 2-D normal's do (39.3 /
  * 86.5 / 98.9 %); 400 trials. */
@@ -249,11 +355,11 @@ static void test_noise_coverage(void **state)
          * systematic term (which the exact cubic model here does not need) */
         {
             double c0 = out.cov_cells[0] -
-                        TRN_REFINE_SYS * out.interp_shift[0] * out.interp_shift[0];
+                        out.sys_weight * out.interp_shift[0] * out.interp_shift[0];
             double c1 = out.cov_cells[1] -
-                        TRN_REFINE_SYS * out.interp_shift[1] * out.interp_shift[1];
+                        out.sys_weight * out.interp_shift[1] * out.interp_shift[1];
             double c2 = out.cov_cells[2] -
-                        TRN_REFINE_SYS * out.interp_shift[0] * out.interp_shift[1];
+                        out.sys_weight * out.interp_shift[0] * out.interp_shift[1];
             det = c0 * c1 - c2 * c2;
             m2 = (c1 * ex * ex - 2.0 * c2 * ex * ey + c0 * ey * ey) / det;
             assert_true(out.cov_cells[0] >= c0 && out.cov_cells[1] >= c1);
@@ -583,7 +689,7 @@ int main(void)
         cmocka_unit_test(test_exact_model),    cmocka_unit_test(test_interp_shift),
         cmocka_unit_test(test_noise_coverage), cmocka_unit_test(test_outliers),
         cmocka_unit_test(test_errors),         cmocka_unit_test(test_cfg_auto),
-        cmocka_unit_test(test_height_search),
+        cmocka_unit_test(test_height_search),  cmocka_unit_test(test_mix),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -130,6 +130,10 @@ typedef struct {
  *  m / roughness <= 1.8 on three real DEMs; a local map from outside the
  *  window 5-50 (docs/method.md section 9). */
 #define TRN_MISFIT_ROUGHNESS 3.0
+/** The height matcher refines from the best integer pose and from each of
+ *  its 8 neighbours whose ln L is within this many nats of the best, and
+ *  keeps the refinement with the highest refined ln L (docs/method.md 9). */
+#define TRN_REFINE_START_NATS 30.0
 
 /** @brief The paper's configuration on its rock fields: 0.1 m cells and
  * bins, 1 m high-pass half-width, 16 bins, s = 0.1 m, a = 0.95, cap 60

@@ -6,21 +6,24 @@
  *
  * Model: a seen local height h_i at rover-relative cell (x_i, y_i) is the
  * global DEM's height at the pose plus one unknown vertical offset plus
- * Gaussian noise: h_i = dz + G(px + x_i, py + y_i) + e_i, with G bicubic
- * (Keys' cubic convolution; bilinear where the 4 x 4 support is incomplete)
- * between global cell centres and e_i ~ N(0, s_i^2 + m^2),
- * s_i = noise_m + noise_k_per_m * r_i^2 (r_i the cell's range from the
- * rover, metres) and m^2 one model variance common to all points (the DEM's
- * own interpolation error, a map older than the terrain), estimated from
- * the residuals by precision-squared weighted moments at every step.
- * trn_height_search finds the best integer pose exhaustively under that
- * model (plus a uniform outlier density); trn_refine_pose refines it by
- * Gauss-Newton over (px, py, dz), residuals beyond TRN_REFINE_CLIP standard
- * deviations being outliers (re-decided every step). Covariance:
- * (J^T W J)^-1 x max(1, reduced chi-square) x the block-sandwich inflation
- * (TRN_REFINE_BLOCK), plus TRN_REFINE_SYS x the outer product of the shift
- * bilinear heights would cause (the interpolants' disagreement, a systematic
- * error). docs/modules/refine.md.
+ * Gaussian noise: h_i = dz + G(px + x_i, py + y_i) + e_i, with e_i ~ N(0,
+ * s_i^2 + m^2), s_i = noise_m + noise_k_per_m * r_i^2 (r_i the cell's range
+ * from the rover, metres) and m^2 one model variance common to all points
+ * (what the map cannot say of the terrain between and beyond its samples),
+ * estimated from the residuals by precision-squared weighted moments at
+ * every step. trn_height_search finds the best integer pose exhaustively
+ * under that model (G the DEM's own samples, plus a uniform outlier
+ * density). trn_refine_pose refines it by Gauss-Newton over (px, py, dz,
+ * mix), G between cell centres being the mix B + mix (C - B) of the
+ * bilinear B and the bicubic C (Keys' cubic convolution; bilinear where
+ * its 4 x 4 support is incomplete), the mix estimated from the data under a
+ * weak prior (TRN_REFINE_MIX_MEAN, TRN_REFINE_MIX_SD); residuals beyond
+ * TRN_REFINE_CLIP standard deviations are outliers (re-decided every step).
+ * Covariance of (px, py), the mix marginalized: (J^T W J)^-1 x max(1,
+ * reduced chi-square) x the block-sandwich inflation (TRN_REFINE_BLOCK),
+ * plus sys_weight x the outer product of the shift bilinear heights would
+ * cause (the interpolants' disagreement), sys_weight = TRN_REFINE_SYS x the
+ * model variance's share of the residual variance. docs/modules/refine.md.
  */
 #ifndef TRN_REFINE_H
 #define TRN_REFINE_H
@@ -42,9 +45,17 @@ extern "C" {
  *  correlated by the covariance (cluster-robust sandwich). */
 #define TRN_REFINE_BLOCK 4
 #ifndef TRN_REFINE_SYS
-/** Weight of the interpolants' disagreement in the covariance. */
+/** Weight of the interpolants' disagreement in the covariance, before the
+ *  model variance's share scales it (trn_refine_t.sys_weight). */
 #define TRN_REFINE_SYS 1.0
 #endif
+/** Prior of the interpolants' mix (0 bilinear, 1 bicubic): its mean, the
+ *  middle of the bracket the two interpolants make, */
+#define TRN_REFINE_MIX_MEAN 0.5
+/** and its standard deviation: weak, so a data set that pins the mix down
+ *  (a local map sampled bilinearly, bicubically, or sharper than either)
+ *  is not pulled to the middle. */
+#define TRN_REFINE_MIX_SD 1.0
 /** Largest Gauss-Newton iterations. */
 #define TRN_REFINE_MAX_ITER 12
 /** Step halvings tried per iteration of the interpolants' shift. */
@@ -55,6 +66,7 @@ typedef struct {
     float cell_m;        /**< cell of both grids, metres, (0, 1000] */
     float noise_m;       /**< constant part, metres, (0, 1000] */
     float noise_k_per_m; /**< range-squared part, 1/m, [0, 1000] */
+    float inlier_prob;   /**< a of the mixture ln L (trn_refine_t.ll), (0, 1) */
 } trn_refine_cfg_t;
 
 /** Best integer pose of trn_height_search. */
@@ -77,8 +89,14 @@ typedef struct {
     double cov_cells[3];    /**< var_x, var_y, cov_xy in cells^2 */
     double chi2_dof;        /**< reduced chi-square of the inliers (before the >= 1 floor) */
     double inflation;       /**< factor (>= 1) the block sandwich put on the model covariance */
-    double interp_shift[2]; /**< shift of (x, y) had the DEM been bilinear, cells;
-                                 TRN_REFINE_SYS times its outer product is in the covariance */
+    double interp_shift[2]; /**< shift of (x, y) had the DEM been bilinear instead of
+                                 bicubic, cells; sys_weight times its outer product is
+                                 in the covariance */
+    double sys_weight;      /**< TRN_REFINE_SYS x m^2 / (m^2 + the mean noise variance) */
+    double interp_mix;      /**< the estimated mix of the interpolants: 0 bilinear,
+                                 1 bicubic (beyond [0, 1]: sharper or smoother) */
+    double ll;              /**< trn_height_search's mixture ln L at the refined pose
+                                 (the mixed interpolant; compares refinements) */
     int32_t n_used;         /**< inlier points of the last iteration */
     int32_t n_seen;         /**< seen local points with a global height under them */
     int32_t iterations;     /**< Gauss-Newton steps taken */

@@ -189,10 +189,17 @@ def expect_fix(label, want, *args, tol=0.03):
         check(r["status"] == "ok", f"localize {label}: status {r['status']}")
         check(r["failure_probability"] < 0.01, f"localize {label}: failure probability {r['failure_probability']}")
         check(0 < r["sigma_x_m"] < 0.05 and 0 < r["sigma_y_m"] < 0.05, f"localize {label}: sigmas")
+        if r.get("refined"):
+            rf = r.get("refinement", {})
+            check(all(k in rf for k in ("model_m", "chi2_dof", "inflation", "interp_mix", "points_used")),
+                  f"localize {label}: refinement fields {sorted(rf)}")
+            check(rf.get("inflation", 0) >= 1 and rf.get("points_used", 0) > 0
+                  and -1.5 <= rf.get("interp_mix", 9) <= 2.5, f"localize {label}: refinement {rf}")
     return r
 
 
-expect_fix("GeoTIFF", truth, "--dem", g_tif, "--local", local_tif, "--prior", prior)
+r_tif = expect_fix("GeoTIFF", truth, "--dem", g_tif, "--local", local_tif, "--prior", prior)
+check(r_tif.get("refined") is True and "refinement" in r_tif, "localize GeoTIFF: the auto map refines")
 rc, out, err = run("localize", "--dem", g_tif, "--local", local_tif, "--prior", prior)
 check(rc == 0 and out.startswith("estimate") and "status: ok" in out, "localize human summary")
 

@@ -136,6 +136,8 @@ def trn_result(j, wall_ms=None):
         sx, sy, rho = j["sigma_x_m"], j["sigma_y_m"], j["rho"]
         cov = [sx * sx, sy * sy, rho * sx * sy]
     out["cov_m2"] = cov
+    if j.get("refinement") is not None:
+        out["refinement"] = j["refinement"]
     if j.get("time_ms") is not None:
         out["time_ms"], out["time_includes_map_build"] = float(j["time_ms"]), False
     else:

@@ -253,6 +253,18 @@ void cmd_localize_report_json(FILE *out, const cmd_localize_ctx_t *c, const char
     }
     json_str(&j, "status", status_word(o->st));
     json_bool(&j, "refined", o->res.refined != 0);
+    if (o->res.refined) {
+        /* the refinement's own figures (docs/method.md 9), grid frame: x
+         * east, y south, cells */
+        const trn_refine_t *rf = &o->res.refinement;
+        json_obj(&j, "refinement");
+        json_num(&j, "model_m", rf->model_m);
+        json_num(&j, "chi2_dof", rf->chi2_dof);
+        json_num(&j, "inflation", rf->inflation);
+        json_num(&j, "interp_mix", rf->interp_mix);
+        json_int(&j, "points_used", (long long)rf->n_used);
+        json_obj_end(&j);
+    }
     json_obj(&j, "prior");
     json_num(&j, "x_m", prior[0]);
     json_num(&j, "y_m", prior[1]);
