@@ -6,6 +6,7 @@
 #include <float.h>
 #include <math.h>
 
+#include "refine_int.h"
 #include "ws.h"
 
 void trn_map_cfg_default(trn_map_cfg_t *cfg)
@@ -745,7 +746,8 @@ size_t trn_localize_dem_heading_workspace_bytes(const trn_map_t *map, int32_t wi
                                                 size_t max_points, const trn_window_t *win)
 {
     head_layout_t lay;
-    if (map == NULL || win == NULL || !map_ok(map) || !window_ok(map, win) || max_points == 0u ||
+    if (map == NULL || win == NULL || !map_ok(map) || map->cfg.match == TRN_MATCH_HEIGHTS ||
+        !window_ok(map, win) || max_points == 0u ||
         max_points > (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM) {
         return 0u;
     }
@@ -770,9 +772,13 @@ trn_status_t trn_localize_dem_heading(const trn_map_t *map, const trn_grid_f32_t
     if ((st = trn_grid_f32_check(local_dem)) != TRN_OK) {
         return st;
     }
-    if (!map_ok(map) || map->cfg.match != TRN_MATCH_VOXEL || map->cfg.refine != 0 ||
+    if (!map_ok(map) || (map->cfg.match == TRN_MATCH_VOXEL && map->cfg.refine != 0) ||
         max_points == 0u || max_points > (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM) {
         return TRN_E_ARG;
+    }
+    if (map->cfg.match == TRN_MATCH_HEIGHTS) {
+        return trn_localize_heights_heading_(map, local_dem, rover_x, rover_y, max_points, win, cfg,
+                                             ws, ws_bytes, out);
     }
     if (!window_ok(map, win) ||
         !head_layout(map, local_dem->width, local_dem->height, max_points, win, &lay)) {
