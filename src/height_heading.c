@@ -304,9 +304,8 @@ trn_status_t trn_height_search_heading(const trn_grid_f32_t *global, const trn_g
         win->x1 >= global->width || win->y1 >= global->height) {
         return TRN_E_RANGE;
     }
-    if ((st = trn_ws_check(
-             ws, ws_bytes, search_carve(local->width, local->height, ws, &obs, &tab))) !=
-        TRN_OK) {
+    if ((st = trn_ws_check(ws, ws_bytes,
+                           search_carve(local->width, local->height, ws, &obs, &tab))) != TRN_OK) {
         return st;
     }
     sc.g = global;
@@ -357,7 +356,8 @@ static void hh_layout(const trn_grid_f32_t *local, const trn_window_t *win, int3
     lay->best = trn_ws_offset(&w, sizeof(trn_height_best3_t));
     lay->ref = trn_ws_offset(&w, sizeof(trn_refine3_t));
     lay->grid = trn_ws_offset(&w, (size_t)(2 * kk + 1) * poses * sizeof(double));
-    lay->search = trn_ws_offset(&w, trn_height_heading_workspace_bytes(local->width, local->height));
+    lay->search = trn_ws_offset(&w,
+                                trn_height_heading_workspace_bytes(local->width, local->height));
     lay->total = w.total;
 }
 
@@ -433,8 +433,10 @@ static void search_result(const trn_height_best3_t *b, const trn_window_t *win,
     out->loc.n_points = 0u;
     out->loc.stats.poses_scored = b->poses;
     out->loc.stats.blocks_bounded = 0u;
-    out->loc.on_window_edge =
-        (b->x == win->x0 || b->x == win->x1 || b->y == win->y0 || b->y == win->y1) ? 1 : 0;
+    out->loc.on_window_edge = (b->x == win->x0 || b->x == win->x1 || b->y == win->y0 ||
+                               b->y == win->y1)
+                                  ? 1
+                                  : 0;
     out->loc.x = (double)b->x;
     out->loc.y = (double)b->y;
     out->loc.sigma_x_m = out->loc.sigma_y_m = (double)INFINITY;
@@ -457,8 +459,8 @@ static void search_result(const trn_height_best3_t *b, const trn_window_t *win,
 static void refine_result(const trn_map_t *map, const trn_refine3_t *r, trn_heading_result_t *out)
 {
     const double cell = (double)map->cfg.terrain.cell_m;
-    const double lim =
-        map->roughness_m > (double)map->cfg.noise_m ? map->roughness_m : (double)map->cfg.noise_m;
+    const double lim = map->roughness_m > (double)map->cfg.noise_m ? map->roughness_m
+                                                                   : (double)map->cfg.noise_m;
     int32_t p;
     out->loc.refined = 1;
     out->loc.misfit = r->pos.model_m > TRN_MISFIT_ROUGHNESS * lim ? 1 : 0;
@@ -556,15 +558,14 @@ trn_status_t trn_localize_heights_heading_(const trn_map_t *map, const trn_grid_
     rc.noise_m = map->cfg.noise_m;
     rc.noise_k_per_m = map->cfg.noise_k_per_m;
     if ((st = trn_height_search_heading(&map->heights, local, rover_x, rover_y, win, cfg, &rc,
-                                        map->cfg.inlier_prob, b + lay.search,
-                                        ws_bytes - lay.search, grid, best)) != TRN_OK) {
+                                        map->cfg.inlier_prob, b + lay.search, ws_bytes - lay.search,
+                                        grid, best)) != TRN_OK) {
         return st;
     }
     search_result(best, win, cfg, out);
-    if (trn_refine_pose_heading(&map->heights, local, rover_x, rover_y, best->x, best->y,
-                                out->heading_rad,
-                                cfg->window_rad > 0.0 ? TRN_REFINE_MAX_TURN_STEPS * step : 0.0,
-                                &rc, ref) == TRN_OK) {
+    if (trn_refine_pose_heading(
+            &map->heights, local, rover_x, rover_y, best->x, best->y, out->heading_rad,
+            cfg->window_rad > 0.0 ? TRN_REFINE_MAX_TURN_STEPS * step : 0.0, &rc, ref) == TRN_OK) {
         refine_result(map, ref, out);
     }
     out->loc.refinement = ref->pos;

@@ -382,8 +382,8 @@ static int iterate(const rctx_t *c, const double p0[4], double max_turn, double 
         }
         *model2 = next_model2(acc);
         out->pos.iterations = it + 1;
-        if (fabs(p[0] - p0[0]) > TRN_REFINE_MAX_SHIFT || fabs(p[1] - p0[1]) > TRN_REFINE_MAX_SHIFT ||
-            fabs(p[2] - p0[2]) > max_turn) {
+        if (fabs(p[0] - p0[0]) > TRN_REFINE_MAX_SHIFT ||
+            fabs(p[1] - p0[1]) > TRN_REFINE_MAX_SHIFT || fabs(p[2] - p0[2]) > max_turn) {
             return 0;
         }
         if (fabs(d[0]) < 1e-4 && fabs(d[1]) < 1e-4 && fabs(d[2]) * rmax < 1e-4) {

@@ -109,11 +109,11 @@ static void local_dem(double rx, double ry, double delta, double dz, int noise)
             const double mx = (double)i * c + (double)j * s, my = -(double)i * s + (double)j * c;
             const double r_m = CELL * sqrt((double)(i * i + j * j));
             const double sd = (double)g_w.cfg.noise_m + (double)g_w.cfg.noise_k_per_m * r_m * r_m;
-            g_loc[(j + LR) * LW + (i + LR)] =
-                (i * i + j * j <= LR * LR)
-                    ? (float)(synth_height(&g_w.t, (rx + mx) * CELL, (ry + my) * CELL) + dz +
-                              (noise ? sd * gauss() : 0.0))
-                    : NAN;
+            g_loc[(j + LR) * LW + (i + LR)] = (i * i + j * j <= LR * LR)
+                                                  ? (float)(synth_height(&g_w.t, (rx + mx) * CELL,
+                                                                         (ry + my) * CELL) +
+                                                            dz + (noise ? sd * gauss() : 0.0))
+                                                  : NAN;
         }
     }
     assert_int_equal(trn_grid_f32_init(&g_lg, g_loc, LW * LW, LW, LW), TRN_OK);
@@ -184,10 +184,9 @@ static void test_w0_bit_equal(void **state)
         assert_int_equal(trn_height_search(&g_w.map.heights, &g_lg, LR, LR, &win, NULL, &rc,
                                            g_w.cfg.inlier_prob, 1.0, g_grid[0], &b2),
                          TRN_OK);
-        assert_int_equal(trn_height_search_heading(&g_w.map.heights, &g_lg, LR, LR, &win, &cw, &rc,
-                                                   g_w.cfg.inlier_prob, g_ws,
-                                                   trn_height_heading_workspace_bytes(LW, LW),
-                                                   g_grid[1], &b3),
+        assert_int_equal(trn_height_search_heading(
+                             &g_w.map.heights, &g_lg, LR, LR, &win, &cw, &rc, g_w.cfg.inlier_prob,
+                             g_ws, trn_height_heading_workspace_bytes(LW, LW), g_grid[1], &b3),
                          TRN_OK);
         assert_true(b3.half_steps >= 1);
         assert_memory_equal(g_grid[0], g_grid[1] + (size_t)b3.half_steps * poses,
@@ -278,10 +277,9 @@ static void test_grid_vs_slow(void **state)
     (void)state;
     world_build(6, 0);
     local_dem(14.3, 69.6, 3.0 * DEG, -0.2, 1);
-    assert_int_equal(trn_height_search_heading(&g_w.map.heights, &g_lg, LR, LR, &win, &c, &rc,
-                                               g_w.cfg.inlier_prob, g_ws,
-                                               trn_height_heading_workspace_bytes(LW, LW),
-                                               g_grid[0], &b),
+    assert_int_equal(trn_height_search_heading(
+                         &g_w.map.heights, &g_lg, LR, LR, &win, &c, &rc, g_w.cfg.inlier_prob, g_ws,
+                         trn_height_heading_workspace_bytes(LW, LW), g_grid[0], &b),
                      TRN_OK);
     assert_true(b.half_steps >= 2);
     /* K of the call: the local DEM's spread */
@@ -298,9 +296,9 @@ static void test_grid_vs_slow(void **state)
     for (i = 0; i < 40; ++i) {
         const int32_t k = trn_rng_int(&r, -b.half_steps, b.half_steps);
         const int32_t px = trn_rng_int(&r, win.x0, win.x1), py = trn_rng_int(&r, win.y0, win.y1);
-        const double got = g_grid[0][((size_t)(k + b.half_steps) * 13u + (size_t)(py - win.y0)) *
-                                         13u +
-                                     (size_t)(px - win.x0)];
+        const double got =
+            g_grid[0][((size_t)(k + b.half_steps) * 13u + (size_t)(py - win.y0)) * 13u +
+                      (size_t)(px - win.x0)];
         const double want = slow_ll(c.center_rad + k * b.step_rad, px, py, kd);
         assert_true(fabs(got - want) <= 1e-7 * (1.0 + fabs(want)));
     }
@@ -336,9 +334,9 @@ static void test_refine_turned(void **state)
     assert_true(fabs(o.pos.dz_m - 0.5) < 0.05);
     assert_true(o.cov3[1] == o.cov3[3] && o.cov3[2] == o.cov3[6] && o.cov3[5] == o.cov3[7]);
     assert_true(o.cov3[0] == o.pos.cov_cells[0] && o.pos.inflation >= 1.0);
-    assert_int_equal(trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, 59, delta, 0.0,
-                                             &rc, &o),
-                     TRN_OK);
+    assert_int_equal(
+        trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, 59, delta, 0.0, &rc, &o),
+        TRN_OK);
     assert_true(o.heading_rad == delta && o.cov3[8] == 0.0 && o.cov3[2] == 0.0 &&
                 o.interp_shift_heading_rad == 0.0);
     assert_true(fabs(o.pos.x - 60.3) < 0.2 && fabs(o.pos.y - 58.7) < 0.2);
@@ -453,12 +451,280 @@ static void test_calibration(void **state)
     assert_true(cp[1] >= 0.55 * n && cp[2] >= 0.82 * n);
 }
 
+/* trn_height_heading_steps, trn_height_search_heading and the workspace
+ * functions: every bad-input class, called directly. */
+static void test_bad_search(void **state)
+{
+    const trn_window_t win = window_at(60, 60, 4), off = window_at(125, 60, 4);
+    const trn_window_t inv = {62, 60, 58, 64};
+    trn_heading_cfg_t c = {0.0, 5.0 * DEG, 0.0}, bc;
+    trn_refine_cfg_t rc = rcfg(), brc;
+    trn_height_best3_t b;
+    trn_grid_f32_t bad, one;
+    static float one_cell[LW * LW];
+    double step;
+    int32_t kk;
+    const size_t wb = trn_height_heading_workspace_bytes(LW, LW);
+    int i;
+    (void)state;
+    world_build(11, 0);
+    local_dem(60.0, 60.0, 0.0, 0.0, 0);
+    rc = rcfg();
+    brc = rc;
+    assert_true(wb > 0u && wb <= sizeof g_ws);
+    assert_int_equal(trn_height_heading_workspace_bytes(0, LW), 0u);
+    assert_int_equal(trn_height_heading_workspace_bytes(LW, TRN_MAX_DIM + 1), 0u);
+    /* steps */
+    assert_int_equal(trn_height_heading_steps(&g_lg, LR, LR, &c, &step, &kk), TRN_OK);
+    assert_true(fabs(step - 1.0 / LR) < 1e-12 && kk == (int32_t)ceil(5.0 * DEG * LR - 1e-9));
+    assert_int_equal(trn_height_heading_steps(NULL, LR, LR, &c, &step, &kk), TRN_E_NULL);
+    assert_int_equal(trn_height_heading_steps(&g_lg, LR, LR, NULL, &step, &kk), TRN_E_NULL);
+    assert_int_equal(trn_height_heading_steps(&g_lg, LR, LR, &c, NULL, &kk), TRN_E_NULL);
+    assert_int_equal(trn_height_heading_steps(&g_lg, LR, LR, &c, &step, NULL), TRN_E_NULL);
+    bad = g_lg;
+    bad.width = 0;
+    assert_int_equal(trn_height_heading_steps(&bad, LR, LR, &c, &step, &kk), TRN_E_SIZE);
+    assert_int_equal(trn_height_heading_steps(&g_lg, -TRN_MAX_DIM - 1, LR, &c, &step, &kk),
+                     TRN_E_ARG);
+    bc = c;
+    bc.center_rad = NAN;
+    assert_int_equal(trn_height_heading_steps(&g_lg, LR, LR, &bc, &step, &kk), TRN_E_ARG);
+    bc = c;
+    bc.window_rad = 4.0;
+    assert_int_equal(trn_height_heading_steps(&g_lg, LR, LR, &bc, &step, &kk), TRN_E_ARG);
+    bc = c;
+    bc.step_rad = 1e-5; /* 17,453 headings */
+    assert_int_equal(trn_height_heading_steps(&g_lg, LR, LR, &bc, &step, &kk), TRN_E_SIZE);
+    for (i = 0; i < LW * LW; ++i) {
+        one_cell[i] = NAN;
+    }
+    assert_int_equal(trn_grid_f32_init(&one, one_cell, LW * LW, LW, LW), TRN_OK);
+    assert_int_equal(trn_height_heading_steps(&one, LR, LR, &c, &step, &kk), TRN_E_NODATA);
+    one_cell[LR * LW + LR] = 1.0f; /* only the rover's own cell: no lever arm */
+    assert_int_equal(trn_height_heading_steps(&one, LR, LR, &c, &step, &kk), TRN_E_NODATA);
+    /* the search */
+#define HS(gl, lo, w, hc, r, a, ws, n, out) \
+    trn_height_search_heading(gl, lo, LR, LR, w, hc, r, a, ws, n, g_grid[0], out)
+    assert_int_equal(HS(&g_w.map.heights, &g_lg, &win, &c, &rc, 0.9f, g_ws, wb, &b), TRN_OK);
+    assert_int_equal(trn_height_search_heading(&g_w.map.heights, &g_lg, LR, LR, &win, &c, &rc, 0.9f,
+                                               g_ws, wb, NULL, &b),
+                     TRN_OK);
+    assert_int_equal(HS(NULL, &g_lg, &win, &c, &rc, 0.9f, g_ws, wb, &b), TRN_E_NULL);
+    assert_int_equal(HS(&g_w.map.heights, NULL, &win, &c, &rc, 0.9f, g_ws, wb, &b), TRN_E_NULL);
+    assert_int_equal(HS(&g_w.map.heights, &g_lg, NULL, &c, &rc, 0.9f, g_ws, wb, &b), TRN_E_NULL);
+    assert_int_equal(HS(&g_w.map.heights, &g_lg, &win, NULL, &rc, 0.9f, g_ws, wb, &b), TRN_E_NULL);
+    assert_int_equal(HS(&g_w.map.heights, &g_lg, &win, &c, NULL, 0.9f, g_ws, wb, &b), TRN_E_NULL);
+    assert_int_equal(HS(&g_w.map.heights, &g_lg, &win, &c, &rc, 0.9f, NULL, wb, &b), TRN_E_NULL);
+    assert_int_equal(HS(&g_w.map.heights, &g_lg, &win, &c, &rc, 0.9f, g_ws, wb, NULL), TRN_E_NULL);
+    assert_int_equal(HS(&bad, &g_lg, &win, &c, &rc, 0.9f, g_ws, wb, &b), TRN_E_SIZE);
+    assert_int_equal(HS(&g_w.map.heights, &bad, &win, &c, &rc, 0.9f, g_ws, wb, &b), TRN_E_SIZE);
+    assert_int_equal(HS(&g_w.map.heights, &g_lg, &win, &c, &rc, 1.0f, g_ws, wb, &b), TRN_E_ARG);
+    brc.noise_m = 0.0f;
+    assert_int_equal(HS(&g_w.map.heights, &g_lg, &win, &c, &brc, 0.9f, g_ws, wb, &b), TRN_E_ARG);
+    bc = c;
+    bc.window_rad = NAN;
+    assert_int_equal(HS(&g_w.map.heights, &g_lg, &win, &bc, &rc, 0.9f, g_ws, wb, &b), TRN_E_ARG);
+    bc = c;
+    bc.step_rad = 1e-5;
+    assert_int_equal(HS(&g_w.map.heights, &g_lg, &win, &bc, &rc, 0.9f, g_ws, wb, &b), TRN_E_SIZE);
+    assert_int_equal(HS(&g_w.map.heights, &g_lg, &off, &c, &rc, 0.9f, g_ws, wb, &b), TRN_E_RANGE);
+    assert_int_equal(HS(&g_w.map.heights, &g_lg, &inv, &c, &rc, 0.9f, g_ws, wb, &b), TRN_E_RANGE);
+    assert_int_equal(HS(&g_w.map.heights, &g_lg, &win, &c, &rc, 0.9f, g_ws, wb - 1u, &b),
+                     TRN_E_WORKSPACE);
+    assert_int_equal(HS(&g_w.map.heights, &g_lg, &win, &c, &rc, 0.9f, g_ws + 1, wb, &b),
+                     TRN_E_WORKSPACE);
+    for (i = 0; i < 6; ++i) { /* seven seen cells: too few */
+        one_cell[i] = 1.0f;
+    }
+    assert_int_equal(HS(&g_w.map.heights, &one, &win, &c, &rc, 0.9f, g_ws, wb, &b), TRN_E_NODATA);
+#undef HS
+}
+
+/* trn_refine_pose_heading: every bad-input class, called directly. */
+static void test_bad_refine(void **state)
+{
+    trn_refine_cfg_t rc, brc;
+    trn_refine3_t o;
+    trn_grid_f32_t bad, few;
+    static float few_cells[LW * LW];
+    int i;
+    (void)state;
+    world_build(12, 0);
+    rc = rcfg();
+    local_dem(60.0, 60.0, 0.0, 0.0, 0);
+    assert_int_equal(
+        trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, 60, 0.0, 0.1, &rc, &o),
+        TRN_OK);
+    assert_int_equal(trn_refine_pose_heading(NULL, &g_lg, LR, LR, 60, 60, 0.0, 0.1, &rc, &o),
+                     TRN_E_NULL);
+    assert_int_equal(
+        trn_refine_pose_heading(&g_w.map.heights, NULL, LR, LR, 60, 60, 0.0, 0.1, &rc, &o),
+        TRN_E_NULL);
+    assert_int_equal(
+        trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, 60, 0.0, 0.1, NULL, &o),
+        TRN_E_NULL);
+    assert_int_equal(
+        trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, 60, 0.0, 0.1, &rc, NULL),
+        TRN_E_NULL);
+    bad = g_lg;
+    bad.height = -1;
+    assert_int_equal(trn_refine_pose_heading(&bad, &g_lg, LR, LR, 60, 60, 0.0, 0.1, &rc, &o),
+                     TRN_E_SIZE);
+    assert_int_equal(
+        trn_refine_pose_heading(&g_w.map.heights, &bad, LR, LR, 60, 60, 0.0, 0.1, &rc, &o),
+        TRN_E_SIZE);
+    assert_int_equal(
+        trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, 60, NAN, 0.1, &rc, &o),
+        TRN_E_ARG);
+    assert_int_equal(
+        trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, 60, 4.0, 0.1, &rc, &o),
+        TRN_E_ARG);
+    assert_int_equal(
+        trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, 60, 0.0, -0.1, &rc, &o),
+        TRN_E_ARG);
+    assert_int_equal(
+        trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, 60, 0.0, 4.0, &rc, &o),
+        TRN_E_ARG);
+    assert_int_equal(trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR + TRN_MAX_DIM + LW, 60,
+                                             60, 0.0, 0.1, &rc, &o),
+                     TRN_E_ARG);
+    brc = rc;
+    brc.cell_m = 0.0f;
+    assert_int_equal(
+        trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, 60, 0.0, 0.1, &brc, &o),
+        TRN_E_ARG);
+    assert_int_equal(
+        trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, N, 60, 0.0, 0.1, &rc, &o),
+        TRN_E_RANGE);
+    assert_int_equal(
+        trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, -1, 0.0, 0.1, &rc, &o),
+        TRN_E_RANGE);
+    for (i = 0; i < LW * LW; ++i) {
+        few_cells[i] = i < 7 ? 1.0f : NAN;
+    }
+    assert_int_equal(trn_grid_f32_init(&few, few_cells, LW * LW, LW, LW), TRN_OK);
+    assert_int_equal(
+        trn_refine_pose_heading(&g_w.map.heights, &few, LR, LR, 60, 60, 0.0, 0.1, &rc, &o),
+        TRN_E_NODATA);
+    /* started 3 cells off: the estimate leaves the neighbourhood, or fits
+     * nowhere; the start with infinite variances */
+    local_dem(63.0, 60.0, 0.0, 0.0, 0);
+    assert_int_equal(
+        trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, 60, 0.0, 0.1, &rc, &o),
+        TRN_E_ILLCOND);
+    assert_true(o.pos.x == 60.0 && o.pos.y == 60.0 && isinf(o.cov3[0]) && isinf(o.cov3[8]));
+    /* a flat map: the normal matrix is singular */
+    world_build(12, 1);
+    assert_int_equal(
+        trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, 60, 0.0, 0.1, &rc, &o),
+        TRN_E_ILLCOND);
+}
+
+/* trn_localize_dem_heading with a height map: each bad-input class and the
+ * statuses of an answer (ill-conditioned, ambiguous). */
+static void test_bad_localize(void **state)
+{
+    const trn_window_t win = window_at(60, 60, 4), off = window_at(125, 60, 4);
+    trn_heading_cfg_t c = {0.0, 5.0 * DEG, 0.0}, bc;
+    trn_heading_result_t res;
+    trn_grid_f32_t none;
+    trn_map_t m2;
+    static float nan_cells[LW * LW];
+    size_t wb;
+    int i, x, y;
+    (void)state;
+    world_build(13, 0);
+    local_dem(60.4, 59.8, 2.0 * DEG, 0.1, 1);
+    wb = trn_localize_dem_heading_workspace_bytes_cfg(&g_w.map, &g_lg, LR, LR, MAXPTS, &win, &c);
+    assert_true(wb > 0u && wb <= sizeof g_ws);
+    assert_int_equal(
+        trn_localize_dem_heading(&g_w.map, &g_lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &res),
+        TRN_OK);
+    assert_true(fabs(res.heading_rad - 2.0 * DEG) < 0.5 * DEG && res.loc.refined == 1);
+    /* the voxel function has no size for a height map; the _cfg one refuses */
+    assert_int_equal(trn_localize_dem_heading_workspace_bytes(&g_w.map, LW, LW, MAXPTS, &win), 0u);
+    assert_int_equal(
+        trn_localize_dem_heading_workspace_bytes_cfg(NULL, &g_lg, LR, LR, MAXPTS, &win, &c), 0u);
+    assert_int_equal(
+        trn_localize_dem_heading_workspace_bytes_cfg(&g_w.map, NULL, LR, LR, MAXPTS, &win, &c), 0u);
+    assert_int_equal(
+        trn_localize_dem_heading_workspace_bytes_cfg(&g_w.map, &g_lg, LR, LR, MAXPTS, &off, &c),
+        0u);
+    assert_int_equal(
+        trn_localize_dem_heading_workspace_bytes_cfg(&g_w.map, &g_lg, LR, LR, 0u, &win, &c), 0u);
+    bc = c;
+    bc.center_rad = NAN;
+    assert_int_equal(
+        trn_localize_dem_heading_workspace_bytes_cfg(&g_w.map, &g_lg, LR, LR, MAXPTS, &win, &bc),
+        0u);
+    assert_int_equal(
+        trn_localize_dem_heading(&g_w.map, &g_lg, LR, LR, MAXPTS, &win, &bc, g_ws, wb, &res),
+        TRN_E_ARG);
+    bc = c;
+    bc.step_rad = 1e-5;
+    assert_int_equal(
+        trn_localize_dem_heading(&g_w.map, &g_lg, LR, LR, MAXPTS, &win, &bc, g_ws, wb, &res),
+        TRN_E_SIZE);
+    bc = c;
+    bc.window_rad = 4.0;
+    assert_int_equal(
+        trn_localize_dem_heading(&g_w.map, &g_lg, LR, LR, MAXPTS, &win, &bc, g_ws, wb, &res),
+        TRN_E_ARG);
+    assert_int_equal(
+        trn_localize_dem_heading(&g_w.map, &g_lg, LR, LR, MAXPTS, &off, &c, g_ws, wb, &res),
+        TRN_E_RANGE);
+    assert_int_equal(
+        trn_localize_dem_heading(&g_w.map, &g_lg, LR, LR, MAXPTS, &win, &c, g_ws, wb - 1u, &res),
+        TRN_E_WORKSPACE);
+    for (i = 0; i < LW * LW; ++i) {
+        nan_cells[i] = NAN;
+    }
+    assert_int_equal(trn_grid_f32_init(&none, nan_cells, LW * LW, LW, LW), TRN_OK);
+    assert_int_equal(
+        trn_localize_dem_heading(&g_w.map, &none, LR, LR, MAXPTS, &win, &c, g_ws, wb, &res),
+        TRN_E_NODATA);
+    m2 = g_w.map; /* a height map without its heights */
+    m2.heights.data = NULL;
+    assert_int_equal(trn_localize_dem_heading(&m2, &g_lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &res),
+                     TRN_E_ARG);
+    /* W = 0 off centre: one heading, held fixed in the refinement */
+    bc = c;
+    bc.center_rad = 2.0 * DEG;
+    bc.window_rad = 0.0;
+    assert_int_equal(loc3(&win, &bc, &res), TRN_OK);
+    assert_true(res.heading_rad == 2.0 * DEG && res.sigma_heading_rad == 0.0 &&
+                res.half_steps == 0 && res.cov3[8] == 0.0);
+    /* a local map from elsewhere: the refinement fits it badly or not at all */
+    local_dem(20.0, 100.0, 0.0, 0.0, 1);
+    assert_int_equal(loc3(&win, &c, &res), TRN_E_ILLCOND);
+    /* a map that repeats every 3 cells along x: ambiguous */
+    for (y = 0; y < N; ++y) {
+        for (x = 0; x < N; ++x) {
+            g_w.dem[y * N + x] = (float)(0.2 * sin(2.0 * M_PI * x / 3.0) + 0.01 * y +
+                                         0.05 * sin(0.37 * y) * sin(0.21 * y + 1.0));
+        }
+    }
+    g_w.cfg.max_failure_prob = 0.05f;
+    assert_int_equal(
+        trn_map_build(&g_w.map, &g_w.cfg, &g_w.g, g_mapbuf, trn_map_bytes(&g_w.cfg, N, N)), TRN_OK);
+    for (y = -LR; y <= LR; ++y) {
+        for (x = -LR; x <= LR; ++x) {
+            g_loc[(y + LR) * LW + x + LR] = (x * x + y * y <= LR * LR)
+                                                ? g_w.dem[(60 + y) * N + 60 + x]
+                                                : NAN;
+        }
+    }
+    assert_int_equal(loc3(&win, &c, &res), TRN_E_AMBIGUOUS);
+    assert_true(res.loc.failure_probability > 0.05 && res.loc.has_second == 1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_w0_bit_equal),     cmocka_unit_test(test_grid_vs_slow),
-        cmocka_unit_test(test_refine_turned),    cmocka_unit_test(test_recovers_heading),
-        cmocka_unit_test(test_calibration),
+        cmocka_unit_test(test_w0_bit_equal),  cmocka_unit_test(test_grid_vs_slow),
+        cmocka_unit_test(test_refine_turned), cmocka_unit_test(test_recovers_heading),
+        cmocka_unit_test(test_calibration),   cmocka_unit_test(test_bad_search),
+        cmocka_unit_test(test_bad_refine),    cmocka_unit_test(test_bad_localize),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

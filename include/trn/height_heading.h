@@ -39,23 +39,23 @@ extern "C" {
 
 /** Best (pose, heading) of trn_height_search_heading. */
 typedef struct {
-    int32_t x, y;     /**< best integer pose (global cell of the rover cell) */
-    int32_t k;        /**< its heading step: heading = centre + k step */
-    double ll;        /**< its ln L, nats (as trn_height_search) */
-    double dz_m;      /**< its vertical offset local - global, metres */
-    double model_m;   /**< its model error m, metres */
-    double step_rad;  /**< heading step used */
+    int32_t x, y;       /**< best integer pose (global cell of the rover cell) */
+    int32_t k;          /**< its heading step: heading = centre + k step */
+    double ll;          /**< its ln L, nats (as trn_height_search) */
+    double dz_m;        /**< its vertical offset local - global, metres */
+    double model_m;     /**< its model error m, metres */
+    double step_rad;    /**< heading step used */
     int32_t half_steps; /**< K */
-    uint64_t poses;   /**< (pose, heading) pairs scored */
+    uint64_t poses;     /**< (pose, heading) pairs scored */
 } trn_height_best3_t;
 
 /** Result of trn_refine_pose_heading. */
 typedef struct {
-    trn_refine_t pos;    /**< as trn_refine_pose: pose, dz, model error, cov_cells (the
+    trn_refine_t pos;                /**< as trn_refine_pose: pose, dz, model error, cov_cells (the
                               position block of cov3), chi2, inflation, interp_shift
                               (x, y), counts */
-    double heading_rad;  /**< refined heading (the start when held fixed) */
-    double cov3[9];      /**< covariance of (x cells, y cells, heading rad), row-major;
+    double heading_rad;              /**< refined heading (the start when held fixed) */
+    double cov3[9];                  /**< covariance of (x cells, y cells, heading rad), row-major;
                               heading row and column 0 when held fixed */
     double interp_shift_heading_rad; /**< heading part of the interpolants' shift */
 } trn_refine3_t;

@@ -63,8 +63,8 @@ static trn_status_t localize_heading(const cmd_localize_ctx_t *c, const trn_grid
     const double sgn[3] = {1.0, -1.0,
                            deg}; /* core rows point south: flip north terms; radians to degrees */
     trn_heading_result_t hr;
-    size_t wb =
-        trn_localize_dem_heading_workspace_bytes_cfg(&c->map, lg, rx, ry, max_pts, win, &hc);
+    size_t wb = trn_localize_dem_heading_workspace_bytes_cfg(&c->map, lg, rx, ry, max_pts, win,
+                                                             &hc);
     void *raw = NULL, *ws = wb > 0 ? alloc16(wb, &raw) : NULL;
     trn_status_t st;
     int i;
