@@ -214,8 +214,9 @@ static int32_t step_of(int32_t i) { return (i % 2 == 1) ? -(i + 1) / 2 : i / 2; 
 /* The offsets turned by angle (trn_points_rotate's rounding). */
 static void turn_offsets(const obs_t *obs, size_t n, double angle, toff_t *t)
 {
-    const double c = cos(angle), s = sin(angle);
+    double c, s;
     size_t i;
+    trn_heading_trig_(angle, &c, &s);
     for (i = 0; i < n; ++i) {
         const double x = (double)obs[i].ox, y = (double)obs[i].oy;
         t[i].x = (int32_t)floor(x * c + y * s + 0.5);
@@ -405,10 +406,20 @@ size_t trn_localize_dem_heading_workspace_bytes_cfg(const trn_map_t *map,
     return lay.total;
 }
 
-/* The heading result of trn_localize_dem's (W = 0 at centre 0). */
-static void from_2d(trn_heading_result_t *out, double step)
+trn_status_t trn_localize_heights2d_(const trn_map_t *map, const trn_grid_f32_t *local,
+                                     int32_t rover_x, int32_t rover_y, size_t max_points,
+                                     const trn_window_t *win, const trn_heading_cfg_t *cfg,
+                                     void *ws, size_t ws_bytes, trn_heading_result_t *out)
 {
+    trn_status_t st;
     int32_t p;
+    if (out == NULL) { /* trn_localize_dem checks the rest */
+        return TRN_E_NULL;
+    }
+    if (!(cfg->step_rad >= 0.0 && cfg->step_rad <= TRN_HEADING_MAX_WINDOW_RAD)) {
+        return TRN_E_ARG; /* centre and window are 0 here */
+    }
+    st = trn_localize_dem(map, local, rover_x, rover_y, max_points, win, ws, ws_bytes, &out->loc);
     for (p = 0; p < 9; ++p) {
         out->cov3[p] = 0.0;
     }
@@ -417,9 +428,10 @@ static void from_2d(trn_heading_result_t *out, double step)
     out->cov3[1] = out->cov3[3] = out->loc.cov_m2[2];
     out->heading_rad = 0.0;
     out->sigma_heading_rad = 0.0;
-    out->step_rad = step;
+    out->step_rad = 0.0; /* no heading searched */
     out->half_steps = 0;
     out->best_step = 0;
+    return st;
 }
 
 /* The search's answer into out, before the refinement. */
@@ -521,10 +533,10 @@ static void masses(const double *grid, const trn_window_t *win, int32_t kk, doub
     }
 }
 
-trn_status_t trn_localize_heights_heading_(const trn_map_t *map, const trn_grid_f32_t *local,
-                                           int32_t rover_x, int32_t rover_y, size_t max_points,
-                                           const trn_window_t *win, const trn_heading_cfg_t *cfg,
-                                           void *ws, size_t ws_bytes, trn_heading_result_t *out)
+trn_status_t trn_localize_heights3_(const trn_map_t *map, const trn_grid_f32_t *local,
+                                    int32_t rover_x, int32_t rover_y, const trn_window_t *win,
+                                    const trn_heading_cfg_t *cfg, void *ws, size_t ws_bytes,
+                                    trn_heading_result_t *out)
 {
     trn_status_t st;
     trn_refine_cfg_t rc;
@@ -539,12 +551,6 @@ trn_status_t trn_localize_heights_heading_(const trn_map_t *map, const trn_grid_
         return TRN_E_RANGE;
     }
     if ((st = trn_height_heading_steps(local, rover_x, rover_y, cfg, &step, &kk)) != TRN_OK) {
-        return st;
-    }
-    if (is_2d(cfg)) {
-        st = trn_localize_dem(map, local, rover_x, rover_y, max_points, win, ws, ws_bytes,
-                              &out->loc);
-        from_2d(out, step);
         return st;
     }
     hh_layout(local, win, kk, &lay);

@@ -23,6 +23,29 @@ typedef struct {
     int fit_h; /* 1: the heading is a parameter */
 } rctx_t;
 
+/* cos and sin of an angle (finite), by the Taylor series after reduction to
+ * about [-pi, pi] (a - 2 pi round(a / 2 pi): exact for a = 0, within
+ * 1e-15 rad for |a| <= 4 pi, the headings here; a turn of many revolutions
+ * loses the bits of its multiple of 2 pi). libm's cos and sin reduce any
+ * argument exactly (Payne-Hanek), which costs them 1 KiB of stack
+ * (tools/stack/external.txt); this needs none. Error of the series below
+ * 1e-14: its terms are at most pi^6 / 6! = 1.3 in size. */
+void trn_heading_trig_(double a, double *c, double *s)
+{
+    const double two_pi = 6.283185307179586;
+    double x = a - two_pi * floor(a / two_pi + 0.5), term_c = 1.0, term_s, sc = 0.0, ss = 0.0;
+    int32_t n;
+    term_s = x;
+    for (n = 0; n < 30; ++n) {
+        sc += term_c;
+        ss += term_s;
+        term_c *= -x * x / (double)((2 * n + 1) * (2 * n + 2));
+        term_s *= -x * x / (double)((2 * n + 2) * (2 * n + 3));
+    }
+    *c = sc;
+    *s = ss;
+}
+
 /* Height noise variance of local cell (x, y) (as refine.c). */
 static double noise_var(const trn_refine_cfg_t *cfg, int32_t x, int32_t y, int32_t rx, int32_t ry)
 {
@@ -72,8 +95,9 @@ static void jacobian(const rctx_t *c, const double s3[3], double tx, double ty, 
 static void accumulate(const rctx_t *c, const double pose[4], double clip, double model2,
                        int32_t i0, int32_t j0, int32_t i1, int32_t j1, acc4_t *acc)
 {
-    const double cs = cos(pose[2]), sn = sin(pose[2]);
+    double cs, sn;
     int32_t i, j;
+    trn_heading_trig_(pose[2], &cs, &sn);
     acc_clear(acc);
     for (j = j0; j < j1; ++j) {
         for (i = i0; i < i1; ++i) {
@@ -179,13 +203,20 @@ static double next_model2(const acc4_t *acc)
 static double clampd(double v, double lim) { return v > lim ? lim : v < -lim ? -lim : v; }
 
 /* One pass of the bilinear surface at bp onto the bicubic model's heights at
- * the estimate p, over the estimate's inliers (refine.c's model_pass). */
-static void model_pass(const rctx_t *c, const double p[4], const double bp[4], double model2,
-                       acc4_t *acc)
+ * the estimate p, over the estimate's inliers (refine.c's model_pass):
+ * returns the weighted sum of squares at bp with the best offset (closed
+ * form) and the inliers' count; with acc, also the normal equations. */
+static double model_pass(const rctx_t *c, const double p[4], const double bp[4], double model2,
+                         acc4_t *acc, int32_t *n_in)
 {
-    const double cs = cos(p[2]), sn = sin(p[2]), bc = cos(bp[2]), bs = sin(bp[2]);
+    double cs, sn, bc, bs, sw = 0.0, swr = 0.0, swrr = 0.0;
     int32_t i, j;
-    acc_clear(acc);
+    trn_heading_trig_(p[2], &cs, &sn);
+    trn_heading_trig_(bp[2], &bc, &bs);
+    if (acc != NULL) {
+        acc_clear(acc);
+    }
+    *n_in = 0;
     for (j = 0; j < c->l->height; ++j) {
         for (i = 0; i < c->l->width; ++i) {
             double h = (double)TRN_GRID_AT(c->l, i, j), s3[3], b3[3], ox, oy, v, w, res, jv[4];
@@ -207,31 +238,34 @@ static void model_pass(const rctx_t *c, const double p[4], const double bp[4], d
             }
             w = 1.0 / v;
             res = (p[3] + s3[0]) - b3[0];
-            acc->q += w;
-            acc->rr += w * res;
-            acc->noise2 += w * res * res;
-            jacobian(c, b3, btx, bty, jv);
-            acc_add(acc, jv, w, res - bp[3]);
-            acc->n_in += 1;
+            sw += w;
+            swr += w * res;
+            swrr += w * res * res;
+            if (acc != NULL) {
+                jacobian(c, b3, btx, bty, jv);
+                acc_add(acc, jv, w, res - bp[3]);
+            }
+            *n_in += 1;
         }
     }
-    acc->ss = acc->q > 0.0 ? acc->noise2 - acc->rr * acc->rr / acc->q : 0.0;
+    return sw > 0.0 ? swrr - swr * swr / sw : 0.0;
 }
 
 /* The interpolants' shift (refine.c's interp_shift): Gauss-Newton of the
  * bilinear surface onto the bicubic model's own heights at p, each step
  * halved until the sum of squares drops over the same points. acc and bi
- * are the caller's (dead by now). */
+ * are the caller's (dead by now); a trial step's pass keeps its sums only,
+ * and the normal equations are remade at the step taken (one more pass,
+ * less stack). */
 static void interp_shift(const rctx_t *c, const double p[4], double model2, acc4_t *acc,
                          double bi[16], double shift[4])
 {
-    acc4_t trial;
-    double bp[4], tp[4], d[4];
-    int32_t it, h, q;
+    double bp[4], tp[4], d[4], ss, ss_t;
+    int32_t it, h, q, n, n_t;
     for (q = 0; q < 4; ++q) {
         bp[q] = p[q];
     }
-    model_pass(c, p, bp, model2, acc);
+    ss = model_pass(c, p, bp, model2, acc, &n);
     for (it = 0; it < TRN_REFINE_MAX_ITER && inv4(acc->a, c->fit_h, bi); ++it) {
         double step = 1.0;
         solve(bi, acc->b, d);
@@ -239,8 +273,8 @@ static void interp_shift(const rctx_t *c, const double p[4], double model2, acc4
             for (q = 0; q < 4; ++q) {
                 tp[q] = bp[q] + step * d[q];
             }
-            model_pass(c, p, tp, model2, &trial);
-            if (trial.n_in == acc->n_in && trial.ss < acc->ss) {
+            ss_t = model_pass(c, p, tp, model2, NULL, &n_t);
+            if (n_t == n && ss_t < ss) {
                 break;
             }
             step *= 0.5;
@@ -251,10 +285,10 @@ static void interp_shift(const rctx_t *c, const double p[4], double model2, acc4
         for (q = 0; q < 4; ++q) {
             bp[q] = tp[q];
         }
-        *acc = trial;
         if (fabs(step * d[0]) < 1e-4 && fabs(step * d[1]) < 1e-4) {
             break;
         }
+        ss = model_pass(c, p, bp, model2, acc, &n);
     }
     for (q = 0; q < 4; ++q) {
         shift[q] = bp[q] - p[q];
@@ -263,12 +297,12 @@ static void interp_shift(const rctx_t *c, const double p[4], double model2, acc4
 
 /* Block sandwich (refine.c's block_meat and its product): the inflation
  * factor of the model covariance inv x chi2, the larger of its variance
- * ratios over x, y (and the heading when fitted), at least 1. */
+ * ratios over x, y (and the heading when fitted), at least 1. acc and meat
+ * are the caller's (the stack stays small when this is inlined). */
 static double sandwich(const rctx_t *c, const double p[4], double model2, const double inv[16],
-                       double chi2)
+                       double chi2, acc4_t *acc, double meat[16])
 {
-    double meat[16], t[16], f = 1.0;
-    acc4_t acc;
+    double f = 1.0;
     int32_t bi, bj, q, r, s;
     for (q = 0; q < 16; ++q) {
         meat[q] = 0.0;
@@ -278,26 +312,20 @@ static double sandwich(const rctx_t *c, const double p[4], double model2, const 
             int32_t i1 = bi + TRN_REFINE_BLOCK < c->l->width ? bi + TRN_REFINE_BLOCK : c->l->width;
             int32_t j1 = bj + TRN_REFINE_BLOCK < c->l->height ? bj + TRN_REFINE_BLOCK
                                                               : c->l->height;
-            accumulate(c, p, TRN_REFINE_CLIP, model2, bi, bj, i1, j1, &acc);
+            accumulate(c, p, TRN_REFINE_CLIP, model2, bi, bj, i1, j1, acc);
             for (q = 0; q < 4; ++q) {
                 for (r = 0; r < 4; ++r) {
-                    meat[q * 4 + r] += acc.b[q] * acc.b[r];
+                    meat[q * 4 + r] += acc->b[q] * acc->b[r];
                 }
             }
         }
     }
-    for (q = 0; q < 4; ++q) {
-        for (r = 0; r < 4; ++r) {
-            t[q * 4 + r] = 0.0;
-            for (s = 0; s < 4; ++s) {
-                t[q * 4 + r] += inv[q * 4 + s] * meat[s * 4 + r];
-            }
-        }
-    }
     for (q = 0; q < (c->fit_h ? 3 : 2); ++q) {
-        double sw = 0.0, ratio;
+        double sw = 0.0, ratio; /* (inv meat inv)[q][q] */
         for (s = 0; s < 4; ++s) {
-            sw += t[q * 4 + s] * inv[s * 4 + q];
+            for (r = 0; r < 4; ++r) {
+                sw += inv[q * 4 + s] * meat[s * 4 + r] * inv[r * 4 + q];
+            }
         }
         ratio = sw / (inv[q * 5] * chi2);
         f = ratio > f ? ratio : f;
@@ -398,7 +426,7 @@ static int iterate(const rctx_t *c, const double p0[4], double max_turn, double 
 static int covariance(const rctx_t *c, const double p[4], double model2, acc4_t *acc,
                       double inv[16], trn_refine3_t *out)
 {
-    double chi2, f, sh[4];
+    double chi2, f, sh[4], meat[16];
     int32_t q, r;
     accumulate_all(c, p, TRN_REFINE_CLIP, model2, acc);
     out->pos.n_used = acc->n_in;
@@ -408,7 +436,7 @@ static int covariance(const rctx_t *c, const double p[4], double model2, acc4_t 
     chi2 = acc->ss / (double)(acc->n_in - (c->fit_h ? 4 : 3));
     out->pos.chi2_dof = chi2;
     chi2 = chi2 > 1.0 ? chi2 : 1.0;
-    f = sandwich(c, p, model2, inv, chi2);
+    f = sandwich(c, p, model2, inv, chi2, acc, meat); /* acc is dead after chi2 */
     out->pos.inflation = f;
     for (q = 0; q < 3; ++q) {
         for (r = 0; r < 3; ++r) {
