@@ -159,10 +159,10 @@ static int inv4(const double a[16], int fit_h, double r[16])
         m[10] = 1.0;
     }
     for (p = 0; p < 4; ++p) {
-        diag *= m[p * 5];
+        diag *= m[p + 4 * p];
     }
     for (k = 0; k < 4; ++k) {
-        const double piv = m[k * 5];
+        const double piv = m[k + 4 * k];
         if (!(piv > 0.0)) {
             return 0;
         }
@@ -189,8 +189,8 @@ static void solve(const double inv[16], const double b[4], double d[4])
 {
     int32_t p;
     for (p = 0; p < 4; ++p) {
-        d[p] = inv[p * 4] * b[0] + inv[p * 4 + 1] * b[1] + inv[p * 4 + 2] * b[2] +
-               inv[p * 4 + 3] * b[3];
+        const double *row = &inv[4 * p];
+        d[p] = row[0] * b[0] + row[1] * b[1] + row[2] * b[2] + row[3] * b[3];
     }
 }
 
@@ -327,7 +327,7 @@ static double sandwich(const rctx_t *c, const double p[4], double model2, const 
                 sw += inv[q * 4 + s] * meat[s * 4 + r] * inv[r * 4 + q];
             }
         }
-        ratio = sw / (inv[q * 5] * chi2);
+        ratio = sw / (inv[q + 4 * q] * chi2);
         f = ratio > f ? ratio : f;
     }
     return f;

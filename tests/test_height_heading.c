@@ -469,7 +469,6 @@ static void test_bad_search(void **state)
     (void)state;
     world_build(11, 0);
     local_dem(60.0, 60.0, 0.0, 0.0, 0);
-    rc = rcfg();
     brc = rc;
     assert_true(wb > 0u && wb <= sizeof g_ws);
     assert_int_equal(trn_height_heading_workspace_bytes(0, LW), 0u);
@@ -714,7 +713,11 @@ static void test_bad_localize(void **state)
                                                 : NAN;
         }
     }
-    assert_int_equal(loc3(&win, &c, &res), TRN_E_AMBIGUOUS);
+    wb = trn_localize_dem_heading_workspace_bytes_cfg(&g_w.map, &g_lg, LR, LR, MAXPTS, &win, &c);
+    assert_true(wb > 0u && wb <= sizeof g_ws);
+    assert_int_equal(
+        trn_localize_dem_heading(&g_w.map, &g_lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &res),
+        TRN_E_AMBIGUOUS);
     assert_true(res.loc.failure_probability > 0.05 && res.loc.has_second == 1);
 }
 
