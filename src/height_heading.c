@@ -331,14 +331,10 @@ trn_status_t trn_height_search_heading(const trn_grid_f32_t *global, const trn_g
     return TRN_OK;
 }
 
-/* ln(exp(a) + exp(b)) without overflow; a may be -inf. */
+/* ln(exp(a) + exp(b)) without overflow (a, b finite). */
 static double log_add(double a, double b)
 {
-    double hi = a > b ? a : b, lo = a > b ? b : a;
-    if (isinf(hi) && hi < 0.0) {
-        return hi;
-    }
-    return hi + log1p(exp(lo - hi));
+    return fmax(a, b) + log1p(exp(fmin(a, b) - fmax(a, b)));
 }
 
 /* Layout of trn_localize_dem_heading's workspace for a TRN_MATCH_HEIGHTS
@@ -502,35 +498,34 @@ static void masses(const double *grid, const trn_window_t *win, int32_t kk, doub
     const size_t poses = (size_t)(win->x1 - win->x0 + 1) * (size_t)(win->y1 - win->y0 + 1);
     trn_exclusion_t ex;
     trn_height_best_t m;
-    double lse_all = -(double)INFINITY, lse_out = -(double)INFINITY;
+    double lse_all = 0.0, lse_out = 0.0;
     int32_t k;
     int any = 0;
     ex.cx = loc->ix;
     ex.cy = loc->iy;
     ex.radius = loc->exclusion_cells;
+    loc->has_second = 0;
+    loc->second_x = loc->ix;
+    loc->second_y = loc->iy;
+    loc->ll_second = loc->ll_best;
     for (k = 0; k < 2 * kk + 1; ++k) {
-        /* cannot fail: the window, zone and scale were checked */
-        if (trn_height_mass(grid + (size_t)k * poses, win, &ex, infl, &m) == TRN_OK) {
-            lse_out = log_add(lse_out, m.lse_out);
-            if (!any || m.ll > loc->ll_second) {
-                loc->ll_second = m.ll;
-                loc->second_x = m.x;
-                loc->second_y = m.y;
-                any = 1;
-            }
+        /* TRN_OK or TRN_E_NODATA (every pose in the zone): the window, zone
+         * and scale were checked; lse_all is filled in either case */
+        const int ok = trn_height_mass(grid + (size_t)k * poses, win, &ex, infl, &m) == TRN_OK;
+        lse_all = k == 0 ? m.lse_all : log_add(lse_all, m.lse_all);
+        if (ok && (!any || m.ll > loc->ll_second)) {
+            loc->ll_second = m.ll;
+            loc->second_x = m.x;
+            loc->second_y = m.y;
         }
-        lse_all = log_add(lse_all, m.lse_all);
+        if (ok) {
+            lse_out = any ? log_add(lse_out, m.lse_out) : m.lse_out;
+            any = 1;
+        }
     }
     loc->has_second = any;
-    if (any) {
-        const double pf = exp(lse_out - lse_all);
-        loc->failure_probability = pf > 1.0 ? 1.0 : pf;
-    } else {
-        loc->second_x = loc->ix;
-        loc->second_y = loc->iy;
-        loc->ll_second = loc->ll_best;
-        loc->failure_probability = 0.0;
-    }
+    /* no pose outside the zone: no competitor, probability 0 */
+    loc->failure_probability = any ? exp(fmin(0.0, lse_out - lse_all)) : 0.0;
 }
 
 trn_status_t trn_localize_heights3_(const trn_map_t *map, const trn_grid_f32_t *local,

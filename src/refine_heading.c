@@ -3,6 +3,7 @@
  * (see trn/height_heading.h): parameters (x, y, heading, dz). */
 #include "trn/height_heading.h"
 
+#include <float.h>
 #include <math.h>
 
 #include "refine_int.h"
@@ -182,7 +183,7 @@ static int inv4(const double a[16], int fit_h, double r[16])
             }
         }
     }
-    return (diag > 0.0 && det > 1e-9 * diag && isfinite(det)) ? 1 : 0;
+    return det > 1e-9 * diag ? 1 : 0; /* the pivots were positive: so is diag */
 }
 
 static void solve(const double inv[16], const double b[4], double d[4])
@@ -248,7 +249,7 @@ static double model_pass(const rctx_t *c, const double p[4], const double bp[4],
             *n_in += 1;
         }
     }
-    return sw > 0.0 ? swrr - swr * swr / sw : 0.0;
+    return swrr - swr * swr / fmax(sw, DBL_MIN); /* 0 without inliers */
 }
 
 /* The interpolants' shift (refine.c's interp_shift): Gauss-Newton of the

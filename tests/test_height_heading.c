@@ -47,6 +47,7 @@ static synth_rock_t g_rocks[2000];
 TRN_WORKSPACE_DECLARE(g_mapbuf, 8u << 20);
 TRN_WORKSPACE_DECLARE(g_ws, 8u << 20);
 TRN_WORKSPACE_DECLARE(g_ws2, 8u << 20);
+TRN_WORKSPACE_DECLARE(g_mapbuf2, 8u << 20);
 TRN_WORKSPACE_DECLARE(g_auto_ws, 1u << 20);
 static float g_loc[LW * LW];
 static trn_grid_f32_t g_lg;
@@ -721,13 +722,276 @@ static void test_bad_localize(void **state)
     assert_true(res.loc.failure_probability > 0.05 && res.loc.has_second == 1);
 }
 
+/* Bad configurations and rover cells of the search and the refinement, each
+ * field and bound on its own; the search's edges (a window at each side of
+ * the map, the local map off the map at every pose, constant local heights). */
+static void test_edges_search(void **state)
+{
+    const size_t wb = trn_height_heading_workspace_bytes(LW, LW);
+    const trn_window_t win = window_at(60, 60, 3);
+    const trn_window_t bad_w[4] = {
+        {60, 64, 62, 60}, {-1, 56, 4, 62}, {56, -1, 62, 4}, {56, 122, 62, N}};
+    const trn_window_t corner[2] = {{1, 1, 6, 6}, {120, 120, 126, 126}};
+    trn_heading_cfg_t c = {0.0, 3.0 * DEG, 0.0};
+    trn_refine_cfg_t rc, bad[6];
+    trn_height_best3_t b;
+    trn_refine3_t o;
+    const int32_t rovers[4][2] = {{LR, -TRN_MAX_DIM - 1},
+                                  {LW - 1 + TRN_MAX_DIM + 1, LR},
+                                  {LR, LW - 1 + TRN_MAX_DIM + 1},
+                                  {-TRN_MAX_DIM - 1, LR}};
+    double step;
+    int32_t kk;
+    int i, j;
+    (void)state;
+    world_build(14, 0);
+    rc = rcfg();
+    local_dem(60.0, 60.0, 0.0, 0.0, 0);
+    for (i = 0; i < 6; ++i) {
+        bad[i] = rc;
+    }
+    bad[0].cell_m = 0.0f;
+    bad[1].cell_m = 2000.0f;
+    bad[2].noise_m = 0.0f;
+    bad[3].noise_m = 2000.0f;
+    bad[4].noise_k_per_m = -1.0f;
+    bad[5].noise_k_per_m = 2000.0f;
+    for (i = 0; i < 6; ++i) {
+        assert_int_equal(trn_height_search_heading(&g_w.map.heights, &g_lg, LR, LR, &win, &c,
+                                                   &bad[i], 0.9f, g_ws, wb, NULL, &b),
+                         TRN_E_ARG);
+        assert_int_equal(
+            trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, 60, 0.0, 0.1, &bad[i], &o),
+            TRN_E_ARG);
+    }
+    for (i = 0; i < 4; ++i) {
+        assert_int_equal(
+            trn_height_heading_steps(&g_lg, rovers[i][0], rovers[i][1], &c, &step, &kk), TRN_E_ARG);
+        assert_int_equal(trn_refine_pose_heading(&g_w.map.heights, &g_lg, rovers[i][0],
+                                                 rovers[i][1], 60, 60, 0.0, 0.1, &rc, &o),
+                         TRN_E_ARG);
+        assert_int_equal(trn_height_search_heading(&g_w.map.heights, &g_lg, LR, LR, &bad_w[i], &c,
+                                                   &rc, 0.9f, g_ws, wb, NULL, &b),
+                         TRN_E_RANGE);
+    }
+    assert_int_equal(trn_height_search_heading(&g_w.map.heights, &g_lg, LR, LR, &win, &c, &rc, 0.0f,
+                                               g_ws, wb, NULL, &b),
+                     TRN_E_ARG);
+    assert_int_equal(
+        trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, -1, 60, 0.0, 0.1, &rc, &o),
+        TRN_E_RANGE);
+    assert_int_equal(
+        trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, N, 0.0, 0.1, &rc, &o),
+        TRN_E_RANGE);
+    assert_int_equal(trn_height_heading_workspace_bytes(TRN_MAX_DIM + 1, LW), 0u);
+    assert_int_equal(trn_height_heading_workspace_bytes(LW, 0), 0u);
+    /* windows at the map's corners: local cells off each side */
+    for (i = 0; i < 2; ++i) {
+        assert_int_equal(trn_height_search_heading(&g_w.map.heights, &g_lg, LR, LR, &corner[i], &c,
+                                                   &rc, 0.9f, g_ws, wb, NULL, &b),
+                         TRN_OK);
+    }
+    /* the rover 300 cells east of the local map: no cell has a map height
+     * at any pose, every point counts the outlier density */
+    assert_int_equal(trn_height_search_heading(&g_w.map.heights, &g_lg, LR + 300, LR, &win, &c, &rc,
+                                               0.9f, g_ws, wb, g_grid[0], &b),
+                     TRN_OK);
+    assert_true(g_grid[0][0] == g_grid[0][1] && b.ll == g_grid[0][0]);
+    /* constant local heights: no spread (K from the noise floor) */
+    for (j = 0; j < LW * LW; ++j) {
+        g_loc[j] = isfinite(g_loc[j]) ? 0.25f : NAN;
+    }
+    assert_int_equal(trn_height_search_heading(&g_w.map.heights, &g_lg, LR, LR, &win, &c, &rc, 0.9f,
+                                               g_ws, wb, NULL, &b),
+                     TRN_OK);
+}
+
+/* A map of z = f(x, y) (cells). */
+static void world_surface(int kind)
+{
+    int x, y;
+    for (y = 0; y < N; ++y) {
+        for (x = 0; x < N; ++x) {
+            g_w.dem[y * N + x] = (float)(kind == 0 ? 0.01 * x + 0.02 * y /* plane */
+                                                   : 0.3 * sin(0.31 * x + 0.2 * y) +
+                                                         0.25 * sin(0.23 * y - 0.12 * x + 1.0) +
+                                                         0.2 * sin(0.17 * (x + y) +
+                                                                   2.0)); /* long waves */
+        }
+    }
+    assert_int_equal(
+        trn_map_build(&g_w.map, &g_w.cfg, &g_w.g, g_mapbuf, trn_map_bytes(&g_w.cfg, N, N)), TRN_OK);
+}
+
+/* The local map cut from the map at cell (cx, cy) turned by delta (bilinear
+ * between the map's cells: exact on a plane),
+ * plus dz. */
+static void local_cut(double cx, double cy, double delta, double dz)
+{
+    const double c = cos(delta), s = sin(delta);
+    int i, j;
+    for (j = -LR; j <= LR; ++j) {
+        for (i = -LR; i <= LR; ++i) {
+            const double mx = cx + i * c + j * s, my = cy - i * s + j * c;
+            const int x0 = (int)floor(mx), y0 = (int)floor(my);
+            const double fx = mx - x0, fy = my - y0;
+            float v = NAN;
+            if (i * i + j * j <= LR * LR && x0 >= 0 && y0 >= 0 && x0 + 1 < N && y0 + 1 < N) {
+                const float *d = g_w.dem;
+                v = (float)((d[y0 * N + x0] * (1.0 - fx) + d[y0 * N + x0 + 1] * fx) * (1.0 - fy) +
+                            (d[(y0 + 1) * N + x0] * (1.0 - fx) + d[(y0 + 1) * N + x0 + 1] * fx) *
+                                fy +
+                            dz);
+            }
+            g_loc[(j + LR) * LW + i + LR] = v;
+        }
+    }
+}
+
+/* The refinement's failures one by one, near the map's edge, on a plane
+ * (singular) and with most points outliers; on long smooth waves (a map
+ * smoother than its noise) the localization still refines. */
+static void test_edges_refine(void **state)
+{
+    trn_refine_cfg_t rc;
+    trn_refine3_t o;
+    trn_heading_cfg_t c = {0.0, 5.0 * DEG, 0.0};
+    trn_heading_result_t res;
+    const trn_window_t win = window_at(86, 66, 3);
+    int j;
+    (void)state;
+    world_build(15, 0);
+    rc = rcfg();
+    /* near the edge: some turned cells off the map */
+    local_dem(12.3, 60.4, 1.0 * DEG, 0.0, 0);
+    assert_int_equal(
+        trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 12, 60, 0.0, 6.0 * DEG, &rc, &o),
+        TRN_OK);
+    assert_true(fabs(o.heading_rad - 1.0 * DEG) < 0.3 * DEG);
+    /* 3 cells off in y; a heading 5 deg off with 0.5 deg of turn allowed */
+    local_dem(60.0, 63.0, 0.0, 0.0, 0);
+    assert_int_equal(
+        trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, 60, 0.0, 6.0 * DEG, &rc, &o),
+        TRN_E_ILLCOND);
+    local_dem(60.0, 60.0, 5.0 * DEG, 0.0, 0);
+    assert_int_equal(
+        trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, 60, 0.0, 0.5 * DEG, &rc, &o),
+        TRN_E_ILLCOND);
+    /* every cell beyond 12 cells an outlier (64 % of them) */
+    local_dem(60.0, 60.0, 0.0, 0.0, 0);
+    for (j = 0; j < LW * LW; ++j) {
+        const int di = j % LW - LR, dj = j / LW - LR;
+        if (di * di + dj * dj > 144 && isfinite(g_loc[j])) {
+            g_loc[j] += (float)(50.0 + 10.0 * (j % 7));
+        }
+    }
+    assert_int_equal(
+        trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, 60, 0.0, 6.0 * DEG, &rc, &o),
+        TRN_E_ILLCOND);
+    assert_true(2 * o.pos.n_used < o.pos.n_seen && isinf(o.cov3[8]));
+    /* a plane: position along it and the offset cannot be told apart */
+    world_surface(0);
+    local_cut(60.0, 60.0, 0.0, 0.0);
+    assert_int_equal(
+        trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, 60, 0.0, 6.0 * DEG, &rc, &o),
+        TRN_E_ILLCOND);
+    /* long waves (20-40 cells): the map's roughness under the noise (1 cm) */
+    world_surface(1);
+    assert_true(g_w.map.roughness_m < (double)g_w.cfg.noise_m);
+    local_cut(86.3, 65.8, 3.0 * DEG, 0.2);
+    assert_int_equal(loc3(&win, &c, &res), TRN_OK);
+    assert_true(res.loc.refined == 1 && res.loc.misfit == 0);
+    assert_true(fabs(res.heading_rad - 3.0 * DEG) < 0.5 * DEG);
+}
+
+/* trn_localize_dem_heading's edges with a height map: the workspace size's
+ * refusals, W = 0's own checks, each window bound, a search with too few
+ * points, the answer on each edge of the window, a window inside the zone
+ * (no competitor), a refinement that fails (flat map). */
+static void test_edges_localize(void **state)
+{
+    const trn_window_t win = window_at(60, 60, 4);
+    const trn_window_t bad_w[5] = {
+        {60, 64, 62, 60}, {64, 56, 60, 62}, {-1, 56, 4, 62}, {56, -1, 62, 4}, {56, 122, 62, N}};
+    const trn_window_t edge[4] = {
+        {60, 56, 66, 64}, {54, 56, 60, 64}, {56, 60, 64, 66}, {56, 54, 64, 60}};
+    trn_heading_cfg_t c = {0.0, 5.0 * DEG, 0.0}, c0 = {0.0, 0.0, 0.0};
+    trn_heading_result_t res;
+    trn_map_t m2, vox;
+    trn_map_cfg_t vc;
+    trn_grid_f32_t bad;
+    size_t wb;
+    int i;
+    (void)state;
+    world_build(16, 0);
+    local_dem(60.0, 60.0, 2.0 * DEG, 0.0, 1);
+    wb = trn_localize_dem_heading_workspace_bytes_cfg(&g_w.map, &g_lg, LR, LR, MAXPTS, &win, &c);
+    assert_true(wb > 0u && wb <= sizeof g_ws);
+    bad = g_lg;
+    bad.width = 0;
+    assert_int_equal(
+        trn_localize_dem_heading_workspace_bytes_cfg(&g_w.map, &g_lg, LR, LR, MAXPTS, NULL, &c),
+        0u);
+    assert_int_equal(
+        trn_localize_dem_heading_workspace_bytes_cfg(&g_w.map, &g_lg, LR, LR, MAXPTS, &win, NULL),
+        0u);
+    assert_int_equal(
+        trn_localize_dem_heading_workspace_bytes_cfg(&g_w.map, &bad, LR, LR, MAXPTS, &win, &c), 0u);
+    m2 = g_w.map;
+    m2.heights.data = NULL;
+    assert_int_equal(
+        trn_localize_dem_heading_workspace_bytes_cfg(&m2, &g_lg, LR, LR, MAXPTS, &win, &c), 0u);
+    /* a voxel map: the voxel path's size */
+    trn_map_cfg_default(&vc);
+    assert_int_equal(trn_map_build(&vox, &vc, &g_w.g, g_mapbuf2, trn_map_bytes(&vc, N, N)), TRN_OK);
+    assert_int_equal(
+        trn_localize_dem_heading_workspace_bytes_cfg(&vox, &g_lg, LR, LR, MAXPTS, &win, &c),
+        trn_localize_dem_heading_workspace_bytes(&vox, LW, LW, MAXPTS, &win));
+    /* W = 0 at centre 0: its own checks */
+    assert_int_equal(
+        trn_localize_dem_heading(&g_w.map, &g_lg, LR, LR, MAXPTS, &win, &c0, g_ws, wb, NULL),
+        TRN_E_NULL);
+    c0.step_rad = NAN;
+    assert_int_equal(
+        trn_localize_dem_heading(&g_w.map, &g_lg, LR, LR, MAXPTS, &win, &c0, g_ws, wb, &res),
+        TRN_E_ARG);
+    for (i = 0; i < 5; ++i) {
+        assert_int_equal(trn_localize_dem_heading(&g_w.map, &g_lg, LR, LR, MAXPTS, &bad_w[i], &c,
+                                                  g_ws, wb, &res),
+                         TRN_E_RANGE);
+    }
+    /* the answer on each edge of the window */
+    for (i = 0; i < 4; ++i) {
+        assert_int_equal(loc3(&edge[i], &c, &res), TRN_OK);
+        assert_true(res.loc.on_window_edge == 1 && res.loc.ix == 60 && res.loc.iy == 60);
+    }
+    /* a 3 x 3 window inside the zone: no competitor */
+    {
+        const trn_window_t w3 = window_at(60, 60, 1);
+        assert_int_equal(loc3(&w3, &c, &res), TRN_OK);
+        assert_true(res.loc.has_second == 0 && res.loc.failure_probability == 0.0);
+    }
+    /* too few points for the search (seven seen cells, none at the rover) */
+    for (i = 0; i < LW * LW; ++i) {
+        g_loc[i] = (i > 2 * LW && i < 2 * LW + 8) ? 1.0f : NAN;
+    }
+    assert_int_equal(loc3(&win, &c, &res), TRN_E_NODATA);
+    /* a flat map: every pose alike, the refinement singular */
+    world_build(16, 1);
+    local_dem(60.0, 60.0, 0.0, 0.0, 1);
+    assert_int_equal(loc3(&win, &c, &res), TRN_E_ILLCOND);
+    assert_true(res.loc.refined == 0 && isinf(res.sigma_heading_rad));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_w0_bit_equal),  cmocka_unit_test(test_grid_vs_slow),
-        cmocka_unit_test(test_refine_turned), cmocka_unit_test(test_recovers_heading),
-        cmocka_unit_test(test_calibration),   cmocka_unit_test(test_bad_search),
-        cmocka_unit_test(test_bad_refine),    cmocka_unit_test(test_bad_localize),
+        cmocka_unit_test(test_w0_bit_equal),   cmocka_unit_test(test_grid_vs_slow),
+        cmocka_unit_test(test_refine_turned),  cmocka_unit_test(test_recovers_heading),
+        cmocka_unit_test(test_calibration),    cmocka_unit_test(test_bad_search),
+        cmocka_unit_test(test_bad_refine),     cmocka_unit_test(test_bad_localize),
+        cmocka_unit_test(test_edges_search),   cmocka_unit_test(test_edges_refine),
+        cmocka_unit_test(test_edges_localize),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
