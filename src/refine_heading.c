@@ -188,10 +188,12 @@ static int inv4(const double a[16], int fit_h, double r[16])
 
 static void solve(const double inv[16], const double b[4], double d[4])
 {
-    int32_t p;
+    int32_t p, q;
     for (p = 0; p < 4; ++p) {
-        const double *row = &inv[4 * p];
-        d[p] = row[0] * b[0] + row[1] * b[1] + row[2] * b[2] + row[3] * b[3];
+        d[p] = 0.0;
+        for (q = 0; q < 4; ++q) {
+            d[p] += inv[p * 4 + q] * b[q];
+        }
     }
 }
 
