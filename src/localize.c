@@ -6,6 +6,7 @@
 #include <float.h>
 #include <math.h>
 
+#include "refine_int.h"
 #include "ws.h"
 
 void trn_map_cfg_default(trn_map_cfg_t *cfg)
@@ -781,35 +782,28 @@ size_t trn_localize_dem_heading_workspace_bytes(const trn_map_t *map, int32_t wi
                                                 size_t max_points, const trn_window_t *win)
 {
     head_layout_t lay;
-    if (map == NULL || win == NULL || !map_ok(map) || !window_ok(map, win) || max_points == 0u ||
+    if (map == NULL || win == NULL || !map_ok(map) || map->cfg.match == TRN_MATCH_HEIGHTS ||
+        !window_ok(map, win) || max_points == 0u ||
         max_points > (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM) {
         return 0u;
     }
     return head_layout(map, width, height, max_points, win, &lay) ? lay.total : 0u;
 }
 
-trn_status_t trn_localize_dem_heading(const trn_map_t *map, const trn_grid_f32_t *local_dem,
-                                      int32_t rover_x, int32_t rover_y, size_t max_points,
-                                      const trn_window_t *win, const trn_heading_cfg_t *cfg,
-                                      void *ws, size_t ws_bytes, trn_heading_result_t *out)
+/* trn_localize_dem_heading's voxel path up to the search: window, layout,
+ * workspace, the local high-pass and occupancy; the points' count and the
+ * offsets of the points and of the search's workspace. Out of line: the
+ * search's stack does not carry this frame. */
+trn_status_t trn_localize_dem_heading_prep_(const trn_map_t *map, const trn_grid_f32_t *local_dem,
+                                            int32_t rover_x, int32_t rover_y, size_t max_points,
+                                            const trn_window_t *win, void *ws, size_t ws_bytes,
+                                            size_t *n, size_t at[2])
 {
     trn_status_t st;
     head_layout_t lay;
     uint8_t *b = (uint8_t *)ws;
     trn_grid_f32_t hp;
-    size_t n = 0;
 
-    if (map == NULL || local_dem == NULL || win == NULL || cfg == NULL || ws == NULL ||
-        out == NULL) {
-        return TRN_E_NULL;
-    }
-    if ((st = trn_grid_f32_check(local_dem)) != TRN_OK) {
-        return st;
-    }
-    if (!map_ok(map) || map->cfg.match != TRN_MATCH_VOXEL || map->cfg.refine != 0 ||
-        max_points == 0u || max_points > (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM) {
-        return TRN_E_ARG;
-    }
     if (!window_ok(map, win) ||
         !head_layout(map, local_dem->width, local_dem->height, max_points, win, &lay)) {
         return TRN_E_RANGE;
@@ -828,11 +822,76 @@ trn_status_t trn_localize_dem_heading(const trn_map_t *map, const trn_grid_f32_t
     } else {
         st = trn_highpass(local_dem, &map->cfg.terrain, &hp, b + lay.hpws, lay.pts - lay.hpws);
     }
-    if (st != TRN_OK || (st = trn_occupancy_points(&hp, &map->cfg.terrain, rover_x, rover_y,
-                                                   (trn_point_t *)(void *)(b + lay.pts), max_points,
-                                                   &n)) != TRN_OK) {
+    at[0] = lay.pts;
+    at[1] = lay.heading;
+    return st != TRN_OK ? st
+                        : trn_occupancy_points(&hp, &map->cfg.terrain, rover_x, rover_y,
+                                               (trn_point_t *)(void *)(b + lay.pts), max_points, n);
+}
+
+/* trn_localize_dem_heading with a voxel map, after its argument checks (out
+ * of line: the height map's W = 0 path, trn_localize_dem, does not carry
+ * this frame). */
+trn_status_t trn_localize_dem_heading_voxel_(const trn_map_t *map, const trn_grid_f32_t *local_dem,
+                                             int32_t rover_x, int32_t rover_y, size_t max_points,
+                                             const trn_window_t *win, const trn_heading_cfg_t *cfg,
+                                             void *ws, size_t ws_bytes, trn_heading_result_t *out)
+{
+    trn_status_t st;
+    uint8_t *b = (uint8_t *)ws;
+    size_t n = 0, at[2];
+
+    if ((st = trn_localize_dem_heading_prep_(map, local_dem, rover_x, rover_y, max_points, win, ws,
+                                             ws_bytes, &n, at)) != TRN_OK) {
         return st;
     }
-    return trn_localize_points_heading(map, (const trn_point_t *)(void *)(b + lay.pts), n, win, cfg,
-                                       b + lay.heading, ws_bytes - lay.heading, out);
+    return trn_localize_points_heading(map, (const trn_point_t *)(void *)(b + at[0]), n, win, cfg,
+                                       b + at[1], ws_bytes - at[1], out);
+}
+
+/* trn_localize_dem_heading but W = 0 at centre 0 with a height map (out of
+ * line: that path, trn_localize_dem, does not carry this frame). */
+trn_status_t trn_localize_dem_heading_checked_(const trn_map_t *map,
+                                               const trn_grid_f32_t *local_dem, int32_t rover_x,
+                                               int32_t rover_y, size_t max_points,
+                                               const trn_window_t *win,
+                                               const trn_heading_cfg_t *cfg, void *ws,
+                                               size_t ws_bytes, trn_heading_result_t *out)
+{
+    trn_status_t st;
+
+    if (map == NULL || local_dem == NULL || win == NULL || cfg == NULL || ws == NULL ||
+        out == NULL) {
+        return TRN_E_NULL;
+    }
+    if ((st = trn_grid_f32_check(local_dem)) != TRN_OK) {
+        return st;
+    }
+    if (!map_ok(map) || (map->cfg.match == TRN_MATCH_VOXEL && map->cfg.refine != 0) ||
+        max_points == 0u || max_points > (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM) {
+        return TRN_E_ARG;
+    }
+    if (map->cfg.match == TRN_MATCH_HEIGHTS) { /* src/height_heading.c */
+        return trn_localize_heights3_(map, local_dem, rover_x, rover_y, win, cfg, ws, ws_bytes,
+                                      out);
+    }
+    return trn_localize_dem_heading_voxel_(map, local_dem, rover_x, rover_y, max_points, win, cfg,
+                                           ws, ws_bytes, out);
+}
+
+trn_status_t trn_localize_dem_heading(const trn_map_t *map, const trn_grid_f32_t *local_dem,
+                                      int32_t rover_x, int32_t rover_y, size_t max_points,
+                                      const trn_window_t *win, const trn_heading_cfg_t *cfg,
+                                      void *ws, size_t ws_bytes, trn_heading_result_t *out)
+{
+    /* Two paths, each a tail call so that neither's stack carries the
+     * other's frame: a height map with W = 0 at centre 0 is trn_localize_dem
+     * itself (src/height_heading.c); everything else is checked here. */
+    if (map != NULL && cfg != NULL && map->cfg.match == TRN_MATCH_HEIGHTS &&
+        cfg->window_rad == 0.0 && cfg->center_rad == 0.0) {
+        return trn_localize_heights2d_(map, local_dem, rover_x, rover_y, max_points, win, cfg, ws,
+                                       ws_bytes, out);
+    }
+    return trn_localize_dem_heading_checked_(map, local_dem, rover_x, rover_y, max_points, win, cfg,
+                                             ws, ws_bytes, out);
 }

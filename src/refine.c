@@ -5,6 +5,7 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "refine_int.h"
 
 /* Bilinear height at fractional cell (x, y) (centres at integers) and its
  * exact gradient (per cell) inside the containing cell; 0 when a corner is
@@ -837,4 +838,15 @@ trn_status_t trn_height_mass(const double *ll_grid, const trn_window_t *win,
         }
     }
     return found ? TRN_OK : TRN_E_NODATA;
+}
+
+/* The interpolants for the heading refinement (refine_int.h). */
+int trn_refine_sample_(const trn_grid_f32_t *g, double x, double y, double out[3])
+{
+    return sample(g, x, y, out);
+}
+
+int trn_refine_sample_bilinear_(const trn_grid_f32_t *g, double x, double y, double out[3])
+{
+    return sample_bilinear(g, x, y, out);
 }

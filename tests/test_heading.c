@@ -723,11 +723,11 @@ static void test_dem_entry(void **state)
             TRN_E_SIZE);
     }
     m2 = g_w.map;
-    m2.cfg.refine = 1; /* the height refinement is not heading-aware yet */
+    m2.cfg.refine = 1; /* the voxel matcher searches heading without refinement only */
     assert_int_equal(trn_localize_dem_heading(&m2, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a),
                      TRN_E_ARG);
     m2 = g_w.map;
-    m2.cfg.match = TRN_MATCH_HEIGHTS; /* nor the height matcher */
+    m2.cfg.match = TRN_MATCH_HEIGHTS; /* a height map without its heights */
     assert_int_equal(trn_localize_dem_heading(&m2, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a),
                      TRN_E_ARG);
     assert_int_equal(trn_localize_dem_heading(&g_w.map, &lg, LR, LR,

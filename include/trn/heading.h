@@ -104,7 +104,10 @@ trn_status_t trn_localize_points_heading(const trn_map_t *map, const trn_point_t
                                          const trn_window_t *win, const trn_heading_cfg_t *cfg,
                                          void *ws, size_t ws_bytes, trn_heading_result_t *out);
 
-/** @brief Workspace bytes of trn_localize_dem_heading (0 if invalid). */
+/** @brief Workspace bytes of trn_localize_dem_heading with a voxel map (0 if
+ * invalid, or for a TRN_MATCH_HEIGHTS map, whose need depends on the local
+ * DEM and the heading window: trn_localize_dem_heading_workspace_bytes_cfg,
+ * trn/height_heading.h). */
 size_t trn_localize_dem_heading_workspace_bytes(const trn_map_t *map, int32_t width, int32_t height,
                                                 size_t max_points, const trn_window_t *win);
 
@@ -114,13 +117,19 @@ size_t trn_localize_dem_heading_workspace_bytes(const trn_map_t *map, int32_t wi
  * low-pass at the window's centre) and occupancy with the map's terrain
  * configuration, then the search over (x, y, heading). The local DEM is in
  * the map's orientation as the rover believes it (the heading then found is
- * the correction to that belief). Only the voxel matcher without refinement
- * searches heading so far (trn_map_cfg_default; issue 14).
- * @retval as trn_localize_points_heading, plus TRN_E_ARG (the map matches
- *         heights or refines), TRN_E_CAPACITY (more than max_points occupied
- *         voxels) and TRN_E_NODATA (local DEM all missing); TRN_E_RANGE also
- *         when the window is not inside the map or the local DEM's size is
- *         out of range.
+ * the correction to that belief). With a TRN_MATCH_HEIGHTS map (the auto
+ * configuration) it is the height matcher over heading instead
+ * (trn_height_search_heading, trn_refine_pose_heading, the failure
+ * probability over every (pose, heading), the acceptance test; no local
+ * high-pass: heights are matched with their offset); with W = 0 at centre
+ * 0 that is trn_localize_dem itself (heading 0, sigma_heading 0, cov3 its
+ * position covariance). The voxel matcher with refinement is refused.
+ * @retval as trn_localize_points_heading, plus TRN_E_ARG (a voxel map that
+ *         refines), TRN_E_CAPACITY (more than max_points occupied voxels),
+ *         TRN_E_NODATA (local DEM all missing) and, with a height map,
+ *         TRN_E_AMBIGUOUS (as trn_localize_dem); TRN_E_RANGE also when the
+ *         window is not inside the map or the local DEM's size is out of
+ *         range.
  */
 trn_status_t trn_localize_dem_heading(const trn_map_t *map, const trn_grid_f32_t *local_dem,
                                       int32_t rover_x, int32_t rover_y, size_t max_points,

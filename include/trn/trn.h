@@ -23,6 +23,7 @@
 #include "trn/field.h"
 #include "trn/mast.h"
 #include "trn/heading.h"
+#include "trn/height_heading.h"
 #include "trn/abi.h"
 
 #endif /* TRN_TRN_H */

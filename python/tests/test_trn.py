@@ -66,9 +66,12 @@ def test_affine_transform(dems, gmap):
 
 
 def test_localize_options_equal_cli(cli, dems, gmap):
-    """Map options through keywords, and the prepared map re-made when they change."""
+    """Map options through keywords, and the prepared map re-made when they change; the
+    heading search (issue 14) with the auto and the paper configurations."""
     a, gt, _ = read(dems["local"])
-    for opts in ({"map_config": "paper"}, {}, {"map_config": "paper", "zbin_m": 0.05}):
+    for opts in ({"map_config": "paper"}, {}, {"map_config": "paper", "zbin_m": 0.05},
+                 {"heading_window_deg": 6}, {"heading_deg": 2, "heading_window_deg": 4},
+                 {"map_config": "paper", "heading_window_deg": 6}):
         args = []
         for k, v in opts.items():
             args += ["--" + k.replace("_", "-"), v]

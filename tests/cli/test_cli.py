@@ -382,8 +382,25 @@ rh = run_json("localize", "--dem", g_tif, *turned, "--heading-deg", str(DELTA), 
 errh = math.hypot(rh["x_m"] - truth[0], rh["y_m"] - truth[1]) if rh.get("x_m") is not None else 1e9
 check(rh.get("heading_deg") == DELTA and rh.get("sigma_heading_deg") == 0 and errh < 1.5 * CELL,
       f"--heading-deg {DELTA} alone: heading {rh.get('heading_deg')}, error {errh:.4f} m")
-expect_error(1, "the heading search needs the voxel matcher", "localize", "--dem", g_tif, *common,
-             "--heading-window-deg", "5")
+expect_error(1, "the voxel matcher searches heading without refinement only", "localize", "--dem", g_tif,
+             *common, "--match", "voxel", "--heading-window-deg", "5")
+# the default (auto) configuration: the height matcher over heading, refined
+auto_turned = [a for a in turned if a not in ("--map-config", "paper")]
+rha = run_json("localize", "--dem", g_tif, *auto_turned, "--heading-window-deg", "8", "--json")
+erra = math.hypot(rha["x_m"] - truth[0], rha["y_m"] - truth[1]) if rha.get("x_m") is not None else 1e9
+print(f"localize over heading, auto (height matcher): {rha.get('heading_deg')} deg (true {DELTA:+.1f}), sigma "
+      f"{rha.get('sigma_heading_deg')} deg, position error {erra:.4f} m, {rha.get('status')}")
+check(rha.get("heading_deg") is not None and abs(rha["heading_deg"] - DELTA) < 0.5 and erra < 0.5 * CELL
+      and rha["status"] == "ok" and rha["refined"] and rha["map_config"]["match"] == "heights",
+      f"--heading-window-deg with the auto configuration: {rha}")
+check(rha.get("sigma_heading_deg", 0) > 0 and abs(rha["cov3"][8] ** 0.5 - rha["sigma_heading_deg"]) < 1e-9
+      and rha["cov3"][0] == rha["cov_m2"][0], f"auto: cov3's heading variance sigma^2: {rha.get('cov3')}")
+# W = 0 with the auto configuration is the plain localization, field for field
+r0a = run_json("localize", "--dem", g_tif, *common, "--heading-window-deg", "0", "--json")
+r0b = run_json("localize", "--dem", g_tif, *common, "--json")
+check(all(r0a[k] == r0b[k] for k in ("x_m", "y_m", "cov_m2", "failure_probability", "status", "poses_scored"))
+      and r0a["heading_deg"] == 0 and r0a["sigma_heading_deg"] == 0,
+      f"auto, --heading-window-deg 0: the plain result {r0a} vs {r0b}")
 expect_error(1, "--heading-window-deg: 200 is out of range", "localize", "--dem", g_tif, *turned,
              "--heading-window-deg", "200")
 expect_error(1, "--heading-deg: 'nan' is not a finite number", "localize", "--dem", g_tif, *turned,

@@ -213,17 +213,25 @@ def visibility(radius, c, azimuth_deg, p):
     return seen
 
 
-def make_local(dem, truth, p, rng=None, azimuth_deg=0.0, offset_m=0.0, fine=None):
+def make_local(dem, truth, p, rng=None, azimuth_deg=0.0, offset_m=0.0, fine=None, turn_deg=0.0):
     """The local DEM (heights + offset + noise, NaN unseen) of a rover at truth: cells
     of dem's cell size, heights sampled from `fine` (the true surface) if given, else
-    from dem itself."""
+    from dem itself. turn_deg: the rover's believed heading is off by this much, so
+    local cell offset (east e, north n) shows the terrain at (e, n) turned turn_deg
+    counterclockwise about the rover (trn localize --heading-window-deg then finds
+    +turn_deg as the correction)."""
     R = p.radius
     src = dem if fine is None else fine
     scale = 1.0 if fine is None else dem.c / fine.c  # source cells per local cell
     fr, fc = src.frac_index(*truth)
     k = np.arange(-R, R + 1)
-    rows = fr + k[:, None] * scale + 0 * k[None, :]
-    cols = fc + k[None, :] * scale + 0 * k[:, None]
+    if turn_deg == 0.0:
+        rows = fr + k[:, None] * scale + 0 * k[None, :]
+        cols = fc + k[None, :] * scale + 0 * k[:, None]
+    else:  # column offset x (east), row offset y (south): (x c + y s, -x s + y c)
+        ct, st = math.cos(math.radians(turn_deg)), math.sin(math.radians(turn_deg))
+        rows = fr + (-k[None, :] * st + k[:, None] * ct) * scale
+        cols = fc + (k[None, :] * ct + k[:, None] * st) * scale
     h = sample(src.z, rows, cols, p.resample) + offset_m
     seen = visibility(R, dem.c, azimuth_deg, p)
     if p.noise and rng is not None:

@@ -63,8 +63,8 @@ static trn_status_t localize_heading(const cmd_localize_ctx_t *c, const trn_grid
     const double sgn[3] = {1.0, -1.0,
                            deg}; /* core rows point south: flip north terms; radians to degrees */
     trn_heading_result_t hr;
-    size_t wb = trn_localize_dem_heading_workspace_bytes(&c->map, lg->width, lg->height, max_pts,
-                                                         win);
+    size_t wb = trn_localize_dem_heading_workspace_bytes_cfg(&c->map, lg, rx, ry, max_pts, win,
+                                                             &hc);
     void *raw = NULL, *ws = wb > 0 ? alloc16(wb, &raw) : NULL;
     trn_status_t st;
     int i;
@@ -399,8 +399,8 @@ int cmd_localize_parse(int argc, char **argv, cmd_localize_params_t *p)
          0},
         {"--heading-window-deg", CLI_DOUBLE, &p->heading_win_deg, 0.0, 180.0, 0, "W",
          "also search the heading over H +- W degrees (step: one cell of arc at the local map's "
-         "farthest point); needs --map-config paper or --match voxel without --refine (default: "
-         "heading known)",
+         "farthest point); the height matcher (the auto configuration) refines it, the voxel "
+         "matcher needs --refine 0 (default: heading known)",
          0},
     };
     cli_opt_t json_opt = {
@@ -469,13 +469,11 @@ int cmd_localize_prepare(const cmd_localize_params_t *p, cmd_localize_ctx_t *c, 
         snprintf(err, err_len, "--dem: %s", why);
         return CLI_BAD_INPUT;
     }
-    if (c->heading && (c->cfg.match != TRN_MATCH_VOXEL || c->cfg.refine != 0)) {
-        snprintf(
-            err, err_len,
-            "--heading-deg/--heading-window-deg: the heading search needs the voxel matcher "
-            "without "
-            "refinement (--map-config paper, or --match voxel --refine 0); the height matcher does "
-            "not search heading yet");
+    if (c->heading && c->cfg.match == TRN_MATCH_VOXEL && c->cfg.refine != 0) {
+        snprintf(err, err_len,
+                 "--heading-deg/--heading-window-deg: the voxel matcher searches heading without "
+                 "refinement only (--map-config paper, or --refine 0); the height matcher "
+                 "(--match heights, the auto configuration) searches it with refinement");
         return CLI_BAD_INPUT;
     }
     if (trn_grid_f32_init(&gg, c->g.data, (size_t)c->g.width * (size_t)c->g.height, c->g.width,

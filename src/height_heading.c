@@ -1,0 +1,583 @@
+/* SPDX-License-Identifier: Apache-2.0 */
+/* height_heading.c - the height matcher and its refinement over (x, y,
+ * heading) (see trn/height_heading.h). */
+#include "trn/height_heading.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+#include "refine_int.h"
+#include "ws.h"
+
+/* One seen local cell: height, noise variance, offset from the rover. */
+typedef struct {
+    double h, v;
+    int32_t ox, oy;
+} obs_t;
+
+/* An offset turned to one heading, rounded to the cell. */
+typedef struct {
+    int32_t x, y;
+} toff_t;
+
+/* Height noise variance of local cell (x, y) (as refine.c). */
+static double noise_var(const trn_refine_cfg_t *cfg, int32_t x, int32_t y, int32_t rx, int32_t ry)
+{
+    double px = (double)(x - rx), py = (double)(y - ry);
+    double r_m = (double)cfg->cell_m * sqrt(px * px + py * py);
+    double sd = (double)cfg->noise_m + (double)cfg->noise_k_per_m * r_m * r_m;
+    return sd * sd;
+}
+
+static int rcfg_ok(const trn_refine_cfg_t *cfg)
+{
+    return cfg->cell_m > 0.0f && cfg->cell_m <= 1000.0f && cfg->noise_m > 0.0f &&
+           cfg->noise_m <= 1000.0f && cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f;
+}
+
+static int rover_ok(const trn_grid_f32_t *l, int32_t rx, int32_t ry)
+{
+    return rx >= -TRN_MAX_DIM && ry >= -TRN_MAX_DIM && rx <= l->width - 1 + TRN_MAX_DIM &&
+           ry <= l->height - 1 + TRN_MAX_DIM;
+}
+
+trn_status_t trn_height_heading_steps(const trn_grid_f32_t *local, int32_t rover_x, int32_t rover_y,
+                                      const trn_heading_cfg_t *cfg, double *step_rad,
+                                      int32_t *half_steps)
+{
+    trn_status_t st;
+    trn_point_t far;
+    int64_t r2 = -1;
+    int32_t x, y;
+    if (local == NULL || cfg == NULL || step_rad == NULL || half_steps == NULL) {
+        return TRN_E_NULL;
+    }
+    if ((st = trn_grid_f32_check(local)) != TRN_OK) {
+        return st;
+    }
+    if (!rover_ok(local, rover_x, rover_y)) {
+        return TRN_E_ARG;
+    }
+    far.x = 0;
+    far.y = 0;
+    far.z = 0;
+    for (y = 0; y < local->height; ++y) {
+        for (x = 0; x < local->width; ++x) {
+            const int64_t ox = (int64_t)x - rover_x, oy = (int64_t)y - rover_y;
+            if (isfinite(TRN_GRID_AT(local, x, y)) && ox * ox + oy * oy > r2) {
+                r2 = ox * ox + oy * oy;
+                far.x = (int16_t)ox;
+                far.y = (int16_t)oy;
+            }
+        }
+    }
+    /* the offsets fit int16_t: |.| <= TRN_MAX_DIM - 1 + TRN_MAX_DIM; with no
+     * seen cell, n = 0 gives trn_heading_steps' TRN_E_NODATA after its
+     * argument checks */
+    return trn_heading_steps(&far, r2 < 0 ? 0u : 1u, cfg, step_rad, half_steps);
+}
+
+/* The search's workspace: the seen cells, then their offsets turned to the
+ * heading being scored (one table, remade per heading). */
+static size_t search_carve(int32_t width, int32_t height, void *base, obs_t **obs, toff_t **tab)
+{
+    trn_ws_t w;
+    size_t n = (size_t)width * (size_t)height;
+    *obs = NULL;
+    *tab = NULL;
+    if (width < 1 || height < 1 || width > TRN_MAX_DIM || height > TRN_MAX_DIM) {
+        return 0u;
+    }
+    trn_ws_begin(&w, base);
+    *obs = (obs_t *)trn_ws_take(&w, n * sizeof(obs_t));
+    *tab = (toff_t *)trn_ws_take(&w, n * sizeof(toff_t));
+    return w.total;
+}
+
+size_t trn_height_heading_workspace_bytes(int32_t width, int32_t height)
+{
+    obs_t *obs;
+    toff_t *tab;
+    return search_carve(width, height, NULL, &obs, &tab);
+}
+
+/* Spread of the seen local heights (standard deviation about their mean),
+ * the same arithmetic as trn_height_search's, and their count. */
+static double local_spread(const obs_t *obs, size_t n)
+{
+    size_t i;
+    double ref = 0.0, s1 = 0.0, s2 = 0.0, v;
+    for (i = 0; i < n; ++i) {
+        if (i == 0u) {
+            ref = obs[i].h;
+        }
+        s1 += obs[i].h - ref;
+        s2 += (obs[i].h - ref) * (obs[i].h - ref);
+    }
+    v = s2 / (double)n - (s1 / (double)n) * (s1 / (double)n);
+    return v > 0.0 ? sqrt(v) : 0.0;
+}
+
+/* The scoring context of one heading. */
+typedef struct {
+    const trn_grid_f32_t *g;
+    const obs_t *obs;
+    const toff_t *t; /* the offsets turned to this heading */
+    size_t n;
+} score_t;
+
+/* Global height under observation i at pose (px, py), or NaN. */
+static double global_at(const score_t *s, int32_t px, int32_t py, size_t i)
+{
+    int64_t gx = (int64_t)px + s->t[i].x, gy = (int64_t)py + s->t[i].y;
+    if (gx < 0 || gy < 0 || gx >= s->g->width || gy >= s->g->height) {
+        return (double)NAN;
+    }
+    return (double)TRN_GRID_AT(s->g, (int32_t)gx, (int32_t)gy);
+}
+
+/* Weighted offset and model variance at pose (px, py) over the points within
+ * clip of (dz, m2) (clip < 0: all); trn_height_search's pose fit. */
+static int32_t pose_fit(const score_t *s, int32_t px, int32_t py, double clip, double *dz,
+                        double *m2)
+{
+    size_t i;
+    int32_t n = 0;
+    double sw = 0.0, swr = 0.0, sq = 0.0, sqr = 0.0, sqrr = 0.0, sqv = 0.0, ref = 0.0, d, m;
+    int have_ref = 0;
+    for (i = 0; i < s->n; ++i) {
+        double gv = global_at(s, px, py, i), r, v, q;
+        if (!isfinite(gv)) {
+            continue;
+        }
+        r = s->obs[i].h - gv;
+        v = s->obs[i].v;
+        if (clip >= 0.0 && fabs(r - *dz) > clip * sqrt(v + *m2)) {
+            continue;
+        }
+        if (!have_ref) {
+            ref = r;
+            have_ref = 1;
+        }
+        r -= ref;
+        sw += 1.0 / (v + *m2);
+        swr += r / (v + *m2);
+        q = 1.0 / ((v + *m2) * (v + *m2));
+        sq += q;
+        sqr += q * r;
+        sqrr += q * r * r;
+        sqv += q * v;
+        ++n;
+    }
+    if (n == 0) {
+        return 0;
+    }
+    d = swr / sw;
+    m = (sqrr - 2.0 * d * sqr + d * d * sq - sqv) / sq;
+    *dz = d + ref;
+    *m2 = m > 0.0 ? m : 0.0;
+    return n;
+}
+
+/* ln L of pose (px, py) at this heading (trn_height_search's pose_ll). */
+static double pose_ll(const score_t *s, int32_t px, int32_t py, double a, double k, double *dz_out,
+                      double *m_out)
+{
+    const double two_pi = 6.283185307179586;
+    size_t i;
+    double dz = 0.0, m2 = 0.0, ll = 0.0, lout = log((1.0 - a) * k);
+    if (pose_fit(s, px, py, -1.0, &dz, &m2) > 0 && pose_fit(s, px, py, -1.0, &dz, &m2) > 0) {
+        double dz1 = dz, m21 = m2;
+        if (pose_fit(s, px, py, TRN_REFINE_CLIP, &dz1, &m21) > 0) {
+            dz = dz1;
+            m2 = m21;
+        }
+    }
+    for (i = 0; i < s->n; ++i) {
+        double gv = global_at(s, px, py, i), v, u;
+        if (!isfinite(gv)) {
+            ll += lout;
+            continue;
+        }
+        v = s->obs[i].v + m2;
+        u = s->obs[i].h - dz - gv;
+        ll += log(a * exp(-0.5 * u * u / v) / sqrt(two_pi * v) + (1.0 - a) * k);
+    }
+    *dz_out = dz;
+    *m_out = sqrt(m2);
+    return ll;
+}
+
+/* k of the i-th heading in the tie order 0, -1, +1, -2, +2, ... */
+static int32_t step_of(int32_t i) { return (i % 2 == 1) ? -(i + 1) / 2 : i / 2; }
+
+/* The offsets turned by angle (trn_points_rotate's rounding). */
+static void turn_offsets(const obs_t *obs, size_t n, double angle, toff_t *t)
+{
+    double c, s;
+    size_t i;
+    trn_heading_trig_(angle, &c, &s);
+    for (i = 0; i < n; ++i) {
+        const double x = (double)obs[i].ox, y = (double)obs[i].oy;
+        t[i].x = (int32_t)floor(x * c + y * s + 0.5);
+        t[i].y = (int32_t)floor(-x * s + y * c + 0.5);
+    }
+}
+
+/* The seen local cells in scan order; their count. */
+static size_t gather(const trn_grid_f32_t *local, int32_t rx, int32_t ry,
+                     const trn_refine_cfg_t *cfg, obs_t *obs)
+{
+    int32_t x, y;
+    size_t n = 0;
+    for (y = 0; y < local->height; ++y) {
+        for (x = 0; x < local->width; ++x) {
+            double h = (double)TRN_GRID_AT(local, x, y);
+            if (!isfinite(h)) {
+                continue;
+            }
+            obs[n].h = h;
+            obs[n].v = noise_var(cfg, x, y, rx, ry);
+            obs[n].ox = x - rx;
+            obs[n].oy = y - ry;
+            ++n;
+        }
+    }
+    return n;
+}
+
+/* Score every pose of the window at heading step k (grid: its slice, may be
+ * NULL), keeping a better best (strictly higher ln L). */
+static void search_heading(const score_t *s, const trn_window_t *win, int32_t k, double a,
+                           double kd, double *grid, int *found, trn_height_best3_t *best)
+{
+    int32_t x, y;
+    for (y = win->y0; y <= win->y1; ++y) {
+        for (x = win->x0; x <= win->x1; ++x) {
+            double dz, m, ll = pose_ll(s, x, y, a, kd, &dz, &m);
+            if (grid != NULL) {
+                grid[(size_t)(y - win->y0) * (size_t)(win->x1 - win->x0 + 1) +
+                     (size_t)(x - win->x0)] = ll;
+            }
+            best->poses += 1u;
+            if (!*found || ll > best->ll) {
+                best->x = x;
+                best->y = y;
+                best->k = k;
+                best->ll = ll;
+                best->dz_m = dz;
+                best->model_m = m;
+                *found = 1;
+            }
+        }
+    }
+}
+
+trn_status_t trn_height_search_heading(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
+                                       int32_t rover_x, int32_t rover_y, const trn_window_t *win,
+                                       const trn_heading_cfg_t *hcfg, const trn_refine_cfg_t *rcfg,
+                                       float inlier_prob, void *ws, size_t ws_bytes,
+                                       double *ll_grid, trn_height_best3_t *best)
+{
+    trn_status_t st;
+    score_t sc;
+    obs_t *obs;
+    toff_t *tab;
+    double step, spread, kd;
+    int32_t kk, i;
+    size_t poses;
+    int found = 0;
+
+    if (global == NULL || local == NULL || win == NULL || hcfg == NULL || rcfg == NULL ||
+        ws == NULL || best == NULL) {
+        return TRN_E_NULL;
+    }
+    if ((st = trn_grid_f32_check(global)) != TRN_OK) {
+        return st;
+    }
+    if (!rcfg_ok(rcfg) || !(inlier_prob > 0.0f && inlier_prob < 1.0f)) {
+        return TRN_E_ARG;
+    }
+    if ((st = trn_height_heading_steps(local, rover_x, rover_y, hcfg, &step, &kk)) != TRN_OK) {
+        return st;
+    }
+    if (win->x0 > win->x1 || win->y0 > win->y1 || win->x0 < 0 || win->y0 < 0 ||
+        win->x1 >= global->width || win->y1 >= global->height) {
+        return TRN_E_RANGE;
+    }
+    if ((st = trn_ws_check(ws, ws_bytes,
+                           search_carve(local->width, local->height, ws, &obs, &tab))) != TRN_OK) {
+        return st;
+    }
+    sc.g = global;
+    sc.obs = obs;
+    sc.t = tab;
+    sc.n = gather(local, rover_x, rover_y, rcfg, obs);
+    if (sc.n < 8u) {
+        return TRN_E_NODATA;
+    }
+    spread = local_spread(obs, sc.n);
+    kd = 1.0 / (10.0 * (spread > (double)rcfg->noise_m ? spread : (double)rcfg->noise_m));
+    poses = (size_t)(win->x1 - win->x0 + 1) * (size_t)(win->y1 - win->y0 + 1);
+    best->poses = 0u;
+    best->step_rad = step;
+    best->half_steps = kk;
+    for (i = 0; i < 2 * kk + 1; ++i) {
+        const int32_t k = step_of(i);
+        turn_offsets(obs, sc.n, hcfg->center_rad + (double)k * step, tab);
+        search_heading(&sc, win, k, (double)inlier_prob, kd,
+                       ll_grid != NULL ? ll_grid + (size_t)(k + kk) * poses : NULL, &found, best);
+    }
+    return TRN_OK;
+}
+
+/* ln(exp(a) + exp(b)) without overflow (a, b finite). */
+static double log_add(double a, double b)
+{
+    return fmax(a, b) + log1p(exp(fmin(a, b) - fmax(a, b)));
+}
+
+/* Layout of trn_localize_dem_heading's workspace for a TRN_MATCH_HEIGHTS
+ * map with a heading window: [search best | refinement | ln L of every
+ * (pose, heading) | the search's workspace]. */
+typedef struct {
+    size_t best, ref, grid, search, total;
+} hh_layout_t;
+
+static void hh_layout(const trn_grid_f32_t *local, const trn_window_t *win, int32_t kk,
+                      hh_layout_t *lay)
+{
+    trn_ws_t w;
+    size_t poses = (size_t)(win->x1 - win->x0 + 1) * (size_t)(win->y1 - win->y0 + 1);
+    trn_ws_begin(&w, NULL);
+    lay->best = trn_ws_offset(&w, sizeof(trn_height_best3_t));
+    lay->ref = trn_ws_offset(&w, sizeof(trn_refine3_t));
+    lay->grid = trn_ws_offset(&w, (size_t)(2 * kk + 1) * poses * sizeof(double));
+    lay->search = trn_ws_offset(&w,
+                                trn_height_heading_workspace_bytes(local->width, local->height));
+    lay->total = w.total;
+}
+
+/* The window is non-empty and inside the map. */
+static int window_in(const trn_map_t *map, const trn_window_t *win)
+{
+    return win->x0 <= win->x1 && win->y0 <= win->y1 && win->x0 >= 0 && win->y0 >= 0 &&
+           win->x1 < map->heights.width && win->y1 < map->heights.height;
+}
+
+/* W = 0 at centre 0: trn_localize_dem itself (the heading known). */
+static int is_2d(const trn_heading_cfg_t *cfg)
+{
+    return cfg->window_rad == 0.0 && cfg->center_rad == 0.0;
+}
+
+size_t trn_localize_dem_heading_workspace_bytes_cfg(const trn_map_t *map,
+                                                    const trn_grid_f32_t *local_dem,
+                                                    int32_t rover_x, int32_t rover_y,
+                                                    size_t max_points, const trn_window_t *win,
+                                                    const trn_heading_cfg_t *cfg)
+{
+    hh_layout_t lay;
+    double step;
+    int32_t kk;
+    size_t dem;
+    if (map == NULL || local_dem == NULL || win == NULL || cfg == NULL ||
+        trn_grid_f32_check(local_dem) != TRN_OK) {
+        return 0u;
+    }
+    if (map->cfg.match != TRN_MATCH_HEIGHTS) {
+        return trn_localize_dem_heading_workspace_bytes(map, local_dem->width, local_dem->height,
+                                                        max_points, win);
+    }
+    dem = trn_localize_dem_workspace_bytes(map, local_dem->width, local_dem->height, max_points,
+                                           win);
+    if (dem == 0u || map->heights.data == NULL || !window_in(map, win) ||
+        trn_height_heading_steps(local_dem, rover_x, rover_y, cfg, &step, &kk) != TRN_OK) {
+        return 0u;
+    }
+    if (is_2d(cfg)) {
+        return dem;
+    }
+    hh_layout(local_dem, win, kk, &lay);
+    return lay.total;
+}
+
+trn_status_t trn_localize_heights2d_(const trn_map_t *map, const trn_grid_f32_t *local,
+                                     int32_t rover_x, int32_t rover_y, size_t max_points,
+                                     const trn_window_t *win, const trn_heading_cfg_t *cfg,
+                                     void *ws, size_t ws_bytes, trn_heading_result_t *out)
+{
+    trn_status_t st;
+    int32_t p;
+    if (out == NULL) { /* trn_localize_dem checks the rest */
+        return TRN_E_NULL;
+    }
+    if (!(cfg->step_rad >= 0.0 && cfg->step_rad <= TRN_HEADING_MAX_WINDOW_RAD)) {
+        return TRN_E_ARG; /* centre and window are 0 here */
+    }
+    st = trn_localize_dem(map, local, rover_x, rover_y, max_points, win, ws, ws_bytes, &out->loc);
+    for (p = 0; p < 9; ++p) {
+        out->cov3[p] = 0.0;
+    }
+    out->cov3[0] = out->loc.cov_m2[0];
+    out->cov3[4] = out->loc.cov_m2[1];
+    out->cov3[1] = out->cov3[3] = out->loc.cov_m2[2];
+    out->heading_rad = 0.0;
+    out->sigma_heading_rad = 0.0;
+    out->step_rad = 0.0; /* no heading searched */
+    out->half_steps = 0;
+    out->best_step = 0;
+    return st;
+}
+
+/* The search's answer into out, before the refinement. */
+static void search_result(const trn_height_best3_t *b, const trn_window_t *win,
+                          const trn_heading_cfg_t *cfg, trn_heading_result_t *out)
+{
+    int32_t p;
+    out->loc.ix = b->x;
+    out->loc.iy = b->y;
+    out->loc.ll_best = b->ll;
+    out->loc.n_points = 0u;
+    out->loc.stats.poses_scored = b->poses;
+    out->loc.stats.blocks_bounded = 0u;
+    out->loc.on_window_edge = (b->x == win->x0 || b->x == win->x1 || b->y == win->y0 ||
+                               b->y == win->y1)
+                                  ? 1
+                                  : 0;
+    out->loc.x = (double)b->x;
+    out->loc.y = (double)b->y;
+    out->loc.sigma_x_m = out->loc.sigma_y_m = (double)INFINITY;
+    out->loc.rho = 0.0;
+    out->loc.cov_m2[0] = out->loc.cov_m2[1] = (double)INFINITY;
+    out->loc.cov_m2[2] = 0.0;
+    out->loc.refined = 0;
+    out->loc.misfit = 0;
+    out->step_rad = b->step_rad;
+    out->half_steps = b->half_steps;
+    out->best_step = b->k;
+    out->heading_rad = cfg->center_rad + (double)b->k * b->step_rad;
+    out->sigma_heading_rad = cfg->window_rad > 0.0 ? (double)INFINITY : 0.0;
+    for (p = 0; p < 9; ++p) {
+        out->cov3[p] = (p % 4 == 0) ? (double)INFINITY : 0.0;
+    }
+}
+
+/* The refinement's answer into out (metres; refined, misfit). */
+static void refine_result(const trn_map_t *map, const trn_refine3_t *r, trn_heading_result_t *out)
+{
+    const double cell = (double)map->cfg.terrain.cell_m;
+    const double lim = map->roughness_m > (double)map->cfg.noise_m ? map->roughness_m
+                                                                   : (double)map->cfg.noise_m;
+    int32_t p;
+    out->loc.refined = 1;
+    out->loc.misfit = r->pos.model_m > TRN_MISFIT_ROUGHNESS * lim ? 1 : 0;
+    out->loc.x = r->pos.x;
+    out->loc.y = r->pos.y;
+    for (p = 0; p < 9; ++p) {
+        const double sr = (p / 3 < 2) ? cell : 1.0, sc = (p % 3 < 2) ? cell : 1.0;
+        out->cov3[p] = r->cov3[p] * sr * sc;
+    }
+    out->loc.cov_m2[0] = out->cov3[0];
+    out->loc.cov_m2[1] = out->cov3[4];
+    out->loc.cov_m2[2] = out->cov3[1];
+    out->loc.sigma_x_m = sqrt(out->cov3[0]);
+    out->loc.sigma_y_m = sqrt(out->cov3[4]);
+    out->loc.rho = out->cov3[1] / (out->loc.sigma_x_m * out->loc.sigma_y_m);
+    out->heading_rad = r->heading_rad;
+    out->sigma_heading_rad = sqrt(out->cov3[8]);
+}
+
+/* The failure probability: the posterior mass (uniform prior over the window
+ * and the headings) of every (pose, heading) outside the position zone
+ * around the answer, ln L divided by the inflation (trn_height_mass per
+ * heading, summed); the competitor is the best of them. */
+static void masses(const double *grid, const trn_window_t *win, int32_t kk, double infl,
+                   trn_loc_result_t *loc)
+{
+    const size_t poses = (size_t)(win->x1 - win->x0 + 1) * (size_t)(win->y1 - win->y0 + 1);
+    trn_exclusion_t ex;
+    trn_height_best_t m;
+    double lse_all = 0.0, lse_out = 0.0;
+    int32_t k;
+    int any = 0;
+    ex.cx = loc->ix;
+    ex.cy = loc->iy;
+    ex.radius = loc->exclusion_cells;
+    loc->has_second = 0;
+    loc->second_x = loc->ix;
+    loc->second_y = loc->iy;
+    loc->ll_second = loc->ll_best;
+    for (k = 0; k < 2 * kk + 1; ++k) {
+        /* TRN_OK or TRN_E_NODATA (every pose in the zone): the window, zone
+         * and scale were checked; lse_all is filled in either case */
+        const int ok = trn_height_mass(grid + (size_t)k * poses, win, &ex, infl, &m) == TRN_OK;
+        lse_all = k == 0 ? m.lse_all : log_add(lse_all, m.lse_all);
+        if (ok && (!any || m.ll > loc->ll_second)) {
+            loc->ll_second = m.ll;
+            loc->second_x = m.x;
+            loc->second_y = m.y;
+        }
+        if (ok) {
+            lse_out = any ? log_add(lse_out, m.lse_out) : m.lse_out;
+            any = 1;
+        }
+    }
+    loc->has_second = any;
+    /* no pose outside the zone: no competitor, probability 0 */
+    loc->failure_probability = any ? exp(fmin(0.0, lse_out - lse_all)) : 0.0;
+}
+
+trn_status_t trn_localize_heights3_(const trn_map_t *map, const trn_grid_f32_t *local,
+                                    int32_t rover_x, int32_t rover_y, const trn_window_t *win,
+                                    const trn_heading_cfg_t *cfg, void *ws, size_t ws_bytes,
+                                    trn_heading_result_t *out)
+{
+    trn_status_t st;
+    trn_refine_cfg_t rc;
+    hh_layout_t lay;
+    uint8_t *b = (uint8_t *)ws;
+    trn_height_best3_t *best;
+    trn_refine3_t *ref;
+    double step, *grid;
+    int32_t kk;
+
+    if (!window_in(map, win)) {
+        return TRN_E_RANGE;
+    }
+    if ((st = trn_height_heading_steps(local, rover_x, rover_y, cfg, &step, &kk)) != TRN_OK) {
+        return st;
+    }
+    hh_layout(local, win, kk, &lay);
+    if ((st = trn_ws_check(ws, ws_bytes, lay.total)) != TRN_OK) {
+        return st;
+    }
+    best = (trn_height_best3_t *)(void *)(b + lay.best);
+    ref = (trn_refine3_t *)(void *)(b + lay.ref);
+    grid = (double *)(void *)(b + lay.grid);
+    rc.cell_m = map->cfg.terrain.cell_m;
+    rc.noise_m = map->cfg.noise_m;
+    rc.noise_k_per_m = map->cfg.noise_k_per_m;
+    rc.inlier_prob = map->cfg.inlier_prob;
+    if ((st = trn_height_search_heading(&map->heights, local, rover_x, rover_y, win, cfg, &rc,
+                                        map->cfg.inlier_prob, b + lay.search, ws_bytes - lay.search,
+                                        grid, best)) != TRN_OK) {
+        return st;
+    }
+    search_result(best, win, cfg, out);
+    if (trn_refine_pose_heading(
+            &map->heights, local, rover_x, rover_y, best->x, best->y, out->heading_rad,
+            cfg->window_rad > 0.0 ? TRN_REFINE_MAX_TURN_STEPS * step : 0.0, &rc, ref) == TRN_OK) {
+        refine_result(map, ref, out);
+    }
+    out->loc.refinement = ref->pos;
+    out->loc.n_points = (size_t)(ref->pos.n_seen > 0 ? ref->pos.n_seen : 0);
+    /* the zone as trn_localize_dem's height matcher: min_exclusion_cells */
+    out->loc.exclusion_cells = map->cfg.min_exclusion_cells;
+    masses(grid, win, kk, out->loc.refined ? ref->pos.inflation : 1.0, &out->loc);
+    if (!out->loc.refined || out->loc.misfit) {
+        return TRN_E_ILLCOND;
+    }
+    return out->loc.failure_probability > (double)map->cfg.max_failure_prob ? TRN_E_AMBIGUOUS
+                                                                            : TRN_OK;
+}

@@ -1,0 +1,531 @@
+/* SPDX-License-Identifier: Apache-2.0 */
+/* refine_heading.c - trn_refine_pose with the heading as a fourth parameter
+ * (see trn/height_heading.h): parameters (x, y, heading, dz). */
+#include "trn/height_heading.h"
+
+#include <float.h>
+#include <math.h>
+
+#include "refine_int.h"
+
+/* Normal equations and moments of one pass (as refine.c's accum_t, four
+ * parameters). */
+typedef struct {
+    double a[16], b[4];
+    double ss, rr, noise2, q;
+    int32_t n_in, n_all;
+} acc4_t;
+
+/* The fixed part of a refinement. */
+typedef struct {
+    const trn_grid_f32_t *g, *l;
+    const trn_refine_cfg_t *cfg;
+    int32_t rx, ry;
+    int fit_h; /* 1: the heading is a parameter */
+} rctx_t;
+
+/* cos and sin of an angle (finite), by the Taylor series after reduction to
+ * about [-pi, pi] (a - 2 pi round(a / 2 pi): exact for a = 0, within
+ * 1e-15 rad for |a| <= 4 pi, the headings here; a turn of many revolutions
+ * loses the bits of its multiple of 2 pi). libm's cos and sin reduce any
+ * argument exactly (Payne-Hanek), which costs them 1 KiB of stack
+ * (tools/stack/external.txt); this needs none. Error of the series below
+ * 1e-14: its terms are at most pi^6 / 6! = 1.3 in size. */
+void trn_heading_trig_(double a, double *c, double *s)
+{
+    const double two_pi = 6.283185307179586;
+    double x = a - two_pi * floor(a / two_pi + 0.5), term_c = 1.0, term_s, sc = 0.0, ss = 0.0;
+    int32_t n;
+    term_s = x;
+    for (n = 0; n < 30; ++n) {
+        sc += term_c;
+        ss += term_s;
+        term_c *= -x * x / (double)((2 * n + 1) * (2 * n + 2));
+        term_s *= -x * x / (double)((2 * n + 2) * (2 * n + 3));
+    }
+    *c = sc;
+    *s = ss;
+}
+
+/* Height noise variance of local cell (x, y) (as refine.c). */
+static double noise_var(const trn_refine_cfg_t *cfg, int32_t x, int32_t y, int32_t rx, int32_t ry)
+{
+    double px = (double)(x - rx), py = (double)(y - ry);
+    double r_m = (double)cfg->cell_m * sqrt(px * px + py * py);
+    double sd = (double)cfg->noise_m + (double)cfg->noise_k_per_m * r_m * r_m;
+    return sd * sd;
+}
+
+static void acc_clear(acc4_t *acc)
+{
+    int32_t p;
+    for (p = 0; p < 16; ++p) {
+        acc->a[p] = 0.0;
+    }
+    for (p = 0; p < 4; ++p) {
+        acc->b[p] = 0.0;
+    }
+    acc->ss = acc->rr = acc->noise2 = acc->q = 0.0;
+    acc->n_in = acc->n_all = 0;
+}
+
+/* Add w J J^T and w J r to the normal equations. */
+static void acc_add(acc4_t *acc, const double jv[4], double w, double res)
+{
+    int32_t p, q;
+    for (p = 0; p < 4; ++p) {
+        for (q = 0; q < 4; ++q) {
+            acc->a[p * 4 + q] += w * jv[p] * jv[q];
+        }
+        acc->b[p] += w * jv[p] * res;
+    }
+}
+
+/* Jacobian of the model height at a sample s3 (height, gradient) seen at the
+ * turned offset (tx, ty): d/d heading of (tx, ty) is (ty, -tx). */
+static void jacobian(const rctx_t *c, const double s3[3], double tx, double ty, double jv[4])
+{
+    jv[0] = s3[1];
+    jv[1] = s3[2];
+    jv[2] = c->fit_h ? s3[1] * ty - s3[2] * tx : 0.0;
+    jv[3] = 1.0;
+}
+
+/* One pass over local cells [i0, i1) x [j0, j1) at (x, y, th, dz): normal
+ * equations of the points within clip (refine.c's accumulate_rect). */
+static void accumulate(const rctx_t *c, const double pose[4], double clip, double model2,
+                       int32_t i0, int32_t j0, int32_t i1, int32_t j1, acc4_t *acc)
+{
+    double cs, sn;
+    int32_t i, j;
+    trn_heading_trig_(pose[2], &cs, &sn);
+    acc_clear(acc);
+    for (j = j0; j < j1; ++j) {
+        for (i = i0; i < i1; ++i) {
+            double h = (double)TRN_GRID_AT(c->l, i, j), s3[3], ox, oy, tx, ty, v, sd, res, u, qw;
+            double jv[4];
+            if (!isfinite(h)) {
+                continue;
+            }
+            ox = (double)(i - c->rx);
+            oy = (double)(j - c->ry);
+            tx = ox * cs + oy * sn;
+            ty = -ox * sn + oy * cs;
+            if (!trn_refine_sample_(c->g, pose[0] + tx, pose[1] + ty, s3)) {
+                continue;
+            }
+            acc->n_all += 1;
+            v = noise_var(c->cfg, i, j, c->rx, c->ry);
+            sd = sqrt(v + model2);
+            res = h - pose[3] - s3[0];
+            u = res / sd;
+            if (fabs(u) > clip) {
+                continue;
+            }
+            qw = 1.0 / ((sd * sd) * (sd * sd));
+            acc->noise2 += qw * v;
+            acc->rr += qw * res * res;
+            acc->q += qw;
+            jacobian(c, s3, tx, ty, jv);
+            acc_add(acc, jv, 1.0 / (sd * sd), res);
+            acc->ss += u * u;
+            acc->n_in += 1;
+        }
+    }
+}
+
+static void accumulate_all(const rctx_t *c, const double pose[4], double clip, double model2,
+                           acc4_t *acc)
+{
+    accumulate(c, pose, clip, model2, 0, 0, c->l->width, c->l->height, acc);
+}
+
+/* Inverse of the symmetric positive definite 4 x 4 matrix a by Gauss-Jordan
+ * elimination without pivoting; 0 when a pivot is not positive or the
+ * determinant is below 1e-9 x the product of the diagonal (refine.c's test
+ * for 3 x 3). With the heading held fixed its row and column are the unit
+ * ones here. */
+static int inv4(const double a[16], int fit_h, double r[16])
+{
+    double m[16], det = 1.0, diag = 1.0;
+    int32_t p, q, k;
+    for (p = 0; p < 16; ++p) {
+        m[p] = a[p];
+        r[p] = (p % 5 == 0) ? 1.0 : 0.0;
+    }
+    if (!fit_h) {
+        for (p = 0; p < 4; ++p) {
+            m[2 * 4 + p] = m[p * 4 + 2] = 0.0;
+        }
+        m[10] = 1.0;
+    }
+    for (p = 0; p < 4; ++p) {
+        diag *= m[p + 4 * p];
+    }
+    for (k = 0; k < 4; ++k) {
+        const double piv = m[k + 4 * k];
+        if (!(piv > 0.0)) {
+            return 0;
+        }
+        det *= piv;
+        for (q = 0; q < 4; ++q) {
+            m[k * 4 + q] /= piv;
+            r[k * 4 + q] /= piv;
+        }
+        for (p = 0; p < 4; ++p) {
+            const double f = m[p * 4 + k];
+            if (p == k) {
+                continue;
+            }
+            for (q = 0; q < 4; ++q) {
+                m[p * 4 + q] -= f * m[k * 4 + q];
+                r[p * 4 + q] -= f * r[k * 4 + q];
+            }
+        }
+    }
+    return det > 1e-9 * diag ? 1 : 0; /* the pivots were positive: so is diag */
+}
+
+static void solve(const double inv[16], const double b[4], double d[4])
+{
+    int32_t p, q;
+    for (p = 0; p < 4; ++p) {
+        d[p] = 0.0;
+        for (q = 0; q < 4; ++q) {
+            d[p] += inv[p * 4 + q] * b[q];
+        }
+    }
+}
+
+static double next_model2(const acc4_t *acc)
+{
+    double m = (acc->rr - acc->noise2) / acc->q;
+    return m > 0.0 ? m : 0.0;
+}
+
+static double clampd(double v, double lim) { return v > lim ? lim : v < -lim ? -lim : v; }
+
+/* One pass of the bilinear surface at bp onto the bicubic model's heights at
+ * the estimate p, over the estimate's inliers (refine.c's model_pass):
+ * returns the weighted sum of squares at bp with the best offset (closed
+ * form) and the inliers' count; with acc, also the normal equations. */
+static double model_pass(const rctx_t *c, const double p[4], const double bp[4], double model2,
+                         acc4_t *acc, int32_t *n_in)
+{
+    double cs, sn, bc, bs, sw = 0.0, swr = 0.0, swrr = 0.0;
+    int32_t i, j;
+    trn_heading_trig_(p[2], &cs, &sn);
+    trn_heading_trig_(bp[2], &bc, &bs);
+    if (acc != NULL) {
+        acc_clear(acc);
+    }
+    *n_in = 0;
+    for (j = 0; j < c->l->height; ++j) {
+        for (i = 0; i < c->l->width; ++i) {
+            double h = (double)TRN_GRID_AT(c->l, i, j), s3[3], b3[3], ox, oy, v, w, res, jv[4];
+            double btx, bty;
+            if (!isfinite(h)) {
+                continue;
+            }
+            ox = (double)(i - c->rx);
+            oy = (double)(j - c->ry);
+            btx = ox * bc + oy * bs;
+            bty = -ox * bs + oy * bc;
+            if (!trn_refine_sample_(c->g, p[0] + ox * cs + oy * sn, p[1] - ox * sn + oy * cs, s3) ||
+                !trn_refine_sample_bilinear_(c->g, bp[0] + btx, bp[1] + bty, b3)) {
+                continue;
+            }
+            v = noise_var(c->cfg, i, j, c->rx, c->ry) + model2;
+            if (fabs(h - p[3] - s3[0]) > TRN_REFINE_CLIP * sqrt(v)) {
+                continue;
+            }
+            w = 1.0 / v;
+            res = (p[3] + s3[0]) - b3[0];
+            sw += w;
+            swr += w * res;
+            swrr += w * res * res;
+            if (acc != NULL) {
+                jacobian(c, b3, btx, bty, jv);
+                acc_add(acc, jv, w, res - bp[3]);
+            }
+            *n_in += 1;
+        }
+    }
+    return swrr - swr * swr / fmax(sw, DBL_MIN); /* 0 without inliers */
+}
+
+/* The interpolants' shift (refine.c's interp_shift): Gauss-Newton of the
+ * bilinear surface onto the bicubic model's own heights at p, each step
+ * halved until the sum of squares drops over the same points. acc and bi
+ * are the caller's (dead by now); a trial step's pass keeps its sums only,
+ * and the normal equations are remade at the step taken (one more pass,
+ * less stack). */
+static void interp_shift(const rctx_t *c, const double p[4], double model2, acc4_t *acc,
+                         double bi[16], double shift[4])
+{
+    double bp[4], tp[4], d[4], ss, ss_t;
+    int32_t it, h, q, n, n_t;
+    for (q = 0; q < 4; ++q) {
+        bp[q] = p[q];
+    }
+    ss = model_pass(c, p, bp, model2, acc, &n);
+    for (it = 0; it < TRN_REFINE_MAX_ITER && inv4(acc->a, c->fit_h, bi); ++it) {
+        double step = 1.0;
+        solve(bi, acc->b, d);
+        for (h = 0; h < TRN_REFINE_HALVINGS; ++h) {
+            for (q = 0; q < 4; ++q) {
+                tp[q] = bp[q] + step * d[q];
+            }
+            ss_t = model_pass(c, p, tp, model2, NULL, &n_t);
+            if (n_t == n && ss_t < ss) {
+                break;
+            }
+            step *= 0.5;
+        }
+        if (h == TRN_REFINE_HALVINGS) {
+            break;
+        }
+        for (q = 0; q < 4; ++q) {
+            bp[q] = tp[q];
+        }
+        if (fabs(step * d[0]) < 1e-4 && fabs(step * d[1]) < 1e-4) {
+            break;
+        }
+        ss = model_pass(c, p, bp, model2, acc, &n);
+    }
+    for (q = 0; q < 4; ++q) {
+        shift[q] = bp[q] - p[q];
+    }
+}
+
+/* Block sandwich (refine.c's block_meat and its product): the inflation
+ * factor of the model covariance inv x chi2, the larger of its variance
+ * ratios over x, y (and the heading when fitted), at least 1. acc and meat
+ * are the caller's (the stack stays small when this is inlined). */
+static double sandwich(const rctx_t *c, const double p[4], double model2, const double inv[16],
+                       double chi2, acc4_t *acc, double meat[16])
+{
+    double f = 1.0;
+    int32_t bi, bj, q, r, s;
+    for (q = 0; q < 16; ++q) {
+        meat[q] = 0.0;
+    }
+    for (bj = 0; bj < c->l->height; bj += TRN_REFINE_BLOCK) {
+        for (bi = 0; bi < c->l->width; bi += TRN_REFINE_BLOCK) {
+            int32_t i1 = bi + TRN_REFINE_BLOCK < c->l->width ? bi + TRN_REFINE_BLOCK : c->l->width;
+            int32_t j1 = bj + TRN_REFINE_BLOCK < c->l->height ? bj + TRN_REFINE_BLOCK
+                                                              : c->l->height;
+            accumulate(c, p, TRN_REFINE_CLIP, model2, bi, bj, i1, j1, acc);
+            for (q = 0; q < 4; ++q) {
+                for (r = 0; r < 4; ++r) {
+                    meat[q * 4 + r] += acc->b[q] * acc->b[r];
+                }
+            }
+        }
+    }
+    for (q = 0; q < (c->fit_h ? 3 : 2); ++q) {
+        double sw = 0.0, ratio; /* (inv meat inv)[q][q] */
+        for (s = 0; s < 4; ++s) {
+            for (r = 0; r < 4; ++r) {
+                sw += inv[q * 4 + s] * meat[s * 4 + r] * inv[r * 4 + q];
+            }
+        }
+        ratio = sw / (inv[q + 4 * q] * chi2);
+        f = ratio > f ? ratio : f;
+    }
+    return f;
+}
+
+static void set_fail(trn_refine3_t *out, int32_t ix, int32_t iy, double th)
+{
+    int32_t p;
+    out->pos.x = (double)ix;
+    out->pos.y = (double)iy;
+    out->pos.cov_cells[0] = out->pos.cov_cells[1] = (double)INFINITY;
+    out->pos.cov_cells[2] = 0.0;
+    out->pos.inflation = 1.0;
+    out->pos.interp_shift[0] = out->pos.interp_shift[1] = 0.0;
+    out->heading_rad = th;
+    out->interp_shift_heading_rad = 0.0;
+    for (p = 0; p < 9; ++p) {
+        out->cov3[p] = (p % 4 == 0) ? (double)INFINITY : 0.0;
+    }
+}
+
+/* Farthest seen local cell from the rover, cells (at least 1). */
+static double far_cells(const rctx_t *c)
+{
+    int32_t i, j;
+    double r2 = 1.0;
+    for (j = 0; j < c->l->height; ++j) {
+        for (i = 0; i < c->l->width; ++i) {
+            const double ox = (double)(i - c->rx), oy = (double)(j - c->ry);
+            if (isfinite(TRN_GRID_AT(c->l, i, j)) && ox * ox + oy * oy > r2) {
+                r2 = ox * ox + oy * oy;
+            }
+        }
+    }
+    return sqrt(r2);
+}
+
+/* The start: dz over every point, then dz and the model variance (refine.c).
+ * Returns the seen points with a global height. */
+static int32_t start(const rctx_t *c, double p[4], double *model2, acc4_t *acc)
+{
+    int32_t it, n_all;
+    accumulate_all(c, p, (double)INFINITY, 0.0, acc);
+    n_all = acc->n_all;
+    if (n_all < 8) {
+        return n_all;
+    }
+    p[3] = acc->b[3] / acc->a[15];
+    for (it = 0; it < 3; ++it) {
+        accumulate_all(c, p, it == 0 ? (double)INFINITY : TRN_REFINE_CLIP, *model2, acc);
+        if (acc->n_in < 8) {
+            break;
+        }
+        *model2 = next_model2(acc);
+        p[3] += acc->b[3] / acc->a[15];
+    }
+    return n_all;
+}
+
+/* Gauss-Newton to convergence; 0 when it fails (singular, or left the
+ * start's neighbourhood). */
+static int iterate(const rctx_t *c, const double p0[4], double max_turn, double p[4],
+                   double *model2, acc4_t *acc, double inv[16], trn_refine3_t *out)
+{
+    const double rmax = far_cells(c);
+    double d[4];
+    int32_t it, q;
+    for (it = 0; it < TRN_REFINE_MAX_ITER; ++it) {
+        accumulate_all(c, p, TRN_REFINE_CLIP, *model2, acc);
+        if (acc->n_in < 8 || !inv4(acc->a, c->fit_h, inv)) {
+            out->pos.n_used = acc->n_in;
+            return 0;
+        }
+        solve(inv, acc->b, d);
+        d[0] = clampd(d[0], 0.5);
+        d[1] = clampd(d[1], 0.5);
+        d[2] = c->fit_h ? clampd(d[2], 0.5 / rmax) : 0.0; /* half a cell of arc */
+        for (q = 0; q < 4; ++q) {
+            p[q] += d[q];
+        }
+        *model2 = next_model2(acc);
+        out->pos.iterations = it + 1;
+        if (fabs(p[0] - p0[0]) > TRN_REFINE_MAX_SHIFT ||
+            fabs(p[1] - p0[1]) > TRN_REFINE_MAX_SHIFT || fabs(p[2] - p0[2]) > max_turn) {
+            return 0;
+        }
+        if (fabs(d[0]) < 1e-4 && fabs(d[1]) < 1e-4 && fabs(d[2]) * rmax < 1e-4) {
+            break;
+        }
+    }
+    return 1;
+}
+
+/* The covariance at the converged estimate p (refine.c's): 0 when the
+ * normal matrix is singular or under half the points are inliers. */
+static int covariance(const rctx_t *c, const double p[4], double model2, acc4_t *acc,
+                      double inv[16], trn_refine3_t *out)
+{
+    double chi2, f, sh[4], meat[16];
+    int32_t q, r;
+    accumulate_all(c, p, TRN_REFINE_CLIP, model2, acc);
+    out->pos.n_used = acc->n_in;
+    if (acc->n_in < 8 || 2 * acc->n_in < acc->n_all || !inv4(acc->a, c->fit_h, inv)) {
+        return 0;
+    }
+    chi2 = acc->ss / (double)(acc->n_in - (c->fit_h ? 4 : 3));
+    out->pos.chi2_dof = chi2;
+    chi2 = chi2 > 1.0 ? chi2 : 1.0;
+    f = sandwich(c, p, model2, inv, chi2, acc, meat); /* acc is dead after chi2 */
+    out->pos.inflation = f;
+    for (q = 0; q < 3; ++q) {
+        for (r = 0; r < 3; ++r) {
+            /* the elimination's inverse is symmetric to rounding: its mean */
+            out->cov3[q * 3 + r] = (c->fit_h || (q < 2 && r < 2))
+                                       ? 0.5 * (inv[q * 4 + r] + inv[r * 4 + q]) * chi2 * f
+                                       : 0.0;
+        }
+    }
+    interp_shift(c, p, model2, acc, inv, sh);
+    for (q = 0; q < 3; ++q) {
+        for (r = 0; r < 3; ++r) {
+            out->cov3[q * 3 + r] += TRN_REFINE_SYS * sh[q] * sh[r];
+        }
+    }
+    out->pos.interp_shift[0] = sh[0];
+    out->pos.interp_shift[1] = sh[1];
+    out->interp_shift_heading_rad = sh[2];
+    out->pos.cov_cells[0] = out->cov3[0];
+    out->pos.cov_cells[1] = out->cov3[4];
+    out->pos.cov_cells[2] = out->cov3[1];
+    return 1;
+}
+
+trn_status_t trn_refine_pose_heading(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
+                                     int32_t rover_x, int32_t rover_y, int32_t ix, int32_t iy,
+                                     double heading_rad, double max_turn_rad,
+                                     const trn_refine_cfg_t *cfg, trn_refine3_t *out)
+{
+    trn_status_t st;
+    rctx_t c;
+    acc4_t acc;
+    double p0[4], p[4], model2 = 0.0, inv[16];
+    int32_t q;
+
+    if (global == NULL || local == NULL || cfg == NULL || out == NULL) {
+        return TRN_E_NULL;
+    }
+    if ((st = trn_grid_f32_check(global)) != TRN_OK || (st = trn_grid_f32_check(local)) != TRN_OK) {
+        return st;
+    }
+    if (!(cfg->cell_m > 0.0f && cfg->cell_m <= 1000.0f) ||
+        !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
+        !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f) || rover_x < -TRN_MAX_DIM ||
+        rover_y < -TRN_MAX_DIM || rover_x > local->width - 1 + TRN_MAX_DIM ||
+        rover_y > local->height - 1 + TRN_MAX_DIM ||
+        !(fabs(heading_rad) <= TRN_HEADING_MAX_WINDOW_RAD) ||
+        !(max_turn_rad >= 0.0 && max_turn_rad <= TRN_HEADING_MAX_WINDOW_RAD)) {
+        return TRN_E_ARG;
+    }
+    c.g = global;
+    c.l = local;
+    c.cfg = cfg;
+    c.rx = rover_x;
+    c.ry = rover_y;
+    c.fit_h = max_turn_rad > 0.0 ? 1 : 0;
+    out->pos.dz_m = 0.0;
+    out->pos.model_m = 0.0;
+    out->pos.chi2_dof = 0.0;
+    out->pos.n_used = out->pos.n_seen = out->pos.iterations = 0;
+    set_fail(out, ix, iy, heading_rad);
+    if (ix < 0 || iy < 0 || ix >= global->width || iy >= global->height) {
+        return TRN_E_RANGE;
+    }
+    p[0] = (double)ix;
+    p[1] = (double)iy;
+    p[2] = heading_rad;
+    p[3] = 0.0;
+    for (q = 0; q < 4; ++q) {
+        p0[q] = p[q];
+    }
+    out->pos.n_seen = start(&c, p, &model2, &acc);
+    if (out->pos.n_seen < 8) {
+        return TRN_E_NODATA;
+    }
+    if (!iterate(&c, p0, max_turn_rad, p, &model2, &acc, inv, out) ||
+        !covariance(&c, p, model2, &acc, inv, out)) {
+        q = out->pos.n_used;
+        set_fail(out, ix, iy, heading_rad);
+        out->pos.n_used = q;
+        return TRN_E_ILLCOND;
+    }
+    out->pos.x = p[0];
+    out->pos.y = p[1];
+    out->pos.dz_m = p[3];
+    out->pos.model_m = sqrt(model2);
+    out->heading_rad = p[2];
+    return TRN_OK;
+}
