@@ -311,33 +311,33 @@ static void interp_shift(const trn_grid_f32_t *global, const trn_grid_f32_t *loc
                          int32_t ry, double x, double y, double dz, double model2,
                          const trn_refine_cfg_t *cfg, accum_t *work, double bi[9], double shift[3])
 {
-    /* work and bi are the caller's, dead by now: the stack stays within
-     * TRN_STACK_LIMIT_BYTES when this is inlined */
-    accum_t trial;
+    /* work and bi are the caller's, dead by now, and each trial step is
+     * made in work itself (only the last accepted point's sums are kept
+     * aside): the stack stays within TRN_STACK_LIMIT_BYTES */
     accum_t *acc = work;
     double bx = x, by = y, bz = dz, d[3];
     int32_t it, h;
     model_pass(global, local, rx, ry, x, y, dz, bx, by, bz, model2, cfg, acc);
     for (it = 0; it < TRN_REFINE_MAX_ITER && inv3(acc->a, bi); ++it) {
-        double step = 1.0;
+        double step = 1.0, ss0 = acc->ss;
+        int32_t n0 = acc->n_in;
         d[0] = bi[0] * acc->b[0] + bi[1] * acc->b[1] + bi[2] * acc->b[2];
         d[1] = bi[3] * acc->b[0] + bi[4] * acc->b[1] + bi[5] * acc->b[2];
         d[2] = bi[6] * acc->b[0] + bi[7] * acc->b[1] + bi[8] * acc->b[2];
         for (h = 0; h < TRN_REFINE_HALVINGS; ++h) {
             model_pass(global, local, rx, ry, x, y, dz, bx + step * d[0], by + step * d[1],
-                       bz + step * d[2], model2, cfg, &trial);
-            if (trial.n_in == acc->n_in && trial.ss < acc->ss) {
+                       bz + step * d[2], model2, cfg, acc);
+            if (acc->n_in == n0 && acc->ss < ss0) {
                 break;
             }
             step *= 0.5;
         }
         if (h == TRN_REFINE_HALVINGS) {
-            break;
+            break; /* acc holds a rejected trial: it is not used again */
         }
         bx += step * d[0];
         by += step * d[1];
         bz += step * d[2];
-        *acc = trial;
         if (fabs(step * d[0]) < 1e-4 && fabs(step * d[1]) < 1e-4) {
             break;
         }
@@ -354,10 +354,11 @@ static void interp_shift(const trn_grid_f32_t *global, const trn_grid_f32_t *loc
  * over about a cell) add up there instead of averaging out. */
 static void block_meat(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
                        int32_t ry, double x, double y, double dz, double lam, const double g[3],
-                       double model2, const trn_refine_cfg_t *cfg, double meat[9])
+                       double model2, const trn_refine_cfg_t *cfg, accum_t *work, double meat[9])
 {
+    /* work is the caller's, dead by now (the stack, as in interp_shift) */
+    accum_t *acc = work;
     int32_t bi, bj, p, q;
-    accum_t acc;
     for (p = 0; p < 9; ++p) {
         meat[p] = 0.0;
     }
@@ -368,13 +369,13 @@ static void block_meat(const trn_grid_f32_t *global, const trn_grid_f32_t *local
             int32_t j1 = bj + TRN_REFINE_BLOCK < local->height ? bj + TRN_REFINE_BLOCK
                                                                : local->height;
             accumulate_rect(global, local, rx, ry, x, y, dz, lam, TRN_REFINE_CLIP, model2, cfg, bi,
-                            bj, i1, j1, &acc);
+                            bj, i1, j1, acc);
             for (p = 0; p < 3; ++p) {
-                acc.b[p] -= g[p] * acc.bl; /* the score with the mix profiled out */
+                acc->b[p] -= g[p] * acc->bl; /* the score with the mix profiled out */
             }
             for (p = 0; p < 3; ++p) {
                 for (q = 0; q < 3; ++q) {
-                    meat[p * 3 + q] += acc.b[p] * acc.b[q];
+                    meat[p * 3 + q] += acc->b[p] * acc->b[q];
                 }
             }
         }
@@ -544,9 +545,11 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
      * chi-square floor) is a lower bound on each variance: the block
      * estimate is noisy, and independent errors must not shrink it. */
     {
-        double meat[9], f, sw[2];
+        /* q > 0: at least 8 inliers, each noise variance > 0 */
+        double meat[9], f, sw[2], vbar = acc.noise2 / acc.q;
         int32_t p, q, r;
-        block_meat(global, local, rover_x, rover_y, x, y, dz, lam, g, model2, cfg, meat);
+        out->n_used = acc.n_in;
+        block_meat(global, local, rover_x, rover_y, x, y, dz, lam, g, model2, cfg, &acc, meat);
         /* the sandwich's two position variances, (inv meat inv)[pp] */
         for (p = 0; p < 2; ++p) {
             sw[p] = 0.0;
@@ -567,7 +570,6 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
         out->cov_cells[0] = inv[0] * chi2 * f;
         out->cov_cells[1] = inv[4] * chi2 * f;
         out->cov_cells[2] = inv[1] * chi2 * f;
-        out->n_used = acc.n_in;
         {
             /* The interpolants' disagreement, weighted by the share of the
              * model variance in the residuals' (precision-squared weighted)
@@ -576,8 +578,7 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
              * where the data show a misfit beyond the noise, the map runs
              * between its samples in a way neither interpolant follows, a
              * systematic error the residuals cannot show. */
-            /* q > 0: at least 8 inliers, each noise variance > 0 */
-            double sh[3], vbar = acc.noise2 / acc.q, w = TRN_REFINE_SYS * model2 / (model2 + vbar);
+            double sh[3], w = TRN_REFINE_SYS * model2 / (model2 + vbar);
             interp_shift(global, local, rover_x, rover_y, x, y, dz, model2, cfg, &acc, inv, sh);
             out->interp_shift[0] = sh[0];
             out->interp_shift[1] = sh[1];
