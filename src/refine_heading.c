@@ -345,6 +345,12 @@ static void set_fail(trn_refine3_t *out, int32_t ix, int32_t iy, double th)
     out->pos.cov_cells[2] = 0.0;
     out->pos.inflation = 1.0;
     out->pos.interp_shift[0] = out->pos.interp_shift[1] = 0.0;
+    /* this refinement keeps the bicubic heights and the full-weight shift
+     * (the 2-D one's mix and weighted term are not here yet), and does not
+     * compute the refined ln L */
+    out->pos.interp_mix = 1.0;
+    out->pos.sys_weight = TRN_REFINE_SYS;
+    out->pos.ll = (double)NAN;
     out->heading_rad = th;
     out->interp_shift_heading_rad = 0.0;
     for (p = 0; p < 9; ++p) {

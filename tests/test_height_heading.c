@@ -642,6 +642,10 @@ static void test_bad_localize(void **state)
         trn_localize_dem_heading(&g_w.map, &g_lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &res),
         TRN_OK);
     assert_true(fabs(res.heading_rad - 2.0 * DEG) < 0.5 * DEG && res.loc.refined == 1);
+    /* the refinement's details are the heading refinement's, every field set */
+    assert_true(res.loc.refinement.interp_mix == 1.0 &&
+                res.loc.refinement.sys_weight == TRN_REFINE_SYS && isnan(res.loc.refinement.ll) &&
+                res.loc.refinement.x == res.loc.x && res.loc.refinement.n_used > 0);
     /* the voxel function has no size for a height map; the _cfg one refuses */
     assert_int_equal(trn_localize_dem_heading_workspace_bytes(&g_w.map, LW, LW, MAXPTS, &win), 0u);
     assert_int_equal(

@@ -53,7 +53,8 @@ typedef struct {
 typedef struct {
     trn_refine_t pos;                /**< as trn_refine_pose: pose, dz, model error, cov_cells (the
                               position block of cov3), chi2, inflation, interp_shift
-                              (x, y), counts */
+                              (x, y), counts; interp_mix 1 and sys_weight
+                              TRN_REFINE_SYS (bicubic heights, the full shift), ll NaN */
     double heading_rad;              /**< refined heading (the start when held fixed) */
     double cov3[9];                  /**< covariance of (x cells, y cells, heading rad), row-major;
                               heading row and column 0 when held fixed */
