@@ -113,6 +113,7 @@ typedef struct {
     double ss;           /* sum of squared normalized residuals of the inliers */
     double rr, noise2;   /* sums of q r^2 and of q s^2 over the inliers, q = 1 / (s^2 + m^2)^2 */
     double q;            /* sum of q */
+    double vv;           /* sum of q^2 2 s^4: the variance of rr - noise2 if m were 0 */
     double al[3], all;   /* the interpolants' mix column: its cross terms and its own term */
     double bl;           /* its right-hand side */
     int32_t n_in, n_all; /* inliers, points with a global height */
@@ -162,7 +163,7 @@ static void accumulate_rect(const trn_grid_f32_t *global, const trn_grid_f32_t *
     }
     acc->b[0] = acc->b[1] = acc->b[2] = 0.0;
     acc->al[0] = acc->al[1] = acc->al[2] = acc->all = acc->bl = 0.0;
-    acc->ss = acc->rr = acc->noise2 = acc->q = 0.0;
+    acc->ss = acc->rr = acc->noise2 = acc->q = acc->vv = 0.0;
     acc->n_in = acc->n_all = 0;
     for (j = j0; j < j1; ++j) {
         for (i = i0; i < i1; ++i) {
@@ -192,6 +193,7 @@ static void accumulate_rect(const trn_grid_f32_t *global, const trn_grid_f32_t *
                 acc->noise2 += qw * w;
                 acc->rr += qw * res * res;
                 acc->q += qw;
+                acc->vv += 2.0 * qw * qw * w * w;
             }
             w = 1.0 / (sd * sd);
             jv[0] = s3[1];
@@ -547,6 +549,11 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
     {
         /* q > 0: at least 8 inliers, each noise variance > 0 */
         double meat[9], f, sw[2], vbar = acc.noise2 / acc.q;
+        /* the misfit beyond TRN_REFINE_SYS_Z sampling sds of what the noise
+         * alone would give (with no misfit, next_model2's estimate is
+         * positive in about a third of the cases) */
+        double m2s = (acc.rr - acc.noise2 - TRN_REFINE_SYS_Z * sqrt(acc.vv)) / acc.q;
+        m2s = m2s > 0.0 ? m2s : 0.0;
         int32_t p, q, r;
         out->n_used = acc.n_in;
         block_meat(global, local, rover_x, rover_y, x, y, dz, lam, g, model2, cfg, &acc, meat);
@@ -572,13 +579,14 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
         out->cov_cells[2] = inv[1] * chi2 * f;
         {
             /* The interpolants' disagreement, weighted by the share of the
-             * model variance in the residuals' (precision-squared weighted)
-             * variance: where a mix of the two interpolants explains the
-             * data (m^2 ~ 0) the mix's own uncertainty is in inv already;
+             * misfit (beyond its sampling noise: m2s) in the residuals'
+             * (precision-squared weighted) variance: where a mix of the two
+             * interpolants explains the data (m^2 ~ 0) the mix's own
+             * uncertainty is in inv already;
              * where the data show a misfit beyond the noise, the map runs
              * between its samples in a way neither interpolant follows, a
              * systematic error the residuals cannot show. */
-            double sh[3], w = TRN_REFINE_SYS * model2 / (model2 + vbar);
+            double sh[3], w = TRN_REFINE_SYS * m2s / (m2s + vbar);
             interp_shift(global, local, rover_x, rover_y, x, y, dz, model2, cfg, &acc, inv, sh);
             out->interp_shift[0] = sh[0];
             out->interp_shift[1] = sh[1];

@@ -23,7 +23,8 @@
  * reduced chi-square) x the block-sandwich inflation (TRN_REFINE_BLOCK),
  * plus sys_weight x the outer product of the shift bilinear heights would
  * cause (the interpolants' disagreement), sys_weight = TRN_REFINE_SYS x the
- * model variance's share of the residual variance. docs/modules/refine.md.
+ * share in the residual variance of the misfit beyond its sampling noise
+ * (TRN_REFINE_SYS_Z). docs/modules/refine.md.
  */
 #ifndef TRN_REFINE_H
 #define TRN_REFINE_H
@@ -48,6 +49,13 @@ extern "C" {
 /** Weight of the interpolants' disagreement in the covariance, before the
  *  model variance's share scales it (trn_refine_t.sys_weight). */
 #define TRN_REFINE_SYS 1.0
+#endif
+#ifndef TRN_REFINE_SYS_Z
+/** The misfit that weights the interpolants' disagreement counts only beyond
+ *  this many sampling standard deviations of what the noise alone would
+ *  give (sys_weight): with no misfit at all, the moment estimate of m^2 is
+ *  positive in about a third of the cases (tests/test_refine.c). */
+#define TRN_REFINE_SYS_Z 1.0
 #endif
 /** Prior of the interpolants' mix (0 bilinear, 1 bicubic): its mean, the
  *  middle of the bracket the two interpolants make, */
@@ -92,7 +100,8 @@ typedef struct {
     double interp_shift[2]; /**< shift of (x, y) had the DEM been bilinear instead of
                                  bicubic, cells; sys_weight times its outer product is
                                  in the covariance */
-    double sys_weight;      /**< TRN_REFINE_SYS x m^2 / (m^2 + the mean noise variance) */
+    double sys_weight;      /**< TRN_REFINE_SYS x m_s^2 / (m_s^2 + the mean noise variance), m_s^2
+                                 the misfit beyond TRN_REFINE_SYS_Z sampling sds */
     double interp_mix;      /**< the estimated mix of the interpolants: 0 bilinear,
                                  1 bicubic (beyond [0, 1]: sharper or smoother) */
     double ll;              /**< trn_height_search's mixture ln L at the refined pose
