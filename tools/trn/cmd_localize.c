@@ -262,6 +262,11 @@ void cmd_localize_report_json(FILE *out, const cmd_localize_ctx_t *c, const char
         json_num(&j, "chi2_dof", rf->chi2_dof);
         json_num(&j, "inflation", rf->inflation);
         json_num(&j, "interp_mix", rf->interp_mix);
+        json_num(&j, "sys_weight", rf->sys_weight);
+        json_arr(&j, "interp_shift_cells");
+        json_num(&j, NULL, rf->interp_shift[0]);
+        json_num(&j, NULL, rf->interp_shift[1]);
+        json_arr_end(&j);
         json_int(&j, "points_used", (long long)rf->n_used);
         json_obj_end(&j);
     }
