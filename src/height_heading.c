@@ -338,10 +338,11 @@ static double log_add(double a, double b)
 }
 
 /* Layout of trn_localize_dem_heading's workspace for a TRN_MATCH_HEIGHTS
- * map with a heading window: [search best | refinement | ln L of every
- * (pose, heading) | the search's workspace]. */
+ * map with a heading window: [search best | refinement | a candidate
+ * refinement (the second starts) | ln L of every (pose, heading) | the
+ * search's workspace]. */
 typedef struct {
-    size_t best, ref, grid, search, total;
+    size_t best, ref, cand, grid, search, total;
 } hh_layout_t;
 
 static void hh_layout(const trn_grid_f32_t *local, const trn_window_t *win, int32_t kk,
@@ -352,6 +353,7 @@ static void hh_layout(const trn_grid_f32_t *local, const trn_window_t *win, int3
     trn_ws_begin(&w, NULL);
     lay->best = trn_ws_offset(&w, sizeof(trn_height_best3_t));
     lay->ref = trn_ws_offset(&w, sizeof(trn_refine3_t));
+    lay->cand = trn_ws_offset(&w, sizeof(trn_refine3_t));
     lay->grid = trn_ws_offset(&w, (size_t)(2 * kk + 1) * poses * sizeof(double));
     lay->search = trn_ws_offset(&w,
                                 trn_height_heading_workspace_bytes(local->width, local->height));
@@ -528,6 +530,42 @@ static void masses(const double *grid, const trn_window_t *win, int32_t kk, doub
     loc->failure_probability = any ? exp(fmin(0.0, lse_out - lse_all)) : 0.0;
 }
 
+/* trn_refine_pose_heading from the search's best (pose, heading) and, as
+ * trn_localize_dem's refinement, from each of the 8 position neighbours at
+ * the best heading step whose ln L is within TRN_REFINE_START_NATS of the
+ * best's (inside the window): on terrain a cell or two wide the best integer
+ * pose can lie in the basin of a lesser sub-cell peak. Keeps in ref the
+ * refinement with the highest refined ln L (ties: the best pose's); 1 if
+ * any succeeded. */
+static int refine_starts(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
+                         const trn_window_t *win, const double *grid, const trn_height_best3_t *b,
+                         double heading, double max_turn, const trn_refine_cfg_t *rc,
+                         trn_refine3_t *ref, trn_refine3_t *cand)
+{
+    /* the window is inside the map, x0 <= x1 and y0 <= y1 (window_in) */
+    const size_t wx = (size_t)win->x1 - (size_t)win->x0 + 1u;
+    const size_t wy = (size_t)win->y1 - (size_t)win->y0 + 1u;
+    const double *slice = grid + (size_t)(b->k + b->half_steps) * wx * wy;
+    int found = trn_refine_pose_heading(&map->heights, local, rx, ry, b->x, b->y, heading, max_turn,
+                                        rc, ref) == TRN_OK;
+    int32_t k;
+    for (k = 0; k < 9; ++k) {
+        const int32_t sx = b->x + k % 3 - 1, sy = b->y + k / 3 - 1;
+        if (k == 4 || sx < win->x0 || sx > win->x1 || sy < win->y0 || sy > win->y1 ||
+            !(slice[(size_t)(sy - win->y0) * wx + (size_t)(sx - win->x0)] >
+              b->ll - TRN_REFINE_START_NATS)) {
+            continue;
+        }
+        if (trn_refine_pose_heading(&map->heights, local, rx, ry, sx, sy, heading, max_turn, rc,
+                                    cand) == TRN_OK &&
+            (!found || cand->pos.ll > ref->pos.ll)) {
+            *ref = *cand;
+            found = 1;
+        }
+    }
+    return found;
+}
+
 trn_status_t trn_localize_heights3_(const trn_map_t *map, const trn_grid_f32_t *local,
                                     int32_t rover_x, int32_t rover_y, const trn_window_t *win,
                                     const trn_heading_cfg_t *cfg, void *ws, size_t ws_bytes,
@@ -565,9 +603,9 @@ trn_status_t trn_localize_heights3_(const trn_map_t *map, const trn_grid_f32_t *
         return st;
     }
     search_result(best, win, cfg, out);
-    if (trn_refine_pose_heading(
-            &map->heights, local, rover_x, rover_y, best->x, best->y, out->heading_rad,
-            cfg->window_rad > 0.0 ? TRN_REFINE_MAX_TURN_STEPS * step : 0.0, &rc, ref) == TRN_OK) {
+    if (refine_starts(map, local, rover_x, rover_y, win, grid, best, out->heading_rad,
+                      cfg->window_rad > 0.0 ? TRN_REFINE_MAX_TURN_STEPS * step : 0.0, &rc, ref,
+                      (trn_refine3_t *)(void *)(b + lay.cand))) {
         refine_result(map, ref, out);
     }
     out->loc.refinement = ref->pos;

@@ -451,19 +451,8 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
     const double lam_hi = TRN_REFINE_MIX_MEAN + 2.0 * TRN_REFINE_MIX_SD;
     int32_t it;
 
-    if (global == NULL || local == NULL || cfg == NULL || out == NULL) {
-        return TRN_E_NULL;
-    }
-    if ((st = trn_grid_f32_check(global)) != TRN_OK || (st = trn_grid_f32_check(local)) != TRN_OK) {
+    if ((st = trn_refine_args_(global, local, rover_x, rover_y, cfg, out)) != TRN_OK) {
         return st;
-    }
-    if (!(cfg->cell_m > 0.0f && cfg->cell_m <= 1000.0f) ||
-        !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
-        !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f) ||
-        !(cfg->inlier_prob > 0.0f && cfg->inlier_prob < 1.0f) || rover_x < -TRN_MAX_DIM ||
-        rover_y < -TRN_MAX_DIM || rover_x > local->width - 1 + TRN_MAX_DIM ||
-        rover_y > local->height - 1 + TRN_MAX_DIM) {
-        return TRN_E_ARG;
     }
     out->x = x;
     out->y = y;
@@ -858,4 +847,31 @@ int trn_refine_sample_(const trn_grid_f32_t *g, double x, double y, double out[3
 int trn_refine_sample_bilinear_(const trn_grid_f32_t *g, double x, double y, double out[3])
 {
     return sample_bilinear(g, x, y, out);
+}
+
+double trn_refine_local_spread_(const trn_grid_f32_t *local, int32_t *n_seen)
+{
+    return local_spread(local, n_seen);
+}
+
+trn_status_t trn_refine_args_(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
+                              int32_t rover_x, int32_t rover_y, const trn_refine_cfg_t *cfg,
+                              const void *out)
+{
+    trn_status_t st;
+    if (global == NULL || local == NULL || cfg == NULL || out == NULL) {
+        return TRN_E_NULL;
+    }
+    if ((st = trn_grid_f32_check(global)) != TRN_OK || (st = trn_grid_f32_check(local)) != TRN_OK) {
+        return st;
+    }
+    if (!(cfg->cell_m > 0.0f && cfg->cell_m <= 1000.0f) ||
+        !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
+        !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f) ||
+        !(cfg->inlier_prob > 0.0f && cfg->inlier_prob < 1.0f) || rover_x < -TRN_MAX_DIM ||
+        rover_y < -TRN_MAX_DIM || rover_x > local->width - 1 + TRN_MAX_DIM ||
+        rover_y > local->height - 1 + TRN_MAX_DIM) {
+        return TRN_E_ARG;
+    }
+    return TRN_OK;
 }

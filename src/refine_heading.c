@@ -1,6 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* refine_heading.c - trn_refine_pose with the heading as a fourth parameter
- * (see trn/height_heading.h): parameters (x, y, heading, dz). */
+ * (see trn/height_heading.h): parameters (x, y, heading, dz) and, as
+ * there, the interpolants' mix, folded out of the normal equations. A pose
+ * is p[5] = (x, y, heading, dz, mix). */
 #include "trn/height_heading.h"
 
 #include <float.h>
@@ -9,10 +11,12 @@
 #include "refine_int.h"
 
 /* Normal equations and moments of one pass (as refine.c's accum_t, four
- * parameters). */
+ * parameters and the mix's column). */
 typedef struct {
     double a[16], b[4];
     double ss, rr, noise2, q;
+    double vv;             /* sum of q^2 2 s^4: the variance of rr - noise2 if m were 0 */
+    double al[4], all, bl; /* the mix: cross terms, own term, right-hand side */
     int32_t n_in, n_all;
 } acc4_t;
 
@@ -63,9 +67,10 @@ static void acc_clear(acc4_t *acc)
         acc->a[p] = 0.0;
     }
     for (p = 0; p < 4; ++p) {
-        acc->b[p] = 0.0;
+        acc->b[p] = acc->al[p] = 0.0;
     }
-    acc->ss = acc->rr = acc->noise2 = acc->q = 0.0;
+    acc->all = acc->bl = 0.0;
+    acc->ss = acc->rr = acc->noise2 = acc->q = acc->vv = 0.0;
     acc->n_in = acc->n_all = 0;
 }
 
@@ -81,6 +86,28 @@ static void acc_add(acc4_t *acc, const double jv[4], double w, double res)
     }
 }
 
+/* Height and gradient of the mixed interpolant B + lam (C - B) at (x, y)
+ * (B bilinear, C bicubic; they agree where the 4 x 4 support is
+ * incomplete: there C - B = 0), and C - B, the derivative in lam
+ * (refine.c's sample_mix, from its two samplers). */
+static inline int sample_mix(const trn_grid_f32_t *g, double x, double y, double lam, double out[3],
+                             double *dcb)
+{
+    double b3[3];
+    int32_t k;
+    if (!trn_refine_sample_bilinear_(g, x, y, b3)) {
+        return 0;
+    }
+    /* the bicubic sampler has a height exactly where the bilinear one has
+     * (it falls back to bilinear where its 4 x 4 support is incomplete) */
+    (void)trn_refine_sample_(g, x, y, out);
+    *dcb = out[0] - b3[0];
+    for (k = 0; k < 3; ++k) {
+        out[k] = b3[k] + lam * (out[k] - b3[k]);
+    }
+    return 1;
+}
+
 /* Jacobian of the model height at a sample s3 (height, gradient) seen at the
  * turned offset (tx, ty): d/d heading of (tx, ty) is (ty, -tx). */
 static void jacobian(const rctx_t *c, const double s3[3], double tx, double ty, double jv[4])
@@ -91,9 +118,10 @@ static void jacobian(const rctx_t *c, const double s3[3], double tx, double ty, 
     jv[3] = 1.0;
 }
 
-/* One pass over local cells [i0, i1) x [j0, j1) at (x, y, th, dz): normal
- * equations of the points within clip (refine.c's accumulate_rect). */
-static void accumulate(const rctx_t *c, const double pose[4], double clip, double model2,
+/* One pass over local cells [i0, i1) x [j0, j1) at (x, y, th, dz, mix):
+ * normal equations of the points within clip, the mix's column included
+ * (refine.c's accumulate_rect). */
+static void accumulate(const rctx_t *c, const double pose[5], double clip, double model2,
                        int32_t i0, int32_t j0, int32_t i1, int32_t j1, acc4_t *acc)
 {
     double cs, sn;
@@ -103,7 +131,8 @@ static void accumulate(const rctx_t *c, const double pose[4], double clip, doubl
     for (j = j0; j < j1; ++j) {
         for (i = i0; i < i1; ++i) {
             double h = (double)TRN_GRID_AT(c->l, i, j), s3[3], ox, oy, tx, ty, v, sd, res, u, qw;
-            double jv[4];
+            double jv[4], dcb, w;
+            int32_t p;
             if (!isfinite(h)) {
                 continue;
             }
@@ -111,7 +140,7 @@ static void accumulate(const rctx_t *c, const double pose[4], double clip, doubl
             oy = (double)(j - c->ry);
             tx = ox * cs + oy * sn;
             ty = -ox * sn + oy * cs;
-            if (!trn_refine_sample_(c->g, pose[0] + tx, pose[1] + ty, s3)) {
+            if (!sample_mix(c->g, pose[0] + tx, pose[1] + ty, pose[4], s3, &dcb)) {
                 continue;
             }
             acc->n_all += 1;
@@ -126,15 +155,22 @@ static void accumulate(const rctx_t *c, const double pose[4], double clip, doubl
             acc->noise2 += qw * v;
             acc->rr += qw * res * res;
             acc->q += qw;
+            acc->vv += 2.0 * qw * qw * v * v;
             jacobian(c, s3, tx, ty, jv);
-            acc_add(acc, jv, 1.0 / (sd * sd), res);
+            w = 1.0 / (sd * sd);
+            acc_add(acc, jv, w, res);
+            for (p = 0; p < 4; ++p) {
+                acc->al[p] += w * jv[p] * dcb;
+            }
+            acc->all += w * dcb * dcb;
+            acc->bl += w * dcb * res;
             acc->ss += u * u;
             acc->n_in += 1;
         }
     }
 }
 
-static void accumulate_all(const rctx_t *c, const double pose[4], double clip, double model2,
+static void accumulate_all(const rctx_t *c, const double pose[5], double clip, double model2,
                            acc4_t *acc)
 {
     accumulate(c, pose, clip, model2, 0, 0, c->l->width, c->l->height, acc);
@@ -205,11 +241,34 @@ static double next_model2(const acc4_t *acc)
 
 static double clampd(double v, double lim) { return v > lim ? lim : v < -lim ? -lim : v; }
 
+/* Fold the mix out of the normal equations of (x, y, heading, dz, mix)
+ * (refine.c's fold_mix: Schur complement, the mix's prior added): a and b
+ * become those of the four with the mix at its conditional best, so inv(a)
+ * is their marginal covariance. g = al / all' (the mix's coupling). Returns
+ * the mix's step at d = 0; for a step d of the four it is that minus g . d.
+ * With the heading held fixed its column al[2] is 0 (jacobian). */
+static double fold_mix(acc4_t *acc, double lam, double g[4])
+{
+    const double pw = 1.0 / (TRN_REFINE_MIX_SD * TRN_REFINE_MIX_SD);
+    const double all = acc->all + pw, bl = acc->bl + pw * (TRN_REFINE_MIX_MEAN - lam);
+    int32_t p, q;
+    for (p = 0; p < 4; ++p) {
+        g[p] = acc->al[p] / all;
+    }
+    for (p = 0; p < 4; ++p) {
+        for (q = 0; q < 4; ++q) {
+            acc->a[p * 4 + q] -= acc->al[p] * g[q];
+        }
+        acc->b[p] -= g[p] * bl;
+    }
+    return bl / all;
+}
+
 /* One pass of the bilinear surface at bp onto the bicubic model's heights at
  * the estimate p, over the estimate's inliers (refine.c's model_pass):
  * returns the weighted sum of squares at bp with the best offset (closed
  * form) and the inliers' count; with acc, also the normal equations. */
-static double model_pass(const rctx_t *c, const double p[4], const double bp[4], double model2,
+static double model_pass(const rctx_t *c, const double p[5], const double bp[4], double model2,
                          acc4_t *acc, int32_t *n_in)
 {
     double cs, sn, bc, bs, sw = 0.0, swr = 0.0, swrr = 0.0;
@@ -260,7 +319,7 @@ static double model_pass(const rctx_t *c, const double p[4], const double bp[4],
  * are the caller's (dead by now); a trial step's pass keeps its sums only,
  * and the normal equations are remade at the step taken (one more pass,
  * less stack). */
-static void interp_shift(const rctx_t *c, const double p[4], double model2, acc4_t *acc,
+static void interp_shift(const rctx_t *c, const double p[5], double model2, acc4_t *acc,
                          double bi[16], double shift[4])
 {
     double bp[4], tp[4], d[4], ss, ss_t;
@@ -300,42 +359,73 @@ static void interp_shift(const rctx_t *c, const double p[4], double model2, acc4
 
 /* Block sandwich (refine.c's block_meat and its product): the inflation
  * factor of the model covariance inv x chi2, the larger of its variance
- * ratios over x, y (and the heading when fitted), at least 1. acc and meat
- * are the caller's (the stack stays small when this is inlined). */
-static double sandwich(const rctx_t *c, const double p[4], double model2, const double inv[16],
-                       double chi2, acc4_t *acc, double meat[16])
+ * ratios over x, y (and the heading when fitted), at least 1. Each block's
+ * score has the mix profiled out (b - g bl, refine.c); (inv meat inv)[q][q]
+ * is summed as the squares of (inv score)[q] block by block, so no meat
+ * matrix is kept. acc is the caller's (the stack stays small). */
+static double sandwich(const rctx_t *c, const double p[5], double model2, const double inv[16],
+                       const double g[4], double chi2, acc4_t *acc)
 {
-    double f = 1.0;
-    int32_t bi, bj, q, r, s;
-    for (q = 0; q < 16; ++q) {
-        meat[q] = 0.0;
-    }
+    double f = 1.0, sw[3] = {0.0, 0.0, 0.0};
+    const int32_t nq = c->fit_h ? 3 : 2;
+    int32_t bi, bj, q, s;
     for (bj = 0; bj < c->l->height; bj += TRN_REFINE_BLOCK) {
         for (bi = 0; bi < c->l->width; bi += TRN_REFINE_BLOCK) {
             int32_t i1 = bi + TRN_REFINE_BLOCK < c->l->width ? bi + TRN_REFINE_BLOCK : c->l->width;
             int32_t j1 = bj + TRN_REFINE_BLOCK < c->l->height ? bj + TRN_REFINE_BLOCK
                                                               : c->l->height;
             accumulate(c, p, TRN_REFINE_CLIP, model2, bi, bj, i1, j1, acc);
-            for (q = 0; q < 4; ++q) {
-                for (r = 0; r < 4; ++r) {
-                    meat[q * 4 + r] += acc->b[q] * acc->b[r];
+            for (q = 0; q < nq; ++q) {
+                double t = 0.0; /* (inv score)[q] */
+                for (s = 0; s < 4; ++s) {
+                    t += inv[q * 4 + s] * (acc->b[s] - g[s] * acc->bl);
                 }
+                sw[q] += t * t;
             }
         }
     }
-    for (q = 0; q < (c->fit_h ? 3 : 2); ++q) {
-        double sw = 0.0, ratio; /* (inv meat inv)[q][q] */
-        for (s = 0; s < 4; ++s) {
-            for (r = 0; r < 4; ++r) {
-                sw += inv[q * 4 + s] * meat[s * 4 + r] * inv[r * 4 + q];
-            }
-        }
-        ratio = sw / (inv[q + 4 * q] * chi2);
+    for (q = 0; q < nq; ++q) {
+        const double ratio = sw[q] / (inv[q + 4 * q] * chi2);
         f = ratio > f ? ratio : f;
     }
     return f;
 }
 
+/* trn_height_search's mixture ln L at the refined pose p (refine.c's
+ * refined_ll, the offsets turned by the heading): the mixed interpolant,
+ * offset and model variance; a point with no height under it counts
+ * ln((1 - a) K), K = 1 / (10 sd of the seen local heights). */
+static double refined_ll(const rctx_t *c, const double p[5], double model2)
+{
+    const double two_pi = 6.283185307179586, a = (double)c->cfg->inlier_prob;
+    const double floor_m = (double)c->cfg->noise_m;
+    int32_t i, j, n_seen = 0;
+    double spread = trn_refine_local_spread_(c->l, &n_seen), k, lout, ll = 0.0, cs, sn;
+    k = 1.0 / (10.0 * (spread > floor_m ? spread : floor_m));
+    lout = log((1.0 - a) * k);
+    trn_heading_trig_(p[2], &cs, &sn);
+    for (j = 0; j < c->l->height; ++j) {
+        for (i = 0; i < c->l->width; ++i) {
+            double h = (double)TRN_GRID_AT(c->l, i, j), s3[3], dcb, ox, oy, v, u;
+            if (!isfinite(h)) {
+                continue;
+            }
+            ox = (double)(i - c->rx);
+            oy = (double)(j - c->ry);
+            if (!sample_mix(c->g, p[0] + ox * cs + oy * sn, p[1] - ox * sn + oy * cs, p[4], s3,
+                            &dcb)) {
+                ll += lout;
+                continue;
+            }
+            v = noise_var(c->cfg, i, j, c->rx, c->ry) + model2;
+            u = h - p[3] - s3[0];
+            ll += log(a * exp(-0.5 * u * u / v) / sqrt(two_pi * v) + (1.0 - a) * k);
+        }
+    }
+    return ll;
+}
+
+/* The failed answer: the start, infinite variances (refine.c's set_fail). */
 static void set_fail(trn_refine3_t *out, int32_t ix, int32_t iy, double th)
 {
     int32_t p;
@@ -345,12 +435,9 @@ static void set_fail(trn_refine3_t *out, int32_t ix, int32_t iy, double th)
     out->pos.cov_cells[2] = 0.0;
     out->pos.inflation = 1.0;
     out->pos.interp_shift[0] = out->pos.interp_shift[1] = 0.0;
-    /* this refinement keeps the bicubic heights and the full-weight shift
-     * (the 2-D one's mix and weighted term are not here yet), and does not
-     * compute the refined ln L */
-    out->pos.interp_mix = 1.0;
-    out->pos.sys_weight = TRN_REFINE_SYS;
-    out->pos.ll = (double)NAN;
+    out->pos.interp_mix = TRN_REFINE_MIX_MEAN;
+    out->pos.sys_weight = 0.0;
+    out->pos.ll = -(double)INFINITY;
     out->heading_rad = th;
     out->interp_shift_heading_rad = 0.0;
     for (p = 0; p < 9; ++p) {
@@ -374,9 +461,10 @@ static double far_cells(const rctx_t *c)
     return sqrt(r2);
 }
 
+
 /* The start: dz over every point, then dz and the model variance (refine.c).
  * Returns the seen points with a global height. */
-static int32_t start(const rctx_t *c, double p[4], double *model2, acc4_t *acc)
+static int32_t start(const rctx_t *c, double p[5], double *model2, acc4_t *acc)
 {
     int32_t it, n_all;
     accumulate_all(c, p, (double)INFINITY, 0.0, acc);
@@ -396,16 +484,21 @@ static int32_t start(const rctx_t *c, double p[4], double *model2, acc4_t *acc)
     return n_all;
 }
 
-/* Gauss-Newton to convergence; 0 when it fails (singular, or left the
- * start's neighbourhood). */
-static int iterate(const rctx_t *c, const double p0[4], double max_turn, double p[4],
-                   double *model2, acc4_t *acc, double inv[16], trn_refine3_t *out)
+/* Gauss-Newton to convergence, the mix folded out at each step and moved
+ * by its conditional step (refine.c), kept within two prior sds; 0 when it
+ * fails (singular, or left the start's neighbourhood). */
+static int iterate(const rctx_t *c, const double p0[3], double max_turn, double p[5],
+                   double *model2, acc4_t *acc, double inv[16], double g[4], trn_refine3_t *out)
 {
     const double rmax = far_cells(c);
-    double d[4];
+    const double lam_lo = TRN_REFINE_MIX_MEAN - 2.0 * TRN_REFINE_MIX_SD;
+    const double lam_hi = TRN_REFINE_MIX_MEAN + 2.0 * TRN_REFINE_MIX_SD;
+    double d[4], dl;
     int32_t it, q;
     for (it = 0; it < TRN_REFINE_MAX_ITER; ++it) {
         accumulate_all(c, p, TRN_REFINE_CLIP, *model2, acc);
+        *model2 = next_model2(acc);
+        dl = fold_mix(acc, p[4], g);
         if (acc->n_in < 8 || !inv4(acc->a, c->fit_h, inv)) {
             out->pos.n_used = acc->n_in;
             return 0;
@@ -416,8 +509,12 @@ static int iterate(const rctx_t *c, const double p0[4], double max_turn, double 
         d[2] = c->fit_h ? clampd(d[2], 0.5 / rmax) : 0.0; /* half a cell of arc */
         for (q = 0; q < 4; ++q) {
             p[q] += d[q];
+            dl -= g[q] * d[q];
         }
-        *model2 = next_model2(acc);
+        /* within two prior sds: beyond, the "mix" would be a free
+         * sharpening that fits the map to anything */
+        p[4] += dl;
+        p[4] = p[4] > lam_hi ? lam_hi : p[4] < lam_lo ? lam_lo : p[4];
         out->pos.iterations = it + 1;
         if (fabs(p[0] - p0[0]) > TRN_REFINE_MAX_SHIFT ||
             fabs(p[1] - p0[1]) > TRN_REFINE_MAX_SHIFT || fabs(p[2] - p0[2]) > max_turn) {
@@ -430,22 +527,37 @@ static int iterate(const rctx_t *c, const double p0[4], double max_turn, double 
     return 1;
 }
 
-/* The covariance at the converged estimate p (refine.c's): 0 when the
- * normal matrix is singular or under half the points are inliers. */
-static int covariance(const rctx_t *c, const double p[4], double model2, acc4_t *acc,
-                      double inv[16], trn_refine3_t *out)
+/* The covariance at the converged estimate p (refine.c's): the mix folded
+ * out (the marginal of the four), the block sandwich's inflation, and the
+ * interpolants' shift weighted by the misfit's share of the residuals'
+ * variance, sys_weight = TRN_REFINE_SYS m_s^2 / (m_s^2 + the
+ * precision-squared weighted mean noise variance), m_s^2 the misfit beyond
+ * TRN_REFINE_SYS_Z sampling sds. 0 when the normal matrix
+ * is singular or under half the points are inliers. */
+static int covariance(const rctx_t *c, const double p[5], double model2, acc4_t *acc,
+                      double inv[16], double g[4], trn_refine3_t *out)
 {
-    double chi2, f, sh[4], meat[16];
+    double chi2, f, sh[4], w;
     int32_t q, r;
     accumulate_all(c, p, TRN_REFINE_CLIP, model2, acc);
+    (void)fold_mix(acc, p[4], g);
     out->pos.n_used = acc->n_in;
     if (acc->n_in < 8 || 2 * acc->n_in < acc->n_all || !inv4(acc->a, c->fit_h, inv)) {
         return 0;
     }
-    chi2 = acc->ss / (double)(acc->n_in - (c->fit_h ? 4 : 3));
+    /* four parameters and the mix (three with the heading held) */
+    chi2 = acc->ss / (double)(acc->n_in - (c->fit_h ? 5 : 4));
     out->pos.chi2_dof = chi2;
     chi2 = chi2 > 1.0 ? chi2 : 1.0;
-    f = sandwich(c, p, model2, inv, chi2, acc, meat); /* acc is dead after chi2 */
+    /* q > 0: at least 8 inliers, each noise variance > 0 */
+    {
+        /* the misfit beyond TRN_REFINE_SYS_Z sampling sds of what the noise
+         * alone would give, as refine.c's */
+        double m2s = (acc->rr - acc->noise2 - TRN_REFINE_SYS_Z * sqrt(acc->vv)) / acc->q;
+        m2s = m2s > 0.0 ? m2s : 0.0;
+        w = TRN_REFINE_SYS * m2s / (m2s + acc->noise2 / acc->q);
+    }
+    f = sandwich(c, p, model2, inv, g, chi2, acc); /* acc is dead after w */
     out->pos.inflation = f;
     for (q = 0; q < 3; ++q) {
         for (r = 0; r < 3; ++r) {
@@ -458,9 +570,10 @@ static int covariance(const rctx_t *c, const double p[4], double model2, acc4_t 
     interp_shift(c, p, model2, acc, inv, sh);
     for (q = 0; q < 3; ++q) {
         for (r = 0; r < 3; ++r) {
-            out->cov3[q * 3 + r] += TRN_REFINE_SYS * sh[q] * sh[r];
+            out->cov3[q * 3 + r] += w * sh[q] * sh[r];
         }
     }
+    out->pos.sys_weight = w;
     out->pos.interp_shift[0] = sh[0];
     out->pos.interp_shift[1] = sh[1];
     out->interp_shift_heading_rad = sh[2];
@@ -478,21 +591,13 @@ trn_status_t trn_refine_pose_heading(const trn_grid_f32_t *global, const trn_gri
     trn_status_t st;
     rctx_t c;
     acc4_t acc;
-    double p0[4], p[4], model2 = 0.0, inv[16];
+    double p0[3], p[5], model2 = 0.0, inv[16], g[4];
     int32_t q;
 
-    if (global == NULL || local == NULL || cfg == NULL || out == NULL) {
-        return TRN_E_NULL;
-    }
-    if ((st = trn_grid_f32_check(global)) != TRN_OK || (st = trn_grid_f32_check(local)) != TRN_OK) {
+    if ((st = trn_refine_args_(global, local, rover_x, rover_y, cfg, out)) != TRN_OK) {
         return st;
     }
-    if (!(cfg->cell_m > 0.0f && cfg->cell_m <= 1000.0f) ||
-        !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
-        !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f) || rover_x < -TRN_MAX_DIM ||
-        rover_y < -TRN_MAX_DIM || rover_x > local->width - 1 + TRN_MAX_DIM ||
-        rover_y > local->height - 1 + TRN_MAX_DIM ||
-        !(fabs(heading_rad) <= TRN_HEADING_MAX_WINDOW_RAD) ||
+    if (!(fabs(heading_rad) <= TRN_HEADING_MAX_WINDOW_RAD) ||
         !(max_turn_rad >= 0.0 && max_turn_rad <= TRN_HEADING_MAX_WINDOW_RAD)) {
         return TRN_E_ARG;
     }
@@ -510,19 +615,17 @@ trn_status_t trn_refine_pose_heading(const trn_grid_f32_t *global, const trn_gri
     if (ix < 0 || iy < 0 || ix >= global->width || iy >= global->height) {
         return TRN_E_RANGE;
     }
-    p[0] = (double)ix;
-    p[1] = (double)iy;
-    p[2] = heading_rad;
+    p0[0] = p[0] = (double)ix;
+    p0[1] = p[1] = (double)iy;
+    p0[2] = p[2] = heading_rad;
     p[3] = 0.0;
-    for (q = 0; q < 4; ++q) {
-        p0[q] = p[q];
-    }
+    p[4] = TRN_REFINE_MIX_MEAN;
     out->pos.n_seen = start(&c, p, &model2, &acc);
     if (out->pos.n_seen < 8) {
         return TRN_E_NODATA;
     }
-    if (!iterate(&c, p0, max_turn_rad, p, &model2, &acc, inv, out) ||
-        !covariance(&c, p, model2, &acc, inv, out)) {
+    if (!iterate(&c, p0, max_turn_rad, p, &model2, &acc, inv, g, out) ||
+        !covariance(&c, p, model2, &acc, inv, g, out)) {
         q = out->pos.n_used;
         set_fail(out, ix, iy, heading_rad);
         out->pos.n_used = q;
@@ -532,6 +635,8 @@ trn_status_t trn_refine_pose_heading(const trn_grid_f32_t *global, const trn_gri
     out->pos.y = p[1];
     out->pos.dz_m = p[3];
     out->pos.model_m = sqrt(model2);
+    out->pos.interp_mix = p[4];
+    out->pos.ll = refined_ll(&c, p, model2);
     out->heading_rad = p[2];
     return TRN_OK;
 }

@@ -15,6 +15,18 @@ int trn_refine_sample_(const trn_grid_f32_t *g, double x, double y, double out[3
 /* The same by bilinear interpolation only. */
 int trn_refine_sample_bilinear_(const trn_grid_f32_t *g, double x, double y, double out[3]);
 
+/* Standard deviation of the seen local heights about their mean (0 for
+ * none), and their count (trn_height_search's K is 1 / (10 x it)). */
+double trn_refine_local_spread_(const trn_grid_f32_t *local, int32_t *n_seen);
+
+/* The argument checks of trn_refine_pose and trn_refine_pose_heading (the
+ * latter adds its heading's): TRN_E_NULL (global, local, cfg, out), the
+ * grids' status, TRN_E_ARG (cfg out of range or NaN, the rover cell
+ * farther than TRN_MAX_DIM from the local grid); TRN_OK. */
+trn_status_t trn_refine_args_(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
+                              int32_t rover_x, int32_t rover_y, const trn_refine_cfg_t *cfg,
+                              const void *out);
+
 /* cos and sin of a finite angle without libm's exact argument reduction
  * and its stack (src/refine_heading.c; within 1e-14 for |a| <= 4 pi). */
 void trn_heading_trig_(double a, double *c, double *s);

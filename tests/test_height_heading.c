@@ -444,12 +444,16 @@ static void test_calibration(void **state)
            100.0 * cp[0] / n, 100.0 * cp[1] / n, 100.0 * cp[2] / n);
     assert_true(n >= 35 * fields && wrong <= fields / 5 + 1);
     /* heading: within ~8 points of a normal's 68.3 % at 1 sigma, 95.4 / 99.7
-     * at 2 / 3 less a few points (measured on these 200: 63.5 / 93.0 / 99.5) */
+     * at 2 / 3 less a few points (measured on these 200, 2026-12-02 with the
+     * mix and the misfit-weighted systematic term: 60.5 / 91.5 / 99.5) */
     assert_true(ch[0] >= 0.55 * n && ch[0] <= 0.80 * n);
     assert_true(ch[1] >= 0.88 * n && ch[2] >= 0.96 * n);
-    /* position: optimistic on these rock fields (measured 25.5 / 65.5 / 89.5;
-     * the interpolants' shift shrinks once the local cells fall off the map's
-     * grid, docs/modules/heading.md); asserted so it cannot get worse */
+    /* position: optimistic on these rock fields (measured 20.0 / 61.5 / 87.0):
+     * the local map is the terrain itself, sharper than the map's samples,
+     * and part of the map's interpolation error is common to the whole patch
+     * (absorbed by the fitted pose, seen by no residual statistic; the 2-D
+     * refinement shares it, docs/modules/heading.md); asserted so it cannot
+     * get worse */
     assert_true(cp[1] >= 0.55 * n && cp[2] >= 0.82 * n);
 }
 
@@ -594,6 +598,11 @@ static void test_bad_refine(void **state)
     assert_int_equal(
         trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, 60, 0.0, 0.1, &brc, &o),
         TRN_E_ARG);
+    brc = rc; /* the refined ln L's inlier probability */
+    brc.inlier_prob = 1.0f;
+    assert_int_equal(
+        trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, 60, 0.0, 0.1, &brc, &o),
+        TRN_E_ARG);
     assert_int_equal(
         trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, N, 60, 0.0, 0.1, &rc, &o),
         TRN_E_RANGE);
@@ -614,6 +623,8 @@ static void test_bad_refine(void **state)
         trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, 60, 0.0, 0.1, &rc, &o),
         TRN_E_ILLCOND);
     assert_true(o.pos.x == 60.0 && o.pos.y == 60.0 && isinf(o.cov3[0]) && isinf(o.cov3[8]));
+    assert_true(o.pos.interp_mix == TRN_REFINE_MIX_MEAN && o.pos.sys_weight == 0.0 &&
+                isinf(o.pos.ll) && o.pos.ll < 0.0);
     /* a flat map: the normal matrix is singular */
     world_build(12, 1);
     assert_int_equal(
@@ -642,10 +653,14 @@ static void test_bad_localize(void **state)
         trn_localize_dem_heading(&g_w.map, &g_lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &res),
         TRN_OK);
     assert_true(fabs(res.heading_rad - 2.0 * DEG) < 0.5 * DEG && res.loc.refined == 1);
-    /* the refinement's details are the heading refinement's, every field set */
-    assert_true(res.loc.refinement.interp_mix == 1.0 &&
-                res.loc.refinement.sys_weight == TRN_REFINE_SYS && isnan(res.loc.refinement.ll) &&
-                res.loc.refinement.x == res.loc.x && res.loc.refinement.n_used > 0);
+    /* the refinement's details are the heading refinement's, every field set:
+     * the mix estimated within two prior sds, the systematic term's weight
+     * in [0, TRN_REFINE_SYS], the refined ln L */
+    assert_true(
+        fabs(res.loc.refinement.interp_mix - TRN_REFINE_MIX_MEAN) <= 2.0 * TRN_REFINE_MIX_SD &&
+        res.loc.refinement.sys_weight >= 0.0 && res.loc.refinement.sys_weight <= TRN_REFINE_SYS &&
+        isfinite(res.loc.refinement.ll) && res.loc.refinement.x == res.loc.x &&
+        res.loc.refinement.n_used > 0);
     /* the voxel function has no size for a height map; the _cfg one refuses */
     assert_int_equal(trn_localize_dem_heading_workspace_bytes(&g_w.map, LW, LW, MAXPTS, &win), 0u);
     assert_int_equal(

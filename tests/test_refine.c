@@ -21,6 +21,7 @@
 #include <stdlib.h>
 
 #include "trn/refine.h"
+#include "trn/height_heading.h"
 #include "trn/localize.h"
 #include "rng.h"
 
@@ -364,6 +365,156 @@ static void test_sys_weight(void **state)
            n, large);
     assert_true(zero >= 170);
     assert_true(large >= 190);
+}
+
+/* Local DEM seen from pose (tx, ty) with the heading off by d: local offset
+ * o shows the global DEM at (tx, ty) + o turned as trn_refine_pose_heading
+ * turns it, (ox cos d + oy sin d, -ox sin d + oy cos d); heights the mix
+ * B + mix (C - B), offset dz, noise of cfg times `noise`. */
+static void make_local_turned(trn_grid_f32_t *l, double tx, double ty, double d, double dz,
+                              double noise, double mix, const trn_refine_cfg_t *cfg, trn_rng_t *r)
+{
+    const double cs = cos(d), sn = sin(d);
+    int x, y, c = LW / 2;
+    for (y = 0; y < LW; ++y) {
+        for (x = 0; x < LW; ++x) {
+            double rm = cfg->cell_m * sqrt((double)((x - c) * (x - c) + (y - c) * (y - c)));
+            double s = cfg->noise_m + cfg->noise_k_per_m * rm * rm;
+            double px = tx + (x - c) * cs + (y - c) * sn, py = ty - (x - c) * sn + (y - c) * cs;
+            double b = lin(px, py), cc = bilin(px, py);
+            l_data[y * LW + x] = (float)(b + mix * (cc - b) + dz + noise * s * gauss(r));
+        }
+    }
+    l_data[c * LW + c] = NAN;
+    assert_int_equal(trn_grid_f32_init(l, l_data, LW * LW, LW, LW), TRN_OK);
+}
+
+/* slow_ll at a refined (x, y, heading): the offsets turned. */
+static double slow_ll3(const trn_refine_cfg_t *c, const trn_refine3_t *o)
+{
+    const double cs = cos(o->heading_rad), sn = sin(o->heading_rad);
+    int i, j, m = LW / 2, n = 0;
+    double mean = 0.0, var = 0.0, k, a = (double)c->inlier_prob, ll = 0.0;
+    for (j = 0; j < LW * LW; ++j) {
+        if (isfinite(l_data[j])) {
+            mean += l_data[j];
+            ++n;
+        }
+    }
+    mean /= n;
+    for (j = 0; j < LW * LW; ++j) {
+        if (isfinite(l_data[j])) {
+            var += (l_data[j] - mean) * (l_data[j] - mean);
+        }
+    }
+    k = 1.0 / (10.0 * fmax(sqrt(var / n), (double)c->noise_m));
+    for (j = 0; j < LW; ++j) {
+        for (i = 0; i < LW; ++i) {
+            double rm, s, v, b, cc, u, px, py;
+            if (!isfinite(l_data[j * LW + i])) {
+                continue;
+            }
+            rm = c->cell_m * sqrt((double)((i - m) * (i - m) + (j - m) * (j - m)));
+            s = c->noise_m + c->noise_k_per_m * rm * rm;
+            v = s * s + o->pos.model_m * o->pos.model_m;
+            px = o->pos.x + (i - m) * cs + (j - m) * sn;
+            py = o->pos.y - (i - m) * sn + (j - m) * cs;
+            b = lin(px, py);
+            cc = bilin(px, py);
+            u = l_data[j * LW + i] - o->pos.dz_m - (b + o->pos.interp_mix * (cc - b));
+            ll += log(a * exp(-0.5 * u * u / v) / sqrt(6.283185307179586 * v) + (1.0 - a) * k);
+        }
+    }
+    return ll;
+}
+
+/* The interpolants' mix over heading (trn_refine_pose_heading): local DEMs
+ * made with the mix 0, 0.3, 1 and 1.8 and turned by a known angle (up to 5
+ * deg) give the pose, the heading and the mix back when noise-free; with
+ * noise ll is the mixture ln L written out (slow_ll3) and, at heading 0
+ * held fixed, the whole answer is trn_refine_pose's (the same Gauss-Newton
+ * with the heading's row and column unit). */
+static void test_heading_mix(void **state)
+{
+    trn_grid_f32_t g, l;
+    trn_refine_cfg_t c = cfg_of();
+    trn_refine3_t o;
+    trn_refine_t o2;
+    trn_rng_t r;
+    const double mixes[4] = {0.0, 0.3, 1.0, 1.8}, deg = 3.14159265358979323846 / 180.0;
+    int k, i;
+    double worst = 0.0, worst_h = 0.0, worst_mix = 0.0, worst_ll = 0.0, worst_2d = 0.0;
+    (void)state;
+    trn_rng_seed(&r, 23);
+    make_global(&g);
+    for (k = 0; k < 4; ++k) {
+        for (i = 0; i < 6; ++i) {
+            double tx = 24.0 + 12.0 * trn_rng_unit(&r), ty = 24.0 + 12.0 * trn_rng_unit(&r);
+            double d = (trn_rng_unit(&r) - 0.5) * 10.0 * deg;
+            make_local_turned(&l, tx, ty, d, 2.0, 0.0, mixes[k], &c, &r);
+            assert_int_equal(trn_refine_pose_heading(&g, &l, LW / 2, LW / 2, (int)floor(tx + 0.5),
+                                                     (int)floor(ty + 0.5), 0.0, 8.0 * deg, &c, &o),
+                             TRN_OK);
+            worst = fmax(worst, fmax(fabs(o.pos.x - tx), fabs(o.pos.y - ty)));
+            worst_h = fmax(worst_h, fabs(o.heading_rad - d));
+            worst_mix = fmax(worst_mix, fabs(o.pos.interp_mix - mixes[k]));
+            make_local_turned(&l, tx, ty, d, 2.0, 1.0, mixes[k], &c, &r);
+            assert_int_equal(trn_refine_pose_heading(&g, &l, LW / 2, LW / 2, (int)floor(tx + 0.5),
+                                                     (int)floor(ty + 0.5), 0.0, 8.0 * deg, &c, &o),
+                             TRN_OK);
+            worst_ll = fmax(worst_ll, fabs(o.pos.ll - slow_ll3(&c, &o)));
+            assert_true(o.pos.sys_weight >= 0.0 && o.pos.sys_weight <= TRN_REFINE_SYS);
+            /* heading 0 held: trn_refine_pose's answer */
+            make_local_mix(&l, tx, ty, 2.0, 1.0, mixes[k], &c, &r);
+            assert_int_equal(trn_refine_pose_heading(&g, &l, LW / 2, LW / 2, (int)floor(tx + 0.5),
+                                                     (int)floor(ty + 0.5), 0.0, 0.0, &c, &o),
+                             TRN_OK);
+            assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, (int)floor(tx + 0.5),
+                                             (int)floor(ty + 0.5), &c, &o2),
+                             TRN_OK);
+            worst_2d = fmax(worst_2d, fabs(o.pos.x - o2.x) + fabs(o.pos.y - o2.y) +
+                                          fabs(o.pos.interp_mix - o2.interp_mix) +
+                                          fabs(o.pos.ll - o2.ll) / (1.0 + fabs(o2.ll)) +
+                                          fabs(o.pos.sys_weight - o2.sys_weight) +
+                                          fabs(o.pos.inflation - o2.inflation));
+            worst_2d = fmax(worst_2d, fabs(o.pos.cov_cells[0] / o2.cov_cells[0] - 1.0) +
+                                          fabs(o.pos.cov_cells[1] / o2.cov_cells[1] - 1.0) +
+                                          fabs(o.pos.cov_cells[2] - o2.cov_cells[2]) /
+                                              sqrt(o2.cov_cells[0] * o2.cov_cells[1]));
+            assert_true(o.heading_rad == 0.0 && o.cov3[8] == 0.0);
+        }
+    }
+    printf("mix over heading: worst pose error %.2e cells, heading %.2e rad, mix %.2e "
+           "(noise-free, 24 poses turned up to 5 deg); ll against the slow sum %.2e nats; "
+           "heading 0 held against trn_refine_pose %.2e\n",
+           worst, worst_h, worst_mix, worst_ll, worst_2d);
+    assert_true(worst < 1e-4);
+    assert_true(worst_h < 1e-5);
+    assert_true(worst_mix < 5e-3);
+    assert_true(worst_ll < 1e-6);
+    assert_true(worst_2d < 1e-9);
+    {
+        /* a mix beyond the bounds stops at two prior sds; a noise model
+         * above the local heights' spread sets K (slow_ll3's floor) */
+        trn_refine_cfg_t big = c;
+        make_local_turned(&l, 30.2, 29.7, 2.0 * deg, 0.0, 0.0, 4.0, &c, &r);
+        assert_int_equal(
+            trn_refine_pose_heading(&g, &l, LW / 2, LW / 2, 30, 30, 0.0, 8.0 * deg, &c, &o),
+            TRN_OK);
+        assert_true(o.pos.interp_mix == TRN_REFINE_MIX_MEAN + 2.0 * TRN_REFINE_MIX_SD);
+        make_local_turned(&l, 30.2, 29.7, 2.0 * deg, 0.0, 0.0, -3.0, &c, &r);
+        assert_int_equal(
+            trn_refine_pose_heading(&g, &l, LW / 2, LW / 2, 30, 30, 0.0, 8.0 * deg, &c, &o),
+            TRN_OK);
+        assert_true(o.pos.interp_mix == TRN_REFINE_MIX_MEAN - 2.0 * TRN_REFINE_MIX_SD);
+        big.noise_m = 100.0f;
+        make_local_turned(&l, 30.2, 29.7, 2.0 * deg, 0.0, 0.0, 1.0, &c, &r);
+        assert_int_equal(
+            trn_refine_pose_heading(&g, &l, LW / 2, LW / 2, 30, 30, 0.0, 8.0 * deg, &big, &o),
+            TRN_OK);
+        assert_true(fabs(o.pos.ll - slow_ll3(&big, &o)) < 1e-6);
+        assert_true(fabs(o.heading_rad - 2.0 * deg) < 1e-4);
+    }
 }
 
 /* With the documented noise the errors fall inside the 1/2/3-sigma ellipses
@@ -727,7 +878,7 @@ int main(void)
         cmocka_unit_test(test_noise_coverage), cmocka_unit_test(test_outliers),
         cmocka_unit_test(test_errors),         cmocka_unit_test(test_cfg_auto),
         cmocka_unit_test(test_height_search),  cmocka_unit_test(test_mix),
-        cmocka_unit_test(test_sys_weight),
+        cmocka_unit_test(test_sys_weight),     cmocka_unit_test(test_heading_mix),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

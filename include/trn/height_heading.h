@@ -14,11 +14,12 @@
  * (pose, heading)'s ln L is kept, so the failure probability is the
  * posterior mass of the whole (x, y, heading) space outside the position
  * zone. The refinement is trn_refine_pose's Gauss-Newton with the heading
- * as a fourth parameter (bicubic map at the pose plus the offset turned
+ * as a fourth parameter (the map at the pose plus the offset turned
  * continuously; d/d heading = gradient . the turned offset rotated by 90
- * degrees), with the same weights, model variance, clip, block-sandwich
- * inflation and interpolants' shift, giving the 3 x 3 (x, y, heading)
- * covariance.
+ * degrees), with the same weights, model variance, clip, interpolants' mix
+ * (estimated, folded out of the covariance), block-sandwich inflation,
+ * interpolants' shift weighted by the data's misfit and refined mixture
+ * ln L, giving the 3 x 3 (x, y, heading) covariance.
  */
 #ifndef TRN_HEIGHT_HEADING_H
 #define TRN_HEIGHT_HEADING_H
@@ -53,8 +54,8 @@ typedef struct {
 typedef struct {
     trn_refine_t pos;                /**< as trn_refine_pose: pose, dz, model error, cov_cells (the
                               position block of cov3), chi2, inflation, interp_shift
-                              (x, y), counts; interp_mix 1 and sys_weight
-                              TRN_REFINE_SYS (bicubic heights, the full shift), ll NaN */
+                              (x, y), sys_weight, interp_mix, ll (at the refined
+                              heading), counts */
     double heading_rad;              /**< refined heading (the start when held fixed) */
     double cov3[9];                  /**< covariance of (x cells, y cells, heading rad), row-major;
                               heading row and column 0 when held fixed */
@@ -106,14 +107,16 @@ trn_status_t trn_height_search_heading(const trn_grid_f32_t *global, const trn_g
                                        double *ll_grid, trn_height_best3_t *best);
 
 /**
- * @brief trn_refine_pose over (x, y, heading, dz) from the integer pose
- * (ix, iy) at heading heading_rad (the local DEM's offsets turned by it).
+ * @brief trn_refine_pose over (x, y, heading, dz, mix) from the integer
+ * pose (ix, iy) at heading heading_rad (the local DEM's offsets turned by
+ * it). With the heading held fixed at 0 the answer is trn_refine_pose's.
  * @param[in] max_turn_rad farthest the heading may move, [0, pi]; 0: the
- *            heading is held fixed (x, y, dz only).
+ *            heading is held fixed (x, y, dz and the mix only).
  * @retval TRN_OK
  * @retval TRN_E_NULL, TRN_E_SIZE (bad grids)
- * @retval TRN_E_ARG cfg, heading not finite or over pi in size, max_turn_rad
- *         out of range, or the rover cell farther than TRN_MAX_DIM
+ * @retval TRN_E_ARG cfg (inlier_prob included), heading not finite or over
+ *         pi in size, max_turn_rad out of range, or the rover cell farther
+ *         than TRN_MAX_DIM
  * @retval TRN_E_RANGE   start pose off the global grid
  * @retval TRN_E_NODATA  fewer than 8 seen points with global heights
  * @retval TRN_E_ILLCOND singular normal matrix, the estimate left the start's
