@@ -5,10 +5,20 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "likelihood_int.h"
 #include "ws.h"
 
 /* Largest |x|, |y| of a point turned: sqrt(2) x 16383 < 32767. */
 #define HEADING_MAX_OFFSET 16383
+
+/* Positions kept by the one-pass search (the first of those with a pose
+ * within the margin of the best: a few near the peak on terrain that pins
+ * the pose down). More than the zone's (2 r + 1)^2, r = 2 by default: a
+ * full list always holds a position outside the zone. If the zone holds
+ * every one, the competitor is searched again (search_all). 32: fewer
+ * falls back more often on few points; more lowers the threshold once
+ * full (more work), measured in docs/modules/heading.md. */
+#define HEADING_KEEP 32
 
 trn_status_t trn_heading_steps(const trn_point_t *pts, size_t n, const trn_heading_cfg_t *cfg,
                                double *step_rad, int32_t *half_steps)
@@ -106,11 +116,12 @@ typedef struct {
 typedef struct {
     double ll[27];
     trn_peak3_t pk;
-    hsearch_t h; /* the search's context */
+    hsearch_t h;      /* the search's context */
+    trn_bb_keep_t kp; /* the one-pass search's best and kept poses */
 } fit_t;
 
 /* The workspace: the turned points, the fit, the search's heading list,
- * then trn_search_bb's workspace. */
+ * the kept poses, then trn_search_bb's workspace. */
 static size_t heading_carve(const trn_map_t *map, size_t n, const trn_window_t *win, void *base,
                             trn_point_t **buf, fit_t **fit, heading_t **hs, void **search,
                             size_t *search_bytes)
@@ -130,6 +141,13 @@ static size_t heading_carve(const trn_map_t *map, size_t n, const trn_window_t *
     *buf = (trn_point_t *)trn_ws_take(&w, n * sizeof(trn_point_t));
     *fit = (fit_t *)trn_ws_take(&w, sizeof(fit_t));
     *hs = (heading_t *)trn_ws_take(&w, (size_t)TRN_MAX_HEADING_STEPS * sizeof(heading_t));
+    {
+        trn_kept_pose_t *list = (trn_kept_pose_t *)trn_ws_take(&w, (size_t)HEADING_KEEP *
+                                                                       sizeof(trn_kept_pose_t));
+        if (*fit != NULL) {
+            (*fit)->kp.list = list;
+        }
+    }
     *search = trn_ws_take(&w, sw);
     *search_bytes = sw;
     return w.total;
@@ -194,10 +212,10 @@ static void sort_headings(heading_t *hs, int32_t m)
 
 /* Search heading k for a pose beating (best, best_k) under the tie rule
  * (score, then tie rank of the heading, then trn_search_bb's order), or any
- * pose above *floor when nothing is found yet (floor NULL: any pose). The
- * searches can only answer TRN_OK or TRN_E_NODATA here: the map, window,
- * points and workspace were checked before (trn_localize_points_heading). */
-static void search_one(hsearch_t *h, int32_t k, const int64_t *floor, int *found, trn_best_t *best,
+ * pose above floor when nothing is found yet. The searches can only answer
+ * TRN_OK or TRN_E_NODATA here: the map, window, points and workspace were
+ * checked before (trn_localize_points_heading). */
+static void search_one(hsearch_t *h, int32_t k, int64_t floor, int *found, trn_best_t *best,
                        int32_t *best_k, trn_search_stats_t *stats)
 {
     trn_search_stats_t s = {0u, 0u};
@@ -208,12 +226,9 @@ static void search_one(hsearch_t *h, int32_t k, const int64_t *floor, int *found
         const int64_t f = tie_rank(k) < tie_rank(*best_k) ? best->score - 1 : best->score;
         st = trn_search_bb_above(&h->map->pyr, &h->map->lnp, h->buf, h->n, h->win, h->ex, f, h->sws,
                                  h->swb, &b, &s);
-    } else if (floor != NULL) {
-        st = trn_search_bb_above(&h->map->pyr, &h->map->lnp, h->buf, h->n, h->win, h->ex, *floor,
-                                 h->sws, h->swb, &b, &s);
     } else {
-        st = trn_search_bb(&h->map->pyr, &h->map->lnp, h->buf, h->n, h->win, h->ex, h->sws, h->swb,
-                           &b, &s);
+        st = trn_search_bb_above(&h->map->pyr, &h->map->lnp, h->buf, h->n, h->win, h->ex, floor,
+                                 h->sws, h->swb, &b, &s);
     }
     add_stats(stats, &s);
     if (st == TRN_OK) {
@@ -223,12 +238,13 @@ static void search_one(hsearch_t *h, int32_t k, const int64_t *floor, int *found
     }
 }
 
-/* The best pose over every heading (exactly: each heading is searched by
- * branch-and-bound above the best found so far), TRN_OK or TRN_E_NODATA.
- * The seed heading first; the others in the order of the score the seed's
- * answer has at them, so a good floor comes early and the rest stop after a
- * few blocks. */
-static trn_status_t search_all(hsearch_t *h, int32_t seed, const int64_t *floor, trn_best_t *best,
+/* The best pose above floor over every heading, outside h->ex (exactly:
+ * each heading is searched by branch-and-bound above the best found so
+ * far), TRN_OK or TRN_E_NODATA: the competitor when the kept poses cannot
+ * tell it (kept_second). The seed heading first; the others in the order
+ * of the score the seed's answer has at them, so a good floor comes early
+ * and the rest stop after a few blocks. */
+static trn_status_t search_all(hsearch_t *h, int32_t seed, int64_t floor, trn_best_t *best,
                                int32_t *best_k, trn_search_stats_t *stats)
 {
     int32_t i, m = 0;
@@ -253,6 +269,82 @@ static trn_status_t search_all(hsearch_t *h, int32_t seed, const int64_t *floor,
         search_one(h, h->hs[i].k, floor, &found, best, best_k, stats);
     }
     return found ? TRN_OK : TRN_E_NODATA;
+}
+
+/* Heading k of the one-pass search (trn_search_bb_keep_; it cannot fail:
+ * its arguments were checked as search_one's). */
+static void keep_one(hsearch_t *h, int32_t k, trn_bb_keep_t *kp, trn_search_stats_t *stats)
+{
+    trn_search_stats_t s = {0u, 0u};
+    turn(h->pts, h->n, h->cfg, h->step, k, h->map->dist.nz, h->buf);
+    kp->k = k;
+    kp->rank = tie_rank(k);
+    (void)trn_search_bb_keep_(&h->map->pyr, &h->map->lnp, h->buf, h->n, h->win, h->sws, h->swb, kp,
+                              &s);
+    add_stats(stats, &s);
+}
+
+/* The best (x, y, heading) and the poses near it, in one pass over the
+ * headings: each heading is searched by branch-and-bound above keep's
+ * threshold (the best so far minus the margin, or the last kept position's
+ * score once HEADING_KEEP positions are kept; carried across headings), the
+ * poses at or above it offered to kp's list. Heading 0 first, the others in the
+ * order of the score its best pose has at them, so a high bound comes
+ * early. n > 0 points and no zone: kp->found is set. */
+static void keep_all(hsearch_t *h, trn_bb_keep_t *kp, trn_search_stats_t *stats)
+{
+    int32_t i, m = 0;
+    keep_one(h, 0, kp, stats);
+    for (i = 1; i <= 2 * h->kk; ++i) {
+        const int32_t k = step_of(i);
+        int64_t p = 0;
+        turn(h->pts, h->n, h->cfg, h->step, k, h->map->dist.nz, h->buf);
+        (void)trn_score_pose(&h->map->dist, &h->map->lnp, h->buf, h->n, kp->best.x, kp->best.y, &p);
+        h->hs[m].k = k;
+        h->hs[m].proxy = p;
+        ++m;
+    }
+    sort_headings(h->hs, m);
+    for (i = 0; i < m; ++i) {
+        keep_one(h, h->hs[i].k, kp, stats);
+    }
+}
+
+/* The competitor from the kept poses: the first, in the search's order
+ * (score, tie rank of the heading, y, x), outside the zone and above floor
+ * (the best minus the margin). Returns 1 and sets it if there is one; 0
+ * if there is none at all (the list holds every pose above floor: it is
+ * not full, or its last kept pose scores at most floor); -1 if the list
+ * cannot tell (full, every pose above floor in it inside the zone: a pose
+ * not kept may be the competitor). Exact: a pose not kept comes after
+ * every pose kept or scores at most floor (trn_bb_keep_t). */
+static int kept_second(const trn_bb_keep_t *kp, const trn_exclusion_t *ex, int64_t floor,
+                       trn_best_t *second, int32_t *sk)
+{
+    const trn_kept_pose_t *c = NULL;
+    size_t i;
+    for (i = 0; i < kp->len; ++i) {
+        const trn_kept_pose_t *e = &kp->list[i];
+        const int32_t dx = e->x > ex->cx ? e->x - ex->cx : ex->cx - e->x;
+        const int32_t dy = e->y > ex->cy ? e->y - ex->cy : ex->cy - e->y;
+        if (e->score <= floor || (dx <= ex->radius && dy <= ex->radius)) {
+            continue;
+        }
+        if (c == NULL || e->score > c->score ||
+            (e->score == c->score &&
+             (e->rank < c->rank ||
+              (e->rank == c->rank && (e->y < c->y || (e->y == c->y && e->x < c->x)))))) {
+            c = e;
+        }
+    }
+    if (c != NULL) {
+        second->x = c->x;
+        second->y = c->y;
+        second->score = c->score;
+        *sk = c->k;
+        return 1;
+    }
+    return (kp->len < kp->cap || kp->list[0].score <= floor) ? 0 : -1;
 }
 
 /* ln L, nats, on the 3 x 3 x 3 grid around (x, y, k) (checked points, poses
@@ -357,7 +449,14 @@ trn_status_t trn_localize_points_heading(const trn_map_t *map, const trn_point_t
     h->hs = hsl;
     h->sws = sws;
     h->swb = swb;
-    (void)search_all(h, 0, NULL, &best, &bk, &stats); /* n > 0 points, no zone: always a best */
+    /* scores are sums of n int32 table entries, n < 2^31: the differences cannot wrap */
+    fit->kp.margin = (int64_t)TRN_HEADING_MARGIN_NATS * (int64_t)TRN_LNP_SCALE;
+    fit->kp.found = 0;
+    fit->kp.len = 0u;
+    fit->kp.cap = HEADING_KEEP;
+    keep_all(h, &fit->kp, &stats); /* n > 0 points, no zone: always a best */
+    best = fit->kp.best;
+    bk = fit->kp.best_k;
     out->loc.refined = 0;
     out->loc.misfit = 0;
     out->loc.ix = best.x;
@@ -408,10 +507,15 @@ trn_status_t trn_localize_points_heading(const trn_map_t *map, const trn_point_t
     ex.radius = r;
     out->loc.exclusion_cells = r;
     h->ex = &ex;
-    /* scores are sums of n int32 table entries, n < 2^31: the difference cannot wrap */
-    margin = best.score - (int64_t)TRN_HEADING_MARGIN_NATS * (int64_t)TRN_LNP_SCALE;
-    st = search_all(h, bk, &margin, &second, &sk, &s2);
-    out->loc.stats = stats; /* the first search's work, as trn_localize_points */
+    margin = best.score - fit->kp.margin;
+    /* the kept poses decide, unless the zone holds every one of them */
+    r = kept_second(&fit->kp, &ex, margin, &second, &sk); /* r: the zone is in ex */
+    if (r >= 0) {
+        st = r ? TRN_OK : TRN_E_NODATA;
+    } else {
+        st = search_all(h, bk, margin, &second, &sk, &s2);
+    }
+    out->loc.stats = stats; /* the one pass's work (not the search again) */
     if (st == TRN_OK) {
         out->loc.has_second = 1;
         out->loc.second_x = second.x;

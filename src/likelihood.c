@@ -5,6 +5,7 @@
 
 #include <math.h>
 
+#include "likelihood_int.h"
 #include "ws.h"
 
 #define TRN_SQRT_2PI 2.5066282746310002
@@ -707,13 +708,106 @@ static void sort_blocks(block_t *a, size_t n)
     }
 }
 
+/* Does pose a come before pose b (score, then tie rank, then y, x)? */
+static int kept_before(const trn_kept_pose_t *a, const trn_kept_pose_t *b)
+{
+    if (a->score != b->score) {
+        return a->score > b->score;
+    }
+    if (a->rank != b->rank) {
+        return a->rank < b->rank;
+    }
+    return a->y < b->y || (a->y == b->y && a->x < b->x);
+}
+
+/* keep's threshold: its best's score minus the margin, or the last kept
+ * pose's score when the list is full and that is higher (scores are sums
+ * of fewer than 2^31 int32 entries: no wrap). */
+static int64_t keep_cut(const trn_bb_keep_t *kp)
+{
+    const int64_t c = kp->best.score - kp->margin;
+    return (kp->len == kp->cap && kp->list[0].score > c) ? kp->list[0].score : c;
+}
+
+/* Restore the min-heap (the last kept pose at the root) below slot at. */
+static void keep_sift(trn_kept_pose_t *h, size_t len, size_t at)
+{
+    size_t i = at;
+    for (;;) {
+        size_t l = 2u * i + 1u, m = i;
+        trn_kept_pose_t tmp;
+        if (l < len && kept_before(&h[m], &h[l])) {
+            m = l;
+        }
+        if (l + 1u < len && kept_before(&h[m], &h[l + 1u])) {
+            m = l + 1u;
+        }
+        if (m == i) {
+            return;
+        }
+        tmp = h[i];
+        h[i] = h[m];
+        h[m] = tmp;
+        i = m;
+    }
+}
+
+/* Offer pose (x, y) of score s (at or above keep_cut, or nothing found
+ * yet) to keep: it may become the best; it replaces its position's entry
+ * if it comes before it, or else is kept if the list has room or it comes
+ * before the last kept position. */
+static void keep_offer(trn_bb_keep_t *kp, int64_t s, int32_t x, int32_t y)
+{
+    trn_kept_pose_t e;
+    size_t i;
+    e.score = s;
+    e.x = x;
+    e.y = y;
+    e.k = kp->k;
+    e.rank = kp->rank;
+    if (!kp->found || s > kp->best.score ||
+        (s == kp->best.score &&
+         (kp->rank < kp->best_rank || (kp->rank == kp->best_rank &&
+                                       (y < kp->best.y || (y == kp->best.y && x < kp->best.x)))))) {
+        kp->best.x = x;
+        kp->best.y = y;
+        kp->best.score = s;
+        kp->best_k = kp->k;
+        kp->best_rank = kp->rank;
+        kp->found = 1;
+    }
+    for (i = 0; i < kp->len; ++i) {
+        if (kp->list[i].x == x && kp->list[i].y == y) { /* this position: keep the first */
+            if (kept_before(&e, &kp->list[i])) {
+                kp->list[i] = e;
+                keep_sift(kp->list, kp->len, i);
+            }
+            return;
+        }
+    }
+    if (kp->len < kp->cap) { /* room: sift up */
+        i = kp->len++;
+        while (i > 0u && kept_before(&kp->list[(i - 1u) / 2u], &e)) {
+            kp->list[i] = kp->list[(i - 1u) / 2u];
+            i = (i - 1u) / 2u;
+        }
+        kp->list[i] = e;
+    } else if (kept_before(&e, &kp->list[0])) { /* full: replace the last kept */
+        kp->list[0] = e;
+        keep_sift(kp->list, kp->len, 0u);
+    }
+}
+
 /* The branch-and-bound search of trn_search_bb; with floor, only poses
  * scoring above *floor count (the search starts as if one had been found
- * with that score, so blocks that cannot beat it are never opened). */
+ * with that score, so blocks that cannot beat it are never opened); with
+ * keep (floor NULL), blocks are pruned below keep's threshold (keep_cut,
+ * rising as poses are offered) and every pose at or above it is offered to
+ * keep (trn_search_bb_keep_). */
 static trn_status_t bb_run(const trn_pyramid_t *p, const trn_lnp_table_t *t, const trn_point_t *pts,
                            size_t n, const trn_window_t *win, const trn_exclusion_t *ex, void *ws,
-                           size_t ws_bytes, const int64_t *floor, trn_best_t *best,
-                           trn_search_stats_t *stats)
+                           size_t ws_bytes, const int64_t *floor, trn_bb_keep_t *kp,
+                           trn_best_t *best, trn_search_stats_t *stats)
 {
     trn_status_t st;
     block_t *tops;
@@ -724,7 +818,8 @@ static trn_status_t bb_run(const trn_pyramid_t *p, const trn_lnp_table_t *t, con
     size_t ntop = 0, i;
     int32_t top_lv, bs, x, y;
     bbox_t bb;
-    int found = 0;
+    int found = 0, have_cut;
+    int64_t cut; /* with have_cut: blocks and poses below it are pruned */
     uint64_t scored = 0, bounded = 0;
 
     if (p == NULL || t == NULL || best == NULL || ws == NULL) {
@@ -750,6 +845,12 @@ static trn_status_t bb_run(const trn_pyramid_t *p, const trn_lnp_table_t *t, con
         best->score = *floor;
         found = 1;
     }
+    have_cut = found;
+    cut = found ? best->score : 0;
+    if (kp != NULL) {
+        have_cut = kp->found;
+        cut = kp->found ? keep_cut(kp) : 0;
+    }
     (void)bb_carve(p, win, ws, &lay);
     tops = lay.tops;
     tops_suf = lay.tops_suf;
@@ -771,9 +872,11 @@ static trn_status_t bb_run(const trn_pyramid_t *p, const trn_lnp_table_t *t, con
                 tb->y = y;
                 tb->level = top_lv;
                 tb->slot = (int32_t)ntop;
-                /* no bound yet (nothing found before the top level is
-                 * scored), so no early exit: every top block is scored whole */
-                if (score_chunks(&L, t->lnp, pts, n, &bb, x, y, NULL, best->score, &tb->bound,
+                /* no early exit: every top block is scored whole (before
+                 * anything is found there is no bound; with a floor or
+                 * keep's threshold, the bench's top blocks all score above
+                 * it, 2026-12-02) */
+                if (score_chunks(&L, t->lnp, pts, n, &bb, x, y, NULL, cut, &tb->bound,
                                  &tops_suf[ntop])) {
                     ++ntop;
                 }
@@ -783,7 +886,7 @@ static trn_status_t bb_run(const trn_pyramid_t *p, const trn_lnp_table_t *t, con
     sort_blocks(tops, ntop);
     for (i = 0; i < ntop; ++i) {
         size_t sp = 0;
-        if (found && tops[i].bound < best->score) {
+        if (have_cut && tops[i].bound < cut) {
             break; /* sorted: no later block can hold a better pose */
         }
         stack_suf[0] = tops_suf[tops[i].slot];
@@ -795,7 +898,7 @@ static trn_status_t bb_run(const trn_pyramid_t *p, const trn_lnp_table_t *t, con
             level_view_t Lc;
             size_t nk = 0, a, b;
             int32_t h, cl, k;
-            if (found && e.bound < best->score) {
+            if (have_cut && e.bound < cut) {
                 continue;
             }
             h = (int32_t)(1u << (unsigned)(e.level - 1));
@@ -812,9 +915,18 @@ static trn_status_t bb_run(const trn_pyramid_t *p, const trn_lnp_table_t *t, con
                         continue;
                     }
                     ++scored;
-                    if (score_chunks(&L0, t->lnp, pts, n, &bb, cx, cy, found ? eup : NULL,
-                                     best->score, &s, NULL)) {
+                    if (!score_chunks(&L0, t->lnp, pts, n, &bb, cx, cy, have_cut ? eup : NULL, cut,
+                                      &s, NULL)) {
+                        continue;
+                    }
+                    if (kp == NULL) {
                         consider(best, &found, s, cx, cy);
+                        have_cut = found;
+                        cut = best->score;
+                    } else if (!have_cut || s >= cut) {
+                        keep_offer(kp, s, cx, cy);
+                        have_cut = 1;
+                        cut = keep_cut(kp);
                     }
                 } else {
                     if (block_excluded(ex, win, cx, cy, h)) {
@@ -825,8 +937,8 @@ static trn_status_t bb_run(const trn_pyramid_t *p, const trn_lnp_table_t *t, con
                     kids[nk].y = cy;
                     kids[nk].level = cl;
                     kids[nk].slot = k;
-                    if (score_chunks(&Lc, t->lnp, pts, n, &bb, cx, cy, found ? eup : NULL,
-                                     best->score, &kids[nk].bound, &kid_suf[k])) {
+                    if (score_chunks(&Lc, t->lnp, pts, n, &bb, cx, cy, have_cut ? eup : NULL, cut,
+                                     &kids[nk].bound, &kid_suf[k])) {
                         ++nk;
                     }
                 }
@@ -854,6 +966,9 @@ static trn_status_t bb_run(const trn_pyramid_t *p, const trn_lnp_table_t *t, con
     if (floor != NULL) {
         return best->score > *floor ? TRN_OK : TRN_E_NODATA;
     }
+    if (kp != NULL) {
+        return TRN_OK; /* found or not: in keep */
+    }
     return found ? TRN_OK : TRN_E_NODATA;
 }
 
@@ -861,7 +976,7 @@ trn_status_t trn_search_bb(const trn_pyramid_t *p, const trn_lnp_table_t *t, con
                            size_t n, const trn_window_t *win, const trn_exclusion_t *ex, void *ws,
                            size_t ws_bytes, trn_best_t *best, trn_search_stats_t *stats)
 {
-    return bb_run(p, t, pts, n, win, ex, ws, ws_bytes, NULL, best, stats);
+    return bb_run(p, t, pts, n, win, ex, ws, ws_bytes, NULL, NULL, best, stats);
 }
 
 trn_status_t trn_search_bb_above(const trn_pyramid_t *p, const trn_lnp_table_t *t,
@@ -874,11 +989,20 @@ trn_status_t trn_search_bb_above(const trn_pyramid_t *p, const trn_lnp_table_t *
     if (best == NULL) {
         return TRN_E_NULL;
     }
-    st = bb_run(p, t, pts, n, win, ex, ws, ws_bytes, &floor, &b, stats);
+    st = bb_run(p, t, pts, n, win, ex, ws, ws_bytes, &floor, NULL, &b, stats);
     if (st == TRN_OK) {
         *best = b;
     }
     return st;
+}
+
+trn_status_t trn_search_bb_keep_(const trn_pyramid_t *p, const trn_lnp_table_t *t,
+                                 const trn_point_t *pts, size_t n, const trn_window_t *win,
+                                 void *ws, size_t ws_bytes, trn_bb_keep_t *keep,
+                                 trn_search_stats_t *stats)
+{
+    trn_best_t b;
+    return bb_run(p, t, pts, n, win, NULL, ws, ws_bytes, NULL, keep, &b, stats);
 }
 
 /* ------------------------------------------------------------ point order */

@@ -3,7 +3,9 @@
  * parts: point rotation against the formula, the automatic step, eq. 6 in
  * three dimensions against analytic quadratics, trn_search_bb_above against
  * trn_search_bb, the heading search against the exhaustive search over
- * every (x, y, heading) on seeded rock fields, headings recovered from local
+ * every (x, y, heading) on seeded rock fields (the best pose and the
+ * competitor, also with few points, where many poses are within the
+ * margin and the kept poses may not tell the competitor), headings recovered from local
  * maps rendered turned by known angles, W = 0 equal to trn_localize_points,
  * and every bad-input class. */
 #include <stdarg.h>
@@ -373,10 +375,69 @@ static void exhaustive3(size_t np, const trn_window_t *win, const trn_heading_cf
     }
 }
 
+/* Tie rank of step k (0, -1, +1, -2, ...: the lower wins a tie). */
+static int32_t rank_of(int32_t k) { return k > 0 ? 2 * k : (k < 0 ? -2 * k - 1 : 0); }
+
+/* The competitor by brute force: every pose of every heading outside the
+ * zone of res scoring above the best minus the margin, the first in the
+ * order (score, tie rank, y, x); checked against res (has_second, pose,
+ * ln L, failure probability). */
+static void check_second(size_t np, const trn_window_t *win, const trn_heading_cfg_t *c,
+                         const trn_heading_result_t *res, int *has)
+{
+    const int64_t best = (int64_t)llround(res->loc.ll_best * TRN_LNP_SCALE);
+    const int64_t floor = best - (int64_t)TRN_HEADING_MARGIN_NATS * TRN_LNP_SCALE;
+    const int32_t r = res->loc.exclusion_cells;
+    int32_t k, x, y, srank = 0;
+    int found = 0;
+    trn_best_t sec = {0, 0, 0};
+    for (k = -res->half_steps; k <= res->half_steps; ++k) {
+        assert_int_equal(
+            trn_points_rotate(g_pts, np, c->center_rad + (double)k * res->step_rad, g_rot), TRN_OK);
+        for (y = win->y0; y <= win->y1; ++y) {
+            for (x = win->x0; x <= win->x1; ++x) {
+                int64_t s = 0;
+                if (abs(x - res->loc.ix) <= r && abs(y - res->loc.iy) <= r) {
+                    continue;
+                }
+                assert_int_equal(trn_score_pose(&g_w.map.dist, &g_w.map.lnp, g_rot, np, x, y, &s),
+                                 TRN_OK);
+                if (s <= floor) {
+                    continue;
+                }
+                if (!found || s > sec.score ||
+                    (s == sec.score &&
+                     (rank_of(k) < srank ||
+                      (rank_of(k) == srank && (y < sec.y || (y == sec.y && x < sec.x)))))) {
+                    sec.x = x;
+                    sec.y = y;
+                    sec.score = s;
+                    srank = rank_of(k);
+                    found = 1;
+                }
+            }
+        }
+    }
+    assert_int_equal(res->loc.has_second, found);
+    *has = found;
+    if (found) {
+        double pf = -1.0;
+        assert_int_equal(res->loc.second_x, sec.x);
+        assert_int_equal(res->loc.second_y, sec.y);
+        assert_true(res->loc.ll_second == (double)sec.score / (double)TRN_LNP_SCALE);
+        assert_int_equal(trn_failure_probability(res->loc.ll_best, res->loc.ll_second, &pf),
+                         TRN_OK);
+        assert_true(res->loc.failure_probability == pf);
+    } else {
+        assert_true(res->loc.failure_probability == 0.0);
+        assert_true(res->loc.ll_second == res->loc.ll_best);
+    }
+}
+
 static void test_equals_exhaustive(void **state)
 {
     trn_rng_t r;
-    int cases, seed;
+    int cases, seed, has = 0, n_second = 0;
     uint64_t bb_scored = 0, ex_scored = 0;
     (void)state;
     trn_rng_seed(&r, 77);
@@ -406,14 +467,64 @@ static void test_equals_exhaustive(void **state)
             assert_int_equal(res.loc.iy, ref.y);
             assert_int_equal(res.best_step, rk);
             assert_true(fabs(res.loc.ll_best - (double)ref.score / TRN_LNP_SCALE) < 1e-9);
+            check_second(np, &win, &c, &res, &has);
+            n_second += has;
             bb_scored += res.loc.stats.poses_scored;
             ex_scored += (uint64_t)(2 * res.half_steps + 1) * 13u * 13u;
         }
     }
-    printf("heading search: %llu exact pose scores against %llu exhaustive (%.3f)\n",
+    printf("heading search: %llu exact pose scores against %llu exhaustive (%.3f); %d of 24 with "
+           "a competitor within the margin\n",
            (unsigned long long)bb_scored, (unsigned long long)ex_scored,
-           (double)bb_scored / (double)ex_scored);
+           (double)bb_scored / (double)ex_scored, n_second);
     assert_true(bb_scored < ex_scored); /* the bound across headings prunes */
+}
+
+/* The same with fewer points (every j-th of the local map's, 2 to 600 of
+ * them), wider windows and some zones wider than the minimum: many poses
+ * within the margin of the best, competitors at other headings, the kept
+ * poses full (and then at times all inside the zone: the competitor is
+ * searched again). Best pose and competitor against brute force. */
+static void test_few_points_exhaustive(void **state)
+{
+    trn_rng_t r;
+    int cases, has = 0, n_second = 0;
+    (void)state;
+    trn_rng_seed(&r, 1414);
+    world_build(21u, 0);
+    for (cases = 0; cases < 80; ++cases) {
+        const double rx = 40.0 + 48.0 * trn_rng_unit(&r), ry = 40.0 + 48.0 * trn_rng_unit(&r);
+        const double delta = (trn_rng_unit(&r) - 0.5) * 12.0 * DEG;
+        const int32_t cx = (int32_t)floor(rx + 0.5), cy = (int32_t)floor(ry + 0.5);
+        const int32_t lo[4] = {2, 9, 60, 200}, hi[4] = {8, 60, 200, 600};
+        const int32_t keep = trn_rng_int(&r, lo[cases % 4], hi[cases % 4]);
+        const int32_t w = cases % 4 == 3 ? trn_rng_int(&r, 8, 15) : trn_rng_int(&r, 3, 9);
+        trn_window_t win = {cx - w, cy - w, cx + w, cy + w};
+        trn_heading_cfg_t c = {0.0, (double)trn_rng_int(&r, 2, 8) * DEG, 0.0};
+        trn_heading_result_t res;
+        trn_best_t ref = {0, 0, 0};
+        int32_t rk = 0;
+        size_t np = local_points(rx, ry, delta), i, m = 0, stride, wb;
+        trn_status_t st;
+        stride = np / (size_t)keep > 0u ? np / (size_t)keep : 1u;
+        for (i = (size_t)cases % stride; i < np; i += stride) {
+            g_pts[m++] = g_pts[i];
+        }
+        np = m;
+        wb = trn_localize_heading_workspace_bytes(&g_w.map, np, &win);
+        assert_true(wb > 0u && wb <= sizeof g_ws);
+        st = trn_localize_points_heading(&g_w.map, g_pts, np, &win, &c, g_ws, wb, &res);
+        assert_true(st == TRN_OK || st == TRN_E_ILLCOND);
+        exhaustive3(np, &win, &c, res.step_rad, res.half_steps, &ref, &rk);
+        assert_int_equal(res.loc.ix, ref.x);
+        assert_int_equal(res.loc.iy, ref.y);
+        assert_int_equal(res.best_step, rk);
+        assert_true(res.loc.ll_best == (double)ref.score / TRN_LNP_SCALE);
+        check_second(np, &win, &c, &res, &has);
+        n_second += has;
+    }
+    printf("fewer points: %d of 80 with a competitor within the margin\n", n_second);
+    assert_true(n_second >= 30);
 }
 
 static void test_recovers_heading(void **state)
@@ -797,11 +908,17 @@ static void test_dem_entry(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_rotate_formula),    cmocka_unit_test(test_steps),
-        cmocka_unit_test(test_fit3_analytic),     cmocka_unit_test(test_search_bb_above),
-        cmocka_unit_test(test_equals_exhaustive), cmocka_unit_test(test_recovers_heading),
-        cmocka_unit_test(test_w0_is_2d),          cmocka_unit_test(test_bad_inputs),
-        cmocka_unit_test(test_dem_entry),         cmocka_unit_test(test_calibration),
+        cmocka_unit_test(test_rotate_formula),
+        cmocka_unit_test(test_steps),
+        cmocka_unit_test(test_fit3_analytic),
+        cmocka_unit_test(test_search_bb_above),
+        cmocka_unit_test(test_equals_exhaustive),
+        cmocka_unit_test(test_recovers_heading),
+        cmocka_unit_test(test_w0_is_2d),
+        cmocka_unit_test(test_bad_inputs),
+        cmocka_unit_test(test_dem_entry),
+        cmocka_unit_test(test_calibration),
+        cmocka_unit_test(test_few_points_exhaustive),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

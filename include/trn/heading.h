@@ -7,18 +7,21 @@
  * The local points (rover frame, already turned by the believed heading)
  * are turned about the rover's cell by each heading step of a window
  * +-W around a centre, rounded to the voxel grid, and matched as in
- * trn_localize_points. Headings are searched from the centre outwards, each
- * by branch-and-bound above the best score found so far
- * (trn_search_bb_above), so the result is exactly the best (x, y, heading)
- * of the exhaustive search over all of them (ties: the heading first in the
- * order 0, -1, +1, -2, ... steps, then trn_search_bb's order). The order
+ * trn_localize_points. Every heading is searched by branch-and-bound above
+ * the best score found so far minus TRN_HEADING_MARGIN_NATS, in one pass
+ * that keeps the poses above that threshold (up to a fixed number of
+ * positions), so the result is exactly the best (x, y, heading) of the
+ * exhaustive search over all of them (ties: the heading first in the order
+ * 0, -1, +1, -2, ... steps, then trn_search_bb's order). The order
  * searched: heading 0, then the others by the score its answer has at them,
  * so a high bound comes early. Eq. 6 in three dimensions
  * (trn_peak_fit3) gives the sub-step pose and the 3 x 3 covariance; the
  * failure probability weighs the best pose against the best one, at any
  * heading, outside the position zone around it (max(min_exclusion_cells,
  * 4 sigma) cells: a position failure is what it is the probability of),
- * searched above the best's ln L minus TRN_HEADING_MARGIN_NATS.
+ * among the poses above the best's ln L minus TRN_HEADING_MARGIN_NATS: taken
+ * from the kept poses, or searched again (trn_search_bb_above at every
+ * heading, outside the zone) when the kept ones all lie inside the zone.
  *
  * Angles: radians, counterclockwise in the (east, north) plane; a point at
  * (x cells east, y cells along +row, i.e. south) turned by a goes to
@@ -58,9 +61,10 @@ typedef struct {
     trn_loc_result_t loc;     /**< at the best heading: x, y (sub-step fit), ix, iy, ll_best,
                                  the competitor, the failure probability; sigma_x_m,
                                  sigma_y_m, rho and cov_m2 are the position marginal of cov3;
-                                 stats: the first search's work summed over the headings
-                                 (the competitor's search not counted, as in
-                                 trn_localize_points) */
+                                 stats: the one pass's work summed over the headings
+                                 (the best pose and every pose within the margin;
+                                 a second search for the competitor, when needed,
+                                 not counted) */
     double heading_rad;       /**< centre + (k + dk) step */
     double sigma_heading_rad; /**< sqrt(cov3[8]); 0 with W = 0 (heading taken as known) */
     double cov3[9];           /**< covariance of (x m, y m, heading rad), row-major */
