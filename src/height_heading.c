@@ -142,11 +142,9 @@ static int32_t pose_fit(const score_t *s, int32_t px, int32_t py, double clip, d
                         double *m2)
 {
     size_t i;
-    int32_t n = 0;
-    double sw = 0.0, swr = 0.0, sq = 0.0, sqr = 0.0, sqrr = 0.0, sqv = 0.0, ref = 0.0, d, m;
-    int have_ref = 0;
+    trn_pose_mom_t a = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0};
     for (i = 0; i < s->n; ++i) {
-        double gv = global_at(s, px, py, i), r, v, q;
+        double gv = global_at(s, px, py, i), r, v;
         if (!isfinite(gv)) {
             continue;
         }
@@ -155,28 +153,9 @@ static int32_t pose_fit(const score_t *s, int32_t px, int32_t py, double clip, d
         if (clip >= 0.0 && fabs(r - *dz) > clip * sqrt(v + *m2)) {
             continue;
         }
-        if (!have_ref) {
-            ref = r;
-            have_ref = 1;
-        }
-        r -= ref;
-        sw += 1.0 / (v + *m2);
-        swr += r / (v + *m2);
-        q = 1.0 / ((v + *m2) * (v + *m2));
-        sq += q;
-        sqr += q * r;
-        sqrr += q * r * r;
-        sqv += q * v;
-        ++n;
+        trn_pose_mom_add_(&a, r, v, *m2);
     }
-    if (n == 0) {
-        return 0;
-    }
-    d = swr / sw;
-    m = (sqrr - 2.0 * d * sqr + d * d * sq - sqv) / sq;
-    *dz = d + ref;
-    *m2 = m > 0.0 ? m : 0.0;
-    return n;
+    return trn_pose_mom_end_(&a, dz, m2);
 }
 
 /* ln L of pose (px, py) at this heading (trn_height_search's pose_ll). */

@@ -390,8 +390,20 @@ static void block_meat(const trn_grid_f32_t *global, const trn_grid_f32_t *local
  * equation), never negative. */
 static double next_model2(const accum_t *acc)
 {
-    double m = (acc->rr - acc->noise2) / acc->q;
+    return trn_refine_model2_(acc->rr, acc->noise2, acc->q);
+}
+
+double trn_refine_model2_(double rr, double noise2, double q)
+{
+    double m = (rr - noise2) / q;
     return m > 0.0 ? m : 0.0;
+}
+
+double trn_refine_sys_weight_(double rr, double noise2, double q, double vv)
+{
+    double m2s = (rr - noise2 - TRN_REFINE_SYS_Z * sqrt(vv)) / q;
+    m2s = m2s > 0.0 ? m2s : 0.0;
+    return TRN_REFINE_SYS * m2s / (m2s + noise2 / q);
 }
 
 static double local_spread(const trn_grid_f32_t *local, int32_t *n_seen);
@@ -536,13 +548,12 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
      * chi-square floor) is a lower bound on each variance: the block
      * estimate is noisy, and independent errors must not shrink it. */
     {
-        /* q > 0: at least 8 inliers, each noise variance > 0 */
-        double meat[9], f, sw[2], vbar = acc.noise2 / acc.q;
-        /* the misfit beyond TRN_REFINE_SYS_Z sampling sds of what the noise
-         * alone would give (with no misfit, next_model2's estimate is
-         * positive in about a third of the cases) */
-        double m2s = (acc.rr - acc.noise2 - TRN_REFINE_SYS_Z * sqrt(acc.vv)) / acc.q;
-        m2s = m2s > 0.0 ? m2s : 0.0;
+        /* q > 0: at least 8 inliers, each noise variance > 0. The systematic
+         * weight counts the misfit beyond TRN_REFINE_SYS_Z sampling sds of
+         * what the noise alone would give (with no misfit, next_model2's
+         * estimate is positive in about a third of the cases); taken before
+         * block_meat reuses acc. */
+        double meat[9], f, sw[2], w = trn_refine_sys_weight_(acc.rr, acc.noise2, acc.q, acc.vv);
         int32_t p, q, r;
         out->n_used = acc.n_in;
         block_meat(global, local, rover_x, rover_y, x, y, dz, lam, g, model2, cfg, &acc, meat);
@@ -568,14 +579,14 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
         out->cov_cells[2] = inv[1] * chi2 * f;
         {
             /* The interpolants' disagreement, weighted by the share of the
-             * misfit (beyond its sampling noise: m2s) in the residuals'
+             * misfit (beyond its sampling noise: w above) in the residuals'
              * (precision-squared weighted) variance: where a mix of the two
              * interpolants explains the data (m^2 ~ 0) the mix's own
              * uncertainty is in inv already;
              * where the data show a misfit beyond the noise, the map runs
              * between its samples in a way neither interpolant follows, a
              * systematic error the residuals cannot show. */
-            double sh[3], w = TRN_REFINE_SYS * m2s / (m2s + vbar);
+            double sh[3];
             interp_shift(global, local, rover_x, rover_y, x, y, dz, model2, cfg, &acc, inv, sh);
             out->interp_shift[0] = sh[0];
             out->interp_shift[1] = sh[1];
@@ -633,12 +644,11 @@ static int32_t pose_fit(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_
                         int32_t px, int32_t py, const trn_refine_cfg_t *cfg, double clip,
                         double *dz, double *m2)
 {
-    int32_t x, y, n = 0;
-    double sw = 0.0, swr = 0.0, sq = 0.0, sqr = 0.0, sqrr = 0.0, sqv = 0.0, ref = 0.0, d, m;
-    int have_ref = 0;
+    int32_t x, y;
+    trn_pose_mom_t a = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0};
     for (y = 0; y < l->height; ++y) {
         for (x = 0; x < l->width; ++x) {
-            double h = (double)TRN_GRID_AT(l, x, y), gv, r, v, q;
+            double h = (double)TRN_GRID_AT(l, x, y), gv, r, v;
             if (!isfinite(h)) {
                 continue;
             }
@@ -651,31 +661,10 @@ static int32_t pose_fit(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_
             if (clip >= 0.0 && fabs(r - *dz) > clip * sqrt(v + *m2)) {
                 continue;
             }
-            if (!have_ref) {
-                ref = r;
-                have_ref = 1;
-            }
-            r -= ref;
-            sw += 1.0 / (v + *m2);
-            swr += r / (v + *m2);
-            q = 1.0 / ((v + *m2) * (v + *m2));
-            sq += q;
-            sqr += q * r;
-            sqrr += q * r * r;
-            sqv += q * v;
-            ++n;
+            trn_pose_mom_add_(&a, r, v, *m2);
         }
     }
-    if (n == 0) {
-        return 0;
-    }
-    d = swr / sw;
-    /* weighted mean squared residual about d, minus the weighted mean noise
-     * variance (weights: squared precision at the previous m2) */
-    m = (sqrr - 2.0 * d * sqr + d * d * sq - sqv) / sq;
-    *dz = d + ref;
-    *m2 = m > 0.0 ? m : 0.0;
-    return n;
+    return trn_pose_mom_end_(&a, dz, m2);
 }
 
 /* Log-likelihood of pose (px, py), nats. */

@@ -235,8 +235,7 @@ static void solve(const double inv[16], const double b[4], double d[4])
 
 static double next_model2(const acc4_t *acc)
 {
-    double m = (acc->rr - acc->noise2) / acc->q;
-    return m > 0.0 ? m : 0.0;
+    return trn_refine_model2_(acc->rr, acc->noise2, acc->q);
 }
 
 static double clampd(double v, double lim) { return v > lim ? lim : v < -lim ? -lim : v; }
@@ -550,13 +549,7 @@ static int covariance(const rctx_t *c, const double p[5], double model2, acc4_t 
     out->pos.chi2_dof = chi2;
     chi2 = chi2 > 1.0 ? chi2 : 1.0;
     /* q > 0: at least 8 inliers, each noise variance > 0 */
-    {
-        /* the misfit beyond TRN_REFINE_SYS_Z sampling sds of what the noise
-         * alone would give, as refine.c's */
-        double m2s = (acc->rr - acc->noise2 - TRN_REFINE_SYS_Z * sqrt(acc->vv)) / acc->q;
-        m2s = m2s > 0.0 ? m2s : 0.0;
-        w = TRN_REFINE_SYS * m2s / (m2s + acc->noise2 / acc->q);
-    }
+    w = trn_refine_sys_weight_(acc->rr, acc->noise2, acc->q, acc->vv);
     f = sandwich(c, p, model2, inv, g, chi2, acc); /* acc is dead after w */
     out->pos.inflation = f;
     for (q = 0; q < 3; ++q) {

@@ -27,6 +27,57 @@ trn_status_t trn_refine_args_(const trn_grid_f32_t *global, const trn_grid_f32_t
                               int32_t rover_x, int32_t rover_y, const trn_refine_cfg_t *cfg,
                               const void *out);
 
+/* The pose fit's weighted moments (trn_height_search's and the search over
+ * heading's pose_fit): residuals r taken relative to the first one, weights
+ * 1 / (v + m2) for the offset and their squares for the model variance. */
+typedef struct {
+    double sw, swr, sq, sqr, sqrr, sqv, ref;
+    int32_t n;
+} trn_pose_mom_t;
+
+/* Adds residual r of noise variance v at the model variance m2 (inline: the
+ * searches score every point of every pose with it). */
+static inline void trn_pose_mom_add_(trn_pose_mom_t *a, double r, double v, double m2)
+{
+    double q, d;
+    if (a->n == 0) {
+        a->ref = r;
+    }
+    d = r - a->ref;
+    a->sw += 1.0 / (v + m2);
+    a->swr += d / (v + m2);
+    q = 1.0 / ((v + m2) * (v + m2));
+    a->sq += q;
+    a->sqr += q * d;
+    a->sqrr += q * d * d;
+    a->sqv += q * v;
+    a->n += 1;
+}
+
+/* The weighted offset and the model variance (the weighted mean squared
+ * residual about it less the weighted mean noise variance, never negative)
+ * into dz and m2; the number of points (0: dz and m2 untouched). */
+static inline int32_t trn_pose_mom_end_(const trn_pose_mom_t *a, double *dz, double *m2)
+{
+    double d, m;
+    if (a->n == 0) {
+        return 0;
+    }
+    d = a->swr / a->sw;
+    m = (a->sqrr - 2.0 * d * a->sqr + d * d * a->sq - a->sqv) / a->sq;
+    *dz = d + a->ref;
+    *m2 = m > 0.0 ? m : 0.0;
+    return a->n;
+}
+
+/* The refinements' model variance from their precision-squared weighted
+ * sums (rr of q r^2, noise2 of q s^2, q), never negative; and the weight of
+ * the interpolants' disagreement, TRN_REFINE_SYS x m_s^2 / (m_s^2 + noise2
+ * / q), m_s^2 the same less TRN_REFINE_SYS_Z sampling sds (vv, the sum of
+ * q^2 2 s^4) of what the noise alone gives (src/refine.c). */
+double trn_refine_model2_(double rr, double noise2, double q);
+double trn_refine_sys_weight_(double rr, double noise2, double q, double vv);
+
 /* cos and sin of a finite angle without libm's exact argument reduction
  * and its stack (src/refine_heading.c; within 1e-14 for |a| <= 4 pi). */
 void trn_heading_trig_(double a, double *c, double *s);
