@@ -25,6 +25,7 @@ On small synthetic DEMs with analytic surfaces (no download, ~10 s):
   the coarse map's bilinear interpolation exactly on a plane; on smooth terrain
   (wavelengths of 10-20 coarse cells) the SSD peer on the coarse map recovers sub-cell
   truths without bias (a half-fine-cell frame slip would be (K-1)/2K coarse cells);
+* dems.float_nan_tif: no-data to NaN in float32, same grid, the CRS kept or set;
 * bench_real.py exits 1 with one line on bad input;
 * if build/host-release/trn exists: trn localize recovers the noiseless integer case
   (frame agreement of the local file with trn; reported, not required).
@@ -345,6 +346,40 @@ def test_truth_fine():
                                         f"{bias:.3f}; a frame slip would be {(K - 1) / (2 * K):.2f})")
 
 
+def test_float_nan_tif():
+    """dems.float_nan_tif: an int16 raster with a no-data value becomes float32 with NaN
+    there and the other heights unchanged, on the same grid, keeping its CRS or taking
+    EPSG:epsg."""
+    import dems
+    from osgeo import osr
+    z = np.arange(12 * 10, dtype=np.int16).reshape(12, 10) - 40
+    z[3, 4] = z[7, 1] = -9999
+    gt = (500000.0, 2.0, 0.0, 4100000.0, 0.0, -2.0)
+    with tempfile.TemporaryDirectory() as tmp:
+        src = os.path.join(tmp, "src.tif")
+        ds = gdal.GetDriverByName("GTiff").Create(src, 10, 12, 1, gdal.GDT_Int16)
+        ds.SetGeoTransform(gt)
+        srs = osr.SpatialReference()
+        srs.ImportFromEPSG(32611)
+        ds.SetProjection(srs.ExportToWkt())
+        ds.GetRasterBand(1).SetNoDataValue(-9999)
+        ds.GetRasterBand(1).WriteArray(z)
+        ds = None
+        for epsg, want in ((None, "32611"), (32612, "32612")):
+            out = os.path.join(tmp, "sub", f"out_{epsg}.tif")
+            dems.float_nan_tif(src, out, -9999, epsg)
+            d = gdal.Open(out)
+            got = d.GetRasterBand(1).ReadAsArray()
+            keep = z != -9999
+            code = osr.SpatialReference(wkt=d.GetProjection()).GetAuthorityCode(None)
+            check(d.GetRasterBand(1).DataType == gdal.GDT_Float32 and np.isnan(got[~keep]).all()
+                  and np.array_equal(got[keep], z[keep].astype(np.float32))
+                  and d.GetGeoTransform() == gt and code == want
+                  and not os.path.exists(out + ".part.tif"),
+                  f"float_nan_tif (epsg {epsg}): float32, the 2 no-data cells NaN, the other 118 "
+                  f"unchanged, same grid, CRS EPSG:{code}")
+
+
 def test_cli():
     b = os.path.join(HERE, "bench_real.py")
     for args, what in ((["--dem", "no_such_dem"], "unknown DEM"), (["--cases", "0"], "--cases 0"),
@@ -363,6 +398,7 @@ def main():
     test_truth_fine()
     case = test_peers()
     test_trn(*case)
+    test_float_nan_tif()
     test_cli()
     if FAILS:
         print(f"test_real: {len(FAILS)} check(s) failed", file=sys.stderr)
