@@ -321,6 +321,8 @@ expect_error(1, "--refine: 2 is out of range", "localize", "--dem", g_tif, *comm
 expect_error(1, "--zbin-m: -0.1 is out of range", "localize", "--dem", g_tif, *common, "--zbin-m", "-0.1")
 expect_error(1, "map configuration rejected", "localize", "--dem", g_tif, *common, "--highpass-m", "0.01")
 expect_error(1, "--batch " + p("missing.txt") + ": cannot open", "localize", "--dem", g_tif, "--batch", p("missing.txt"))
+# a map that cannot be prepared says why with --batch as without it (it printed nothing before)
+expect_error(1, "no_such_map.tif", "localize", "--dem", p("no_such_map.tif"), "--batch", p("missing.txt"))
 with open(p("bad_batch.txt"), "w") as f:
     f.write(f"{local_tif} 1014.75\n")
 expect_error(1, "line 1: expected 'LOCAL PRIOR_X PRIOR_Y [WINDOW_M]'", "localize", "--dem", g_tif,

@@ -546,18 +546,20 @@ int trn_cmd_localize(int argc, char **argv)
         return rc == CLI_HELP ? 0 : rc;
     }
     rc = cmd_localize_prepare(&p, &c, err, sizeof err);
-    if (rc == CLI_OK && p.batch_path != NULL) {
-        rc = run_batch(&c, p.batch_path, p.window_m);
-    } else if (rc == CLI_OK) {
+    if (rc != CLI_OK) {
+        /* the map could not be prepared: one line, with --batch too */
+        cli_fail("localize", "%s", err);
+    } else if (p.batch_path != NULL) {
+        rc = run_batch(&c, p.batch_path, p.window_m); /* prints its own reasons */
+    } else {
         rc = cmd_localize_run(&c, p.local_path, p.prior, p.window_m, &o, err, sizeof err);
         if (rc == CLI_OK && p.json) {
             cmd_localize_report_json(stdout, &c, p.local_path, p.prior, p.window_m, &o, 0);
         } else if (rc == CLI_OK) {
             localize_report_text(&c, &p, &o);
+        } else {
+            cli_fail("localize", "%s", err);
         }
-    }
-    if (rc != CLI_OK && p.batch_path == NULL) {
-        cli_fail("localize", "%s", err);
     }
     cmd_localize_ctx_free(&c);
     return rc;
