@@ -3,7 +3,8 @@
 """tools/real/bench_real.py - seeded real-terrain benchmark: trn against two peers.
 
     /usr/bin/python3 tools/real/bench_real.py [--dem ID ...] [--cases N] [--seed S]
-        [--radius R] [--resample bilinear|cubic] [--truth-fine K] [--subcell axis|quad2d]
+        [--radius R] [--resample bilinear|cubic] [--truth-fine K] [--fine-map mean|point]
+        [--subcell axis|quad2d]
         [--trn PATH] [--trn-mode auto|batch|single]
         [--out DIR] [--keep-cases] [--no-plot] [-- TRN_ARGS...]
 
@@ -26,8 +27,10 @@ each peer timed with time.perf_counter per localization in the same run.
 block-averaged over K x K cells (cell K c, written as OUT/ID_meanK.tif), while each
 local DEM is sampled from the ORIGINAL DEM (bilinear on the fine grid at the coarse
 cell spacing, centred on the rover): the rover sees the true terrain, the map is a
-smoothed coarser product. Radius, prior, window, noise and errors are then in coarse
-cells (tools/real/cases.py).
+smoothed coarser product. With --fine-map point the map is the DEM's point samples
+every K cells instead (OUT/ID_pointK.tif): a map that samples the terrain at its cell
+centres, so that what it cannot resolve is aliased, not smoothed. Radius, prior,
+window, noise and errors are then in coarse cells (tools/real/cases.py).
 
 Metrics per DEM and method: success (radial error <= 1.5 cells) rate, median error
 (cells) over all cases and over the successes, median time per localization (ms);
@@ -91,6 +94,9 @@ def parse_args(argv):
                     help="local DEM sampling (default bilinear)")
     ap.add_argument("--truth-fine", type=int, default=None, metavar="K",
                     help="model error: global map = DEM block-averaged K x K (K >= 2), local maps from the DEM")
+    ap.add_argument("--fine-map", default="mean", choices=("mean", "point"),
+                    help="with --truth-fine: the map is the K x K block mean (default) or the point "
+                         "samples every K cells")
     ap.add_argument("--subcell", default="axis", choices=("axis", "quad2d"),
                     help="peers' sub-cell fit: a parabola per axis (default) or the 3x3 2-D quadratic")
     ap.add_argument("--trn", default=os.path.join(dems.ROOT, "build", "host-release", "trn"),
@@ -258,8 +264,10 @@ def fmt(v, spec):
 
 
 def print_table(dem_id, meta, ms):
-    fine = (f", map = {meta['truth_fine']} x {meta['truth_fine']} block mean of the {meta['fine_cell_m']:g} m "
-            f"DEM the local maps are sampled from") if meta.get("truth_fine") else ""
+    how = "point samples (every K-th cell) of" if meta.get("fine_map") == "point" else "block mean of"
+    kk = meta.get("truth_fine")
+    fine = (f", map = {kk} x {kk} {how} the {meta['fine_cell_m']:g} m "
+            f"DEM the local maps are sampled from") if kk else ""
     print(f"\n{dem_id} ({meta['character']}, held_out={meta['held_out']}): {meta['cols']} x {meta['rows']} "
           f"cells of {meta['cell_m']:g} m, {ms['trn']['n']} cases, R = {meta['radius']} cells, "
           f"{meta['resample']}, trn {meta['trn_mode']}{fine}")
@@ -292,9 +300,13 @@ def bench_dem(a, dem_id, batch):
     fine = None
     if a.truth_fine:
         fine = dem
-        dem = casemod.block_average(fine, a.truth_fine)
+        if a.fine_map == "point":
+            dem = casemod.point_sample(fine, a.truth_fine)
+        else:
+            dem = casemod.block_average(fine, a.truth_fine)
         os.makedirs(a.out, exist_ok=True)
-        path = casemod.write_global(os.path.join(a.out, f"{dem_id}_mean{a.truth_fine}.tif"), dem, like=fine.path)
+        path = casemod.write_global(os.path.join(a.out, f"{dem_id}_{a.fine_map}{a.truth_fine}.tif"), dem,
+                                    like=fine.path)
         dem.path = path
     p = casemod.CaseParams(radius=a.radius, resample=a.resample)
     tmp = tempfile.mkdtemp(prefix=f"bench_real_{dem_id}_")
@@ -336,6 +348,7 @@ def bench_dem(a, dem_id, batch):
                 "window_m": p.window_cells * dem.c, "prior_cells": p.prior_cells, "resample": a.resample,
                 "trn_mode": "batch" if batch else "single", "trn_wall_ms": trn_wall,
                 "opencv_mask": peers.mask_supported(), "truth_fine": a.truth_fine,
+                "fine_map": a.fine_map if a.truth_fine else None,
                 "fine_cell_m": fine.c if fine is not None else None,
                 "fine_path": fine.path if fine is not None else None}
         # the figure's case: the first trn success (else case 0); keep its local DEM
@@ -377,7 +390,7 @@ def main(argv):
         mode = a.trn_mode
         batch = trn_has_batch(a.trn) if mode == "auto" else mode == "batch"
         res = {"config": {"cases": a.cases, "seed": a.seed, "radius": a.radius, "resample": a.resample,
-                          "subcell": a.subcell, "truth_fine": a.truth_fine, "trn": a.trn, "trn_args": a.trn_extra, "success_cells": SUCCESS_CELLS},
+                          "subcell": a.subcell, "truth_fine": a.truth_fine, "fine_map": a.fine_map, "trn": a.trn, "trn_args": a.trn_extra, "success_cells": SUCCESS_CELLS},
                "dems": {}}
         for d in a.dem:
             r = bench_dem(a, d, batch)

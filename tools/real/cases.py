@@ -20,7 +20,9 @@ For a global DEM G (north-up, square cell c metres) a case is:
 Model error (`fine`, bench_real.py --truth-fine K): the global map G is then the fine
 DEM F block-averaged over K x K cells (block_average: cell c = K c_F, the same
 corner, so coarse cell (I, J)'s centre is the centroid of F's cells (KI..KI+K-1,
-KJ..KJ+K-1)), and the local DEM is sampled from F instead (bilinear on F's grid at
+KJ..KJ+K-1)), or, with --fine-map point, F's point samples every K cells
+(point_sample: coarse cell (I, J) is F's cell (KI + K//2, KJ + K//2), centred on
+it), and the local DEM is sampled from F instead (bilinear on F's grid at
 truth + ((j-R)c, (R-i)c), c the COARSE cell): the rover sees the true surface, the
 map is a smoothed coarser product. Truth, prior, window, radius, visibility and
 noise are all in coarse cells, as without `fine`.
@@ -92,6 +94,23 @@ def block_average(dem, k):
         raise InputError(f"{dem.path}: smaller than one {k} x {k} block")
     z = dem.z[:nr * k, :nc * k].reshape(nr, k, nc, k).mean(axis=(1, 3))
     return Dem(z, dem.x0, dem.y0, dem.c * k, dem.path)
+
+
+def point_sample(dem, k):
+    """`dem`'s point samples every k cells: coarse cell (I, J) holds fine cell
+    (k I + k // 2, k J + k // 2) and is centred on it (cell k c; the north-west corner
+    moves by (k // 2 + 1/2 - k / 2) fine cells). A map that samples the terrain at its
+    cell centres, as a rendered rock field does, where block_average smooths it."""
+    k = int(k)
+    if k < 1:
+        raise InputError(f"sampling step {k}: must be >= 1")
+    h = k // 2
+    z = dem.z[h::k, h::k]
+    nr, nc = (dem.z.shape[0] - h + k - 1) // k, (dem.z.shape[1] - h + k - 1) // k
+    if nr < 1 or nc < 1 or z.shape != (nr, nc):
+        raise InputError(f"{dem.path}: smaller than one {k} x {k} block")
+    shift = (h + 0.5 - 0.5 * k) * dem.c
+    return Dem(z.copy(), dem.x0 + shift, dem.y0 - shift, dem.c * k, dem.path)
 
 
 def write_global(path, dem, like=None):

@@ -25,6 +25,8 @@ On small synthetic DEMs with analytic surfaces (no download, ~10 s):
   the coarse map's bilinear interpolation exactly on a plane; on smooth terrain
   (wavelengths of 10-20 coarse cells) the SSD peer on the coarse map recovers sub-cell
   truths without bias (a half-fine-cell frame slip would be (K-1)/2K coarse cells);
+* cases.point_sample (--fine-map point): a sinusoid's point samples every K cells equal it
+  at the coarse centres, K odd and even;
 * dems.float_nan_tif: no-data to NaN in float32, same grid, the CRS kept or set;
 * bench_real.py exits 1 with one line on bad input;
 * if build/host-release/trn exists: trn localize recovers the noiseless integer case
@@ -346,6 +348,27 @@ def test_truth_fine():
                                         f"{bias:.3f}; a frame slip would be {(K - 1) / (2 * K):.2f})")
 
 
+def test_point_sample():
+    """cases.point_sample: coarse cell (I, J) is fine cell (K I + K//2, K J + K//2), centred
+    on it, so a sinusoid's point samples equal it at the coarse centres, with no
+    attenuation (block_average's would be attenuated), for K odd and even."""
+    cf = 10.0
+
+    def sines(x, y):
+        return 20 * np.sin(2 * np.pi * x / (3.1 * cf) + 0.4) + 12 * np.cos(2 * np.pi * y / (4.7 * cf) - 1.1)
+    fine = synth_dem(sines, n=121, c=cf)
+    for K in (2, 3):
+        g = cm.point_sample(fine, K)
+        r = np.arange(g.z.shape[0])[:, None] + 0.0 * np.arange(g.z.shape[1])[None, :]
+        c = 0.0 * np.arange(g.z.shape[0])[:, None] + np.arange(g.z.shape[1])[None, :]
+        X, Y = g.xy(r, c)
+        n_want = (121 - K // 2 + K - 1) // K
+        d = np.abs(g.z - sines(X, Y)).max()
+        check(g.c == K * cf and g.z.shape == (n_want, n_want) and d < 1e-9,
+              f"point samples every {K} cells: {g.z.shape[0]}^2 cells of {g.c:g} m, equal to the "
+              f"surface at the coarse centres (max diff {d:.1e} m)")
+
+
 def test_float_nan_tif():
     """dems.float_nan_tif: an int16 raster with a no-data value becomes float32 with NaN
     there and the other heights unchanged, on the same grid, keeping its CRS or taking
@@ -383,6 +406,7 @@ def test_float_nan_tif():
 def test_cli():
     b = os.path.join(HERE, "bench_real.py")
     for args, what in ((["--dem", "no_such_dem"], "unknown DEM"), (["--cases", "0"], "--cases 0"),
+                       (["--fine-map", "median"], "--fine-map median"),
                        (["--trn", "/nonexistent/trn"], "missing trn"), (["--bogus"], "unknown option"),
                       (["--truth-fine", "1"], "--truth-fine 1")):
         r = subprocess.run([sys.executable, b] + args, capture_output=True, text=True)
@@ -398,6 +422,7 @@ def main():
     test_truth_fine()
     case = test_peers()
     test_trn(*case)
+    test_point_sample()
     test_float_nan_tif()
     test_cli()
     if FAILS:
