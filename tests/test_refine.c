@@ -237,10 +237,12 @@ static void test_interp_shift(void **state)
     assert_true(least > 5e-3);
 }
 
-/* The mixture ln L of trn_height_search at a continuous pose, written out:
- * the mixed interpolant, K = 1 / (10 sd of the seen local heights). */
-static double slow_ll(const trn_refine_cfg_t *c, const trn_refine_t *o)
+/* The mixture ln L of trn_height_search at a continuous pose (x, y,
+ * heading), written out: the local offsets turned by the heading, the mixed
+ * interpolant, K = 1 / (10 sd of the seen local heights). */
+static double slow_ll_at(const trn_refine_cfg_t *c, const trn_refine_t *o, double heading_rad)
 {
+    const double cs = cos(heading_rad), sn = sin(heading_rad);
     int i, j, m = LW / 2, n = 0;
     double mean = 0.0, var = 0.0, k, a = (double)c->inlier_prob, ll = 0.0;
     for (j = 0; j < LW * LW; ++j) {
@@ -258,20 +260,27 @@ static double slow_ll(const trn_refine_cfg_t *c, const trn_refine_t *o)
     k = 1.0 / (10.0 * fmax(sqrt(var / n), (double)c->noise_m));
     for (j = 0; j < LW; ++j) {
         for (i = 0; i < LW; ++i) {
-            double rm, s, v, b, cc, u;
+            double rm, s, v, b, cc, u, px, py;
             if (!isfinite(l_data[j * LW + i])) {
                 continue;
             }
             rm = c->cell_m * sqrt((double)((i - m) * (i - m) + (j - m) * (j - m)));
             s = c->noise_m + c->noise_k_per_m * rm * rm;
             v = s * s + o->model_m * o->model_m;
-            b = lin(o->x + i - m, o->y + j - m);
-            cc = bilin(o->x + i - m, o->y + j - m);
+            px = o->x + (i - m) * cs + (j - m) * sn;
+            py = o->y - (i - m) * sn + (j - m) * cs;
+            b = lin(px, py);
+            cc = bilin(px, py);
             u = l_data[j * LW + i] - o->dz_m - (b + o->interp_mix * (cc - b));
             ll += log(a * exp(-0.5 * u * u / v) / sqrt(6.283185307179586 * v) + (1.0 - a) * k);
         }
     }
     return ll;
+}
+
+static double slow_ll(const trn_refine_cfg_t *c, const trn_refine_t *o)
+{
+    return slow_ll_at(c, o, 0.0);
 }
 
 /* The interpolants' mix is estimated with the pose: local DEMs made with
@@ -389,43 +398,10 @@ static void make_local_turned(trn_grid_f32_t *l, double tx, double ty, double d,
     assert_int_equal(trn_grid_f32_init(l, l_data, LW * LW, LW, LW), TRN_OK);
 }
 
-/* slow_ll at a refined (x, y, heading): the offsets turned. */
+/* slow_ll at a refined (x, y, heading). */
 static double slow_ll3(const trn_refine_cfg_t *c, const trn_refine3_t *o)
 {
-    const double cs = cos(o->heading_rad), sn = sin(o->heading_rad);
-    int i, j, m = LW / 2, n = 0;
-    double mean = 0.0, var = 0.0, k, a = (double)c->inlier_prob, ll = 0.0;
-    for (j = 0; j < LW * LW; ++j) {
-        if (isfinite(l_data[j])) {
-            mean += l_data[j];
-            ++n;
-        }
-    }
-    mean /= n;
-    for (j = 0; j < LW * LW; ++j) {
-        if (isfinite(l_data[j])) {
-            var += (l_data[j] - mean) * (l_data[j] - mean);
-        }
-    }
-    k = 1.0 / (10.0 * fmax(sqrt(var / n), (double)c->noise_m));
-    for (j = 0; j < LW; ++j) {
-        for (i = 0; i < LW; ++i) {
-            double rm, s, v, b, cc, u, px, py;
-            if (!isfinite(l_data[j * LW + i])) {
-                continue;
-            }
-            rm = c->cell_m * sqrt((double)((i - m) * (i - m) + (j - m) * (j - m)));
-            s = c->noise_m + c->noise_k_per_m * rm * rm;
-            v = s * s + o->pos.model_m * o->pos.model_m;
-            px = o->pos.x + (i - m) * cs + (j - m) * sn;
-            py = o->pos.y - (i - m) * sn + (j - m) * cs;
-            b = lin(px, py);
-            cc = bilin(px, py);
-            u = l_data[j * LW + i] - o->pos.dz_m - (b + o->pos.interp_mix * (cc - b));
-            ll += log(a * exp(-0.5 * u * u / v) / sqrt(6.283185307179586 * v) + (1.0 - a) * k);
-        }
-    }
-    return ll;
+    return slow_ll_at(c, &o->pos, o->heading_rad);
 }
 
 /* The interpolants' mix over heading (trn_refine_pose_heading): local DEMs
