@@ -408,6 +408,29 @@ double trn_refine_sys_weight_(double rr, double noise2, double q, double vv)
 
 static double local_spread(const trn_grid_f32_t *local, int32_t *n_seen);
 
+/* The checks trn_height_search and the refinements share: the grids, the
+ * noise model and the rover cell (each caller checks its own inlier
+ * probability). */
+static trn_status_t common_args(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
+                                int32_t rover_x, int32_t rover_y, const trn_refine_cfg_t *cfg)
+{
+    trn_status_t st;
+    if (global == NULL || local == NULL || cfg == NULL) {
+        return TRN_E_NULL;
+    }
+    if ((st = trn_grid_f32_check(global)) != TRN_OK || (st = trn_grid_f32_check(local)) != TRN_OK) {
+        return st;
+    }
+    if (!(cfg->cell_m > 0.0f && cfg->cell_m <= 1000.0f) ||
+        !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
+        !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f) || rover_x < -TRN_MAX_DIM ||
+        rover_y < -TRN_MAX_DIM || rover_x > local->width - 1 + TRN_MAX_DIM ||
+        rover_y > local->height - 1 + TRN_MAX_DIM) {
+        return TRN_E_ARG;
+    }
+    return TRN_OK;
+}
+
 /* The mixture log-likelihood of trn_height_search at a continuous pose,
  * the mixed interpolant's heights, offset dz and model variance model2. */
 static double refined_ll(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
@@ -727,18 +750,13 @@ trn_status_t trn_height_search(const trn_grid_f32_t *global, const trn_grid_f32_
     double spread, k, floor_m;
     int found = 0;
 
-    if (global == NULL || local == NULL || win == NULL || cfg == NULL || best == NULL) {
+    if (win == NULL || best == NULL) {
         return TRN_E_NULL;
     }
-    if ((st = trn_grid_f32_check(global)) != TRN_OK || (st = trn_grid_f32_check(local)) != TRN_OK) {
+    if ((st = common_args(global, local, rover_x, rover_y, cfg)) != TRN_OK) {
         return st;
     }
-    if (!(cfg->cell_m > 0.0f && cfg->cell_m <= 1000.0f) ||
-        !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
-        !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f) ||
-        !(inlier_prob > 0.0f && inlier_prob < 1.0f) || rover_x < -TRN_MAX_DIM ||
-        rover_y < -TRN_MAX_DIM || rover_x > local->width - 1 + TRN_MAX_DIM ||
-        rover_y > local->height - 1 + TRN_MAX_DIM || (ex != NULL && ex->radius < 0) ||
+    if (!(inlier_prob > 0.0f && inlier_prob < 1.0f) || (ex != NULL && ex->radius < 0) ||
         !(ll_scale >= 1.0 && ll_scale <= 1e6)) {
         return TRN_E_ARG;
     }
@@ -848,19 +866,11 @@ trn_status_t trn_refine_args_(const trn_grid_f32_t *global, const trn_grid_f32_t
                               const void *out)
 {
     trn_status_t st;
-    if (global == NULL || local == NULL || cfg == NULL || out == NULL) {
+    if (out == NULL) {
         return TRN_E_NULL;
     }
-    if ((st = trn_grid_f32_check(global)) != TRN_OK || (st = trn_grid_f32_check(local)) != TRN_OK) {
+    if ((st = common_args(global, local, rover_x, rover_y, cfg)) != TRN_OK) {
         return st;
     }
-    if (!(cfg->cell_m > 0.0f && cfg->cell_m <= 1000.0f) ||
-        !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
-        !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f) ||
-        !(cfg->inlier_prob > 0.0f && cfg->inlier_prob < 1.0f) || rover_x < -TRN_MAX_DIM ||
-        rover_y < -TRN_MAX_DIM || rover_x > local->width - 1 + TRN_MAX_DIM ||
-        rover_y > local->height - 1 + TRN_MAX_DIM) {
-        return TRN_E_ARG;
-    }
-    return TRN_OK;
+    return cfg->inlier_prob > 0.0f && cfg->inlier_prob < 1.0f ? TRN_OK : TRN_E_ARG;
 }
