@@ -434,6 +434,27 @@ static void check_second(size_t np, const trn_window_t *win, const trn_heading_c
     }
 }
 
+/* The heading search on the first np points against exhaustive3: the same
+ * best (x, y, heading step), its ln L (to tol nats; 0: the same double) and
+ * the competitor (check_second). */
+static void search_vs_exhaustive(size_t np, const trn_window_t *win, const trn_heading_cfg_t *c,
+                                 double tol, trn_heading_result_t *res, int *has)
+{
+    trn_best_t ref = {0, 0, 0};
+    int32_t rk = 0;
+    size_t wb = trn_localize_heading_workspace_bytes(&g_w.map, np, win);
+    trn_status_t st;
+    assert_true(wb > 0u && wb <= sizeof g_ws);
+    st = trn_localize_points_heading(&g_w.map, g_pts, np, win, c, g_ws, wb, res);
+    assert_true(st == TRN_OK || st == TRN_E_ILLCOND);
+    exhaustive3(np, win, c, res->step_rad, res->half_steps, &ref, &rk);
+    assert_int_equal(res->loc.ix, ref.x);
+    assert_int_equal(res->loc.iy, ref.y);
+    assert_int_equal(res->best_step, rk);
+    assert_true(fabs(res->loc.ll_best - (double)ref.score / TRN_LNP_SCALE) <= tol);
+    check_second(np, win, c, res, has);
+}
+
 static void test_equals_exhaustive(void **state)
 {
     trn_rng_t r;
@@ -451,23 +472,11 @@ static void test_equals_exhaustive(void **state)
             trn_window_t win = {cx - 6, cy - 6, cx + 6, cy + 6};
             trn_heading_cfg_t c = {0.0, 10.0 * DEG, 0.0};
             trn_heading_result_t res;
-            trn_best_t ref = {0, 0, 0};
-            int32_t rk = 0;
-            size_t np = local_points(rx, ry, delta), wb;
-            trn_status_t st;
+            size_t np = local_points(rx, ry, delta);
             if (cases % 4 == 3) {
                 c.center_rad = 3.0 * DEG; /* an off-zero centre */
             }
-            wb = trn_localize_heading_workspace_bytes(&g_w.map, np, &win);
-            assert_true(wb > 0u && wb <= sizeof g_ws);
-            st = trn_localize_points_heading(&g_w.map, g_pts, np, &win, &c, g_ws, wb, &res);
-            assert_true(st == TRN_OK || st == TRN_E_ILLCOND);
-            exhaustive3(np, &win, &c, res.step_rad, res.half_steps, &ref, &rk);
-            assert_int_equal(res.loc.ix, ref.x);
-            assert_int_equal(res.loc.iy, ref.y);
-            assert_int_equal(res.best_step, rk);
-            assert_true(fabs(res.loc.ll_best - (double)ref.score / TRN_LNP_SCALE) < 1e-9);
-            check_second(np, &win, &c, &res, &has);
+            search_vs_exhaustive(np, &win, &c, 1e-9, &res, &has);
             n_second += has;
             bb_scored += res.loc.stats.poses_scored;
             ex_scored += (uint64_t)(2 * res.half_steps + 1) * 13u * 13u;
@@ -502,25 +511,13 @@ static void test_few_points_exhaustive(void **state)
         trn_window_t win = {cx - w, cy - w, cx + w, cy + w};
         trn_heading_cfg_t c = {0.0, (double)trn_rng_int(&r, 2, 8) * DEG, 0.0};
         trn_heading_result_t res;
-        trn_best_t ref = {0, 0, 0};
-        int32_t rk = 0;
-        size_t np = local_points(rx, ry, delta), i, m = 0, stride, wb;
-        trn_status_t st;
+        size_t np = local_points(rx, ry, delta), i, m = 0, stride;
         stride = np / (size_t)keep > 0u ? np / (size_t)keep : 1u;
         for (i = (size_t)cases % stride; i < np; i += stride) {
             g_pts[m++] = g_pts[i];
         }
         np = m;
-        wb = trn_localize_heading_workspace_bytes(&g_w.map, np, &win);
-        assert_true(wb > 0u && wb <= sizeof g_ws);
-        st = trn_localize_points_heading(&g_w.map, g_pts, np, &win, &c, g_ws, wb, &res);
-        assert_true(st == TRN_OK || st == TRN_E_ILLCOND);
-        exhaustive3(np, &win, &c, res.step_rad, res.half_steps, &ref, &rk);
-        assert_int_equal(res.loc.ix, ref.x);
-        assert_int_equal(res.loc.iy, ref.y);
-        assert_int_equal(res.best_step, rk);
-        assert_true(res.loc.ll_best == (double)ref.score / TRN_LNP_SCALE);
-        check_second(np, &win, &c, &res, &has);
+        search_vs_exhaustive(np, &win, &c, 0.0, &res, &has);
         n_second += has;
     }
     printf("fewer points: %d of 80 with a competitor within the margin\n", n_second);
