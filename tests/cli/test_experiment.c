@@ -435,6 +435,13 @@ static void test_run_dem(void **state)
     p.dem = dem;
     p.dem_width = n;
     p.dem_height = n;
+    /* a DEM's global error has no range term by default (an overhead
+     * product); the generated terrain's (the paper's, from the centre) given */
+    assert_int_equal(exp_run(&p, &b, NULL, NULL, err, sizeof err), 0);
+    assert_true(b.global_sigma.k_per_m == 0.0f &&
+                b.global_sigma.sigma_min_m == a.global_sigma.sigma_min_m);
+    assert_true(a.global_sigma.k_per_m > 0.0f);
+    p.global_sigma_k = (double)a.global_sigma.k_per_m;
     assert_int_equal(exp_run(&p, &b, NULL, NULL, err, sizeof err), 0);
     assert_int_equal(a.draws, b.draws);
     assert_int_equal(a.with.successes, b.with.successes);
@@ -450,6 +457,7 @@ static void test_run_dem(void **state)
     p.window_m = 20.0;
     p.prior_error_m = 10.0;
     p.grid_spacing_m = 20.0;
+    p.global_sigma_k = (double)a.global_sigma.k_per_m / 10.0; /* r^2 term / f */
     assert_int_equal(exp_run(&p, &b, NULL, NULL, err, sizeof err), 0);
     assert_int_equal(a.draws, b.draws);
     assert_int_equal(a.with.successes, b.with.successes);

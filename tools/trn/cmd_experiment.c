@@ -210,7 +210,9 @@ static int experiment_parse(int argc, char **argv, cmd_experiment_params_t *p)
         "Every length defaults to its value at the paper's 0.1 m cells scaled by cell / 0.1 m "
         "(the\n"
         "same experiment in cells), and so do the error models (constant x cell/0.1, r^2 term /\n"
-        "(cell/0.1)); on the generated terrain the factor is 1. Map configuration: --map-config\n"
+        "(cell/0.1)); on the generated terrain the factor is 1. On a --dem the global map's error\n"
+        "has no r^2 term unless --global-sigma-k gives one (an overhead DEM is sensed from no\n"
+        "point on it). Map configuration: --map-config\n"
         "" SELMAP_MAP_CONFIG_DEFAULT " on the generated terrain, auto with --dem.",
         opts, 0};
     int rc;

@@ -763,8 +763,12 @@ static int world_map(world_t *w, const exp_params_t *p, exp_result_t *out, void 
 }
 
 /* Eq. 8: one sensing position of the global map, at the map's centre; the
- * error model's constant scales with the cell, its r^2 term inversely (the
- * same sigma in cells at the same range in cells as at 0.1 m). */
+ * error model's constant scales with the cell. Its r^2 term: on the
+ * generated terrain the paper's (a map sensed from its centre); on a DEM
+ * (p->dem) none by default: a DEM file is an overhead product (orbital or
+ * airborne), sensed from no point on it, so its error does not grow with
+ * the distance from its centre (with the paper's term scaled to the cell,
+ * the success rate fell with the DEM's extent: docs/method.md 9). */
 static int world_prob(world_t *w, const exp_params_t *p, exp_result_t *out, void **raw, char *err,
                       size_t err_len)
 {
@@ -790,7 +794,9 @@ static int world_prob(world_t *w, const exp_params_t *p, exp_result_t *out, void
     trn_sigma_global_default(&gm);
     gm.sigma_min_m = (float)(p->global_sigma_m >= 0.0 ? p->global_sigma_m
                                                       : (double)gm.sigma_min_m * f);
-    gm.k_per_m = (float)(p->global_sigma_k >= 0.0 ? p->global_sigma_k : (double)gm.k_per_m / f);
+    gm.k_per_m = (float)(p->global_sigma_k >= 0.0 ? p->global_sigma_k
+                         : p->dem != NULL         ? 0.0
+                                                  : (double)gm.k_per_m / f);
     out->global_sigma = gm;
     {
         const int mid_x = nx / 2, mid_y = ny / 2; /* the centre cell (integer division intended) */

@@ -119,9 +119,11 @@ typedef struct {
     /* Ranges in metres; 0 (footprint: < 0) = trn_select_cfg_default's, scaled
    * by cell_m / 0.1 (the same cells as the paper's 0.1 m: 10-100 cells, a
    * 21-cell patch, a 5-cell footprint). The local error model (eq. 9) and the
-   * default global one (eq. 8) scale likewise: constant x f, r^2 term / f. */
+   * default global one (eq. 8) scale likewise: constant x f, r^2 term / f
+   * (eq. 8's r^2 term is 0 on a DEM: experiment.c world_prob). */
     double min_range_m, max_range_m, patch_m, footprint_m;
-    double global_sigma_m, global_sigma_k; /* eq. 8 model; < 0: default (scaled) */
+    double global_sigma_m,
+        global_sigma_k;        /* eq. 8 model; < 0: default (scaled; no r^2 term on a DEM) */
     const float *global_error; /* per-cell eq. 8 sigma, m, the DEM's grid (NaN: model) or NULL */
     /* Heading error (issue 14): each trial's local maps are turned about the
      * rover by an error drawn N(0, heading_error_deg) before matching; besides
