@@ -19,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cal3.h"
 #include "rng.h"
 #include "synth.h"
 #include "trn/heading.h"
@@ -591,30 +592,15 @@ static void test_calibration(void **state)
             trn_heading_result_t res;
             size_t np = local_points(rx, ry, delta);
             size_t wb = trn_localize_heading_workspace_bytes(&g_w.map, np, &win);
-            double eh, ex, ey, a, b, d, m2, z;
             if (trn_localize_points_heading(&g_w.map, g_pts, np, &win, &c, g_ws, wb, &res) !=
                 TRN_OK) {
                 continue;
             }
-            eh = res.heading_rad - delta;
-            ex = (res.loc.x - rx) * CELL;
-            ey = (res.loc.y - ry) * CELL;
-            if (hypot(ex, ey) > 1.5 * CELL) {
+            if (cal3_tally(&res, rx, ry, delta, CELL, ch, cp)) {
+                ++n;
+            } else {
                 ++wrong;
-                continue;
             }
-            a = res.cov3[0];
-            b = res.cov3[1];
-            d = res.cov3[4];
-            m2 = (d * ex * ex - 2.0 * b * ex * ey + a * ey * ey) / (a * d - b * b);
-            z = fabs(eh) / res.sigma_heading_rad;
-            ++n;
-            ch[0] += z < 1.0;
-            ch[1] += z < 2.0;
-            ch[2] += z < 3.0;
-            cp[0] += m2 < 1.0;
-            cp[1] += m2 < 4.0;
-            cp[2] += m2 < 9.0;
         }
     }
     g_noise_m = 0.0;

@@ -19,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cal3.h"
 #include "rng.h"
 #include "synth.h"
 #include "trn/height_heading.h"
@@ -409,32 +410,17 @@ static void test_calibration(void **state)
             trn_heading_cfg_t c = {0.0, 8.0 * DEG, 0.0};
             trn_heading_result_t res;
             trn_status_t st;
-            double eh, ex, ey, a, b, d, m2, z;
             local_dem(rx, ry, delta, 0.3 * (trn_rng_unit(&r) - 0.5), 1);
             st = loc3(&win, &c, &res);
             amb += st == TRN_E_AMBIGUOUS;
             if (st != TRN_OK) {
                 continue;
             }
-            eh = res.heading_rad - delta;
-            ex = (res.loc.x - rx) * CELL;
-            ey = (res.loc.y - ry) * CELL;
-            if (hypot(ex, ey) > 1.5 * CELL) {
+            if (cal3_tally(&res, rx, ry, delta, CELL, ch, cp)) {
+                ++n;
+            } else {
                 ++wrong;
-                continue;
             }
-            a = res.cov3[0];
-            b = res.cov3[1];
-            d = res.cov3[4];
-            m2 = (d * ex * ex - 2.0 * b * ex * ey + a * ey * ey) / (a * d - b * b);
-            z = fabs(eh) / res.sigma_heading_rad;
-            ++n;
-            ch[0] += z < 1.0;
-            ch[1] += z < 2.0;
-            ch[2] += z < 3.0;
-            cp[0] += m2 < 1.0;
-            cp[1] += m2 < 4.0;
-            cp[2] += m2 < 9.0;
         }
     }
     printf("height matcher over heading, calibration: %d ok and right, %d wrong, %d ambiguous; "
