@@ -4,7 +4,9 @@
 (x, y, heading) on real DEMs (issue 14), asserted.
 
 For each of the three package DEMs of the real_dems test (Jacksboro hills 83 m, Minnesota
-lidar 1 m, Rhine basin 900 m; made into build/real/ by tools/real/dems.py on first use),
+lidar 1 m, Rhine basin 900 m; made into build/real/ by tools/real/dems.py on first use), and
+the benchmark's synthetic rock field (`trn terrain`, 0.1 m: calibration over heading on rocks
+when the local map has no representation error, docs/modules/heading.md),
 N seeded cases (default 200, seed 14) built as tools/real/cases.py builds the real
 benchmark's (bilinear from the DEM at a sub-cell truth, a height offset, noise of
 1 cm + 0.04 % r^2 / c, a 120 deg wedge of 20 cells, prior within +-4 cells, window
@@ -12,8 +14,10 @@ benchmark's (bilinear from the DEM at a sub-cell truth, a height offset, noise o
 through `trn localize --batch LIST --heading-window-deg 8` with the default (auto) map
 configuration. Per DEM, over the answers with status ok whose position is within 1.5
 cells (right):
-  * at least 90 % of the cases are ok and right;
-  * RMS heading error at most 0.5 deg (Rhine: 2 deg; its noise at 20 cells is 144 m);
+  * at least 90 % of the cases are ok and right (rock field: 80 %; a 120 deg wedge of 2 m sees
+    few rocks, and 14 % of its answers are flagged ambiguous; measured 85.5 % of 200);
+  * RMS heading error at most 0.5 deg (Rhine: 2 deg, its noise at 20 cells is 144 m; rock
+    field: 1.5 deg, measured 1.08);
     measured figures in docs/modules/heading.md;
   * heading errors within 1 / 2 / 3 sigma_heading: 1 sigma in [50, 90] %, 2 and 3 sigma at
     least 83 and 94 % (a normal: 68.3 / 95.4 / 99.7; 200 cases spread ~3 points at 1 sigma);
@@ -35,7 +39,9 @@ sys.path.insert(0, os.path.join(ROOT, "tools", "real"))
 import cases as cm  # noqa: E402
 import dems  # noqa: E402
 
-DEMS = ("jacksboro", "lidar_mn", "rhine")
+DEMS = ("jacksboro", "lidar_mn", "rhine", "rockfield")
+RIGHT_MIN = {"rockfield": 0.8}  # share of the cases ok and right; default 0.9
+RMS_MAX_DEG = {"rhine": 2.0, "rockfield": 1.5}  # default 0.5
 TURN_DEG = 6.0
 WINDOW_DEG = 8.0
 
@@ -88,7 +94,8 @@ def run_dem(trn, out, dem_id, n):
         dp = np.array([j["x_m"] - c.truth[0], j["y_m"] - c.truth[1]])
         zp.append(float(dp @ np.linalg.solve(cv, dp)))  # squared Mahalanobis distance
     eh, z, zp = np.array(eh), np.array(z), np.array(zp)
-    rms_max = 2.0 if dem_id == "rhine" else 0.5
+    rms_max = RMS_MAX_DEG.get(dem_id, 0.5)
+    right_min = RIGHT_MIN.get(dem_id, 0.9)
     right = len(eh)
     rms = float(np.sqrt(np.mean(eh ** 2))) if right else float("inf")
     cov = [100.0 * float(np.mean(z < k)) if right else 0.0 for k in (1, 2, 3)]
@@ -98,7 +105,7 @@ def run_dem(trn, out, dem_id, n):
           f"(68.3 / 95.4 / 99.7); position in the 1/2/3-sigma ellipses {covp[0]:.1f} / {covp[1]:.1f} / "
           f"{covp[2]:.1f} % (39.3 / 86.5 / 98.9); median time {float(np.median(times)) if times else 0:.1f} ms")
     checks = [
-        (right >= 0.9 * n, f"ok and right {right} >= 90 % of {n}"),
+        (right >= right_min * n, f"ok and right {right} >= {100 * right_min:.0f} % of {n}"),
         (rms <= rms_max, f"RMS heading error {rms:.3f} <= {rms_max} deg"),
         (50.0 <= cov[0] <= 90.0, f"1 sigma {cov[0]:.1f} % in [50, 90]"),
         (cov[1] >= 83.0 and cov[2] >= 94.0, f"2 / 3 sigma {cov[1]:.1f} / {cov[2]:.1f} >= 83 / 94 %"),
@@ -124,6 +131,7 @@ def main():
         print("usage: test_real_heading.py TRN OUT [--cases N]", file=sys.stderr)
         return 2
     trn, out = args
+    os.environ.setdefault("TRN", trn)  # the synthetic rock field is made by the trn under test
     bad = sum(run_dem(trn, out, d, n) for d in DEMS)
     print(f"{len(DEMS)} DEMs, {bad} checks failed")
     return 1 if bad else 0
