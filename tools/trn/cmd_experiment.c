@@ -136,10 +136,48 @@ static int experiment_usage(cmd_experiment_params_t *p, cli_opt_t *opts, size_t 
     return CLI_OK;
 }
 
+/* Help texts whose defaults depend on the terrain: the selection lengths
+ * (the core's, trn_select_cfg_default in p->so, scaled by cell / 0.1 m), the
+ * global map's error (world_prob in experiment.c: trn_sigma_global_default,
+ * its constant scaled, its r^2 term 0 on a --dem) and the map configuration;
+ * h holds the texts, written into opts. */
+#define EXP_N_HELP 6
+static void experiment_help(const cmd_experiment_params_t *p, cli_opt_t *opts, size_t n_opts,
+                            char h[EXP_N_HELP][112])
+{
+    trn_sigma_model_t gm;
+    trn_sigma_global_default(&gm);
+    snprintf(h[0], sizeof h[0], "nearest target (default %g m at 0.1 m cells; scaled on a --dem)",
+             p->so.min_range_m);
+    snprintf(h[1], sizeof h[1], "farthest target (default %g m at 0.1 m cells; scaled on a --dem)",
+             p->so.max_range_m);
+    snprintf(h[2], sizeof h[2],
+             "side of the sensed patch (default %g m at 0.1 m cells; scaled on a --dem)",
+             p->so.patch_m);
+    snprintf(h[3], sizeof h[3],
+             "rover footprint radius no patch may touch (default %g m at 0.1 m cells; scaled on a "
+             "--dem)",
+             p->so.footprint_m);
+    snprintf(h[4], sizeof h[4],
+             "global map's error at its sensing position, m (eq. 8; default %g at 0.1 m cells; "
+             "scaled on a --dem)",
+             (double)gm.sigma_min_m);
+    snprintf(h[5], sizeof h[5],
+             "global map's error growth with squared range from the map's centre, 1/m (default %g; "
+             "0 on a --dem)",
+             (double)gm.k_per_m);
+    cli_find(opts, n_opts, "--global-sigma-m")->help = h[4];
+    cli_find(opts, n_opts, "--global-sigma-k")->help = h[5];
+    cli_find(opts, n_opts, "--map-config")->help =
+        "map configuration: paper (as in the paper, scaled to the cell; default on the generated "
+        "terrain) "
+        "or auto (from the DEM, docs/method.md 9; default with --dem)";
+}
+
 /* argv -> p. Returns CLI_OK, CLI_HELP (usage printed) or the usage / bad input status (message printed). */
 static int experiment_parse(int argc, char **argv, cmd_experiment_params_t *p)
 {
-    char h[4][112];
+    char h[EXP_N_HELP][112];
 #define EXP_N_OWN 22
     cli_opt_t own[EXP_N_OWN] = {
         {"--trials", CLI_LONG, &p->trials, 1, 1000000, 0, "N", "trials", 0},
@@ -214,25 +252,10 @@ static int experiment_parse(int argc, char **argv, cmd_experiment_params_t *p)
         opts, 0};
     int rc;
 
-    /* the selection lengths default to the core's (trn_select_cfg_default, in so), scaled by cell / 0.1 m */
-    snprintf(h[0], sizeof h[0], "nearest target (default %g m at 0.1 m cells; scaled on a --dem)",
-             p->so.min_range_m);
-    snprintf(h[1], sizeof h[1], "farthest target (default %g m at 0.1 m cells; scaled on a --dem)",
-             p->so.max_range_m);
-    snprintf(h[2], sizeof h[2],
-             "side of the sensed patch (default %g m at 0.1 m cells; scaled on a --dem)",
-             p->so.patch_m);
-    snprintf(h[3], sizeof h[3],
-             "rover footprint radius no patch may touch (default %g m at 0.1 m cells; scaled on a "
-             "--dem)",
-             p->so.footprint_m);
     memcpy(opts, own, (EXP_N_OWN) * sizeof own[0]);
     selmap_gerr_opts(&p->so, opts + EXP_N_OWN);
     mapopt_cli(&p->so.mo, opts + EXP_N_OWN + SELMAP_N_GERR_OPTS);
-    cli_find(opts, n_opts, "--map-config")->help =
-        "map configuration: paper (as in the paper, scaled to the cell; default on the generated "
-        "terrain) "
-        "or auto (from the DEM, docs/method.md 9; default with --dem)";
+    experiment_help(p, opts, n_opts, h);
     cmd.n_opts = n_opts;
     rc = cli_parse(&cmd, argc, argv);
     return rc != CLI_OK ? rc : experiment_usage(p, opts, n_opts);
