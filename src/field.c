@@ -373,12 +373,22 @@ static size_t field_fast_carve(const trn_select_cfg_t *scfg, const trn_map_t *ma
     return w.total;
 }
 
+/* The heading-searched prediction (select.h) has no ground path yet:
+ * trn_field_fast runs trn_field's for it, in trn_field's workspace. */
+static int field_fast_delegates(const trn_select_cfg_t *scfg)
+{
+    return scfg != NULL && scfg->heading_search == 1 && scfg->sigma_heading_rad > 0.0f;
+}
+
 size_t trn_field_fast_workspace_bytes(const trn_select_cfg_t *scfg, const trn_map_t *map,
                                       const trn_kernels_t *k, const trn_vol_f32_t *pg)
 {
     trn_selpre_t *pre;
     void *t;
     size_t tb;
+    if (field_fast_delegates(scfg) && pg != NULL && trn_selpre_bytes(scfg, map, k, pg) != 0u) {
+        return trn_field_workspace_bytes(scfg, map, k);
+    }
     return field_fast_carve(scfg, map, k, pg, NULL, &pre, &t, &tb);
 }
 
@@ -398,6 +408,10 @@ trn_status_t trn_field_fast(const trn_map_t *map, const trn_kernels_t *k, const 
     if ((s = field_check(map, k, pg, scfg, fcfg, heading_rad, area, out, evaluated, evaluated_len,
                          stats, ws)) != TRN_OK) {
         return s;
+    }
+    if (field_fast_delegates(scfg)) {
+        return trn_field(map, k, pg, scfg, fcfg, heading_rad, area, out, evaluated, evaluated_len,
+                         stats, ws, ws_bytes);
     }
     /* sizes refused (need 0): the header at least, and trn_selpre_init says why */
     need = field_fast_carve(scfg, map, k, pg, NULL, &pre, &tables, &tb);

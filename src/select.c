@@ -27,6 +27,7 @@ void trn_select_cfg_default(trn_select_cfg_t *cfg)
     cfg->min_separation_m = 1.0f;
     trn_sigma_local_default(&cfg->local_sigma);
     cfg->sigma_heading_rad = 0.0f;
+    cfg->heading_search = 0;
 }
 
 /* patch_m in whole cells (nearest, so 2.0 m / 0.1f m is 20, not 19), then
@@ -62,7 +63,8 @@ trn_status_t trn_select_cfg_check(const trn_select_cfg_t *cfg, float cell_m)
         !(cfg->min_separation_m >= 0.0f && cfg->min_separation_m <= 1.0e6f) ||
         !(cfg->sigma_heading_rad >= 0.0f &&
           cfg->sigma_heading_rad <= TRN_SELECT_MAX_SIGMA_HEADING_RAD) ||
-        cfg->stride_cells < 1 || cfg->stride_cells > 64) {
+        cfg->stride_cells < 1 || cfg->stride_cells > 64 ||
+        (cfg->heading_search != 0 && cfg->heading_search != 1)) {
         return TRN_E_ARG;
     }
     if ((double)cfg->patch_m / (double)cell_m > (double)TRN_MAX_DIM ||
@@ -98,17 +100,32 @@ typedef struct {
     float *p;
     void *lws;
     int64_t *sat, *crow;
+    double *rp1, *rp2, *q7; /* heading searched: row moment prefixes, 7 sums per candidate */
 } sel_layout_t;
 
-static size_t select_carve(int32_t w, int32_t h, int32_t nz, size_t lw, void *base,
+/* The heading-searched prediction applies (select.h): its moments are kept. */
+static int sel_moments(const trn_select_cfg_t *cfg)
+{
+    return cfg->heading_search == 1 && cfg->sigma_heading_rad > 0.0f;
+}
+
+/* ncap > 0: also the moment arrays of the heading-searched prediction. */
+static size_t select_carve(int32_t w, int32_t h, int32_t nz, size_t lw, size_t ncap, void *base,
                            sel_layout_t *lay)
 {
     trn_ws_t c;
+    const size_t pre = (size_t)h * ((size_t)w + 1u) * sizeof(double);
     trn_ws_begin(&c, base);
     lay->p = (float *)trn_ws_take(&c, (size_t)w * (size_t)h * (size_t)nz * sizeof(float));
     lay->lws = trn_ws_take(&c, lw);
     lay->sat = (int64_t *)trn_ws_take(&c, ((size_t)w + 1u) * ((size_t)h + 1u) * sizeof(int64_t));
     lay->crow = (int64_t *)trn_ws_take(&c, (size_t)w * sizeof(int64_t));
+    lay->rp1 = lay->rp2 = lay->q7 = NULL;
+    if (ncap > 0u) {
+        lay->rp1 = (double *)trn_ws_take(&c, pre);
+        lay->rp2 = (double *)trn_ws_take(&c, pre);
+        lay->q7 = (double *)trn_ws_take(&c, ncap * 7u * sizeof(double));
+    }
     return c.total;
 }
 
@@ -133,7 +150,10 @@ size_t trn_select_workspace_bytes(const trn_select_cfg_t *cfg, const trn_map_t *
     if (lw == 0u) {
         return 0u;
     }
-    return select_carve(w, h, map->dist.nz, lw, NULL, &lay);
+    return select_carve(w, h, map->dist.nz, lw,
+                        sel_moments(cfg) ? trn_select_max_candidates(cfg, map->cfg.terrain.cell_m)
+                                         : 0u,
+                        NULL, &lay);
 }
 
 typedef struct {
@@ -187,7 +207,7 @@ static void patch_window(const geom_t *g, int32_t cx, int32_t cy, trn_window_t *
 /* Summed-area table of C_d over the region: sat[(y+1)(w+1) + x+1] = sum of
  * C_d over [0, x] x [0, y] of the region. */
 static void build_sat(const trn_map_t *map, const trn_vol_f32_t *p, const trn_window_t *roi,
-                      int32_t dx, int32_t dy, int64_t *sat, int64_t *crow)
+                      int32_t dx, int32_t dy, int64_t *sat, int64_t *crow, double *rp1, double *rp2)
 {
     const trn_vol_u8_t *d = &map->dist;
     const int32_t *lnp = map->lnp.lnp;
@@ -224,7 +244,98 @@ static void build_sat(const trn_map_t *map, const trn_vol_f32_t *p, const trn_wi
             run += crow[x];
             sat[(size_t)(y + 1) * w1 + (size_t)x + 1u] = sat[(size_t)y * w1 + (size_t)x + 1u] + run;
         }
+        if (rp1 != NULL) { /* row prefixes of (x - w/2) C_d and (x - w/2)^2 C_d */
+            double *r1 = rp1 + (size_t)y * w1, *r2 = rp2 + (size_t)y * w1;
+            const double xm = 0.5 * (double)w;
+            r1[0] = 0.0;
+            r2[0] = 0.0;
+            for (x = 0; x < w; ++x) {
+                const double u = (double)x - xm, cv = (double)crow[x];
+                r1[x + 1] = r1[x] + u * cv;
+                r2[x + 1] = r2[x] + u * u * cv;
+            }
+        }
     }
+}
+
+/* The heading-searched prediction's seven sums of candidate c for pose
+ * offset d (select.h): the patch's first and second moments of C_d about its
+ * centre (w = voxel - centre, cells), each in nats, folded with eq. 6's
+ * linear map for d (H_xx = sum (x_d^2 - 2/3) ll_d, H_yy likewise,
+ * H_xy = sum x_d y_d ll_d / 4): q7 += [Lxx(M_wy), Lxy(M_wx), Lxy(M_wy),
+ * Lyy(M_wx), Lxx(M_wyy), Lxy(M_wxy), Lyy(M_wxx)]. */
+static void moment_sums(const int64_t *sat, const double *rp1, const double *rp2, size_t w1,
+                        const trn_window_t *roi, const trn_window_t *pw, int32_t cy, double xc,
+                        int32_t d, double scale, double q7[7])
+{
+    const size_t x0 = (size_t)(pw->x0 - roi->x0), x1 = (size_t)(pw->x1 - roi->x0) + 1u;
+    const double lx = (double)(d % 3 - 1), ly = (double)(d / 3 - 1);
+    const double cxx = lx * lx - 2.0 / 3.0, cyy = ly * ly - 2.0 / 3.0, cxy = lx * ly / 4.0;
+    double mx = 0.0, my = 0.0, mxx = 0.0, mxy = 0.0, myy = 0.0;
+    int32_t y;
+    for (y = pw->y0; y <= pw->y1; ++y) {
+        const size_t r = (size_t)(y - roi->y0);
+        const int64_t s0i = (sat[(r + 1u) * w1 + x1] - sat[r * w1 + x1]) -
+                            (sat[(r + 1u) * w1 + x0] - sat[r * w1 + x0]);
+        const double s0 = (double)s0i;
+        const double s1 = rp1[r * w1 + x1] - rp1[r * w1 + x0];
+        const double s2 = rp2[r * w1 + x1] - rp2[r * w1 + x0];
+        const double wy = (double)(y - cy);
+        const double m1 = s1 - xc * s0;
+        mx += m1;
+        my += wy * s0;
+        mxx += s2 - 2.0 * xc * s1 + xc * xc * s0;
+        mxy += wy * m1;
+        myy += wy * wy * s0;
+    }
+    mx *= scale;
+    my *= scale;
+    mxx *= scale;
+    mxy *= scale;
+    myy *= scale;
+    q7[0] += cxx * my;
+    q7[1] += cxy * mx;
+    q7[2] += cxy * my;
+    q7[3] += cyy * mx;
+    q7[4] += cxx * myy;
+    q7[5] += cxy * mxy;
+    q7[6] += cyy * mxx;
+}
+
+/* The heading-searched covariance (select.h) of a fitted candidate: cov
+ * (m^2) = (A^-1 + g g^T / (s_h^-2 + I)) c^2 from the fit's A^-1, eq. 6's
+ * Hessian of ll, the seven sums q7 and the rover-to-target offset (ox, oy)
+ * in cells. Returns the scalar sqrt(var_x + var_y); *head_m the heading's
+ * part |g| c / sqrt(s_h^-2 + I). */
+static double sel_search_cov(const trn_peak_t *pk, const double ll[9], const double q7[7],
+                             double cell, double sh, double ox, double oy, double cov[3],
+                             double *head_m)
+{
+    double hxx = 0.0, hyy = 0.0, hxy = 0.0, bx, by, cc, gx, gy, info, den;
+    int32_t d;
+    for (d = 0; d < 9; ++d) {
+        const double lx = (double)(d % 3 - 1), ly = (double)(d / 3 - 1);
+        hxx += (lx * lx - 2.0 / 3.0) * ll[d];
+        hyy += (ly * ly - 2.0 / 3.0) * ll[d];
+        hxy += lx * ly / 4.0 * ll[d];
+    }
+    /* b = sum A_v J u_v, c = sum (J u_v)^T A_v J u_v with A_v = -L(v's terms),
+     * u_v = w_v + (ox, oy): the centred moments q7 plus the offset's terms */
+    bx = q7[0] + oy * hxx - q7[1] - ox * hxy;
+    by = q7[2] + oy * hxy - q7[3] - ox * hyy;
+    cc = -(q7[4] + 2.0 * oy * q7[0] + oy * oy * hxx) +
+         2.0 * (q7[5] + ox * q7[2] + oy * q7[1] + ox * oy * hxy) -
+         (q7[6] + 2.0 * ox * q7[3] + ox * ox * hyy);
+    gx = pk->var_x * bx + pk->cov_xy * by;
+    gy = pk->cov_xy * bx + pk->var_y * by;
+    info = cc - (bx * gx + by * gy);
+    info = info > 0.0 ? info : 0.0;
+    den = 1.0 / (sh * sh) + info;
+    cov[0] = (pk->var_x + gx * gx / den) * cell * cell;
+    cov[1] = (pk->var_y + gy * gy / den) * cell * cell;
+    cov[2] = (pk->cov_xy + gx * gy / den) * cell * cell;
+    *head_m = sqrt((gx * gx + gy * gy) / den) * cell;
+    return sqrt(cov[0] + cov[1]);
 }
 
 static int64_t window_sum(const int64_t *sat, size_t w1, const trn_window_t *roi,
@@ -357,7 +468,9 @@ trn_status_t trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_
 
     /* 2. eq. 9 over the region (this region's carve: within the largest one's) */
     lw = trn_prob_local_workspace_bytes(k, &roi);
-    (void)select_carve(side_w, side_h, pg->nz, lw, ws, &lay);
+    (void)select_carve(
+        side_w, side_h, pg->nz, lw,
+        sel_moments(cfg) ? trn_select_max_candidates(cfg, map->cfg.terrain.cell_m) : 0u, ws, &lay);
     p.data = lay.p;
     p.nx = side_w;
     p.ny = side_h;
@@ -373,11 +486,19 @@ trn_status_t trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_
 
     /* 3. one summed-area table per pose offset, every window read from it */
     scale = 1.0 / ((double)TRN_SELECT_PROB_SCALE * (double)TRN_LNP_SCALE);
+    if (lay.q7 != NULL) {
+        memset(lay.q7, 0, nc * 7u * sizeof(double));
+    }
     for (d = 0; d < 9; ++d) {
-        build_sat(map, &p, &roi, d % 3 - 1, d / 3 - 1, sat, crow);
+        build_sat(map, &p, &roi, d % 3 - 1, d / 3 - 1, sat, crow, lay.rp1, lay.rp2);
         for (i = 0; i < nc; ++i) {
             patch_window(&g, cands[i].x, cands[i].y, &pw);
             cands[i].ll[d] = (double)window_sum(sat, w1, &roi, &pw) * scale;
+            if (lay.q7 != NULL) {
+                moment_sums(sat, lay.rp1, lay.rp2, w1, &roi, &pw, cands[i].y,
+                            (double)(cands[i].x - roi.x0) - 0.5 * (double)side_w, d, scale,
+                            lay.q7 + 7u * i);
+            }
         }
     }
 
@@ -388,7 +509,14 @@ trn_status_t trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_
         trn_candidate_t *c = &cands[i];
         if (trn_peak_fit(c->ll, &pk) == TRN_OK) {
             c->informative = 1;
-            if (sh2c2 > 0.0) {
+            if (lay.q7 != NULL) {
+                c->uncertainty_m = sel_search_cov(
+                    &pk, c->ll, lay.q7 + 7u * i, g.cell, (double)cfg->sigma_heading_rad,
+                    (double)c->x - g.rxf, (double)c->y - g.ryf, c->cov_m2, &c->heading_m);
+                c->sigma_x_m = sqrt(c->cov_m2[0]);
+                c->sigma_y_m = sqrt(c->cov_m2[1]);
+                c->rho = c->cov_m2[2] / (c->sigma_x_m * c->sigma_y_m);
+            } else if (sh2c2 > 0.0) {
                 c->uncertainty_m = sel_heading_cov(&pk, g.cell, sh2c2, (double)c->x - g.rxf,
                                                    (double)c->y - g.ryf, c->cov_m2);
                 c->sigma_x_m = sqrt(c->cov_m2[0]);

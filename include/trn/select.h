@@ -41,6 +41,22 @@
  * becomes sqrt(sigma_x^2 + sigma_y^2 + s_h^2 r^2). Targets are compared on
  * it, so with an uncertain heading nearer targets are preferred. With
  * s_h = 0 every value is the paper's prediction bit for bit.
+ *
+ * Heading searched (heading_search = 1, s_h > 0; method.md 4, "Patches that
+ * pin the heading down"): a voxel v at rover-relative u_v (cells) moves by
+ * d + theta J u_v under a pose change (d, theta), J the quarter turn. Eq. 6's
+ * Hessian is linear in the nine sums, so each voxel has its share A_v of the
+ * precision A = -H, and the information of (d, theta) is
+ *   [A, b; b^T, c + s_h^-2],  b = sum A_v J u_v,  c = sum (J u_v)^T A_v J u_v;
+ * the position's covariance is its marginal
+ *   cov = A^-1 + g g^T / (s_h^-2 + I),  g = A^-1 b,  I = max(0, c - b^T g),
+ * (times c^2 in m^2), g the lever arm to the patch's information-weighted
+ * centroid and I the heading information beyond it (the spread of the
+ * structure about that centroid). b and c need the nine sums' first and
+ * second moments over each patch (x, y, xx, xy, yy), taken from per-row
+ * prefix sums in double beside the exact int64 tables. heading_m is then
+ * |g| c / sqrt(s_h^-2 + I). Structure concentrated at the patch centre gives
+ * g = J (dx, dy) and I = 0: the lever arm above exactly.
  */
 #ifndef TRN_SELECT_H
 #define TRN_SELECT_H
@@ -71,6 +87,13 @@ typedef struct {
     float sigma_heading_rad;       /**< standard deviation of the rover's heading, rad,
                                    [0, TRN_SELECT_MAX_SIGMA_HEADING_RAD]; 0 (the default):
                                    the heading is known, the paper's prediction exactly */
+    int32_t heading_search;        /**< 0 (the default): the target will be matched in x and y
+                                   with the believed heading (the lever arm above); 1: by a
+                                   search over heading too (trn_localize_dem_heading), so with
+                                   sigma_heading_rad > 0 the prediction is the position's
+                                   marginal of the (x, y, heading) fit with that prior: patches
+                                   whose structure spreads across them pin the heading and lose
+                                   less (method.md 4); with sigma_heading_rad = 0 no effect */
 } trn_select_cfg_t;
 
 /** Largest sigma_heading_rad (0.5 rad, 28.6 deg): the heading's term is the
@@ -96,6 +119,7 @@ typedef struct {
     double cov_m2[3];                 /**< var_x, var_y, cov_xy, m^2 (with the heading's term) */
     double uncertainty_m; /**< sqrt(sigma_x^2 + sigma_y^2), m; +inf when uninformative */
     double heading_m;     /**< the heading's part, sigma_heading_rad * range, m
+                                (heading_search: |g| c / sqrt(s_h^-2 + I), file comment)
                                 (0 with a known heading); the fit's own sigmas are
                                 sqrt(var - its term) (file comment) */
     int32_t informative;  /**< 1 finite fit, 0 ill-conditioned */

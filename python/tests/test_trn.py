@@ -88,6 +88,8 @@ def test_select_equals_cli(cli, dems, gmap):
                         ["--heading-deg", 30, "--pan-deg", "-60,60", "--next-best", 3]),
                        ({"sensors": [(1000.5, 2000.5), (1006.0, 2006.0)], "max_range_m": 2.5},
                         ["--sensors", "1000.5,2000.5;1006.0,2006.0", "--max-range-m", 2.5]),
+                       ({"heading_sigma_deg": 2, "heading_search": 1},
+                        ["--heading-sigma-deg", 2, "--heading-search", 1]),
                        ({}, [])):
         want = cli.json("select", "--dem", dems["global"], "--rover", "1003.25,2003.25", *args)
         same(gmap.select(rover=ROVER, **opts), want)
@@ -179,6 +181,7 @@ def test_values_out_of_range(gmap, dems):
     assert status_of(gmap.select, rover=(0.0, 0.0))[0] == "bad_input"
     assert status_of(gmap.select, rover="a,b")[0] == "bad_input"
     assert status_of(gmap.select, rover=ROVER, pan_deg=(10, -10))[0] == "bad_input"
+    assert status_of(gmap.select, rover=ROVER, heading_search=2)[0] == "bad_input"
     assert status_of(gmap.field, area=(1005, 2001, 1001, 2005))[0] == "bad_input"  # inverted
     assert status_of(gmap.field, area=(0, 0, 1, 1))[0] == "bad_input"  # off the map
     assert status_of(gmap.field, coarse_step_cells=3)[0] == "bad_input"

@@ -182,6 +182,25 @@ if "target" in h3 and "target" in sel:
 for bad, why in (("-1", "out of range"), ("29", "out of range"), ("nan", "not a finite number")):
     expect_error(1, why, "select", "--dem", g_tif, "--rover", f"{rover[0]},{rover[1]}", "--heading-sigma-deg", bad)
 
+# --heading-search 1 (the target matched with the heading searched, docs/method.md 4): nothing
+# changes with a known heading; with 3 deg the heading's part is the (x, y, heading) marginal's,
+# never above the lever arm to the information-weighted centroid, reported in the JSON
+hs0 = run_json("select", "--dem", g_tif, "--rover", f"{rover[0]},{rover[1]}", *SMALL, "--heading-search", "1",
+               "--next-best", "4", "--json")
+check(hs0.get("heading_search") == 1 and hs0.get("target") == sel.get("target")
+      and hs0.get("uncertainty_m") == sel.get("uncertainty_m"),
+      "--heading-search 1 with a known heading: the default's target and uncertainty")
+hs3 = run_json("select", "--dem", g_tif, "--rover", f"{rover[0]},{rover[1]}", *SMALL, "--heading-sigma-deg", "3",
+               "--heading-search", "1", "--next-best", "4", "--json")
+check(hs3.get("heading_search") == 1 and hs3.get("heading_sigma_deg") == 3, "heading_search in the JSON")
+if "heading_m" in hs3 and "uncertainty_m" in h3:
+    check(0 < hs3["heading_m"] <= hs3["uncertainty_m"], "the searched heading's part is inside the total")
+    check(hs3["uncertainty_m"] <= h3["uncertainty_m"] * 1.5,
+          f"the searched heading's best ({hs3['uncertainty_m']:.4f} m) is near or below the lever arm's "
+          f"({h3['uncertainty_m']:.4f} m)")
+for bad, why in (("2", "out of range"), ("-1", "out of range"), ("x", "not an integer")):
+    expect_error(1, why, "select", "--dem", g_tif, "--rover", f"{rover[0]},{rover[1]}", "--heading-search", bad)
+
 # second GDAL format (ESRI ASCII grid), same answer
 g_asc = p("global.asc")
 gdal.Translate(g_asc, g_tif, format="AAIGrid")

@@ -143,6 +143,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         sc.min_separation_m = fz_f32(&f);
         sc.local_sigma = sm;
         sc.sigma_heading_rad = 0.0f; /* read at the end (appended) */
+        sc.heading_search = 0;
         cell = fz_f32(&f);
         st = trn_select_cfg_check(&sc, cell);
         FZ_CHECK(st == TRN_OK || st == TRN_E_ARG);
@@ -172,6 +173,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         if (st == TRN_OK) {
             FZ_CHECK(sc.sigma_heading_rad >= 0.0f &&
                      sc.sigma_heading_rad <= TRN_SELECT_MAX_SIGMA_HEADING_RAD);
+        }
+        /* the heading-search flag (appended after the heading sigma) */
+        sc.heading_search = fz_i32(&f);
+        st = trn_select_cfg_check(&sc, cell);
+        FZ_CHECK(st == TRN_OK || st == TRN_E_ARG);
+        if (st == TRN_OK) {
+            FZ_CHECK(sc.heading_search == 0 || sc.heading_search == 1);
         }
     }
     return 0;

@@ -465,9 +465,14 @@ void cmd_field_report_json(FILE *out, const cmd_field_params_t *p, const cmd_fie
     json_int(&j, "coarse_step_cells", p->coarse);
     json_int(&j, "stride_cells", p->so.stride_cells);
     json_num(&j, "seconds", r->secs);
-    json_str(&j, "algorithm", p->reference ? "trn_field" : "trn_field_fast");
+    /* trn_field_fast runs trn_field's path for the heading-searched prediction */
+    json_str(&j, "algorithm",
+             p->reference || (p->so.heading_search == 1 && p->so.heading_sigma_deg > 0.0)
+                 ? "trn_field"
+                 : "trn_field_fast");
     json_int(&j, "workspace_bytes", (long long)r->wsb);
     json_num(&j, "heading_sigma_deg", p->so.heading_sigma_deg);
+    json_int(&j, "heading_search", p->so.heading_search);
     json_num(&j, "outlier_density_per_m", r->w.map.lnp.k_per_m);
     selmap_json_config(&j, &p->so, &r->w.cfg, r->w.sigma_h);
     json_end(&j);

@@ -292,6 +292,7 @@ void cmd_select_report_json(FILE *out, const cmd_select_params_t *p, const cmd_s
         json_str(&j, "out_map", p->out_map);
     }
     json_num(&j, "heading_sigma_deg", p->so.heading_sigma_deg);
+    json_int(&j, "heading_search", p->so.heading_search);
     selmap_json_config(&j, &p->so, &w->cfg, w->sigma_h);
     json_end(&j);
 }

@@ -210,6 +210,13 @@ void selmap_opts(selmap_opts_t *o, cli_opt_t *d)
          "r)^2 across its line "
          "of sight, so nearer targets win as it grows (docs/method.md 4)",
          0},
+        {"--heading-search", CLI_LONG, &o->heading_search, 0, 1, 0, "0|1",
+         "1: the target will be matched with the heading searched too (localize "
+         "--heading-window-deg): with --heading-sigma-deg D each prediction is the position's "
+         "marginal of the (x, y, heading) fit with that prior, so patches whose structure spreads "
+         "across them pin the heading and lose less (docs/method.md 4) (default 0: matched in x "
+         "and y, the lever arm)",
+         0},
         {"--pan-deg", CLI_XY, o->pan_deg, 0, 0, 0, "MIN,MAX",
          "bearings the mast can look at, degrees from the heading, CCW positive", 0},
         {"--min-range-m", CLI_DOUBLE, &o->min_range_m, 0.0, 1e6, 0, "R", "nearest target, m", 0},
@@ -319,6 +326,7 @@ static int select_rules(selmap_t *w, const selmap_opts_t *o, double cell, char *
     c->stride_cells = (int32_t)o->stride_cells;
     c->min_separation_m = (float)o->separation_m;
     c->sigma_heading_rad = (float)(o->heading_sigma_deg * PI / 180.0);
+    c->heading_search = (int32_t)o->heading_search;
     if ((st = trn_select_cfg_check(c, (float)cell)) != TRN_OK) {
         if (o->patch_m / cell < 2.5) {
             snprintf(err, err_len,

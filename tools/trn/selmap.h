@@ -34,7 +34,8 @@ typedef struct {
     double heading_deg; /* map frame, CCW from east */
     double
         heading_sigma_deg; /* the heading's 1-sigma uncertainty, degrees (trn_select_cfg_t.sigma_heading_rad) */
-    double pan_deg[2]; /* min,max relative to the heading, map frame */
+    long heading_search; /* 1: the target is matched with the heading searched (trn_select_cfg_t) */
+    double pan_deg[2];   /* min,max relative to the heading, map frame */
     double min_range_m, max_range_m, footprint_m, patch_m, separation_m;
     long stride_cells;
     const char *sensors; /* "X,Y[;X,Y...]" map metres, or NULL: the DEM's centre */
@@ -46,9 +47,9 @@ typedef struct {
     const char *gerr;    /* per-cell error raster (m, the DEM's grid), or NULL */
 } selmap_opts_t;
 
-/* The selection options (12), the global map's error model (3), the map
+/* The selection options (13), the global map's error model (3), the map
  * configuration (MAPOPT_N), in that order. */
-#define SELMAP_N_SEL_OPTS 12
+#define SELMAP_N_SEL_OPTS 13
 #define SELMAP_N_GERR_OPTS 3
 #define SELMAP_N_OPTS (SELMAP_N_SEL_OPTS + SELMAP_N_GERR_OPTS + MAPOPT_N)
 
