@@ -409,9 +409,15 @@ trn_status_t trn_field_fast(const trn_map_t *map, const trn_kernels_t *k, const 
                          stats, ws)) != TRN_OK) {
         return s;
     }
-    if (field_fast_delegates(scfg)) {
-        return trn_field(map, k, pg, scfg, fcfg, heading_rad, area, out, evaluated, evaluated_len,
-                         stats, ws, ws_bytes);
+    if (field_fast_delegates(scfg)) { /* trn_field's path, inline (one frame less deep) */
+        need = trn_field_workspace_bytes(scfg, map, k);
+        if ((s = trn_ws_check(ws, ws_bytes, need)) != TRN_OK) {
+            return s;
+        }
+        field_setup(&f, map, k, pg, scfg, heading_rad, area, out, evaluated, stats);
+        (void)field_carve(scfg, map, k, ws, &f.cands, &f.ncap, &f.sws, &f.swsb);
+        f.pre = NULL;
+        return field_run(&f, fcfg);
     }
     /* sizes refused (need 0): the header at least, and trn_selpre_init says why */
     need = field_fast_carve(scfg, map, k, pg, NULL, &pre, &tables, &tb);

@@ -264,10 +264,16 @@ static void build_sat(const trn_map_t *map, const trn_vol_f32_t *p, const trn_wi
  * linear map for d (H_xx = sum (x_d^2 - 2/3) ll_d, H_yy likewise,
  * H_xy = sum x_d y_d ll_d / 4): q7 += [Lxx(M_wy), Lxy(M_wx), Lxy(M_wy),
  * Lyy(M_wx), Lxx(M_wyy), Lxy(M_wxy), Lyy(M_wxx)]. */
-static void moment_sums(const int64_t *sat, const double *rp1, const double *rp2, size_t w1,
-                        const trn_window_t *roi, const trn_window_t *pw, int32_t cy, double xc,
-                        int32_t d, double scale, double q7[7])
+void trn_sel_moment_sums_(const int64_t *sat, const double *rp1, const double *rp2,
+                          const trn_window_t *roi, const trn_window_t *pw, int32_t d, double scale,
+                          double q7[7])
 {
+    /* the patch lies inside the map (one-cell margin), so pw is unclipped and
+     * centred on the candidate; x measured from the region's middle as in
+     * build_sat's prefixes */
+    const size_t w1 = (size_t)(roi->x1 - roi->x0) + 2u;
+    const int32_t cy = (pw->y0 + pw->y1) / 2;
+    const double xc = (double)((pw->x0 + pw->x1) / 2 - roi->x0) - 0.5 * (double)(w1 - 1u);
     const size_t x0 = (size_t)(pw->x0 - roi->x0), x1 = (size_t)(pw->x1 - roi->x0) + 1u;
     const double lx = (double)(d % 3 - 1), ly = (double)(d / 3 - 1);
     const double cxx = lx * lx - 2.0 / 3.0, cyy = ly * ly - 2.0 / 3.0, cxy = lx * ly / 4.0;
@@ -307,9 +313,9 @@ static void moment_sums(const int64_t *sat, const double *rp1, const double *rp2
  * Hessian of ll, the seven sums q7 and the rover-to-target offset (ox, oy)
  * in cells. Returns the scalar sqrt(var_x + var_y); *head_m the heading's
  * part |g| c / sqrt(s_h^-2 + I). */
-static double sel_search_cov(const trn_peak_t *pk, const double ll[9], const double q7[7],
-                             double cell, double sh, double ox, double oy, double cov[3],
-                             double *head_m)
+double trn_sel_search_cov_(const trn_peak_t *pk, const double ll[9], const double q7[7],
+                           double cell, double sh, double ox, double oy, double cov[3],
+                           double *head_m)
 {
     double hxx = 0.0, hyy = 0.0, hxy = 0.0, bx, by, cc, gx, gy, info, den;
     int32_t d;
@@ -495,9 +501,7 @@ trn_status_t trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_
             patch_window(&g, cands[i].x, cands[i].y, &pw);
             cands[i].ll[d] = (double)window_sum(sat, w1, &roi, &pw) * scale;
             if (lay.q7 != NULL) {
-                moment_sums(sat, lay.rp1, lay.rp2, w1, &roi, &pw, cands[i].y,
-                            (double)(cands[i].x - roi.x0) - 0.5 * (double)side_w, d, scale,
-                            lay.q7 + 7u * i);
+                trn_sel_moment_sums_(sat, lay.rp1, lay.rp2, &roi, &pw, d, scale, lay.q7 + 7u * i);
             }
         }
     }
@@ -510,7 +514,7 @@ trn_status_t trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_
         if (trn_peak_fit(c->ll, &pk) == TRN_OK) {
             c->informative = 1;
             if (lay.q7 != NULL) {
-                c->uncertainty_m = sel_search_cov(
+                c->uncertainty_m = trn_sel_search_cov_(
                     &pk, c->ll, lay.q7 + 7u * i, g.cell, (double)cfg->sigma_heading_rad,
                     (double)c->x - g.rxf, (double)c->y - g.ryf, c->cov_m2, &c->heading_m);
                 c->sigma_x_m = sqrt(c->cov_m2[0]);

@@ -72,4 +72,15 @@ trn_status_t trn_selpre_init(trn_selpre_t *s, const trn_map_t *map, const trn_ke
 trn_status_t trn_selpre_best(const trn_selpre_t *s, int32_t rx, int32_t ry, float heading_rad,
                              double *best_m);
 
+/* trn_select's heading-searched prediction (select.h), out of line so that
+ * trn_select's own frame, on the deepest stack path, stays as it was: the
+ * seven moment sums of a candidate's patch for pose offset d, and the
+ * covariance and scalar from them (select.c). */
+void trn_sel_moment_sums_(const int64_t *sat, const double *rp1, const double *rp2,
+                          const trn_window_t *roi, const trn_window_t *pw, int32_t d, double scale,
+                          double q7[7]);
+double trn_sel_search_cov_(const trn_peak_t *pk, const double ll[9], const double q7[7],
+                           double cell, double sh, double ox, double oy, double cov[3],
+                           double *head_m);
+
 #endif /* TRN_SELECT_PRE_H */

@@ -146,6 +146,25 @@ for arm, base in (("with_selection_3dof", "with_selection"), ("without_selection
     check(a3.get("localizations") == a2.get("localizations") and a3.get("localizations", 0) > 0,
           f"{arm}: the same localizations as {base} ({a3.get('localizations')}, {a2.get('localizations')})")
     check(0 <= a3.get("successes", -1) <= a3.get("localizations", 0), f"{arm}: successes within the localizations")
+# the 3-DOF arm with selection ranks its own target for a heading search (default 1); with 0 it
+# senses the x-y arm's. Either way the x-y arms and the 3-DOF arm without selection are the same
+# (its sensing starts from the trial's random state before the x-y arm's)
+check(hd.get("select_heading_search") == 1, "the 3-DOF arm's selection knows the heading is searched")
+ntr = rh.get("trials", 0)
+check(0 <= hd.get("trials_3dof_other_target", -1) <= ntr, f"trials with another 3-DOF target: {hd}")
+rc, outs0, _ = run(*SMALL, "--seed", 5, "--heading-error-deg", 3, "--select-heading-search", 0, "--json")
+rs0 = json.loads(outs0) if rc == 0 else {}
+hs0 = rs0.get("heading", {})
+check(hs0.get("select_heading_search") == 0 and hs0.get("trials_3dof_other_target") == 0,
+      "--select-heading-search 0: the 3-DOF arm senses the x-y arm's targets")
+for key in ("with_selection", "without_selection"):
+    check(rs0.get(key) == rh.get(key), f"{key}: the same with either 3-DOF selection")
+check(hs0.get("without_selection_3dof") == hd.get("without_selection_3dof"),
+      "without_selection_3dof: the same with either 3-DOF selection")
+if hd.get("trials_3dof_other_target") == 0:
+    check(hs0.get("with_selection_3dof") == hd.get("with_selection_3dof"),
+          "the same targets: the same 3-DOF arm")
+expect_error(1, "--select-heading-search", "--heading-error-deg", 3, "--select-heading-search", 2)
 rc, outw, _ = run(*SMALL, "--seed", 5, "--heading-error-deg", 3, "--heading-window-deg", 4, "--json")
 check(rc == 0 and abs(json.loads(outw).get("heading", {}).get("window_deg", 0) - 4) < 1e-12, "--heading-window-deg 4")
 rc, outt, _ = run(*SMALL, "--seed", 5, "--heading-error-deg", 3)

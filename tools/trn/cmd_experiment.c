@@ -102,6 +102,7 @@ void cmd_experiment_params_default(cmd_experiment_params_t *p)
     p->prior = e.prior_error_m;
     p->spacing = e.grid_spacing_m;
     p->succ = e.success_cells;
+    p->heading_search = e.select_heading_search;
 }
 
 /* The usage rules between options: the terrain's options without --dem, --global-error with it. */
@@ -178,7 +179,7 @@ static void experiment_help(const cmd_experiment_params_t *p, cli_opt_t *opts, s
 static int experiment_parse(int argc, char **argv, cmd_experiment_params_t *p)
 {
     char h[EXP_N_HELP][112];
-#define EXP_N_OWN 22
+#define EXP_N_OWN 23
     cli_opt_t own[EXP_N_OWN] = {
         {"--trials", CLI_LONG, &p->trials, 1, 1000000, 0, "N", "trials", 0},
         {"--seed", CLI_U64, &p->seed, 0, 0, 0, "S",
@@ -225,6 +226,11 @@ static int experiment_parse(int argc, char **argv, cmd_experiment_params_t *p)
          0},
         {"--heading-window-deg", CLI_DOUBLE, &p->heading_win, 0.0, 180.0, 0, "W",
          "the 3-DOF search's half-window (0: 3 x --heading-error-deg)", 0},
+        {"--select-heading-search", CLI_LONG, &p->heading_search, 0, 1, 0, "0|1",
+         "the 3-DOF arm with selection ranks its own target for a heading search (1; "
+         "docs/method.md "
+         "4), or senses the x-y arm's (0)",
+         0},
         {"--json", CLI_FLAG, &p->json, 0, 0, 0, NULL, "print one JSON object instead of the table",
          0},
     };
@@ -308,6 +314,7 @@ static void experiment_fill(const cmd_experiment_params_t *p, cmd_experiment_res
     e->height_noise_m = p->hnoise;
     e->heading_error_deg = p->heading_err;
     e->heading_window_deg = p->heading_win;
+    e->select_heading_search = p->heading_search;
     e->global_sigma_m = p->so.gsig_m;
     e->global_sigma_k = p->so.gsig_k;
     r->mo = &p->so.mo;
@@ -440,6 +447,8 @@ static void experiment_report_json(const cmd_experiment_params_t *p,
         json_num(&j, "error_deg", r->p.heading_error_deg);
         json_num(&j, "window_deg", r->r.heading_window_deg);
         json_num(&j, "selection_sigma_heading_rad", (double)r->r.scfg.sigma_heading_rad);
+        json_int(&j, "select_heading_search", r->p.select_heading_search);
+        json_int(&j, "trials_3dof_other_target", r->r.with3_other_target);
         json_arm(&j, "with_selection_3dof", &r->r.with3, p->trials);
         json_arm(&j, "without_selection_3dof", &r->r.without3, p->trials);
         json_obj_end(&j);
@@ -487,6 +496,11 @@ static void experiment_report_text(const cmd_experiment_params_t *p,
             "heading error N(0, %g deg); the 3-DOF search over +-%g deg on the same local maps:\n",
             e->heading_error_deg, x->heading_window_deg);
         print_arm("with sel., 3-DOF", &x->with3);
+        if (e->select_heading_search == 1) {
+            printf("  (its own selection for a heading search, method.md 4: another target in %ld "
+                   "of %ld trials)\n",
+                   x->with3_other_target, e->trials);
+        }
         print_arm("without, 3-DOF", &x->without3);
     }
     printf("\nsuccessful localizations %.1f %% more accurate with selection (paper: 97.8 %% vs "

@@ -176,6 +176,7 @@ typedef struct {
     double k, dmin, relief, window, prior, spacing, succ, minr, maxr, patch, foot, hnoise;
     double heading_err,
         heading_win;      /* --heading-error-deg, --heading-window-deg (0: none, 3 x the error) */
+    long heading_search;  /* --select-heading-search: the 3-DOF arm's selection flag */
     const char *sensor;   /* "prob" or "dem" */
     const char *dem_path; /* a given DEM, or NULL: the generated terrain */
     int json;

@@ -244,6 +244,7 @@ void exp_params_default(exp_params_t *p)
     p->footprint_m = -1.0;
     p->global_sigma_m = -1.0;
     p->global_sigma_k = -1.0;
+    p->select_heading_search = 1;
 }
 
 const char *exp_params_check(const exp_params_t *p)
@@ -315,6 +316,9 @@ const char *exp_params_check(const exp_params_t *p)
           p->heading_window_deg <= TRN_HEADING_MAX_WINDOW_RAD * 180.0 / EXP_PI)) {
         return "heading window must be in [0, 180] degrees";
     }
+    if (p->select_heading_search != 0 && p->select_heading_search != 1) {
+        return "the 3-DOF arm's selection flag must be 0 or 1";
+    }
     return NULL;
 }
 
@@ -356,7 +360,8 @@ typedef struct {
     trn_kernels_t k;
     trn_vol_f32_t pg;
     trn_select_cfg_t scfg;
-    int half; /* patch half-side, cells */
+    trn_select_cfg_t scfg3; /* the 3-DOF arm's selection (heading_search from the params) */
+    int half;               /* patch half-side, cells */
     int win_cells, prior_cells, grid_cells;
     trn_candidate_t *cands;
     size_t cap;
@@ -855,6 +860,8 @@ static int world_rules(world_t *w, const exp_params_t *p, exp_result_t *out, cha
         out->heading_window_deg = w->h3win_rad * 180.0 / EXP_PI;
     }
     out->scfg = w->scfg;
+    w->scfg3 = w->scfg;
+    w->scfg3.heading_search = (int32_t)p->select_heading_search;
     if ((st = trn_select_cfg_check(&w->scfg, w->cellf)) != TRN_OK) {
         snprintf(err, err_len,
                  "selection rules rejected for %g m cells (range %g..%g m, patch %g m, footprint "
@@ -881,7 +888,8 @@ static int world_buffers(world_t *w, const exp_params_t *p, void **raw, char *er
     trn_window_t pr, lw;
     w->cap = trn_select_max_candidates(&w->scfg, w->cellf);
     w->cands = malloc((w->cap + 1) * sizeof *w->cands);
-    w->sws_b = trn_select_workspace_bytes(&w->scfg, &w->map, &w->k);
+    /* the 3-DOF arm's selection needs at least the x-y arm's workspace */
+    w->sws_b = trn_select_workspace_bytes(&w->scfg3, &w->map, &w->k);
     w->sws = alloc16(w->sws_b, &raw[2]);
     pr.x0 = pr.y0 = 0;
     pr.x1 = pr.y1 = 2 * w->half;
@@ -1038,6 +1046,49 @@ static int draw_trial(const world_t *w, exp_rng_t *r, exp_result_t *out, trial_t
     return accepted;
 }
 
+/* The 3-DOF arm with selection: its own target from w->scfg3 (a heading
+ * search's selection, method.md 4) when the flag is on, sensed from r0, the
+ * trial's random state before the x-y arm sensed (cx, cy), so the same target
+ * is the same points (s2, not sensed again); 0, or -1 with the reason. */
+static int trial_with3(world_t *w, const trial_t *d, long t, const trn_rover_t *rover, int32_t cx,
+                       int32_t cy, double range, exp_rng_t *r0, const sense_t *s2,
+                       exp_result_t *out, clusters_t *c, char *err, size_t err_len)
+{
+    const exp_params_t *p = w->p;
+    const sense_t *s = s2;
+    sense_t s3;
+    if (w->scfg3.heading_search == 1) {
+        trn_select_result_t sres;
+        size_t ranked = 0;
+        const trn_candidate_t *cand;
+        trn_status_t st = trn_select(&w->map, &w->k, &w->pg, &w->scfg3, rover, w->cands, w->cap,
+                                     &ranked, 1, &sres, w->sws, w->sws_b);
+        if (st == TRN_E_NOTARGET) {
+            out->with3.no_target++;
+            out->with3.localizations++;
+            return 0;
+        }
+        if (st != TRN_OK) {
+            snprintf(err, err_len, "trial %ld: trn_select (3-DOF arm): %s", t, trn_strerror(st));
+            return -1;
+        }
+        cand = &w->cands[ranked];
+        range = (double)cand->range_m;
+        if (cand->x != cx || cand->y != cy) {
+            if (sense_and_localize(w, cand->x - d->ox, cand->y - d->oy, d->fx, d->fy, d->px, d->py,
+                                   d->dtheta, r0, &s3, err, err_len) != 0) {
+                return -1;
+            }
+            s = &s3;
+            out->with3_other_target++;
+        }
+    }
+    out->with3.mean_range_m += range;
+    tally3(&out->with3, s, p->success_cells * p->cell_m, p->cell_m, &c->kw3[t], &c->ew3[t],
+           &c->e2w3[t]);
+    return 0;
+}
+
 /* 3-5: with selection, from the prior: trn_select's best target, sensed
  * shifted by the prior's error, localized. 0, or -1 with the reason. */
 static int trial_with(world_t *w, const trial_t *d, long t, exp_rng_t *r, exp_result_t *out,
@@ -1050,6 +1101,9 @@ static int trial_with(world_t *w, const trial_t *d, long t, exp_rng_t *r, exp_re
     trn_status_t st;
     sense_t s;
     const trn_candidate_t *cand;
+    exp_rng_t r0;
+    int32_t cx, cy;
+    double range;
 
     rover.pos.x_cells = (float)d->px;
     rover.pos.y_cells = (float)d->py;
@@ -1079,17 +1133,19 @@ static int trial_with(world_t *w, const trial_t *d, long t, exp_rng_t *r, exp_re
         return -1;
     }
     out->with.mean_range_m += (double)cand->range_m;
+    r0 = *r;
+    cx = cand->x;
+    cy = cand->y;
+    range = (double)cand->range_m;
     if (sense_and_localize(w, cand->x - d->ox, cand->y - d->oy, d->fx, d->fy, d->px, d->py,
                            d->dtheta, r, &s, err, err_len) != 0) {
         return -1;
     }
     tally(&out->with, &s, p->success_cells * p->cell_m, p->cell_m, &c->kw[t], &c->ew[t],
           &c->e2w[t]);
-    if (w->h3win_rad > 0.0) {
-        tally3(&out->with3, &s, p->success_cells * p->cell_m, p->cell_m, &c->kw3[t], &c->ew3[t],
-               &c->e2w3[t]);
-    }
-    return 0;
+    return w->h3win_rad > 0.0
+               ? trial_with3(w, d, t, &rover, cx, cy, range, &r0, &s, out, c, err, err_len)
+               : 0;
 }
 
 /* Without selection: the nine fixed targets around the midpoint, each its own localization. */
@@ -1135,8 +1191,10 @@ static void exp_summarise(const exp_params_t *p, const clusters_t *c, double sum
     if (out->with3.localizations > 0) {
         exp_cluster_stats(c->mw, c->kw3, c->ew3, c->e2w3, p->trials, &out->with3.st);
         exp_cluster_stats(c->mo, c->ko3, c->eo3, c->e2o3, p->trials, &out->without3.st);
-        out->with3.mean_range_m = out->with.mean_range_m;
-        out->with3.mean_points = out->with.mean_points;
+        if (out->with3.localizations - out->with3.no_target > 0) {
+            out->with3.mean_range_m /= (double)(out->with3.localizations - out->with3.no_target);
+        }
+        out->with3.mean_points /= (double)out->with3.localizations;
         out->without3.mean_range_m = out->without.mean_range_m;
         out->without3.mean_points = out->without.mean_points;
     }

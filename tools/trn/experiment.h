@@ -131,8 +131,13 @@ typedef struct {
      * trn_localize_points_heading over +-heading_window_deg (0: 3 x the error,
      * at most TRN_HEADING_MAX_WINDOW_RAD) localizes the same points (arms
      * with3 / without3). 0 (the default): no error, no 3-DOF arms; the
-     * paper's experiment bit for bit. */
+     * paper's experiment bit for bit. The 3-DOF arm with selection ranks its
+     * own target with trn_select_cfg_t.heading_search = select_heading_search
+     * (1, the default: the selection that knows the heading is searched,
+     * sensed from the trial's random state before the x-y arm's sensing, so
+     * the same target gives the same points; 0: the x-y arm's target). */
     double heading_error_deg, heading_window_deg;
+    long select_heading_search;
 } exp_params_t;
 
 /* Sensor models. PROB: the paper's, voxels sampled from the probability map
@@ -163,7 +168,9 @@ typedef struct {
 
 typedef struct {
     exp_arm_t with, without;
-    exp_arm_t with3, without3; /* the 3-DOF search on the same points (heading_error_deg > 0) */
+    exp_arm_t with3, without3; /* the 3-DOF search on the same points (heading_error_deg > 0;
+                                  with3: its own selection's target, select_heading_search) */
+    long with3_other_target;   /* trials whose 3-DOF arm sensed another target than the x-y arm */
     double heading_window_deg; /* the 3-DOF search's half-window used (0 without a heading error) */
     size_t rocks;
     double d_min_m;         /* smallest rock drawn */
