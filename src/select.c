@@ -273,9 +273,11 @@ void trn_sel_moment_sums_(const int64_t *sat, const double *rp1, const double *r
      * build_sat's prefixes */
     const size_t w1 = (size_t)(roi->x1 - roi->x0) + 2u;
     const int32_t cy = (pw->y0 + pw->y1) / 2;
-    const double xc = (double)((pw->x0 + pw->x1) / 2 - roi->x0) - 0.5 * (double)(w1 - 1u);
+    const int32_t cxr = (pw->x0 + pw->x1) / 2 - roi->x0; /* the centre column in the region */
+    const double xc = (double)cxr - 0.5 * (double)(w1 - 1u);
     const size_t x0 = (size_t)(pw->x0 - roi->x0), x1 = (size_t)(pw->x1 - roi->x0) + 1u;
-    const double lx = (double)(d % 3 - 1), ly = (double)(d / 3 - 1);
+    const int32_t ix = d % 3 - 1, iy = d / 3 - 1; /* the pose offset */
+    const double lx = (double)ix, ly = (double)iy;
     const double cxx = lx * lx - 2.0 / 3.0, cyy = ly * ly - 2.0 / 3.0, cxy = lx * ly / 4.0;
     double mx = 0.0, my = 0.0, mxx = 0.0, mxy = 0.0, myy = 0.0;
     int32_t y;
@@ -320,7 +322,8 @@ double trn_sel_search_cov_(const trn_peak_t *pk, const double ll[9], const doubl
     double hxx = 0.0, hyy = 0.0, hxy = 0.0, bx, by, cc, gx, gy, info, den;
     int32_t d;
     for (d = 0; d < 9; ++d) {
-        const double lx = (double)(d % 3 - 1), ly = (double)(d / 3 - 1);
+        const int32_t ix = d % 3 - 1, iy = d / 3 - 1;
+        const double lx = (double)ix, ly = (double)iy;
         hxx += (lx * lx - 2.0 / 3.0) * ll[d];
         hyy += (ly * ly - 2.0 / 3.0) * ll[d];
         hxy += lx * ly / 4.0 * ll[d];

