@@ -5,6 +5,7 @@
 
 #include <float.h>
 #include <math.h>
+#include <stdlib.h>
 
 #include "refine_int.h"
 #include "ws.h"
@@ -530,6 +531,25 @@ static trn_status_t highpass_by_map(const trn_map_t *map, const trn_grid_f32_t *
     return TRN_OK;
 }
 
+/* The refinement in out->refinement becomes the answer: pose, covariance,
+ * sigmas and the misfit flag. */
+static void take_refinement(const trn_map_t *map, trn_loc_result_t *out)
+{
+    double cell = (double)map->cfg.terrain.cell_m;
+    double lim = map->roughness_m > (double)map->cfg.noise_m ? map->roughness_m
+                                                             : (double)map->cfg.noise_m;
+    out->refined = 1;
+    out->misfit = out->refinement.model_m > TRN_MISFIT_ROUGHNESS * lim ? 1 : 0;
+    out->x = out->refinement.x;
+    out->y = out->refinement.y;
+    out->cov_m2[0] = out->refinement.cov_cells[0] * cell * cell;
+    out->cov_m2[1] = out->refinement.cov_cells[1] * cell * cell;
+    out->cov_m2[2] = out->refinement.cov_cells[2] * cell * cell;
+    out->sigma_x_m = sqrt(out->cov_m2[0]);
+    out->sigma_y_m = sqrt(out->cov_m2[1]);
+    out->rho = out->cov_m2[2] / (out->sigma_x_m * out->sigma_y_m);
+}
+
 /* 1 if the integer pose (sx, sy) is a start for the refinement beside the
  * best one: inside the window, its ln L in the grid within
  * TRN_REFINE_START_NATS of the best's. */
@@ -554,7 +574,6 @@ static void refine_result(const trn_map_t *map, const trn_grid_f32_t *local, int
                           trn_loc_result_t *out)
 {
     trn_refine_cfg_t rc;
-    double cell = (double)map->cfg.terrain.cell_m;
     int32_t found, k;
     rc.cell_m = map->cfg.terrain.cell_m;
     rc.noise_m = map->cfg.noise_m;
@@ -578,19 +597,97 @@ static void refine_result(const trn_map_t *map, const trn_grid_f32_t *local, int
     if (!found) {
         return;
     }
-    out->refined = 1;
-    {
-        double lim = map->roughness_m > (double)rc.noise_m ? map->roughness_m : (double)rc.noise_m;
-        out->misfit = out->refinement.model_m > TRN_MISFIT_ROUGHNESS * lim ? 1 : 0;
+    take_refinement(map, out);
+}
+
+/* Far basins (TRN_REFINE_BASINS): up to that many local maxima of the ln L
+ * grid outside the best pose's zone, highest first (their starts and grid
+ * ln L). */
+typedef struct {
+    int32_t n;
+    int32_t x[TRN_REFINE_BASINS], y[TRN_REFINE_BASINS];
+    double ll[TRN_REFINE_BASINS];
+} basins_t;
+
+static double grid_at(const double *g, const trn_window_t *win, int32_t x, int32_t y)
+{
+    return g[(size_t)(y - win->y0) * (size_t)(win->x1 - win->x0 + 1) + (size_t)(x - win->x0)];
+}
+
+/* 1 if no neighbour of (x, y) in the window is higher, and none equal comes
+ * before it in scan order (one pose per plateau). */
+static int grid_peak(const double *g, const trn_window_t *win, int32_t x, int32_t y, double v)
+{
+    int32_t k;
+    for (k = 0; k < 9; ++k) {
+        int32_t nx = x + k % 3 - 1, ny = y + k / 3 - 1;
+        double w;
+        if (k == 4 || nx < win->x0 || nx > win->x1 || ny < win->y0 || ny > win->y1) {
+            continue;
+        }
+        w = grid_at(g, win, nx, ny);
+        if (w > v || (w == v && k < 4)) {
+            return 0;
+        }
     }
-    out->x = out->refinement.x;
-    out->y = out->refinement.y;
-    out->cov_m2[0] = out->refinement.cov_cells[0] * cell * cell;
-    out->cov_m2[1] = out->refinement.cov_cells[1] * cell * cell;
-    out->cov_m2[2] = out->refinement.cov_cells[2] * cell * cell;
-    out->sigma_x_m = sqrt(out->cov_m2[0]);
-    out->sigma_y_m = sqrt(out->cov_m2[1]);
-    out->rho = out->cov_m2[2] / (out->sigma_x_m * out->sigma_y_m);
+    return 1;
+}
+
+static void far_basins(const double *g, const trn_window_t *win, int32_t bx, int32_t by,
+                       int32_t radius, basins_t *b)
+{
+    int32_t x, y;
+    b->n = 0;
+    for (y = win->y0; y <= win->y1; ++y) {
+        for (x = win->x0; x <= win->x1; ++x) {
+            double v = grid_at(g, win, x, y);
+            int32_t i;
+            if (!isfinite(v) || (abs(x - bx) <= radius && abs(y - by) <= radius) ||
+                (b->n == TRN_REFINE_BASINS && v <= b->ll[TRN_REFINE_BASINS - 1]) ||
+                !grid_peak(g, win, x, y, v)) {
+                continue;
+            }
+            i = b->n < TRN_REFINE_BASINS ? b->n++ : TRN_REFINE_BASINS - 1;
+            for (; i > 0 && b->ll[i - 1] < v; --i) { /* keep them highest first */
+                b->x[i] = b->x[i - 1];
+                b->y[i] = b->y[i - 1];
+                b->ll[i] = b->ll[i - 1];
+            }
+            b->x[i] = x;
+            b->y[i] = y;
+            b->ll[i] = v;
+        }
+    }
+}
+
+/* Refine from each far basin's start; the answer moves to the one whose
+ * refined ln L is highest if that beats the answer's by more than
+ * TRN_REFINE_FAR_NATS (the answer it replaced counts in the failure
+ * probability through the grid, as every pose outside the new zone). */
+static void refine_basins(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
+                          const double *g, const trn_window_t *win, const basins_t *b,
+                          trn_refine_t *cand, trn_loc_result_t *out)
+{
+    trn_refine_cfg_t rc;
+    int32_t i;
+    rc.cell_m = map->cfg.terrain.cell_m;
+    rc.noise_m = map->cfg.noise_m;
+    rc.noise_k_per_m = map->cfg.noise_k_per_m;
+    rc.inlier_prob = map->cfg.inlier_prob;
+    for (i = 0; i < b->n; ++i) {
+        if (trn_refine_pose(&map->heights, local, rx, ry, b->x[i], b->y[i], &rc, cand) == TRN_OK &&
+            cand->ll > out->refinement.ll + TRN_REFINE_FAR_NATS) {
+            out->refinement = *cand;
+            out->ix = b->x[i];
+            out->iy = b->y[i];
+            out->ll_best = grid_at(g, win, out->ix, out->iy);
+            out->on_window_edge = (out->ix == win->x0 || out->ix == win->x1 || out->iy == win->y0 ||
+                                   out->iy == win->y1)
+                                      ? 1
+                                      : 0;
+            take_refinement(map, out);
+        }
+    }
 }
 
 /* TRN_MATCH_HEIGHTS: height search, refinement, competing hypothesis. */
@@ -602,8 +699,11 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
     trn_height_best_t best, second;
     trn_refine_cfg_t rc;
     trn_exclusion_t ex;
+    basins_t bs;
     double infl = 1.0;
     int32_t radius = map->cfg.min_exclusion_cells;
+
+    bs.n = 0;
 
     rc.cell_m = map->cfg.terrain.cell_m;
     rc.noise_m = map->cfg.noise_m;
@@ -630,6 +730,10 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
     out->cov_m2[0] = out->cov_m2[1] = (double)INFINITY;
     out->cov_m2[2] = 0.0;
     refine_result(map, local, rx, ry, win, ll_grid, cand, out);
+    if (out->refined) {
+        far_basins(ll_grid, win, out->ix, out->iy, radius, &bs);
+        refine_basins(map, local, rx, ry, ll_grid, win, &bs, cand, out);
+    }
     out->n_points = (size_t)(out->refinement.n_seen > 0 ? out->refinement.n_seen : 0);
     /* The zone is min_exclusion_cells, not 4 sigma as for eq. 6: the failure
      * probability is the posterior mass of poses that far from the answer,
@@ -638,8 +742,8 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
     if (out->refined) {
         infl = out->refinement.inflation;
     }
-    ex.cx = best.x;
-    ex.cy = best.y;
+    ex.cx = out->ix; /* the answer's start (refine_basins may move it) */
+    ex.cy = out->iy;
     ex.radius = radius;
     out->exclusion_cells = radius;
     /* every pose was scored once: the competitor and the masses come from

@@ -134,6 +134,15 @@ typedef struct {
  *  its 8 neighbours whose ln L is within this many nats of the best, and
  *  keeps the refinement with the highest refined ln L (docs/method.md 9). */
 #define TRN_REFINE_START_NATS 30.0
+/** ... and from the integer poses of this many other basins: the highest
+ *  local maxima of the ln L grid outside the best pose's zone. A sub-cell
+ *  peak can score far below its refined ln L at its nearest integer pose (a
+ *  half-cell shift on terrain a cell wide), so the best integer pose is not
+ *  always in the best refined basin (docs/method.md 9). */
+#define TRN_REFINE_BASINS 4
+/** A far basin replaces the answer only if its refined ln L is higher by
+ *  more than this many nats (docs/method.md 9). */
+#define TRN_REFINE_FAR_NATS 30.0
 
 /** @brief The paper's configuration on its rock fields: 0.1 m cells and
  * bins, 1 m high-pass half-width, 16 bins, s = 0.1 m, a = 0.95, cap 60

@@ -1,0 +1,279 @@
+/* SPDX-License-Identifier: Apache-2.0 */
+/* test_localize_basins.c - the height matcher's far basins (TRN_REFINE_BASINS,
+ * docs/method.md 9): a sub-cell peak that scores low at its integer poses is
+ * still refined, and becomes the answer when its refined ln L beats the
+ * answer's by more than TRN_REFINE_FAR_NATS; the grid's failure
+ * probability then flags it (the grid's mass lies with the basin it left).
+ *
+ * Oracles (a rock-like terrain of Gaussian bumps a cell or two wide on 1 m
+ * cells; local maps are full discs of its bilinear interpolation, no noise):
+ * - a decoy: the local heights written into the map on whole cells elsewhere
+ *   in the window, each off by a fixed +-2 cm pattern. The decoy's integer
+ *   pose scores higher than any integer pose of the truth (asserted with
+ *   trn_height_search: the precondition, where the search alone goes wrong,
+ *   and where the code before far basins answered the decoy with a failure
+ *   probability of 1e-144), yet the truth's refined ln L is higher by more
+ *   than TRN_REFINE_FAR_NATS: the answer is the truth, within 0.02 cell,
+ *   flagged TRN_E_AMBIGUOUS (not a confident wrong answer either way);
+ * - a twin: the terrain around the truth copied 17 and 14 cells away, so two
+ *   basins are equal to the last bit: neither replaces the other, the failure
+ *   probability is 0.3-0.75, status TRN_E_AMBIGUOUS;
+ * - with no decoy and no twin the answer is the truth and nothing moves.
+ */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "rng.h"
+#include "trn/localize.h"
+#include "trn/refine.h"
+
+#define GW 72           /* global side, cells of 1 m */
+#define LR 7            /* local disc radius, cells */
+#define LW (2 * LR + 1) /* local side; rover at its centre cell */
+#define MAXPTS 4096
+
+static float g_data[GW * GW];
+static float l_data[LW * LW];
+
+/* Gaussian bumps of sd 0.9-1.4 cells and 0.4-1.2 m on a gentle slope. */
+static void make_terrain(uint64_t seed)
+{
+    trn_rng_t r;
+    int k, x, y;
+    trn_rng_seed(&r, seed);
+    for (y = 0; y < GW; ++y) {
+        for (x = 0; x < GW; ++x) {
+            g_data[y * GW + x] = (float)(0.02 * x - 0.01 * y);
+        }
+    }
+    for (k = 0; k < 600; ++k) {
+        double cx = trn_rng_unit(&r) * GW, cy = trn_rng_unit(&r) * GW;
+        double s = 0.9 + 0.5 * trn_rng_unit(&r), h = 0.4 + 0.8 * trn_rng_unit(&r);
+        for (y = 0; y < GW; ++y) {
+            for (x = 0; x < GW; ++x) {
+                double d2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
+                if (d2 < 25.0 * s * s) {
+                    g_data[y * GW + x] += (float)(h * exp(-0.5 * d2 / (s * s)));
+                }
+            }
+        }
+    }
+}
+
+static double bilin(double x, double y)
+{
+    int x0 = (int)floor(x), y0 = (int)floor(y);
+    double fx = x - x0, fy = y - y0;
+    const float *p = &g_data[y0 * GW + x0];
+    return (1.0 - fy) * ((1.0 - fx) * p[0] + fx * p[1]) +
+           fy * ((1.0 - fx) * p[GW] + fx * p[GW + 1]);
+}
+
+/* The local disc seen from (tx, ty) (global cells), the rover cell unseen. */
+static void make_local(double tx, double ty, trn_grid_f32_t *l)
+{
+    int i, j;
+    for (j = 0; j < LW; ++j) {
+        for (i = 0; i < LW; ++i) {
+            int dx = i - LR, dy = j - LR;
+            l_data[j * LW + i] = (dx == 0 && dy == 0) || dx * dx + dy * dy > LR * LR
+                                     ? NAN
+                                     : (float)(bilin(tx + dx, ty + dy) + 3.0);
+        }
+    }
+    assert_int_equal(trn_grid_f32_init(l, l_data, LW * LW, LW, LW), TRN_OK);
+}
+
+/* The local heights written into the map with the rover at cell (cx, cy),
+ * each off by +-off metres (a checkerboard), the disc's outside untouched. */
+static void plant(int cx, int cy, double off)
+{
+    int i, j;
+    for (j = 0; j < LW; ++j) {
+        for (i = 0; i < LW; ++i) {
+            float v = l_data[j * LW + i];
+            if (isfinite(v)) {
+                g_data[(cy + j - LR) * GW + cx + i - LR] = (float)((double)v - 3.0 +
+                                                                   ((i + j) % 2 ? off : -off));
+            }
+        }
+    }
+}
+
+typedef struct {
+    trn_map_t map;
+    void *buf, *ws;
+    size_t wb;
+} world_t;
+
+static void build(world_t *w, trn_grid_f32_t *g)
+{
+    trn_map_cfg_t cfg;
+    size_t ab, mb;
+    void *aws;
+    double sh;
+    assert_int_equal(trn_grid_f32_init(g, g_data, GW * GW, GW, GW), TRN_OK);
+    ab = trn_map_cfg_auto_workspace_bytes(GW, GW);
+    aws = malloc(ab);
+    assert_non_null(aws);
+    trn_map_cfg_default(&cfg);
+    cfg.noise_m = 0.01f;
+    cfg.noise_k_per_m = 0.0004f;
+    assert_int_equal(trn_map_cfg_auto(&cfg, g, 1.0f, aws, ab, &sh), TRN_OK);
+    free(aws);
+    assert_int_equal(cfg.match, TRN_MATCH_HEIGHTS);
+    mb = trn_map_bytes(&cfg, GW, GW);
+    w->buf = malloc(mb);
+    assert_non_null(w->buf);
+    assert_int_equal(trn_map_build(&w->map, &cfg, g, w->buf, mb), TRN_OK);
+    w->ws = NULL;
+    w->wb = 0u;
+}
+
+static trn_status_t run(world_t *w, const trn_grid_f32_t *l, const trn_window_t *win,
+                        trn_loc_result_t *res)
+{
+    size_t wb = trn_localize_dem_workspace_bytes(&w->map, LW, LW, MAXPTS, win);
+    assert_true(wb > 0u);
+    w->ws = malloc(wb);
+    assert_non_null(w->ws);
+    w->wb = wb;
+    memset(res, 0, sizeof *res);
+    return trn_localize_dem(&w->map, l, LR, LR, MAXPTS, win, w->ws, wb, res);
+}
+
+static void done(world_t *w)
+{
+    free(w->buf);
+    free(w->ws);
+}
+
+/* The search's best integer pose alone (no refinement). */
+static void grid_best(const world_t *w, const trn_grid_f32_t *g, const trn_grid_f32_t *l,
+                      const trn_window_t *win, trn_height_best_t *b)
+{
+    trn_refine_cfg_t rc;
+    rc.cell_m = w->map.cfg.terrain.cell_m;
+    rc.noise_m = w->map.cfg.noise_m;
+    rc.noise_k_per_m = w->map.cfg.noise_k_per_m;
+    rc.inlier_prob = w->map.cfg.inlier_prob;
+    assert_int_equal(
+        trn_height_search(g, l, LR, LR, win, NULL, &rc, w->map.cfg.inlier_prob, 1.0, NULL, b),
+        TRN_OK);
+}
+
+static const trn_window_t WIN = {24, 24, 48, 48}; /* x0, y0, x1, y1 */
+
+static void test_decoy_loses_to_subcell_truth(void **state)
+{
+    static const double tx = 30.45, ty = 33.35; /* the truth, sub-cell */
+    int s, wins = 0;
+    (void)state;
+    for (s = 1; s <= 4; ++s) {
+        trn_grid_f32_t g, l;
+        trn_height_best_t gb;
+        trn_loc_result_t res;
+        trn_status_t st;
+        world_t w;
+        make_terrain((uint64_t)s);
+        make_local(tx, ty, &l);
+        plant(42, 40, 0.02);
+        build(&w, &g);
+        grid_best(&w, &g, &l, &WIN, &gb);
+        st = run(&w, &l, &WIN, &res);
+        printf("seed %d: grid best (%d, %d) ln L %.1f; answer (%.3f, %.3f) status [%s], failure "
+               "probability %.3g, refined ln L %.1f\n",
+               s, (int)gb.x, (int)gb.y, gb.ll, res.x, res.y, trn_strerror(st),
+               res.failure_probability, res.refinement.ll);
+        done(&w);
+        if (gb.x != 42 || gb.y != 40) {
+            continue; /* this terrain's truth scores best on the grid: not the case */
+        }
+        ++wins;
+        assert_int_equal(st, TRN_E_AMBIGUOUS);
+        assert_true(fabs(res.x - tx) < 0.02 && fabs(res.y - ty) < 0.02);
+        assert_true(res.ix != 42 || res.iy != 40);
+        assert_true(res.failure_probability > 0.5);
+    }
+    assert_true(wins >= 3); /* the decoy wins the grid on most terrains */
+}
+
+/* A copy of the terrain around the truth, a whole number of cells away:
+ * two basins equal to the last bit, one of them sub-cell at both. */
+static void twin(int dx, int dy, int r)
+{
+    static float snap[GW * GW];
+    int x, y;
+    memcpy(snap, g_data, sizeof snap);
+    for (y = 33 - r; y <= 33 + r; ++y) {
+        for (x = 30 - r; x <= 30 + r; ++x) {
+            g_data[(y + dy) * GW + x + dx] = snap[y * GW + x];
+        }
+    }
+}
+
+static void test_twin_is_ambiguous(void **state)
+{
+    static const double tx = 30.45, ty = 33.35;
+    int s;
+    (void)state;
+    for (s = 1; s <= 4; ++s) {
+        trn_grid_f32_t g, l;
+        trn_loc_result_t res;
+        trn_status_t st;
+        world_t w;
+        make_terrain((uint64_t)s);
+        twin(17, 14, LR + 2);
+        make_local(tx, ty, &l);
+        build(&w, &g);
+        st = run(&w, &l, &WIN, &res);
+        printf("seed %d twin: answer (%.3f, %.3f) status [%s], failure probability %.3g\n", s,
+               res.x, res.y, trn_strerror(st), res.failure_probability);
+        done(&w);
+        assert_int_equal(st, TRN_E_AMBIGUOUS);
+        assert_true(res.failure_probability >= 0.3 && res.failure_probability <= 0.75);
+        assert_true((fabs(res.x - tx) < 0.02 && fabs(res.y - ty) < 0.02) ||
+                    (fabs(res.x - tx - 17.0) < 0.02 && fabs(res.y - ty - 14.0) < 0.02));
+    }
+}
+
+static void test_alone_unchanged(void **state)
+{
+    static const double tx = 30.45, ty = 33.35;
+    int s;
+    (void)state;
+    for (s = 1; s <= 4; ++s) {
+        trn_grid_f32_t g, l;
+        trn_loc_result_t res;
+        trn_status_t st;
+        world_t w;
+        make_terrain((uint64_t)s);
+        make_local(tx, ty, &l);
+        build(&w, &g);
+        st = run(&w, &l, &WIN, &res);
+        printf("seed %d alone: answer (%.3f, %.3f) status [%s], failure probability %.3g\n", s,
+               res.x, res.y, trn_strerror(st), res.failure_probability);
+        done(&w);
+        assert_int_equal(st, TRN_OK);
+        assert_true(fabs(res.x - tx) < 0.02 && fabs(res.y - ty) < 0.02);
+        assert_true(res.failure_probability < 1e-3);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_decoy_loses_to_subcell_truth),
+        cmocka_unit_test(test_twin_is_ambiguous),
+        cmocka_unit_test(test_alone_unchanged),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
