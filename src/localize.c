@@ -602,11 +602,14 @@ static void refine_result(const trn_map_t *map, const trn_grid_f32_t *local, int
 
 /* Far basins (TRN_REFINE_BASINS): up to that many local maxima of the ln L
  * grid outside the best pose's zone, highest first (their starts and grid
- * ln L). */
+ * ln L); after refine_basins each slot holds a refinement that is not the
+ * answer: its pose and refined ln L (ok 0: it failed). */
 typedef struct {
     int32_t n;
     int32_t x[TRN_REFINE_BASINS], y[TRN_REFINE_BASINS];
     double ll[TRN_REFINE_BASINS];
+    double px[TRN_REFINE_BASINS], py[TRN_REFINE_BASINS], rll[TRN_REFINE_BASINS];
+    int32_t ok[TRN_REFINE_BASINS];
 } basins_t;
 
 static double grid_at(const double *g, const trn_window_t *win, int32_t x, int32_t y)
@@ -662,11 +665,10 @@ static void far_basins(const double *g, const trn_window_t *win, int32_t bx, int
 
 /* Refine from each far basin's start; the answer moves to the one whose
  * refined ln L is highest if that beats the answer's by more than
- * TRN_REFINE_FAR_NATS (the answer it replaced counts in the failure
- * probability through the grid, as every pose outside the new zone). */
+ * TRN_REFINE_FAR_NATS (the answer it replaced takes the basin's slot). */
 static void refine_basins(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
-                          const double *g, const trn_window_t *win, const basins_t *b,
-                          trn_refine_t *cand, trn_loc_result_t *out)
+                          const double *g, const trn_window_t *win, basins_t *b, trn_refine_t *cand,
+                          trn_loc_result_t *out)
 {
     trn_refine_cfg_t rc;
     int32_t i;
@@ -675,11 +677,21 @@ static void refine_basins(const trn_map_t *map, const trn_grid_f32_t *local, int
     rc.noise_k_per_m = map->cfg.noise_k_per_m;
     rc.inlier_prob = map->cfg.inlier_prob;
     for (i = 0; i < b->n; ++i) {
-        if (trn_refine_pose(&map->heights, local, rx, ry, b->x[i], b->y[i], &rc, cand) == TRN_OK &&
-            cand->ll > out->refinement.ll + TRN_REFINE_FAR_NATS) {
+        b->ok[i] = trn_refine_pose(&map->heights, local, rx, ry, b->x[i], b->y[i], &rc, cand) ==
+                   TRN_OK;
+        b->px[i] = cand->x;
+        b->py[i] = cand->y;
+        b->rll[i] = cand->ll;
+        if (b->ok[i] && cand->ll > out->refinement.ll + TRN_REFINE_FAR_NATS) {
+            int32_t sx = b->x[i], sy = b->y[i];
+            b->x[i] = out->ix;
+            b->y[i] = out->iy;
+            b->px[i] = out->refinement.x;
+            b->py[i] = out->refinement.y;
+            b->rll[i] = out->refinement.ll;
             out->refinement = *cand;
-            out->ix = b->x[i];
-            out->iy = b->y[i];
+            out->ix = sx;
+            out->iy = sy;
             out->ll_best = grid_at(g, win, out->ix, out->iy);
             out->on_window_edge = (out->ix == win->x0 || out->ix == win->x1 || out->iy == win->y0 ||
                                    out->iy == win->y1)
@@ -688,6 +700,25 @@ static void refine_basins(const trn_map_t *map, const trn_grid_f32_t *local, int
             take_refinement(map, out);
         }
     }
+}
+
+/* The refined far basins' share of the failure probability: each one
+ * whose refined pose is more than TRN_FAIL_RADIUS_CELLS from the answer's
+ * weighed against the answer by its refined ln L (divided by infl, as the
+ * grid's), sum_b e^(d_b) / (1 + sum_b e^(d_b)), d_b = (ll_b - ll) / infl. A
+ * basin whose peak lies between integer poses scores low on the grid, so
+ * the grid's mass alone can miss a competitor the refinement sees. */
+static double basins_failure(const basins_t *b, double infl, const trn_loc_result_t *out)
+{
+    double sum = 0.0;
+    int32_t i;
+    for (i = 0; i < b->n; ++i) {
+        if (b->ok[i] && hypot(b->px[i] - out->refinement.x, b->py[i] - out->refinement.y) >
+                            TRN_FAIL_RADIUS_CELLS) {
+            sum += exp(fmin(700.0, (b->rll[i] - out->refinement.ll) / infl));
+        }
+    }
+    return sum / (1.0 + sum);
 }
 
 /* TRN_MATCH_HEIGHTS: height search, refinement, competing hypothesis. */
@@ -755,7 +786,8 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
          * away add up. ln L is divided by the covariance's inflation first:
          * correlated residuals make ln L differences too large by about that
          * factor (a composite likelihood's adjustment). */
-        double pf = exp(second.lse_out - second.lse_all);
+        double pf = fmax(exp(second.lse_out - second.lse_all),
+                         out->refined ? basins_failure(&bs, infl, out) : 0.0);
         out->has_second = 1;
         out->second_x = second.x;
         out->second_y = second.y;

@@ -143,6 +143,9 @@ typedef struct {
 /** A far basin replaces the answer only if its refined ln L is higher by
  *  more than this many nats (docs/method.md 9). */
 #define TRN_REFINE_FAR_NATS 30.0
+/** A localization fails when its answer is more than this many cells from
+ *  the truth: the event of the failure probability (docs/method.md 9). */
+#define TRN_FAIL_RADIUS_CELLS 1.5
 
 /** @brief The paper's configuration on its rock fields: 0.1 m cells and
  * bins, 1 m high-pass half-width, 16 bins, s = 0.1 m, a = 0.95, cap 60
