@@ -7,6 +7,7 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "localize_int.h"
 #include "refine_int.h"
 #include "ws.h"
 
@@ -439,8 +440,9 @@ trn_status_t trn_localize_points(const trn_map_t *map, const trn_point_t *pts, s
 
 /* Layout of trn_localize_dem's workspace: [hp grid | highpass ws | points | search ws | ln L grid
  * (TRN_MATCH_HEIGHTS only)]. */
+
 typedef struct {
-    size_t hp, hpws, pts, search, llgrid, cand, total;
+    size_t hp, hpws, pts, search, llgrid, cand, basins, total;
 } loc_layout_t;
 
 static int loc_layout(const trn_map_t *map, int32_t w, int32_t h, size_t max_points,
@@ -458,12 +460,13 @@ static int loc_layout(const trn_map_t *map, int32_t w, int32_t h, size_t max_poi
     lay->hpws = trn_ws_offset(&ws, hpws);
     lay->pts = trn_ws_offset(&ws, max_points * sizeof(trn_point_t));
     lay->search = trn_ws_offset(&ws, sw);
-    lay->llgrid = lay->cand = ws.total;
+    lay->llgrid = lay->cand = lay->basins = ws.total;
     if (map->cfg.match == TRN_MATCH_HEIGHTS) { /* every pose's ln L (trn_height_search) */
         lay->llgrid = trn_ws_offset(&ws, (size_t)(win->x1 - win->x0 + 1) *
                                              (size_t)(win->y1 - win->y0 + 1) * sizeof(double));
         /* a refinement from a neighbouring start (refine_result) */
         lay->cand = trn_ws_offset(&ws, sizeof(trn_refine_t));
+        lay->basins = trn_ws_offset(&ws, trn_loc_basins_bytes_()); /* far basins (refine_basins) */
     }
     lay->total = ws.total;
     return 1;
@@ -533,7 +536,7 @@ static trn_status_t highpass_by_map(const trn_map_t *map, const trn_grid_f32_t *
 
 /* The refinement in out->refinement becomes the answer: pose, covariance,
  * sigmas and the misfit flag. */
-static void take_refinement(const trn_map_t *map, trn_loc_result_t *out)
+void trn_loc_take_refinement_(const trn_map_t *map, trn_loc_result_t *out)
 {
     double cell = (double)map->cfg.terrain.cell_m;
     double lim = map->roughness_m > (double)map->cfg.noise_m ? map->roughness_m
@@ -597,144 +600,23 @@ static void refine_result(const trn_map_t *map, const trn_grid_f32_t *local, int
     if (!found) {
         return;
     }
-    take_refinement(map, out);
+    trn_loc_take_refinement_(map, out);
 }
 
-/* Far basins (TRN_REFINE_BASINS): up to that many local maxima of the ln L
- * grid outside the best pose's zone, highest first (their starts and grid
- * ln L); after refine_basins each slot holds a refinement that is not the
- * answer: its pose and refined ln L (ok 0: it failed). */
-typedef struct {
-    int32_t n;
-    int32_t x[TRN_REFINE_BASINS], y[TRN_REFINE_BASINS];
-    double ll[TRN_REFINE_BASINS];
-    double px[TRN_REFINE_BASINS], py[TRN_REFINE_BASINS], rll[TRN_REFINE_BASINS];
-    int32_t ok[TRN_REFINE_BASINS];
-} basins_t;
-
-static double grid_at(const double *g, const trn_window_t *win, int32_t x, int32_t y)
-{
-    return g[(size_t)(y - win->y0) * (size_t)(win->x1 - win->x0 + 1) + (size_t)(x - win->x0)];
-}
-
-/* 1 if no neighbour of (x, y) in the window is higher, and none equal comes
- * before it in scan order (one pose per plateau). */
-static int grid_peak(const double *g, const trn_window_t *win, int32_t x, int32_t y, double v)
-{
-    int32_t k;
-    for (k = 0; k < 9; ++k) {
-        int32_t nx = x + k % 3 - 1, ny = y + k / 3 - 1;
-        double w;
-        if (k == 4 || nx < win->x0 || nx > win->x1 || ny < win->y0 || ny > win->y1) {
-            continue;
-        }
-        w = grid_at(g, win, nx, ny);
-        if (w > v || (w == v && k < 4)) {
-            return 0;
-        }
-    }
-    return 1;
-}
-
-static void far_basins(const double *g, const trn_window_t *win, int32_t bx, int32_t by,
-                       int32_t radius, basins_t *b)
-{
-    int32_t x, y;
-    b->n = 0;
-    for (y = win->y0; y <= win->y1; ++y) {
-        for (x = win->x0; x <= win->x1; ++x) {
-            double v = grid_at(g, win, x, y);
-            int32_t i;
-            if (!isfinite(v) || (abs(x - bx) <= radius && abs(y - by) <= radius) ||
-                (b->n == TRN_REFINE_BASINS && v <= b->ll[TRN_REFINE_BASINS - 1]) ||
-                !grid_peak(g, win, x, y, v)) {
-                continue;
-            }
-            i = b->n < TRN_REFINE_BASINS ? b->n++ : TRN_REFINE_BASINS - 1;
-            for (; i > 0 && b->ll[i - 1] < v; --i) { /* keep them highest first */
-                b->x[i] = b->x[i - 1];
-                b->y[i] = b->y[i - 1];
-                b->ll[i] = b->ll[i - 1];
-            }
-            b->x[i] = x;
-            b->y[i] = y;
-            b->ll[i] = v;
-        }
-    }
-}
-
-/* Refine from each far basin's start; the answer moves to the one whose
- * refined ln L is highest if that beats the answer's by more than
- * TRN_REFINE_FAR_NATS (the answer it replaced takes the basin's slot). */
-static void refine_basins(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
-                          const double *g, const trn_window_t *win, basins_t *b, trn_refine_t *cand,
-                          trn_loc_result_t *out)
-{
-    trn_refine_cfg_t rc;
-    int32_t i;
-    rc.cell_m = map->cfg.terrain.cell_m;
-    rc.noise_m = map->cfg.noise_m;
-    rc.noise_k_per_m = map->cfg.noise_k_per_m;
-    rc.inlier_prob = map->cfg.inlier_prob;
-    for (i = 0; i < b->n; ++i) {
-        b->ok[i] = trn_refine_pose(&map->heights, local, rx, ry, b->x[i], b->y[i], &rc, cand) ==
-                   TRN_OK;
-        b->px[i] = cand->x;
-        b->py[i] = cand->y;
-        b->rll[i] = cand->ll;
-        if (b->ok[i] && cand->ll > out->refinement.ll + TRN_REFINE_FAR_NATS) {
-            int32_t sx = b->x[i], sy = b->y[i];
-            b->x[i] = out->ix;
-            b->y[i] = out->iy;
-            b->px[i] = out->refinement.x;
-            b->py[i] = out->refinement.y;
-            b->rll[i] = out->refinement.ll;
-            out->refinement = *cand;
-            out->ix = sx;
-            out->iy = sy;
-            out->ll_best = grid_at(g, win, out->ix, out->iy);
-            out->on_window_edge = (out->ix == win->x0 || out->ix == win->x1 || out->iy == win->y0 ||
-                                   out->iy == win->y1)
-                                      ? 1
-                                      : 0;
-            take_refinement(map, out);
-        }
-    }
-}
-
-/* The refined far basins' share of the failure probability: each one
- * whose refined pose is more than TRN_FAIL_RADIUS_CELLS from the answer's
- * weighed against the answer by its refined ln L (divided by infl, as the
- * grid's), sum_b e^(d_b) / (1 + sum_b e^(d_b)), d_b = (ll_b - ll) / infl. A
- * basin whose peak lies between integer poses scores low on the grid, so
- * the grid's mass alone can miss a competitor the refinement sees. */
-static double basins_failure(const basins_t *b, double infl, const trn_loc_result_t *out)
-{
-    double sum = 0.0;
-    int32_t i;
-    for (i = 0; i < b->n; ++i) {
-        if (b->ok[i] && hypot(b->px[i] - out->refinement.x, b->py[i] - out->refinement.y) >
-                            TRN_FAIL_RADIUS_CELLS) {
-            sum += exp(fmin(700.0, (b->rll[i] - out->refinement.ll) / infl));
-        }
-    }
-    return sum / (1.0 + sum);
-}
 
 /* TRN_MATCH_HEIGHTS: height search, refinement, competing hypothesis. */
 static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
                                      int32_t ry, const trn_window_t *win, double *ll_grid,
-                                     trn_refine_t *cand, trn_loc_result_t *out)
+                                     trn_refine_t *cand, trn_loc_basins_t *bs,
+                                     trn_loc_result_t *out)
 {
     trn_status_t st;
     trn_height_best_t best, second;
     trn_refine_cfg_t rc;
     trn_exclusion_t ex;
-    basins_t bs;
     double infl = 1.0;
     int32_t radius = map->cfg.min_exclusion_cells;
 
-    bs.n = 0;
 
     rc.cell_m = map->cfg.terrain.cell_m;
     rc.noise_m = map->cfg.noise_m;
@@ -762,8 +644,7 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
     out->cov_m2[2] = 0.0;
     refine_result(map, local, rx, ry, win, ll_grid, cand, out);
     if (out->refined) {
-        far_basins(ll_grid, win, out->ix, out->iy, radius, &bs);
-        refine_basins(map, local, rx, ry, ll_grid, win, &bs, cand, out);
+        trn_loc_far_basins_(map, local, rx, ry, ll_grid, win, radius, bs, cand, out);
     }
     out->n_points = (size_t)(out->refinement.n_seen > 0 ? out->refinement.n_seen : 0);
     /* The zone is min_exclusion_cells, not 4 sigma as for eq. 6: the failure
@@ -787,7 +668,7 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
          * correlated residuals make ln L differences too large by about that
          * factor (a composite likelihood's adjustment). */
         double pf = fmax(exp(second.lse_out - second.lse_all),
-                         out->refined ? basins_failure(&bs, infl, out) : 0.0);
+                         out->refined ? trn_loc_basins_failure_(bs, infl, out) : 0.0);
         out->has_second = 1;
         out->second_x = second.x;
         out->second_y = second.y;
@@ -845,7 +726,8 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
     if (map->cfg.match == TRN_MATCH_HEIGHTS) {
         st = localize_heights(map, local_dem, rover_x, rover_y, win,
                               (double *)(void *)(b + lay.llgrid),
-                              (trn_refine_t *)(void *)(b + lay.cand), out);
+                              (trn_refine_t *)(void *)(b + lay.cand),
+                              (trn_loc_basins_t *)(void *)(b + lay.basins), out);
         return accept(map, st, out);
     }
     pts = (trn_point_t *)(void *)(b + lay.pts);

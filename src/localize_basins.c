@@ -1,0 +1,133 @@
+/* SPDX-License-Identifier: Apache-2.0 */
+/* localize_basins.c - the height matcher's far basins (localize_int.h;
+ * docs/modules/refine.md, docs/method.md 9). */
+#include "localize_int.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+size_t trn_loc_basins_bytes_(void) { return sizeof(trn_loc_basins_t); }
+
+static double grid_at(const double *g, const trn_window_t *win, int32_t x, int32_t y)
+{
+    return g[(size_t)(y - win->y0) * (size_t)(win->x1 - win->x0 + 1) + (size_t)(x - win->x0)];
+}
+
+/* 1 if no neighbour of (x, y) in the window is higher, and none equal comes
+ * before it in scan order (one pose per plateau). */
+static int grid_peak(const double *g, const trn_window_t *win, int32_t x, int32_t y, double v)
+{
+    int32_t k;
+    for (k = 0; k < 9; ++k) {
+        int32_t nx = x + k % 3 - 1, ny = y + k / 3 - 1;
+        double w;
+        if (k == 4 || nx < win->x0 || nx > win->x1 || ny < win->y0 || ny > win->y1) {
+            continue;
+        }
+        w = grid_at(g, win, nx, ny);
+        if (w > v || (w == v && k < 4)) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+static void far_basins(const double *g, const trn_window_t *win, int32_t bx, int32_t by,
+                       int32_t radius, trn_loc_basins_t *b)
+{
+    int32_t x, y;
+    b->n = 0;
+    for (y = win->y0; y <= win->y1; ++y) {
+        for (x = win->x0; x <= win->x1; ++x) {
+            double v = grid_at(g, win, x, y);
+            int32_t k, pos = 0, last;
+            if (!isfinite(v) || (abs(x - bx) <= radius && abs(y - by) <= radius) ||
+                (b->n == TRN_REFINE_BASINS && v <= b->ll[TRN_REFINE_BASINS - 1]) ||
+                !grid_peak(g, win, x, y, v)) {
+                continue;
+            }
+            /* keep them highest first: v goes after every one at least as high */
+            last = b->n < TRN_REFINE_BASINS ? b->n++ : TRN_REFINE_BASINS - 1;
+            for (k = 0; k < last; ++k) {
+                if (b->ll[k] >= v) {
+                    pos = k + 1;
+                }
+            }
+            for (k = last; k > pos; --k) {
+                b->x[k] = b->x[k - 1];
+                b->y[k] = b->y[k - 1];
+                b->ll[k] = b->ll[k - 1];
+            }
+            b->x[pos] = x;
+            b->y[pos] = y;
+            b->ll[pos] = v;
+        }
+    }
+}
+
+/* Refine from each far basin's start; the answer moves to the one whose
+ * refined ln L is highest if that beats the answer's by more than
+ * TRN_REFINE_FAR_NATS (the answer it replaced takes the basin's slot). */
+static void refine_basins(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
+                          const double *g, const trn_window_t *win, trn_loc_basins_t *b,
+                          trn_refine_t *cand, trn_loc_result_t *out)
+{
+    trn_refine_cfg_t rc;
+    int32_t i;
+    rc.cell_m = map->cfg.terrain.cell_m;
+    rc.noise_m = map->cfg.noise_m;
+    rc.noise_k_per_m = map->cfg.noise_k_per_m;
+    rc.inlier_prob = map->cfg.inlier_prob;
+    for (i = 0; i < b->n; ++i) {
+        b->ok[i] = trn_refine_pose(&map->heights, local, rx, ry, b->x[i], b->y[i], &rc, cand) ==
+                   TRN_OK;
+        b->px[i] = cand->x;
+        b->py[i] = cand->y;
+        b->rll[i] = cand->ll;
+        if (b->ok[i] && cand->ll > out->refinement.ll + TRN_REFINE_FAR_NATS) {
+            int32_t sx = b->x[i], sy = b->y[i];
+            b->x[i] = out->ix;
+            b->y[i] = out->iy;
+            b->px[i] = out->refinement.x;
+            b->py[i] = out->refinement.y;
+            b->rll[i] = out->refinement.ll;
+            out->refinement = *cand;
+            out->ix = sx;
+            out->iy = sy;
+            out->ll_best = grid_at(g, win, out->ix, out->iy);
+            out->on_window_edge = (out->ix == win->x0 || out->ix == win->x1 || out->iy == win->y0 ||
+                                   out->iy == win->y1)
+                                      ? 1
+                                      : 0;
+            trn_loc_take_refinement_(map, out);
+        }
+    }
+}
+
+
+/* The refined far basins' share of the failure probability: each one
+ * whose refined pose is more than TRN_FAIL_RADIUS_CELLS from the answer's
+ * weighed against the answer by its refined ln L (divided by infl, as the
+ * grid's), sum_b e^(d_b) / (1 + sum_b e^(d_b)), d_b = (ll_b - ll) / infl. A
+ * basin whose peak lies between integer poses scores low on the grid, so
+ * the grid's mass alone can miss a competitor the refinement sees. */
+double trn_loc_basins_failure_(const trn_loc_basins_t *b, double infl, const trn_loc_result_t *out)
+{
+    double sum = 0.0;
+    int32_t i;
+    for (i = 0; i < b->n; ++i) {
+        double dx = b->px[i] - out->refinement.x, dy = b->py[i] - out->refinement.y;
+        if (b->ok[i] && dx * dx + dy * dy > TRN_FAIL_RADIUS_CELLS * TRN_FAIL_RADIUS_CELLS) {
+            sum += exp(fmin(700.0, (b->rll[i] - out->refinement.ll) / infl));
+        }
+    }
+    return sum / (1.0 + sum);
+}
+
+void trn_loc_far_basins_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
+                         const double *ll_grid, const trn_window_t *win, int32_t radius,
+                         trn_loc_basins_t *b, trn_refine_t *cand, trn_loc_result_t *out)
+{
+    far_basins(ll_grid, win, out->ix, out->iy, radius, b);
+    refine_basins(map, local, rx, ry, ll_grid, win, b, cand, out);
+}

@@ -1,0 +1,44 @@
+/* SPDX-License-Identifier: Apache-2.0 */
+/* localize_int.h - internal: the height matcher's far basins
+ * (src/localize_basins.c), shared with src/localize.c. A separate file so
+ * that its frames do not add to trn_localize_dem's (no inlining across
+ * files; the stack limit of docs/architecture.md). */
+#ifndef TRN_LOCALIZE_INT_H
+#define TRN_LOCALIZE_INT_H
+
+#include "trn/localize.h"
+#include "trn/refine.h"
+
+/* Far basins (TRN_REFINE_BASINS): up to that many local maxima of the ln L
+ * grid outside the best pose's zone, highest first (their starts and grid
+ * ln L); after trn_loc_far_basins_ each slot holds a refinement that is not
+ * the answer: its pose and refined ln L (ok 0: it failed). It lives in the
+ * workspace, not on the stack. */
+typedef struct {
+    int32_t n;
+    int32_t x[TRN_REFINE_BASINS], y[TRN_REFINE_BASINS];
+    double ll[TRN_REFINE_BASINS];
+    double px[TRN_REFINE_BASINS], py[TRN_REFINE_BASINS], rll[TRN_REFINE_BASINS];
+    int32_t ok[TRN_REFINE_BASINS];
+} trn_loc_basins_t;
+
+/* Bytes of a trn_loc_basins_t (the workspace's share). */
+size_t trn_loc_basins_bytes_(void);
+
+/* The refinement in out->refinement becomes the answer: pose, covariance,
+ * sigmas and the misfit flag (src/localize.c). */
+void trn_loc_take_refinement_(const trn_map_t *map, trn_loc_result_t *out);
+
+/* Find the far basins of the ln L grid ll_grid over win (outside radius of
+ * the answer's start out->ix, out->iy), refine from each (cand: a
+ * trn_refine_t of the workspace), and move the answer to the one whose
+ * refined ln L is highest if it beats the answer's by more than
+ * TRN_REFINE_FAR_NATS (the answer it replaced takes that basin's slot). */
+void trn_loc_far_basins_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
+                         const double *ll_grid, const trn_window_t *win, int32_t radius,
+                         trn_loc_basins_t *b, trn_refine_t *cand, trn_loc_result_t *out);
+
+/* The refined far basins' share of the failure probability (see the .c). */
+double trn_loc_basins_failure_(const trn_loc_basins_t *b, double infl, const trn_loc_result_t *out);
+
+#endif /* TRN_LOCALIZE_INT_H */
