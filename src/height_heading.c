@@ -6,6 +6,7 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "localize_int.h"
 #include "refine_int.h"
 #include "ws.h"
 
@@ -321,7 +322,7 @@ static double log_add(double a, double b)
  * refinement (the second starts) | ln L of every (pose, heading) | the
  * search's workspace]. */
 typedef struct {
-    size_t best, ref, cand, grid, search, total;
+    size_t best, ref, cand, basins, grid, search, total;
 } hh_layout_t;
 
 static void hh_layout(const trn_grid_f32_t *local, const trn_window_t *win, int32_t kk,
@@ -333,6 +334,7 @@ static void hh_layout(const trn_grid_f32_t *local, const trn_window_t *win, int3
     lay->best = trn_ws_offset(&w, sizeof(trn_height_best3_t));
     lay->ref = trn_ws_offset(&w, sizeof(trn_refine3_t));
     lay->cand = trn_ws_offset(&w, sizeof(trn_refine3_t));
+    lay->basins = trn_ws_offset(&w, trn_loc_basins_bytes_()); /* far basins */
     lay->grid = trn_ws_offset(&w, (size_t)(2 * kk + 1) * poses * sizeof(double));
     lay->search = trn_ws_offset(&w,
                                 trn_height_heading_workspace_bytes(local->width, local->height));
@@ -519,7 +521,7 @@ static void masses(const double *grid, const trn_window_t *win, int32_t kk, doub
 static int refine_starts(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
                          const trn_window_t *win, const double *grid, const trn_height_best3_t *b,
                          double heading, double max_turn, const trn_refine_cfg_t *rc,
-                         trn_refine3_t *ref, trn_refine3_t *cand)
+                         trn_refine3_t *ref, trn_refine3_t *cand, trn_loc_basins_t *far)
 {
     /* the window is inside the map, x0 <= x1 and y0 <= y1 (window_in) */
     const size_t wx = (size_t)win->x1 - (size_t)win->x0 + 1u;
@@ -542,6 +544,33 @@ static int refine_starts(const trn_map_t *map, const trn_grid_f32_t *local, int3
             found = 1;
         }
     }
+    /* then the far basins (trn_loc_find_basins3_), at their own headings: one
+     * replaces the answer if its refined ln L beats it by more than
+     * TRN_REFINE_FAR_NATS, the answer taking its slot (far->moved, mx, my, mk:
+     * the new start) */
+    for (k = 0; found && k < far->n; ++k) {
+        far->ok[k] = trn_refine_pose_heading(&map->heights, local, rx, ry, far->x[k], far->y[k],
+                                             heading + (double)(far->k[k] - b->half_steps - b->k) *
+                                                           b->step_rad,
+                                             max_turn, rc, cand) == TRN_OK;
+        far->px[k] = cand->pos.x;
+        far->py[k] = cand->pos.y;
+        far->rll[k] = cand->pos.ll;
+        if (far->ok[k] && cand->pos.ll > ref->pos.ll + TRN_REFINE_FAR_NATS) {
+            const trn_refine3_t t = *ref;
+            far->moved = 1;
+            far->mx = far->x[k];
+            far->my = far->y[k];
+            far->mk = far->k[k];
+            far->x[k] = b->x;
+            far->y[k] = b->y;
+            far->k[k] = b->k + b->half_steps;
+            *ref = *cand;
+            far->px[k] = t.pos.x;
+            far->py[k] = t.pos.y;
+            far->rll[k] = t.pos.ll;
+        }
+    }
     return found;
 }
 
@@ -556,6 +585,7 @@ trn_status_t trn_localize_heights3_(const trn_map_t *map, const trn_grid_f32_t *
     uint8_t *b = (uint8_t *)ws;
     trn_height_best3_t *best;
     trn_refine3_t *ref;
+    trn_loc_basins_t *far;
     double step, *grid;
     int32_t kk;
 
@@ -572,6 +602,7 @@ trn_status_t trn_localize_heights3_(const trn_map_t *map, const trn_grid_f32_t *
     best = (trn_height_best3_t *)(void *)(b + lay.best);
     ref = (trn_refine3_t *)(void *)(b + lay.ref);
     grid = (double *)(void *)(b + lay.grid);
+    far = (trn_loc_basins_t *)(void *)(b + lay.basins);
     rc.cell_m = map->cfg.terrain.cell_m;
     rc.noise_m = map->cfg.noise_m;
     rc.noise_k_per_m = map->cfg.noise_k_per_m;
@@ -582,9 +613,23 @@ trn_status_t trn_localize_heights3_(const trn_map_t *map, const trn_grid_f32_t *
         return st;
     }
     search_result(best, win, cfg, out);
+    trn_loc_find_basins3_(grid, win, kk, map->cfg.min_exclusion_cells, best->x, best->y, far);
     if (refine_starts(map, local, rover_x, rover_y, win, grid, best, out->heading_rad,
                       cfg->window_rad > 0.0 ? TRN_REFINE_MAX_TURN_STEPS * step : 0.0, &rc, ref,
-                      (trn_refine3_t *)(void *)(b + lay.cand))) {
+                      (trn_refine3_t *)(void *)(b + lay.cand), far)) {
+        if (far->moved) { /* the answer's start moved to a far basin's */
+            out->loc.ix = far->mx;
+            out->loc.iy = far->my;
+            out->best_step = far->mk - kk;
+            out->loc.ll_best = grid[(size_t)far->mk * (size_t)(win->x1 - win->x0 + 1) *
+                                        (size_t)(win->y1 - win->y0 + 1) +
+                                    (size_t)(far->my - win->y0) * (size_t)(win->x1 - win->x0 + 1) +
+                                    (size_t)(far->mx - win->x0)];
+            out->loc.on_window_edge = (far->mx == win->x0 || far->mx == win->x1 ||
+                                       far->my == win->y0 || far->my == win->y1)
+                                          ? 1
+                                          : 0;
+        }
         refine_result(map, ref, out);
     }
     out->loc.refinement = ref->pos;
@@ -592,6 +637,11 @@ trn_status_t trn_localize_heights3_(const trn_map_t *map, const trn_grid_f32_t *
     /* the zone as trn_localize_dem's height matcher: min_exclusion_cells */
     out->loc.exclusion_cells = map->cfg.min_exclusion_cells;
     masses(grid, win, kk, out->loc.refined ? ref->pos.inflation : 1.0, &out->loc);
+    if (out->loc.refined) { /* the far basins' share (localize_int.h) */
+        out->loc.failure_probability = fmax(
+            out->loc.failure_probability,
+            trn_loc_basins_failure_(far, ref->pos.inflation, &out->loc));
+    }
     if (!out->loc.refined || out->loc.misfit) {
         return TRN_E_ILLCOND;
     }

@@ -644,7 +644,8 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
     out->cov_m2[2] = 0.0;
     refine_result(map, local, rx, ry, win, ll_grid, cand, out);
     if (out->refined) {
-        trn_loc_far_basins_(map, local, rx, ry, ll_grid, win, radius, bs, cand, out);
+        trn_loc_find_basins_(ll_grid, win, radius, out, bs);
+        trn_loc_refine_basins_(map, local, rx, ry, ll_grid, win, bs, cand, out);
     }
     out->n_points = (size_t)(out->refinement.n_seen > 0 ? out->refinement.n_seen : 0);
     /* The zone is min_exclusion_cells, not 4 sigma as for eq. 6: the failure

@@ -37,6 +37,7 @@ static void far_basins(const double *g, const trn_window_t *win, int32_t bx, int
 {
     int32_t x, y;
     b->n = 0;
+    b->moved = 0;
     for (y = win->y0; y <= win->y1; ++y) {
         for (x = win->x0; x <= win->x1; ++x) {
             double v = grid_at(g, win, x, y);
@@ -60,6 +61,7 @@ static void far_basins(const double *g, const trn_window_t *win, int32_t bx, int
             }
             b->x[pos] = x;
             b->y[pos] = y;
+            b->k[pos] = 0;
             b->ll[pos] = v;
         }
     }
@@ -124,10 +126,74 @@ double trn_loc_basins_failure_(const trn_loc_basins_t *b, double infl, const trn
     return sum / (1.0 + sum);
 }
 
-void trn_loc_far_basins_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
-                         const double *ll_grid, const trn_window_t *win, int32_t radius,
-                         trn_loc_basins_t *b, trn_refine_t *cand, trn_loc_result_t *out)
+void trn_loc_find_basins_(const double *ll_grid, const trn_window_t *win, int32_t radius,
+                          const trn_loc_result_t *out, trn_loc_basins_t *b)
 {
     far_basins(ll_grid, win, out->ix, out->iy, radius, b);
+}
+
+void trn_loc_refine_basins_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
+                            int32_t ry, const double *ll_grid, const trn_window_t *win,
+                            trn_loc_basins_t *b, trn_refine_t *cand, trn_loc_result_t *out)
+{
     refine_basins(map, local, rx, ry, ll_grid, win, b, cand, out);
+}
+
+/* 1 if (x, y, slice s) is a local maximum of the 3-D grid: no neighbour
+ * higher, none equal before it in (slice, row, column) order. */
+static int grid_peak3(const double *grid, const trn_window_t *win, int32_t half_steps, size_t poses,
+                      int32_t x, int32_t y, int32_t s, double v)
+{
+    int32_t n;
+    for (n = 0; n < 27; ++n) {
+        int32_t nx = x + n % 3 - 1, ny = y + (n / 3) % 3 - 1, ns = s + n / 9 - 1;
+        double w;
+        if (n == 13 || nx < win->x0 || nx > win->x1 || ny < win->y0 || ny > win->y1 || ns < 0 ||
+            ns > 2 * half_steps) {
+            continue;
+        }
+        w = grid_at(grid + (size_t)ns * poses, win, nx, ny);
+        if (w > v || (w == v && n < 13)) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+void trn_loc_find_basins3_(const double *grid, const trn_window_t *win, int32_t half_steps,
+                           int32_t radius, int32_t bx, int32_t by, trn_loc_basins_t *b)
+{
+    const size_t poses = (size_t)(win->x1 - win->x0 + 1) * (size_t)(win->y1 - win->y0 + 1);
+    int32_t x, y, s;
+    b->n = 0;
+    b->moved = 0;
+    for (s = 0; s <= 2 * half_steps; ++s) {
+        for (y = win->y0; y <= win->y1; ++y) {
+            for (x = win->x0; x <= win->x1; ++x) {
+                double v = grid_at(grid + (size_t)s * poses, win, x, y);
+                int32_t k, pos = 0, last;
+                if (!isfinite(v) || (abs(x - bx) <= radius && abs(y - by) <= radius) ||
+                    (b->n == TRN_REFINE_BASINS && v <= b->ll[TRN_REFINE_BASINS - 1]) ||
+                    !grid_peak3(grid, win, half_steps, poses, x, y, s, v)) {
+                    continue;
+                }
+                last = b->n < TRN_REFINE_BASINS ? b->n++ : TRN_REFINE_BASINS - 1;
+                for (k = 0; k < last; ++k) {
+                    if (b->ll[k] >= v) {
+                        pos = k + 1;
+                    }
+                }
+                for (k = last; k > pos; --k) {
+                    b->x[k] = b->x[k - 1];
+                    b->y[k] = b->y[k - 1];
+                    b->k[k] = b->k[k - 1];
+                    b->ll[k] = b->ll[k - 1];
+                }
+                b->x[pos] = x;
+                b->y[pos] = y;
+                b->k[pos] = s;
+                b->ll[pos] = v;
+            }
+        }
+    }
 }

@@ -6,20 +6,24 @@
 #ifndef TRN_LOCALIZE_INT_H
 #define TRN_LOCALIZE_INT_H
 
+#include "trn/heading.h"
+#include "trn/height_heading.h"
 #include "trn/localize.h"
 #include "trn/refine.h"
 
 /* Far basins (TRN_REFINE_BASINS): up to that many local maxima of the ln L
  * grid outside the best pose's zone, highest first (their starts and grid
- * ln L); after trn_loc_far_basins_ each slot holds a refinement that is not
+ * ln L); after trn_loc_refine_basins_ each slot holds a refinement that is not
  * the answer: its pose and refined ln L (ok 0: it failed). It lives in the
  * workspace, not on the stack. */
 typedef struct {
     int32_t n;
     int32_t x[TRN_REFINE_BASINS], y[TRN_REFINE_BASINS];
+    int32_t k[TRN_REFINE_BASINS]; /* heading slice (trn_loc_find_basins3_; 0 in 2-D) */
     double ll[TRN_REFINE_BASINS];
     double px[TRN_REFINE_BASINS], py[TRN_REFINE_BASINS], rll[TRN_REFINE_BASINS];
     int32_t ok[TRN_REFINE_BASINS];
+    int32_t moved, mx, my, mk; /* over heading: 1 if the answer moved to start (mx, my, slice mk) */
 } trn_loc_basins_t;
 
 /* Bytes of a trn_loc_basins_t (the workspace's share). */
@@ -30,13 +34,25 @@ size_t trn_loc_basins_bytes_(void);
 void trn_loc_take_refinement_(const trn_map_t *map, trn_loc_result_t *out);
 
 /* Find the far basins of the ln L grid ll_grid over win (outside radius of
- * the answer's start out->ix, out->iy), refine from each (cand: a
- * trn_refine_t of the workspace), and move the answer to the one whose
- * refined ln L is highest if it beats the answer's by more than
+ * the answer's start out->ix, out->iy); then, in a second call (so that the
+ * search's frame is not under the refinement's on the stack), refine from
+ * each (cand: a trn_refine_t of the workspace) and move the answer to the
+ * one whose refined ln L is highest if it beats the answer's by more than
  * TRN_REFINE_FAR_NATS (the answer it replaced takes that basin's slot). */
-void trn_loc_far_basins_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
-                         const double *ll_grid, const trn_window_t *win, int32_t radius,
-                         trn_loc_basins_t *b, trn_refine_t *cand, trn_loc_result_t *out);
+void trn_loc_find_basins_(const double *ll_grid, const trn_window_t *win, int32_t radius,
+                          const trn_loc_result_t *out, trn_loc_basins_t *b);
+void trn_loc_refine_basins_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
+                            int32_t ry, const double *ll_grid, const trn_window_t *win,
+                            trn_loc_basins_t *b, trn_refine_t *cand, trn_loc_result_t *out);
+
+/* trn_loc_find_basins_'s search over (x, y, heading), for the height matcher
+ * over heading (src/height_heading.c, which refines them itself, so that
+ * this frame is not under the refinement's on the stack): the local maxima
+ * of the ln L grid, (2 half_steps + 1) slices over win (26 neighbours),
+ * outside the position zone (radius) of (bx, by) at any heading; k holds
+ * the slice. */
+void trn_loc_find_basins3_(const double *grid, const trn_window_t *win, int32_t half_steps,
+                           int32_t radius, int32_t bx, int32_t by, trn_loc_basins_t *b);
 
 /* The refined far basins' share of the failure probability (see the .c). */
 double trn_loc_basins_failure_(const trn_loc_basins_t *b, double infl, const trn_loc_result_t *out);
