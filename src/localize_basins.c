@@ -106,7 +106,6 @@ static void refine_basins(const trn_map_t *map, const trn_grid_f32_t *local, int
     }
 }
 
-
 /* The refined far basins' share of the failure probability: each one
  * whose refined pose is more than TRN_FAIL_RADIUS_CELLS from the answer's
  * weighed against the answer by its refined ln L (divided by infl, as the
