@@ -558,13 +558,14 @@ static int refine_starts(const trn_map_t *map, const trn_grid_f32_t *local, int3
         far->rll[k] = cand->pos.ll;
         if (far->ok[k] && cand->pos.ll > ref->pos.ll + TRN_REFINE_FAR_NATS) {
             const trn_refine3_t t = *ref;
+            const int32_t sx = far->x[k], sy = far->y[k], sk = far->k[k];
+            far->x[k] = far->moved ? far->mx : b->x; /* the answer's start so far */
+            far->y[k] = far->moved ? far->my : b->y;
+            far->k[k] = far->moved ? far->mk : b->k + b->half_steps;
             far->moved = 1;
-            far->mx = far->x[k];
-            far->my = far->y[k];
-            far->mk = far->k[k];
-            far->x[k] = b->x;
-            far->y[k] = b->y;
-            far->k[k] = b->k + b->half_steps;
+            far->mx = sx;
+            far->my = sy;
+            far->mk = sk;
             *ref = *cand;
             far->px[k] = t.pos.x;
             far->py[k] = t.pos.y;
