@@ -37,6 +37,57 @@ static int sample_bilinear(const trn_grid_f32_t *g, double x, double y, double o
     return 1;
 }
 
+/* The weight rule of every refinement pass (a factor on 1 / sd^2): a
+ * residual res of standard deviation sd at fractional cell (x, y) within
+ * clip sds has weight 1; beyond clip sds plus the relief of the map's four
+ * cells around (x, y) (their highest less their lowest) it is an outlier,
+ * weight 0; between, Huber's weight clip sd / |res| (its pull on the pose
+ * bounded at that of a residual of clip sds). Between its samples the
+ * terrain may run anywhere the neighbouring samples span (a rock's edge, a
+ * kerb the map cannot resolve), so such a residual is representation error
+ * or a blunder of the terrain's own size: the former carry the most
+ * information on the pose, and dropping them made the refined pose worse
+ * whenever the local map was sensed from terrain finer than the map; the
+ * bounded pull keeps the latter (a changed patch of the map) from moving
+ * it (docs/method.md 9, "the clip"). A gross error beyond the local relief
+ * is still clipped; on flat ground the rule is the plain clip. A clip >= 0 is the plain clip (clip sds, the refinement's
+ * first phase: from an integer start the linearization is poor on terrain a
+ * cell wide, and the large residuals there are the start's, not the
+ * terrain's); TRN_REFINE_CLIP_RELIEF (-TRN_REFINE_CLIP) is the rule above,
+ * the second phase's, from the first phase's estimate. */
+double trn_refine_weight_(const trn_grid_f32_t *g, double x, double y, double res, double sd,
+                          double clip)
+{
+    int32_t x0, y0;
+    float a, b, c, d, lo, hi;
+    const double k = fabs(clip);
+    if (clip >= 0.0) {
+        return fabs(res) > k * sd ? 0.0 : 1.0; /* the plain clip */
+    }
+    if (!(fabs(res) > k * sd)) {
+        return 1.0;
+    }
+    if (!(x >= 0.0 && y >= 0.0 && x <= (double)(g->width - 1) && y <= (double)(g->height - 1)) ||
+        g->width < 2 || g->height < 2) {
+        return 0.0;
+    }
+    x0 = (int32_t)floor(x);
+    y0 = (int32_t)floor(y);
+    x0 = x0 > g->width - 2 ? g->width - 2 : x0;
+    y0 = y0 > g->height - 2 ? g->height - 2 : y0;
+    a = TRN_GRID_AT(g, x0, y0);
+    b = TRN_GRID_AT(g, x0 + 1, y0);
+    c = TRN_GRID_AT(g, x0, y0 + 1);
+    d = TRN_GRID_AT(g, x0 + 1, y0 + 1);
+    lo = a < b ? a : b;
+    lo = lo < c ? lo : c;
+    lo = lo < d ? lo : d;
+    hi = a > b ? a : b;
+    hi = hi > c ? hi : c;
+    hi = hi > d ? hi : d;
+    return fabs(res) > k * sd + ((double)hi - (double)lo) ? 0.0 : k * sd / fabs(res);
+}
+
 /* Keys' cubic convolution kernel (a = -1/2) at t and its derivative. */
 static void keys(double t, double *w, double *dw)
 {
@@ -167,7 +218,8 @@ static void accumulate_rect(const trn_grid_f32_t *global, const trn_grid_f32_t *
     acc->n_in = acc->n_all = 0;
     for (j = j0; j < j1; ++j) {
         for (i = i0; i < i1; ++i) {
-            double h = (double)TRN_GRID_AT(local, i, j), s3[3], px, py, sd, w, res, u, jv[3], dcb;
+            double h = (double)TRN_GRID_AT(local, i, j), s3[3], px, py, sd, w, res, u, jv[3], dcb,
+                   hw;
             int32_t p, q;
             if (!isfinite(h)) {
                 continue;
@@ -182,20 +234,22 @@ static void accumulate_rect(const trn_grid_f32_t *global, const trn_grid_f32_t *
             sd = sqrt(w + model2);
             res = h - dz - s3[0];
             u = res / sd;
-            if (fabs(u) > clip) {
+            hw = trn_refine_weight_(global, x + px, y + py, res, sd, clip);
+            if (!(hw > 0.0)) {
                 continue;
             }
-            {
+            if (hw >= 1.0) {
                 /* precision-squared weights: the model variance is estimated
                  * mostly where the noise is small (near the rover), not
-                 * swamped by the far points' large noise */
+                 * swamped by the far points' large noise; from the points
+                 * within the plain clip only */
                 double qw = 1.0 / ((sd * sd) * (sd * sd));
                 acc->noise2 += qw * w;
                 acc->rr += qw * res * res;
                 acc->q += qw;
                 acc->vv += 2.0 * qw * qw * w * w;
             }
-            w = 1.0 / (sd * sd);
+            w = hw / (sd * sd);
             jv[0] = s3[1];
             jv[1] = s3[2];
             jv[2] = 1.0;
@@ -208,7 +262,7 @@ static void accumulate_rect(const trn_grid_f32_t *global, const trn_grid_f32_t *
             }
             acc->all += w * dcb * dcb;
             acc->bl += w * dcb * res;
-            acc->ss += u * u;
+            acc->ss += hw * u * u;
             acc->n_in += 1;
         }
     }
@@ -275,10 +329,12 @@ static void model_pass(const trn_grid_f32_t *global, const trn_grid_f32_t *local
                 continue;
             }
             v = noise_var(cfg, i, j, rx, ry) + model2;
-            if (fabs(h - dz - s3[0]) > TRN_REFINE_CLIP * sqrt(v)) {
+            w = trn_refine_weight_(global, x + px, y + py, h - dz - s3[0], sqrt(v),
+                                   TRN_REFINE_CLIP_RELIEF) /
+                v;
+            if (!(w > 0.0)) {
                 continue;
             }
-            w = 1.0 / v;
             res = (dz + s3[0]) - b3[0];
             acc->q += w;
             acc->rr += w * res;
@@ -370,8 +426,8 @@ static void block_meat(const trn_grid_f32_t *global, const trn_grid_f32_t *local
                                                               : local->width;
             int32_t j1 = bj + TRN_REFINE_BLOCK < local->height ? bj + TRN_REFINE_BLOCK
                                                                : local->height;
-            accumulate_rect(global, local, rx, ry, x, y, dz, lam, TRN_REFINE_CLIP, model2, cfg, bi,
-                            bj, i1, j1, acc);
+            accumulate_rect(global, local, rx, ry, x, y, dz, lam, TRN_REFINE_CLIP_RELIEF, model2,
+                            cfg, bi, bj, i1, j1, acc);
             for (p = 0; p < 3; ++p) {
                 acc->b[p] -= g[p] * acc->bl; /* the score with the mix profiled out */
             }
@@ -484,7 +540,7 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
     double lam = TRN_REFINE_MIX_MEAN;
     const double lam_lo = TRN_REFINE_MIX_MEAN - 2.0 * TRN_REFINE_MIX_SD;
     const double lam_hi = TRN_REFINE_MIX_MEAN + 2.0 * TRN_REFINE_MIX_SD;
-    int32_t it;
+    int32_t it, phase_end = TRN_REFINE_MAX_ITER;
 
     if ((st = trn_refine_args_(global, local, rover_x, rover_y, cfg, out)) != TRN_OK) {
         return st;
@@ -517,10 +573,11 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
         model2 = next_model2(&acc);
         dz += acc.b[2] / acc.a[8];
     }
-    for (it = 0; it < TRN_REFINE_MAX_ITER; ++it) {
-        double dl;
-        accumulate(global, local, rover_x, rover_y, x, y, dz, lam, TRN_REFINE_CLIP, model2, cfg,
-                   &acc);
+    /* Two phases: the plain clip from the integer start, then the relief
+     * rule (trn_refine_weight_) from the first phase's estimate. */
+    for (it = 0; it < 2 * TRN_REFINE_MAX_ITER; ++it) {
+        double dl, clip = it < phase_end ? TRN_REFINE_CLIP : TRN_REFINE_CLIP_RELIEF;
+        accumulate(global, local, rover_x, rover_y, x, y, dz, lam, clip, model2, cfg, &acc);
         model2 = next_model2(&acc);
         dl = fold_mix(&acc, lam, g);
         if (acc.n_in < 8 || !inv3(acc.a, inv)) {
@@ -546,12 +603,16 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
             set_fail(out, ix, iy);
             return TRN_E_ILLCOND;
         }
-        if (fabs(d[0]) < 1e-4 && fabs(d[1]) < 1e-4) {
-            break;
+        if (it + 1 == phase_end || (fabs(d[0]) < 1e-4 && fabs(d[1]) < 1e-4)) {
+            if (it >= phase_end) {
+                break;
+            }
+            phase_end = it + 1; /* the first phase converged (or ran out) */
         }
     }
     /* Covariance at the final pose. */
-    accumulate(global, local, rover_x, rover_y, x, y, dz, lam, TRN_REFINE_CLIP, model2, cfg, &acc);
+    accumulate(global, local, rover_x, rover_y, x, y, dz, lam, TRN_REFINE_CLIP_RELIEF, model2, cfg,
+               &acc);
     (void)fold_mix(&acc, lam, g);
     if (acc.n_in < 8 || 2 * acc.n_in < acc.n_all || !inv3(acc.a, inv)) {
         set_fail(out, ix, iy);

@@ -130,7 +130,8 @@ static void accumulate(const rctx_t *c, const double pose[5], double clip, doubl
     acc_clear(acc);
     for (j = j0; j < j1; ++j) {
         for (i = i0; i < i1; ++i) {
-            double h = (double)TRN_GRID_AT(c->l, i, j), s3[3], ox, oy, tx, ty, v, sd, res, u, qw;
+            double h = (double)TRN_GRID_AT(c->l, i, j), s3[3], ox, oy, tx, ty, v, sd, res, u, qw,
+                   hw;
             double jv[4], dcb, w;
             int32_t p;
             if (!isfinite(h)) {
@@ -148,23 +149,27 @@ static void accumulate(const rctx_t *c, const double pose[5], double clip, doubl
             sd = sqrt(v + model2);
             res = h - pose[3] - s3[0];
             u = res / sd;
-            if (fabs(u) > clip) {
+            hw = trn_refine_weight_(c->g, pose[0] + tx, pose[1] + ty, res, sd, clip);
+            if (!(hw > 0.0)) {
                 continue;
             }
-            qw = 1.0 / ((sd * sd) * (sd * sd));
-            acc->noise2 += qw * v;
-            acc->rr += qw * res * res;
-            acc->q += qw;
-            acc->vv += 2.0 * qw * qw * v * v;
+            if (hw >= 1.0) {
+                /* the model variance from the points within the plain clip */
+                qw = 1.0 / ((sd * sd) * (sd * sd));
+                acc->noise2 += qw * v;
+                acc->rr += qw * res * res;
+                acc->q += qw;
+                acc->vv += 2.0 * qw * qw * v * v;
+            }
             jacobian(c, s3, tx, ty, jv);
-            w = 1.0 / (sd * sd);
+            w = hw / (sd * sd);
             acc_add(acc, jv, w, res);
             for (p = 0; p < 4; ++p) {
                 acc->al[p] += w * jv[p] * dcb;
             }
             acc->all += w * dcb * dcb;
             acc->bl += w * dcb * res;
-            acc->ss += u * u;
+            acc->ss += hw * u * u;
             acc->n_in += 1;
         }
     }
@@ -294,10 +299,12 @@ static double model_pass(const rctx_t *c, const double p[5], const double bp[4],
                 continue;
             }
             v = noise_var(c->cfg, i, j, c->rx, c->ry) + model2;
-            if (fabs(h - p[3] - s3[0]) > TRN_REFINE_CLIP * sqrt(v)) {
+            w = trn_refine_weight_(c->g, p[0] + ox * cs + oy * sn, p[1] - ox * sn + oy * cs,
+                                   h - p[3] - s3[0], sqrt(v), TRN_REFINE_CLIP_RELIEF) /
+                v;
+            if (!(w > 0.0)) {
                 continue;
             }
-            w = 1.0 / v;
             res = (p[3] + s3[0]) - b3[0];
             sw += w;
             swr += w * res;
@@ -373,7 +380,7 @@ static double sandwich(const rctx_t *c, const double p[5], double model2, const 
             int32_t i1 = bi + TRN_REFINE_BLOCK < c->l->width ? bi + TRN_REFINE_BLOCK : c->l->width;
             int32_t j1 = bj + TRN_REFINE_BLOCK < c->l->height ? bj + TRN_REFINE_BLOCK
                                                               : c->l->height;
-            accumulate(c, p, TRN_REFINE_CLIP, model2, bi, bj, i1, j1, acc);
+            accumulate(c, p, TRN_REFINE_CLIP_RELIEF, model2, bi, bj, i1, j1, acc);
             for (q = 0; q < nq; ++q) {
                 double t = 0.0; /* (inv score)[q] */
                 for (s = 0; s < 4; ++s) {
@@ -493,9 +500,11 @@ static int iterate(const rctx_t *c, const double p0[3], double max_turn, double 
     const double lam_lo = TRN_REFINE_MIX_MEAN - 2.0 * TRN_REFINE_MIX_SD;
     const double lam_hi = TRN_REFINE_MIX_MEAN + 2.0 * TRN_REFINE_MIX_SD;
     double d[4], dl;
-    int32_t it, q;
-    for (it = 0; it < TRN_REFINE_MAX_ITER; ++it) {
-        accumulate_all(c, p, TRN_REFINE_CLIP, *model2, acc);
+    int32_t it, q, phase_end = TRN_REFINE_MAX_ITER;
+    /* two phases, as trn_refine_pose's: the plain clip, then the relief rule */
+    for (it = 0; it < 2 * TRN_REFINE_MAX_ITER; ++it) {
+        accumulate_all(c, p, it < phase_end ? TRN_REFINE_CLIP : TRN_REFINE_CLIP_RELIEF, *model2,
+                       acc);
         *model2 = next_model2(acc);
         dl = fold_mix(acc, p[4], g);
         if (acc->n_in < 8 || !inv4(acc->a, c->fit_h, inv)) {
@@ -519,8 +528,12 @@ static int iterate(const rctx_t *c, const double p0[3], double max_turn, double 
             fabs(p[1] - p0[1]) > TRN_REFINE_MAX_SHIFT || fabs(p[2] - p0[2]) > max_turn) {
             return 0;
         }
-        if (fabs(d[0]) < 1e-4 && fabs(d[1]) < 1e-4 && fabs(d[2]) * rmax < 1e-4) {
-            break;
+        if (it + 1 == phase_end ||
+            (fabs(d[0]) < 1e-4 && fabs(d[1]) < 1e-4 && fabs(d[2]) * rmax < 1e-4)) {
+            if (it >= phase_end) {
+                break;
+            }
+            phase_end = it + 1; /* the first phase converged (or ran out) */
         }
     }
     return 1;
@@ -538,7 +551,7 @@ static int covariance(const rctx_t *c, const double p[5], double model2, acc4_t 
 {
     double chi2, f, sh[4], w;
     int32_t q, r;
-    accumulate_all(c, p, TRN_REFINE_CLIP, model2, acc);
+    accumulate_all(c, p, TRN_REFINE_CLIP_RELIEF, model2, acc);
     (void)fold_mix(acc, p[4], g);
     out->pos.n_used = acc->n_in;
     if (acc->n_in < 8 || 2 * acc->n_in < acc->n_all || !inv4(acc->a, c->fit_h, inv)) {

@@ -15,6 +15,17 @@ int trn_refine_sample_(const trn_grid_f32_t *g, double x, double y, double out[3
 /* The same by bilinear interpolation only. */
 int trn_refine_sample_bilinear_(const trn_grid_f32_t *g, double x, double y, double out[3]);
 
+/* The relief rule's clip (a negative clip in trn_refine_weight_). */
+#define TRN_REFINE_CLIP_RELIEF (-TRN_REFINE_CLIP)
+
+/* The refinements' weight factor of residual res (standard deviation sd)
+ * at fractional cell (x, y): clip >= 0, 1 within clip sds, else 0; clip < 0
+ * (TRN_REFINE_CLIP_RELIEF), 1 within -clip sds, 0 beyond -clip sds plus the
+ * relief of the map's four cells around (x, y), Huber's -clip sd / |res|
+ * between (refine.c). */
+double trn_refine_weight_(const trn_grid_f32_t *g, double x, double y, double res, double sd,
+                          double clip);
+
 /* Standard deviation of the seen local heights about their mean (0 for
  * none), and their count (trn_height_search's K is 1 / (10 x it)). */
 double trn_refine_local_spread_(const trn_grid_f32_t *local, int32_t *n_seen);

@@ -64,7 +64,8 @@ extern "C" {
  *  (a local map sampled bilinearly, bicubically, or sharper than either)
  *  is not pulled to the middle. */
 #define TRN_REFINE_MIX_SD 1.0
-/** Largest Gauss-Newton iterations. */
+/** Largest Gauss-Newton iterations of each of the refinement's two phases
+ *  (the plain clip, then the relief rule: docs/method.md 9, "the clip"). */
 #define TRN_REFINE_MAX_ITER 12
 /** Step halvings tried per iteration of the interpolants' shift. */
 #define TRN_REFINE_HALVINGS 8
@@ -108,7 +109,7 @@ typedef struct {
                                  (the mixed interpolant; compares refinements) */
     int32_t n_used;         /**< inlier points of the last iteration */
     int32_t n_seen;         /**< seen local points with a global height under them */
-    int32_t iterations;     /**< Gauss-Newton steps taken */
+    int32_t iterations;     /**< Gauss-Newton steps taken, both phases */
 } trn_refine_t;
 
 /**

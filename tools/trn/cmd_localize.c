@@ -268,6 +268,7 @@ void cmd_localize_report_json(FILE *out, const cmd_localize_ctx_t *c, const char
         json_num(&j, NULL, rf->interp_shift[1]);
         json_arr_end(&j);
         json_int(&j, "points_used", (long long)rf->n_used);
+        json_int(&j, "iterations", (long long)rf->iterations);
         json_num(&j, "log_likelihood", rf->ll);
         json_obj_end(&j);
     }
