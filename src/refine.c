@@ -50,11 +50,12 @@ static int sample_bilinear(const trn_grid_f32_t *g, double x, double y, double o
  * whenever the local map was sensed from terrain finer than the map; the
  * bounded pull keeps the latter (a changed patch of the map) from moving
  * it (docs/method.md 9, "the clip"). A gross error beyond the local relief
- * is still clipped; on flat ground the rule is the plain clip. A clip >= 0 is the plain clip (clip sds, the refinement's
- * first phase: from an integer start the linearization is poor on terrain a
- * cell wide, and the large residuals there are the start's, not the
- * terrain's); TRN_REFINE_CLIP_RELIEF (-TRN_REFINE_CLIP) is the rule above,
- * the second phase's, from the first phase's estimate. */
+ * is still clipped; on flat ground the rule is the plain clip.
+ * A clip >= 0 is the plain clip (clip sds: the refinement's first phase;
+ * from an integer start the linearization is poor on terrain a cell wide,
+ * and the large residuals there are the start's, not the terrain's);
+ * TRN_REFINE_CLIP_RELIEF (-TRN_REFINE_CLIP) is the rule above, the second
+ * phase's, from the first phase's estimate. */
 double trn_refine_weight_(const trn_grid_f32_t *g, double x, double y, double res, double sd,
                           double clip)
 {
