@@ -286,7 +286,7 @@ static double model_pass(const rctx_t *c, const double p[5], const double bp[4],
     for (j = 0; j < c->l->height; ++j) {
         for (i = 0; i < c->l->width; ++i) {
             double h = (double)TRN_GRID_AT(c->l, i, j), s3[3], b3[3], ox, oy, v, w, res, jv[4];
-            double btx, bty;
+            double btx, bty, gx, gy;
             if (!isfinite(h)) {
                 continue;
             }
@@ -294,13 +294,15 @@ static double model_pass(const rctx_t *c, const double p[5], const double bp[4],
             oy = (double)(j - c->ry);
             btx = ox * bc + oy * bs;
             bty = -ox * bs + oy * bc;
-            if (!trn_refine_sample_(c->g, p[0] + ox * cs + oy * sn, p[1] - ox * sn + oy * cs, s3) ||
+            gx = p[0] + ox * cs + oy * sn; /* the estimate's point */
+            gy = p[1] - ox * sn + oy * cs;
+            if (!trn_refine_sample_(c->g, gx, gy, s3) ||
                 !trn_refine_sample_bilinear_(c->g, bp[0] + btx, bp[1] + bty, b3)) {
                 continue;
             }
             v = noise_var(c->cfg, i, j, c->rx, c->ry) + model2;
-            w = trn_refine_weight_(c->g, p[0] + ox * cs + oy * sn, p[1] - ox * sn + oy * cs,
-                                   h - p[3] - s3[0], sqrt(v), TRN_REFINE_CLIP_RELIEF) /
+            w = trn_refine_weight_(c->g, gx, gy, h - p[3] - s3[0], sqrt(v),
+                                   TRN_REFINE_CLIP_RELIEF) /
                 v;
             if (!(w > 0.0)) {
                 continue;

@@ -37,13 +37,6 @@ static double surface(double x, double y)
            2.5 * sin(0.51 * x + 0.44 * y);
 }
 
-static double gauss(trn_rng_t *r)
-{
-    double u1 = trn_rng_unit(r), u2 = trn_rng_unit(r);
-    u1 = u1 < 1e-300 ? 1e-300 : u1;
-    return sqrt(-2.0 * log(u1)) * cos(6.283185307179586 * u2);
-}
-
 static void make_global(trn_grid_f32_t *g)
 {
     int x, y;
@@ -91,7 +84,7 @@ static void make_local_mix(trn_grid_f32_t *l, double tx, double ty, double dz, d
             double rm = cfg->cell_m * sqrt((double)((x - c) * (x - c) + (y - c) * (y - c)));
             double s = cfg->noise_m + cfg->noise_k_per_m * rm * rm;
             double b = lin(tx + x - c, ty + y - c), cc = bilin(tx + x - c, ty + y - c);
-            l_data[y * LW + x] = (float)(b + mix * (cc - b) + dz + noise * s * gauss(r));
+            l_data[y * LW + x] = (float)(b + mix * (cc - b) + dz + noise * s * trn_rng_gauss(r));
         }
     }
     l_data[c * LW + c] = NAN; /* the rover's own cell is never seen */
@@ -363,7 +356,7 @@ static void test_sys_weight(void **state)
                          TRN_OK);
         zero += out.sys_weight == 0.0;
         for (k = 0; k < LW * LW; ++k) {
-            l_data[k] += (float)(0.05 * gauss(&r));
+            l_data[k] += (float)(0.05 * trn_rng_gauss(&r));
         }
         assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, (int)floor(tx + 0.5),
                                          (int)floor(ty + 0.5), &c, &out),
@@ -391,7 +384,7 @@ static void make_local_turned(trn_grid_f32_t *l, double tx, double ty, double d,
             double s = cfg->noise_m + cfg->noise_k_per_m * rm * rm;
             double px = tx + (x - c) * cs + (y - c) * sn, py = ty - (x - c) * sn + (y - c) * cs;
             double b = lin(px, py), cc = bilin(px, py);
-            l_data[y * LW + x] = (float)(b + mix * (cc - b) + dz + noise * s * gauss(r));
+            l_data[y * LW + x] = (float)(b + mix * (cc - b) + dz + noise * s * trn_rng_gauss(r));
         }
     }
     l_data[c * LW + c] = NAN;

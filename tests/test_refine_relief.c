@@ -84,12 +84,6 @@ static double terrain_at(double x, double y)
            fy * ((1.0 - fx) * p[FW] + fx * p[FW + 1]);
 }
 
-static double gauss(trn_rng_t *r)
-{
-    double u = trn_rng_unit(r), v = trn_rng_unit(r);
-    return sqrt(-2.0 * log(u > 1e-300 ? u : 1e-300)) * cos(6.283185307179586 * v);
-}
-
 /* The local disc seen from (tx, ty) (map cells), 1 cm of noise, a height
  * offset, the rover's cell unseen. */
 static void make_local(double tx, double ty, trn_rng_t *r, trn_grid_f32_t *l)
@@ -101,7 +95,7 @@ static void make_local(double tx, double ty, trn_rng_t *r, trn_grid_f32_t *l)
             l_data[j * LW + i] = (dx == 0 && dy == 0) || dx * dx + dy * dy > LR * LR
                                      ? NAN
                                      : (float)(terrain_at(tx + dx, ty + dy) + 2.0 +
-                                               0.01 * gauss(r));
+                                               0.01 * trn_rng_gauss(r));
         }
     }
     assert_int_equal(trn_grid_f32_init(l, l_data, LW * LW, LW, LW), TRN_OK);
@@ -128,7 +122,7 @@ static void make_local_map(double tx, double ty, trn_rng_t *r)
             p = &g_data[y0 * GW + x0];
             l_data[j * LW + i] = (float)((1.0 - fy) * ((1.0 - fx) * p[0] + fx * p[1]) +
                                          fy * ((1.0 - fx) * p[GW] + fx * p[GW + 1]) + 1.0 +
-                                         0.01 * gauss(r));
+                                         0.01 * trn_rng_gauss(r));
         }
     }
 }

@@ -3,6 +3,7 @@
  * (splitmix64). The core itself has no random state. */
 #ifndef TRN_SUPPORT_RNG_H
 #define TRN_SUPPORT_RNG_H
+#include <math.h>
 #include <stdint.h>
 
 typedef struct {
@@ -30,5 +31,12 @@ static inline int32_t trn_rng_int(trn_rng_t *r, int32_t lo, int32_t hi)
 {
     uint64_t span = (uint64_t)((int64_t)hi - (int64_t)lo + 1);
     return (int32_t)((int64_t)lo + (int64_t)(trn_rng_u64(r) % span));
+}
+/** Standard normal (Box-Muller, two uniforms per draw). */
+static inline double trn_rng_gauss(trn_rng_t *r)
+{
+    double u1 = trn_rng_unit(r), u2 = trn_rng_unit(r);
+    u1 = u1 < 1e-300 ? 1e-300 : u1;
+    return sqrt(-2.0 * log(u1)) * cos(6.283185307179586 * u2);
 }
 #endif
