@@ -10,28 +10,18 @@
 /* Bilinear height at fractional cell (x, y) (centres at integers) and its
  * exact gradient (per cell) inside the containing cell; 0 when a corner is
  * off the grid or missing. */
-/* The bilinear cell of fractional cell (x, y): its corner (x0, y0), the
- * last cell on the far edges; 0 when (x, y) is off the grid. */
-static int bilinear_cell(const trn_grid_f32_t *g, double x, double y, int32_t *x0, int32_t *y0)
-{
-    if (!(x >= 0.0 && y >= 0.0 && x <= (double)(g->width - 1) && y <= (double)(g->height - 1)) ||
-        g->width < 2 || g->height < 2) {
-        return 0;
-    }
-    *x0 = (int32_t)floor(x);
-    *y0 = (int32_t)floor(y);
-    *x0 = *x0 > g->width - 2 ? g->width - 2 : *x0;
-    *y0 = *y0 > g->height - 2 ? g->height - 2 : *y0;
-    return 1;
-}
-
 static int sample_bilinear(const trn_grid_f32_t *g, double x, double y, double out[3])
 {
     double fx, fy, a, b, c, d;
     int32_t x0, y0;
-    if (!bilinear_cell(g, x, y, &x0, &y0)) {
+    if (!(x >= 0.0 && y >= 0.0 && x <= (double)(g->width - 1) && y <= (double)(g->height - 1)) ||
+        g->width < 2 || g->height < 2) {
         return 0;
     }
+    x0 = (int32_t)floor(x);
+    y0 = (int32_t)floor(y);
+    x0 = x0 > g->width - 2 ? g->width - 2 : x0;
+    y0 = y0 > g->height - 2 ? g->height - 2 : y0;
     fx = x - (double)x0;
     fy = y - (double)y0;
     a = (double)TRN_GRID_AT(g, x0, y0);
@@ -78,9 +68,17 @@ double trn_refine_weight_(const trn_grid_f32_t *g, double x, double y, double re
     if (!(fabs(res) > k * sd)) {
         return 1.0;
     }
-    if (!bilinear_cell(g, x, y, &x0, &y0)) {
+    /* sample_bilinear's cell lookup, written out: a shared helper added a
+     * frame under the heading refinement's deepest chain, which then met
+     * TRN_STACK_LIMIT_BYTES exactly (2048, host-release) */
+    if (!(x >= 0.0 && y >= 0.0 && x <= (double)(g->width - 1) && y <= (double)(g->height - 1)) ||
+        g->width < 2 || g->height < 2) {
         return 0.0;
     }
+    x0 = (int32_t)floor(x);
+    y0 = (int32_t)floor(y);
+    x0 = x0 > g->width - 2 ? g->width - 2 : x0;
+    y0 = y0 > g->height - 2 ? g->height - 2 : y0;
     a = TRN_GRID_AT(g, x0, y0);
     b = TRN_GRID_AT(g, x0 + 1, y0);
     c = TRN_GRID_AT(g, x0, y0 + 1);
