@@ -637,11 +637,11 @@ trn_status_t trn_localize_heights3_(const trn_map_t *map, const trn_grid_f32_t *
     out->loc.n_points = (size_t)(ref->pos.n_seen > 0 ? ref->pos.n_seen : 0);
     /* the zone as trn_localize_dem's height matcher: min_exclusion_cells */
     out->loc.exclusion_cells = map->cfg.min_exclusion_cells;
-    masses(grid, win, kk, out->loc.refined ? ref->pos.inflation : 1.0, &out->loc);
+    masses(grid, win, kk, out->loc.refined ? ref->pos.ll_inflation : 1.0, &out->loc);
     if (out->loc.refined) { /* the far basins' share (localize_int.h) */
         out->loc.failure_probability = fmax(
             out->loc.failure_probability,
-            trn_loc_basins_failure_(far, ref->pos.inflation, &out->loc));
+            trn_loc_basins_failure_(far, ref->pos.ll_inflation, &out->loc));
     }
     if (!out->loc.refined || out->loc.misfit) {
         return TRN_E_ILLCOND;

@@ -653,7 +653,7 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
      * so a broad peak (large sigma) shows as a large probability instead of
      * hiding its competitors inside a wide zone. */
     if (out->refined) {
-        infl = out->refinement.inflation;
+        infl = out->refinement.ll_inflation;
     }
     ex.cx = out->ix; /* the answer's start (refine_basins may move it) */
     ex.cy = out->iy;
@@ -665,9 +665,10 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
     if (st == TRN_OK) {
         /* The posterior mass outside the zone around the peak (uniform prior
          * over the window), not only the best competitor: many near-ties far
-         * away add up. ln L is divided by the covariance's inflation first:
-         * correlated residuals make ln L differences too large by about that
-         * factor (a composite likelihood's adjustment). */
+         * away add up. ln L is divided by the block sandwich's ratio first
+         * (ll_inflation, ungated): correlated residuals make ln L differences
+         * too large by about that factor (a composite likelihood's
+         * adjustment). */
         double pf = fmax(exp(second.lse_out - second.lse_all),
                          out->refined ? trn_loc_basins_failure_(bs, infl, out) : 0.0);
         out->has_second = 1;

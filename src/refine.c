@@ -413,10 +413,16 @@ static void interp_shift(const trn_grid_f32_t *global, const trn_grid_f32_t *loc
  * TRN_REFINE_BLOCK x TRN_REFINE_BLOCK blocks of local cells of the outer
  * product of each block's score (sum of w r J over its inliers). Residuals
  * correlated within a block (the global DEM's interpolation error is smooth
- * over about a cell) add up there instead of averaging out. */
+ * over about a cell) add up there instead of averaging out. h0[p] is the sum
+ * over the blocks of the squared variance each block's term of the
+ * sandwich's position variance p, (inv score)[p]^2, would have if the
+ * residuals were the noise model's alone: (inv V inv)[pp], V the block's
+ * own normal matrix with the mix profiled out ([I, -g] N_b [I, -g]^T). So
+ * sqrt(2 h0[p]) is that variance's sampling sd under the noise model. */
 static void block_meat(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
                        int32_t ry, double x, double y, double dz, double lam, const double g[3],
-                       double model2, const trn_refine_cfg_t *cfg, accum_t *work, double meat[9])
+                       const double inv[9], double model2, const trn_refine_cfg_t *cfg,
+                       accum_t *work, double meat[9], double h0[2])
 {
     /* work is the caller's, dead by now (the stack, as in interp_shift) */
     accum_t *acc = work;
@@ -424,6 +430,7 @@ static void block_meat(const trn_grid_f32_t *global, const trn_grid_f32_t *local
     for (p = 0; p < 9; ++p) {
         meat[p] = 0.0;
     }
+    h0[0] = h0[1] = 0.0;
     for (bj = 0; bj < local->height; bj += TRN_REFINE_BLOCK) {
         for (bi = 0; bi < local->width; bi += TRN_REFINE_BLOCK) {
             int32_t i1 = bi + TRN_REFINE_BLOCK < local->width ? bi + TRN_REFINE_BLOCK
@@ -439,6 +446,11 @@ static void block_meat(const trn_grid_f32_t *global, const trn_grid_f32_t *local
                 for (q = 0; q < 3; ++q) {
                     meat[p * 3 + q] += acc->b[p] * acc->b[q];
                 }
+            }
+            for (p = 0; p < 2; ++p) {
+                const double v = trn_refine_block_var_(acc->a, acc->al, acc->all, g, inv + p * 3,
+                                                       3);
+                h0[p] += v * v;
             }
         }
     }
@@ -464,6 +476,28 @@ double trn_refine_sys_weight_(double rr, double noise2, double q, double vv)
     double m2s = (rr - noise2 - TRN_REFINE_SYS_Z * sqrt(vv)) / q;
     m2s = m2s > 0.0 ? m2s : 0.0;
     return TRN_REFINE_SYS * m2s / (m2s + noise2 / q);
+}
+
+double trn_refine_excess_(double ratio, double rel_sd)
+{
+    return ratio > 1.0 + TRN_REFINE_SYS_Z * rel_sd ? ratio : 1.0;
+}
+
+double trn_refine_block_var_(const double *a, const double *al, double all, const double *g,
+                             const double *u, int32_t n)
+{
+    /* u^T V u with V = A - al g^T - g al^T + all g g^T: the variance of
+     * u . (b - g bl) when b and bl have the covariance [[A, al], [al^T, all]] */
+    double ua = 0.0, ug = 0.0, v = 0.0;
+    int32_t r, t;
+    for (r = 0; r < n; ++r) {
+        for (t = 0; t < n; ++t) {
+            v += u[r] * a[r * n + t] * u[t];
+        }
+        ua += u[r] * al[r];
+        ug += u[r] * g[r];
+    }
+    return v - 2.0 * ua * ug + all * ug * ug;
 }
 
 static double local_spread(const trn_grid_f32_t *local, int32_t *n_seen);
@@ -527,7 +561,7 @@ static void set_fail(trn_refine_t *out, int32_t ix, int32_t iy)
     out->y = (double)iy;
     out->cov_cells[0] = out->cov_cells[1] = INFINITY;
     out->cov_cells[2] = 0.0;
-    out->inflation = 1.0;
+    out->inflation = out->ll_inflation = 1.0;
     out->interp_shift[0] = out->interp_shift[1] = 0.0;
     out->interp_mix = TRN_REFINE_MIX_MEAN;
     out->sys_weight = 0.0;
@@ -625,7 +659,9 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
     }
     chi2 = acc.ss / (double)(acc.n_in - 4);
     out->chi2_dof = chi2;
-    chi2 = chi2 > 1.0 ? chi2 : 1.0;
+    /* the noise model's scale, raised only where the residuals exceed it
+     * beyond TRN_REFINE_SYS_Z sampling sds (sqrt(2 / dof)) */
+    chi2 = trn_refine_excess_(chi2, sqrt(2.0 / (double)(acc.n_in - 4)));
     out->x = x;
     out->y = y;
     out->dz_m = dz;
@@ -633,18 +669,22 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
     out->interp_mix = lam;
     out->ll = refined_ll(global, local, rover_x, rover_y, x, y, dz, lam, model2, cfg);
     /* Sandwich A^-1 B A^-1 (B from blocks); the model-based A^-1 (times the
-     * chi-square floor) is a lower bound on each variance: the block
-     * estimate is noisy, and independent errors must not shrink it. */
+     * chi-square factor) is a lower bound on each variance: the block
+     * estimate is noisy, and independent errors must not shrink it; nor
+     * raise it by chance: a ratio counts only beyond TRN_REFINE_SYS_Z
+     * sampling sds of 1 (docs/method.md 9, "the floors"). */
     {
         /* q > 0: at least 8 inliers, each noise variance > 0. The systematic
          * weight counts the misfit beyond TRN_REFINE_SYS_Z sampling sds of
          * what the noise alone would give (with no misfit, next_model2's
          * estimate is positive in about a third of the cases); taken before
          * block_meat reuses acc. */
-        double meat[9], f, sw[2], w = trn_refine_sys_weight_(acc.rr, acc.noise2, acc.q, acc.vv);
+        double meat[9], f, sw[2], h0[2];
+        double w = trn_refine_sys_weight_(acc.rr, acc.noise2, acc.q, acc.vv);
         int32_t p, q, r;
         out->n_used = acc.n_in;
-        block_meat(global, local, rover_x, rover_y, x, y, dz, lam, g, model2, cfg, &acc, meat);
+        block_meat(global, local, rover_x, rover_y, x, y, dz, lam, g, inv, model2, cfg, &acc, meat,
+                   h0);
         /* the sandwich's two position variances, (inv meat inv)[pp] */
         for (p = 0; p < 2; ++p) {
             sw[p] = 0.0;
@@ -656,10 +696,16 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
         }
         {
             /* one inflation factor for the position block, so the ellipse
-             * keeps the model's shape: the larger of the two variance ratios */
+             * keeps the model's shape: the larger of the two variance
+             * ratios, each where beyond its sampling sd (h0) of 1. ln L's
+             * factor (the failure probability) takes them whole: there a
+             * factor low by chance would make a wrong answer confident */
             double fx = sw[0] / (inv[0] * chi2), fy = sw[1] / (inv[4] * chi2);
             f = fx > fy ? fx : fy;
-            f = f > 1.0 ? f : 1.0;
+            out->ll_inflation = f > 1.0 ? f : 1.0;
+            fx = trn_refine_excess_(fx, sqrt(2.0 * h0[0]) / inv[0]);
+            fy = trn_refine_excess_(fy, sqrt(2.0 * h0[1]) / inv[4]);
+            f = fx > fy ? fx : fy;
         }
         out->inflation = f;
         out->cov_cells[0] = inv[0] * chi2 * f;

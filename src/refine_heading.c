@@ -367,14 +367,17 @@ static void interp_shift(const rctx_t *c, const double p[5], double model2, acc4
 
 /* Block sandwich (refine.c's block_meat and its product): the inflation
  * factor of the model covariance inv x chi2, the larger of its variance
- * ratios over x, y (and the heading when fitted), at least 1. Each block's
- * score has the mix profiled out (b - g bl, refine.c); (inv meat inv)[q][q]
- * is summed as the squares of (inv score)[q] block by block, so no meat
- * matrix is kept. acc is the caller's (the stack stays small). */
+ * ratios over x, y (and the heading when fitted), each where beyond
+ * TRN_REFINE_SYS_Z of its sampling sds under the noise model (h0, as in
+ * refine.c), else 1; *ll_f the larger ratio ungated, at least 1 (ln L's
+ * divisor). Each block's score has the mix profiled out (b - g bl,
+ * refine.c); (inv meat inv)[q][q] is summed as the squares of (inv
+ * score)[q] block by block, so no meat matrix is kept. acc is the caller's
+ * (the stack stays small). */
 static double sandwich(const rctx_t *c, const double p[5], double model2, const double inv[16],
-                       const double g[4], double chi2, acc4_t *acc)
+                       const double g[4], double chi2, acc4_t *acc, double *ll_f)
 {
-    double f = 1.0, sw[3] = {0.0, 0.0, 0.0};
+    double f = 1.0, fg = 1.0, sw[3] = {0.0, 0.0, 0.0}, h0[3] = {0.0, 0.0, 0.0};
     const int32_t nq = c->fit_h ? 3 : 2;
     int32_t bi, bj, q, s;
     for (bj = 0; bj < c->l->height; bj += TRN_REFINE_BLOCK) {
@@ -389,14 +392,19 @@ static double sandwich(const rctx_t *c, const double p[5], double model2, const 
                     t += inv[q * 4 + s] * (acc->b[s] - g[s] * acc->bl);
                 }
                 sw[q] += t * t;
+                t = trn_refine_block_var_(acc->a, acc->al, acc->all, g, inv + q * 4, 4);
+                h0[q] += t * t;
             }
         }
     }
     for (q = 0; q < nq; ++q) {
         const double ratio = sw[q] / (inv[q + 4 * q] * chi2);
+        const double gated = trn_refine_excess_(ratio, sqrt(2.0 * h0[q]) / inv[q + 4 * q]);
         f = ratio > f ? ratio : f;
+        fg = gated > fg ? gated : fg;
     }
-    return f;
+    *ll_f = f;
+    return fg;
 }
 
 /* trn_height_search's mixture ln L at the refined pose p (refine.c's
@@ -441,7 +449,7 @@ static void set_fail(trn_refine3_t *out, int32_t ix, int32_t iy, double th)
     out->pos.y = (double)iy;
     out->pos.cov_cells[0] = out->pos.cov_cells[1] = (double)INFINITY;
     out->pos.cov_cells[2] = 0.0;
-    out->pos.inflation = 1.0;
+    out->pos.inflation = out->pos.ll_inflation = 1.0;
     out->pos.interp_shift[0] = out->pos.interp_shift[1] = 0.0;
     out->pos.interp_mix = TRN_REFINE_MIX_MEAN;
     out->pos.sys_weight = 0.0;
@@ -562,10 +570,10 @@ static int covariance(const rctx_t *c, const double p[5], double model2, acc4_t 
     /* four parameters and the mix (three with the heading held) */
     chi2 = acc->ss / (double)(acc->n_in - (c->fit_h ? 5 : 4));
     out->pos.chi2_dof = chi2;
-    chi2 = chi2 > 1.0 ? chi2 : 1.0;
+    chi2 = trn_refine_excess_(chi2, sqrt(2.0 / (double)(acc->n_in - (c->fit_h ? 5 : 4))));
     /* q > 0: at least 8 inliers, each noise variance > 0 */
     w = trn_refine_sys_weight_(acc->rr, acc->noise2, acc->q, acc->vv);
-    f = sandwich(c, p, model2, inv, g, chi2, acc); /* acc is dead after w */
+    f = sandwich(c, p, model2, inv, g, chi2, acc, &out->pos.ll_inflation); /* acc dead after w */
     out->pos.inflation = f;
     for (q = 0; q < 3; ++q) {
         for (r = 0; r < 3; ++r) {

@@ -89,6 +89,17 @@ static inline int32_t trn_pose_mom_end_(const trn_pose_mom_t *a, double *dz, dou
 double trn_refine_model2_(double rr, double noise2, double q);
 double trn_refine_sys_weight_(double rr, double noise2, double q, double vv);
 
+/* A variance ratio (the reduced chi-square, the block sandwich's) that
+ * counts only where beyond TRN_REFINE_SYS_Z of its sampling sds (rel_sd,
+ * relative to 1) under the noise model: ratio there, else 1. */
+double trn_refine_excess_(double ratio, double rel_sd);
+
+/* u^T V u, V = [I, -g] N_b [I, -g]^T with N_b = [[a, al], [al^T, all]] (a
+ * n x n row-major, al and g and u of n): the variance, under the noise
+ * model, of u . (b - g bl), a block's score with the mix profiled out. */
+double trn_refine_block_var_(const double *a, const double *al, double all, const double *g,
+                             const double *u, int32_t n);
+
 /* cos and sin of a finite angle without libm's exact argument reduction
  * and its stack (src/refine_heading.c; within 1e-14 for |a| <= 4 pi). */
 void trn_heading_trig_(double a, double *c, double *s);

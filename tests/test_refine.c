@@ -369,6 +369,66 @@ static void test_sys_weight(void **state)
     assert_true(large >= 190);
 }
 
+/* The covariance's two floors act only on a departure from the noise model
+ * beyond one sampling sd (TRN_REFINE_SYS_Z; docs/method.md 9, "the
+ * floors"). On noise-only maps (the model plus the documented noise) the
+ * block sandwich's ratio is above 1 by chance in 63 of these 200 cases
+ * (ll_inflation, the ratio ungated, which the code before put on the
+ * covariance: it had the factor 1 in 137); the gated factor must be 1 in at
+ * least 180, and ll_inflation keep the ungated ratio. With 3 times the
+ * documented range term the reduced chi-square is above 1.5 in 78 (the
+ * model variance, decided by the near cells, does not absorb it): each such
+ * covariance must be at least 1.5 times the documented noise's at the same
+ * pose. With offsets of 5 cm common to each block (a misfit the blocks
+ * see), the sandwich's factor must act in 190. */
+static void test_floors(void **state)
+{
+    trn_grid_f32_t g, l;
+    trn_refine_cfg_t c = cfg_of(), c3 = cfg_of();
+    trn_refine_t out, o15;
+    trn_rng_t r;
+    int i, x, y, one = 0, ll_above = 0, big = 0, scaled = 0, wave = 0, n = 200;
+    (void)state;
+    c3.noise_k_per_m = 3.0f * c.noise_k_per_m;
+    trn_rng_seed(&r, 41);
+    make_global(&g);
+    for (i = 0; i < n; ++i) {
+        double tx = 24.0 + 12.0 * trn_rng_unit(&r), ty = 24.0 + 12.0 * trn_rng_unit(&r);
+        const int ix = (int)floor(tx + 0.5), iy = (int)floor(ty + 0.5);
+        make_local(&l, tx, ty, 1.0, 1.0, &c, &r);
+        assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, ix, iy, &c, &out), TRN_OK);
+        one += out.inflation == 1.0;
+        ll_above += out.ll_inflation > 1.0;
+        assert_true(out.ll_inflation >= out.inflation && out.inflation >= 1.0);
+        make_local(&l, tx, ty, 1.0, 1.0, &c3, &r);
+        assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, ix, iy, &c, &o15), TRN_OK);
+        big += o15.chi2_dof > 1.5;
+        scaled += o15.chi2_dof > 1.5 && o15.cov_cells[0] >= 1.5 * out.cov_cells[0];
+        make_local(&l, tx, ty, 1.0, 1.0, &c, &r);
+        for (y = 0; y < LW; y += TRN_REFINE_BLOCK) {
+            for (x = 0; x < LW; x += TRN_REFINE_BLOCK) {
+                const float off = (float)(0.05 * trn_rng_gauss(&r));
+                int u, v;
+                for (v = y; v < y + TRN_REFINE_BLOCK && v < LW; ++v) {
+                    for (u = x; u < x + TRN_REFINE_BLOCK && u < LW; ++u) {
+                        l_data[v * LW + u] += off;
+                    }
+                }
+            }
+        }
+        assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, ix, iy, &c, &out), TRN_OK);
+        wave += out.inflation > 1.0 && out.inflation == out.ll_inflation;
+    }
+    printf("floors: sandwich factor 1 in %d of %d noise-only maps (ungated above 1 in %d); "
+           "reduced chi-square above 1.5 in %d with 3 x the range term, the variance 1.5 x the "
+           "documented noise's in %d of them; sandwich acts in %d with 5 cm block offsets\n",
+           one, n, ll_above, big, scaled, wave);
+    assert_true(one >= 180);
+    assert_true(ll_above >= 40);
+    assert_true(big >= 50 && scaled == big);
+    assert_true(wave >= 190);
+}
+
 /* Local DEM seen from pose (tx, ty) with the heading off by d: local offset
  * o shows the global DEM at (tx, ty) + o turned as trn_refine_pose_heading
  * turns it, (ox cos d + oy sin d, -ox sin d + oy cos d); heights the mix
@@ -847,7 +907,8 @@ int main(void)
         cmocka_unit_test(test_noise_coverage), cmocka_unit_test(test_outliers),
         cmocka_unit_test(test_errors),         cmocka_unit_test(test_cfg_auto),
         cmocka_unit_test(test_height_search),  cmocka_unit_test(test_mix),
-        cmocka_unit_test(test_sys_weight),     cmocka_unit_test(test_heading_mix),
+        cmocka_unit_test(test_sys_weight),     cmocka_unit_test(test_floors),
+        cmocka_unit_test(test_heading_mix),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -19,9 +19,10 @@
  * its 4 x 4 support is incomplete), the mix estimated from the data under a
  * weak prior (TRN_REFINE_MIX_MEAN, TRN_REFINE_MIX_SD); residuals beyond
  * TRN_REFINE_CLIP standard deviations are outliers (re-decided every step).
- * Covariance of (px, py), the mix marginalized: (J^T W J)^-1 x max(1,
- * reduced chi-square) x the block-sandwich inflation (TRN_REFINE_BLOCK),
- * plus sys_weight x the outer product of the shift bilinear heights would
+ * Covariance of (px, py), the mix marginalized: (J^T W J)^-1 x the
+ * reduced chi-square x the block-sandwich inflation (TRN_REFINE_BLOCK),
+ * each only where above 1 by more than TRN_REFINE_SYS_Z of its sampling
+ * sds under the noise model (else 1), plus sys_weight x the outer product of the shift bilinear heights would
  * cause (the interpolants' disagreement), sys_weight = TRN_REFINE_SYS x the
  * share in the residual variance of the misfit beyond its sampling noise
  * (TRN_REFINE_SYS_Z). docs/modules/refine.md.
@@ -54,7 +55,9 @@ extern "C" {
 /** The misfit that weights the interpolants' disagreement counts only beyond
  *  this many sampling standard deviations of what the noise alone would
  *  give (sys_weight): with no misfit at all, the moment estimate of m^2 is
- *  positive in about a third of the cases (tests/test_refine.c). */
+ *  positive in about a third of the cases (tests/test_refine.c). The same
+ *  rule gates the covariance's reduced chi-square and block-sandwich
+ *  ratio (trn_refine_t.inflation). */
 #define TRN_REFINE_SYS_Z 1.0
 #endif
 /** Prior of the interpolants' mix (0 bilinear, 1 bicubic): its mean, the
@@ -96,8 +99,13 @@ typedef struct {
     double dz_m;            /**< vertical offset local - global, metres */
     double model_m;         /**< model error estimated beside the noise, metres */
     double cov_cells[3];    /**< var_x, var_y, cov_xy in cells^2 */
-    double chi2_dof;        /**< reduced chi-square of the inliers (before the >= 1 floor) */
-    double inflation;       /**< factor (>= 1) the block sandwich put on the model covariance */
+    double chi2_dof;        /**< reduced chi-square of the inliers (the covariance takes it
+                                 where beyond TRN_REFINE_SYS_Z sds, sqrt(2 / dof), of 1) */
+    double inflation;       /**< factor (>= 1) the block sandwich put on the model covariance:
+                                 its larger position variance ratio where beyond
+                                 TRN_REFINE_SYS_Z sampling sds of 1, else 1 */
+    double ll_inflation;    /**< that ratio ungated (>= 1): ln L's divisor in the failure
+                                 probability (trn_localize_dem) */
     double interp_shift[2]; /**< shift of (x, y) had the DEM been bilinear instead of
                                  bicubic, cells; sys_weight times its outer product is
                                  in the covariance */

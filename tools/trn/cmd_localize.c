@@ -261,6 +261,7 @@ void cmd_localize_report_json(FILE *out, const cmd_localize_ctx_t *c, const char
         json_num(&j, "model_m", rf->model_m);
         json_num(&j, "chi2_dof", rf->chi2_dof);
         json_num(&j, "inflation", rf->inflation);
+        json_num(&j, "ll_inflation", rf->ll_inflation);
         json_num(&j, "interp_mix", rf->interp_mix);
         json_num(&j, "sys_weight", rf->sys_weight);
         json_arr(&j, "interp_shift_cells");
