@@ -700,9 +700,12 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
              * ratios, each where beyond its sampling sd (h0) of 1. ln L's
              * factor (the failure probability) takes them whole: there a
              * factor low by chance would make a wrong answer confident */
-            double fx = sw[0] / (inv[0] * chi2), fy = sw[1] / (inv[4] * chi2);
+            const double c1 = out->chi2_dof > 1.0 ? out->chi2_dof : 1.0;
+            double fx = sw[0] / (inv[0] * c1), fy = sw[1] / (inv[4] * c1);
             f = fx > fy ? fx : fy;
-            out->ll_inflation = f > 1.0 ? f : 1.0;
+            out->ll_inflation = f > 1.0 ? f : 1.0; /* as before the gate: max(1, chi2) */
+            fx = sw[0] / (inv[0] * chi2);
+            fy = sw[1] / (inv[4] * chi2);
             fx = trn_refine_excess_(fx, sqrt(2.0 * h0[0]) / inv[0]);
             fy = trn_refine_excess_(fy, sqrt(2.0 * h0[1]) / inv[4]);
             f = fx > fy ? fx : fy;

@@ -369,13 +369,13 @@ static void interp_shift(const rctx_t *c, const double p[5], double model2, acc4
  * factor of the model covariance inv x chi2, the larger of its variance
  * ratios over x, y (and the heading when fitted), each where beyond
  * TRN_REFINE_SYS_Z of its sampling sds under the noise model (h0, as in
- * refine.c), else 1; *ll_f the larger ratio ungated, at least 1 (ln L's
- * divisor). Each block's score has the mix profiled out (b - g bl,
+ * refine.c), else 1; *ll_f the larger ratio ungated, against the model
+ * times max(1, chi2_raw), at least 1 (ln L's divisor, as before the gate). Each block's score has the mix profiled out (b - g bl,
  * refine.c); (inv meat inv)[q][q] is summed as the squares of (inv
  * score)[q] block by block, so no meat matrix is kept. acc is the caller's
  * (the stack stays small). */
 static double sandwich(const rctx_t *c, const double p[5], double model2, const double inv[16],
-                       const double g[4], double chi2, acc4_t *acc, double *ll_f)
+                       const double g[4], double chi2, double chi2_raw, acc4_t *acc, double *ll_f)
 {
     double f = 1.0, fg = 1.0, sw[3] = {0.0, 0.0, 0.0}, h0[3] = {0.0, 0.0, 0.0};
     const int32_t nq = c->fit_h ? 3 : 2;
@@ -398,8 +398,10 @@ static double sandwich(const rctx_t *c, const double p[5], double model2, const 
         }
     }
     for (q = 0; q < nq; ++q) {
-        const double ratio = sw[q] / (inv[q + 4 * q] * chi2);
-        const double gated = trn_refine_excess_(ratio, sqrt(2.0 * h0[q]) / inv[q + 4 * q]);
+        /* ln L's ratio against the model times max(1, chi2), as before the gate */
+        const double ratio = sw[q] / (inv[q + 4 * q] * (chi2_raw > 1.0 ? chi2_raw : 1.0));
+        const double gated = trn_refine_excess_(sw[q] / (inv[q + 4 * q] * chi2),
+                                                sqrt(2.0 * h0[q]) / inv[q + 4 * q]);
         f = ratio > f ? ratio : f;
         fg = gated > fg ? gated : fg;
     }
@@ -573,7 +575,8 @@ static int covariance(const rctx_t *c, const double p[5], double model2, acc4_t 
     chi2 = trn_refine_excess_(chi2, sqrt(2.0 / (double)(acc->n_in - (c->fit_h ? 5 : 4))));
     /* q > 0: at least 8 inliers, each noise variance > 0 */
     w = trn_refine_sys_weight_(acc->rr, acc->noise2, acc->q, acc->vv);
-    f = sandwich(c, p, model2, inv, g, chi2, acc, &out->pos.ll_inflation); /* acc dead after w */
+    /* acc is dead after w */
+    f = sandwich(c, p, model2, inv, g, chi2, out->pos.chi2_dof, acc, &out->pos.ll_inflation);
     out->pos.inflation = f;
     for (q = 0; q < 3; ++q) {
         for (r = 0; r < 3; ++r) {

@@ -372,9 +372,9 @@ static void test_sys_weight(void **state)
 /* The covariance's two floors act only on a departure from the noise model
  * beyond one sampling sd (TRN_REFINE_SYS_Z; docs/method.md 9, "the
  * floors"). On noise-only maps (the model plus the documented noise) the
- * block sandwich's ratio is above 1 by chance in 63 of these 200 cases
+ * block sandwich's ratio is above 1 by chance in 61 of these 200 cases
  * (ll_inflation, the ratio ungated, which the code before put on the
- * covariance: it had the factor 1 in 137); the gated factor must be 1 in at
+ * covariance: it had the factor 1 in 139); the gated factor must be 1 in at
  * least 180, and ll_inflation keep the ungated ratio. With 3 times the
  * documented range term the reduced chi-square is above 1.5 in 78 (the
  * model variance, decided by the near cells, does not absorb it): each such
@@ -399,7 +399,7 @@ static void test_floors(void **state)
         assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, ix, iy, &c, &out), TRN_OK);
         one += out.inflation == 1.0;
         ll_above += out.ll_inflation > 1.0;
-        assert_true(out.ll_inflation >= out.inflation && out.inflation >= 1.0);
+        assert_true(out.ll_inflation >= 1.0 && out.inflation >= 1.0);
         make_local(&l, tx, ty, 1.0, 1.0, &c3, &r);
         assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, ix, iy, &c, &o15), TRN_OK);
         big += o15.chi2_dof > 1.5;
@@ -417,7 +417,7 @@ static void test_floors(void **state)
             }
         }
         assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, ix, iy, &c, &out), TRN_OK);
-        wave += out.inflation > 1.0 && out.inflation == out.ll_inflation;
+        wave += out.inflation > 1.0 && out.ll_inflation > 1.0;
     }
     printf("floors: sandwich factor 1 in %d of %d noise-only maps (ungated above 1 in %d); "
            "reduced chi-square above 1.5 in %d with 3 x the range term, the variance 1.5 x the "

@@ -104,8 +104,9 @@ typedef struct {
     double inflation;       /**< factor (>= 1) the block sandwich put on the model covariance:
                                  its larger position variance ratio where beyond
                                  TRN_REFINE_SYS_Z sampling sds of 1, else 1 */
-    double ll_inflation;    /**< that ratio ungated (>= 1): ln L's divisor in the failure
-                                 probability (trn_localize_dem) */
+    double ll_inflation;    /**< the ratio ungated, against the model times max(1, chi2_dof)
+                                 (>= 1; the factor before 2026-12-04): ln L's divisor in the
+                                 failure probability (trn_localize_dem) */
     double interp_shift[2]; /**< shift of (x, y) had the DEM been bilinear instead of
                                  bicubic, cells; sys_weight times its outer product is
                                  in the covariance */

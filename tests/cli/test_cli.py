@@ -195,7 +195,7 @@ def expect_fix(label, want, *args, tol=0.03):
                                            "sys_weight", "interp_shift_cells", "points_used",
                                            "log_likelihood")),
                   f"localize {label}: refinement fields {sorted(rf)}")
-            check(rf.get("inflation", 0) >= 1 and rf.get("ll_inflation", 0) >= rf.get("inflation", 9)
+            check(rf.get("inflation", 0) >= 1 and rf.get("ll_inflation", 0) >= 1
                   and rf.get("points_used", 0) > 0
                   and -1.5 <= rf.get("interp_mix", 9) <= 2.5 and 0 <= rf.get("sys_weight", -1) <= 1
                   and len(rf.get("interp_shift_cells", [])) == 2, f"localize {label}: refinement {rf}")
