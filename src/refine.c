@@ -448,8 +448,8 @@ static void block_meat(const trn_grid_f32_t *global, const trn_grid_f32_t *local
                 }
             }
             for (p = 0; p < 2; ++p) {
-                const double v = trn_refine_block_var_(acc->a, acc->al, acc->all, g, inv + p * 3,
-                                                       3);
+                const double v = trn_refine_block_var_(acc->a, acc->al, acc->all, g,
+                                                       &inv[(size_t)p * 3u], 3);
                 h0[p] += v * v;
             }
         }

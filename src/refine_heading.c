@@ -392,7 +392,7 @@ static double sandwich(const rctx_t *c, const double p[5], double model2, const 
                     t += inv[q * 4 + s] * (acc->b[s] - g[s] * acc->bl);
                 }
                 sw[q] += t * t;
-                t = trn_refine_block_var_(acc->a, acc->al, acc->all, g, inv + q * 4, 4);
+                t = trn_refine_block_var_(acc->a, acc->al, acc->all, g, &inv[(size_t)q * 4u], 4);
                 h0[q] += t * t;
             }
         }
