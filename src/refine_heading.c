@@ -370,10 +370,11 @@ static void interp_shift(const rctx_t *c, const double p[5], double model2, acc4
  * ratios over x, y (and the heading when fitted), each where beyond
  * TRN_REFINE_SYS_Z of its sampling sds under the noise model (h0, as in
  * refine.c), else 1; *ll_f the larger ratio ungated, against the model
- * times max(1, chi2_raw), at least 1 (ln L's divisor, as before the gate). Each block's score has the mix profiled out (b - g bl,
- * refine.c); (inv meat inv)[q][q] is summed as the squares of (inv
- * score)[q] block by block, so no meat matrix is kept. acc is the caller's
- * (the stack stays small). */
+ * times max(1, chi2_raw), at least 1 (ln L's divisor, as before the gate).
+ * Each block's score has the mix profiled out (b - g bl, refine.c); (inv
+ * meat inv)[q][q] is summed as the squares of (inv score)[q] block by
+ * block, so no meat matrix is kept. acc is the caller's (the stack stays
+ * small). */
 static double sandwich(const rctx_t *c, const double p[5], double model2, const double inv[16],
                        const double g[4], double chi2, double chi2_raw, acc4_t *acc, double *ll_f)
 {

@@ -387,7 +387,7 @@ static void test_floors(void **state)
     trn_refine_cfg_t c = cfg_of(), c3 = cfg_of();
     trn_refine_t out, o15;
     trn_rng_t r;
-    int i, x, y, one = 0, ll_above = 0, big = 0, scaled = 0, wave = 0, n = 200;
+    int i, x, y, one = 0, ll_above = 0, big = 0, scaled = 0, blocks = 0, n = 200;
     (void)state;
     c3.noise_k_per_m = 3.0f * c.noise_k_per_m;
     trn_rng_seed(&r, 41);
@@ -417,16 +417,16 @@ static void test_floors(void **state)
             }
         }
         assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, ix, iy, &c, &out), TRN_OK);
-        wave += out.inflation > 1.0 && out.ll_inflation > 1.0;
+        blocks += out.inflation > 1.0 && out.ll_inflation > 1.0;
     }
     printf("floors: sandwich factor 1 in %d of %d noise-only maps (ungated above 1 in %d); "
            "reduced chi-square above 1.5 in %d with 3 x the range term, the variance 1.5 x the "
            "documented noise's in %d of them; sandwich acts in %d with 5 cm block offsets\n",
-           one, n, ll_above, big, scaled, wave);
+           one, n, ll_above, big, scaled, blocks);
     assert_true(one >= 180);
     assert_true(ll_above >= 40);
     assert_true(big >= 50 && scaled == big);
-    assert_true(wave >= 190);
+    assert_true(blocks >= 190);
 }
 
 /* Local DEM seen from pose (tx, ty) with the heading off by d: local offset

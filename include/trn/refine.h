@@ -22,8 +22,9 @@
  * Covariance of (px, py), the mix marginalized: (J^T W J)^-1 x the
  * reduced chi-square x the block-sandwich inflation (TRN_REFINE_BLOCK),
  * each only where above 1 by more than TRN_REFINE_SYS_Z of its sampling
- * sds under the noise model (else 1), plus sys_weight x the outer product of the shift bilinear heights would
- * cause (the interpolants' disagreement), sys_weight = TRN_REFINE_SYS x the
+ * sds under the noise model (else 1), plus sys_weight x the outer product
+ * of the shift bilinear heights would cause (the interpolants'
+ * disagreement), sys_weight = TRN_REFINE_SYS x the
  * share in the residual variance of the misfit beyond its sampling noise
  * (TRN_REFINE_SYS_Z). docs/modules/refine.md.
  */
