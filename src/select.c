@@ -587,24 +587,6 @@ trn_status_t trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_
 
 /* ---- ground path: selection from prepared map data (select_pre.h) ------- */
 
-/* y[i] += a * x[i], i < n: spread.c's axpy, the same product and sum for
- * every element (distinct arrays). Four elements per step: GCC's -O2 SLP
- * vectoriser turns them into one SIMD multiply and add (element-wise, so
- * the same floats). */
-static void pre_axpy(float *restrict y, const float *restrict x, float a, int32_t n)
-{
-    int32_t i = 0;
-    for (; i + 4 <= n; i += 4) {
-        y[i] += a * x[i];
-        y[i + 1] += a * x[i + 1];
-        y[i + 2] += a * x[i + 2];
-        y[i + 3] += a * x[i + 3];
-    }
-    for (; i < n; ++i) {
-        y[i] += a * x[i];
-    }
-}
-
 /* Kernel of a cell at integer offset (ox, oy) from the rover: spread.c's
  * kernel_map expression (one sensing position), hence the same index. */
 static uint8_t pre_kernel(const trn_kernels_t *k, const trn_sigma_model_t *m, float cell_m,
@@ -617,9 +599,79 @@ static uint8_t pre_kernel(const trn_kernels_t *k, const trn_sigma_model_t *m, fl
     return (uint8_t)trn_kernel_pick(k, sig < 1e30 ? (float)sig : 1e30f);
 }
 
+/* The nearest and the farthest coordinate of [lo, hi] from 0. */
+static int32_t pre_near(int32_t lo, int32_t hi) { return lo > 0 ? lo : (hi < 0 ? hi : 0); }
+
+static int32_t pre_far(int32_t lo, int32_t hi) { return -lo > hi ? lo : hi; }
+
+/* The kernels eq. 9 can bring to a cell at offset (ox, oy) from the rover
+ * (trn_prob_local's passes: the x pass spreads a source along its row with
+ * its own kernel, the y pass an intermediate cell along its column with its
+ * own). A cell at Chebyshev distance d from the target reaches it only with
+ * a radius >= d (the intermediate through its row offset, the source through
+ * its column offset or through its intermediate's), and radii grow with the
+ * range, so every cell that reaches lies within the distance D, the largest
+ * d <= R_9 whose box's farthest cell has a radius >= d. The kernel index
+ * grows with the range too (pre_kernel): the interval is [the kernel of the
+ * box's nearest cell, that of its farthest]. */
+static int32_t pre_interval(const trn_kernels_t *k, const trn_sigma_model_t *m, float cell_m,
+                            int32_t ox, int32_t oy, uint8_t *ja, uint8_t *jb)
+{
+    int32_t d = k->radius[TRN_KERNEL_COUNT - 1];
+    for (; d > 0; --d) {
+        const uint8_t j = pre_kernel(k, m, cell_m, pre_far(ox - d, ox + d),
+                                     pre_far(oy - d, oy + d));
+        if (k->radius[j] >= d) {
+            break;
+        }
+    }
+    *ja = pre_kernel(k, m, cell_m, pre_near(ox - d, ox + d), pre_near(oy - d, oy + d));
+    *jb = pre_kernel(k, m, cell_m, pre_far(ox - d, ox + d), pre_far(oy - d, oy + d));
+    return d;
+}
+
+/* Can offset (ox, oy) be a cell of a candidate's patch? Its centre lies
+ * within max_range of the rover and the cell within half a patch of it on
+ * each axis (a conservative disc). */
+static int pre_patch_offset(const trn_select_cfg_t *cfg, float cell_m, int32_t half, int32_t ox,
+                            int32_t oy)
+{
+    const double r = (double)cfg->max_range_m / (double)cell_m + (double)half * 1.4142135623730951 +
+                     1.0;
+    return (double)ox * (double)ox + (double)oy * (double)oy <= r * r;
+}
+
+/* Which kernel intervals the patch cells' offsets use (used[a * 10 + b]);
+ * returns how many. */
+static int32_t pre_used_intervals(const trn_select_cfg_t *cfg, const trn_map_t *map,
+                                  const trn_kernels_t *k, int32_t reach, int32_t half,
+                                  uint8_t used[TRN_KERNEL_COUNT * TRN_KERNEL_COUNT])
+{
+    const float cell = map->cfg.terrain.cell_m;
+    const int32_t e = reach + half;
+    int32_t ox, oy, n = 0;
+    memset(used, 0, TRN_KERNEL_COUNT * TRN_KERNEL_COUNT);
+    for (oy = -e; oy <= e; ++oy) {
+        for (ox = -e; ox <= e; ++ox) {
+            uint8_t a, b;
+            if (!pre_patch_offset(cfg, cell, half, ox, oy)) {
+                continue;
+            }
+            (void)pre_interval(k, &cfg->local_sigma, cell, ox, oy, &a, &b);
+            if (used[a * TRN_KERNEL_COUNT + b] == 0u) {
+                used[a * TRN_KERNEL_COUNT + b] = 1u;
+                ++n;
+            }
+        }
+    }
+    return n;
+}
+
 typedef struct {
-    size_t joff, rowptr, src, lnpv, cxy, lat, nl, touched, u, hit, lok, latan, t, p, sat, total;
-    int32_t half, n, m, side_w, side_h, src_h;
+    size_t joff, rowptr, src, lnpv, cxy, lat, nl, lok, latan;
+    size_t ints, jid, jnext, dcone, bval, bscr, bsat, tc, tstamp, cdc, cstamp, pcol, lb2, heap;
+    size_t epoch, total;
+    int32_t half, n, m, side_w, side_h, src_h, nint;
     size_t ncap;
 } pre_layout_t;
 
@@ -631,6 +683,8 @@ static int pre_layout(const trn_select_cfg_t *cfg, const trn_map_t *map, const t
     const int32_t nx = map->dist.nx, ny = map->dist.ny, nz = map->dist.nz;
     const int32_t r9 = k->radius[TRN_KERNEL_COUNT - 1];
     const int32_t reach = reach_cells(cfg, cell);
+    uint8_t used[TRN_KERNEL_COUNT * TRN_KERNEL_COUNT];
+    size_t plane, region, xcells;
     double mw, tot;
     L->half = patch_cells(cfg, cell) / 2;
     L->n = reach / cfg->stride_cells + 1;
@@ -639,38 +693,51 @@ static int pre_layout(const trn_select_cfg_t *cfg, const trn_map_t *map, const t
     L->side_h = roi_side(cfg, cell, ny);
     L->src_h = L->side_h + 2 * r9 < ny ? L->side_h + 2 * r9 : ny;
     L->ncap = trn_select_max_candidates(cfg, cell);
+    L->nint = pre_used_intervals(cfg, map, k, reach, L->half, used);
     mw = 2.0 * (double)L->m + 1.0;
     /* the largest slice first, in double: no size_t overflow on 32-bit targets */
-    tot = mw * mw + ((double)nz * (double)ny + 1.0) * (double)sizeof(size_t) +
+    tot = mw * mw * 8.0 + ((double)nz * (double)ny + 1.0) * (double)sizeof(size_t) +
           (double)nnz * (double)sizeof(trn_selpre_src_t) +
-          (double)nx * (double)ny * (double)nz * (double)sizeof(int32_t) +
-          (double)L->src_h * ((double)L->side_w * 4.0 + 1.0) +
-          (double)nz * (double)L->side_w * (double)L->side_h * 4.0 +
-          9.0 * ((double)L->half * 2.0 + 3.0) * ((double)L->side_w + 1.0) * 8.0 +
-          (double)L->ncap * 17.0 + (double)nz * (double)L->side_h + 1.0e6;
+          (double)nx * (double)ny * ((double)nz * 4.0 + (double)L->nint * 4.0 + 40.0) +
+          (double)L->src_h * (double)L->side_w * ((double)nz * 4.0 + 4.0) +
+          ((double)L->side_w + 1.0) * ((double)L->side_h + 1.0) * 84.0 + (double)L->ncap * 29.0 +
+          (double)nz * 4.0 + (double)L->side_h * 8.0 + 1.0e6;
     if (tot > (double)(SIZE_MAX / 2u)) {
         return 0;
     }
+    plane = (size_t)nx * (size_t)ny;
+    region = (size_t)L->side_w * (size_t)L->side_h;
+    xcells = (size_t)L->src_h * (size_t)L->side_w;
     L->joff = TRN_ALIGN_UP((size_t)mw * (size_t)mw);
     L->rowptr = TRN_ALIGN_UP(((size_t)nz * (size_t)ny + 1u) * sizeof(size_t));
     L->src = TRN_ALIGN_UP(nnz * sizeof(trn_selpre_src_t));
-    L->lnpv = TRN_ALIGN_UP((size_t)nx * (size_t)ny * (size_t)nz * sizeof(int32_t));
+    L->lnpv = TRN_ALIGN_UP(plane * (size_t)nz * sizeof(int32_t));
     L->cxy = TRN_ALIGN_UP(L->ncap * 2u * sizeof(int32_t));
     L->lat = TRN_ALIGN_UP((2u * (size_t)L->n + 1u) * 2u * sizeof(int32_t));
     L->nl = TRN_ALIGN_UP((size_t)L->side_h * 2u * sizeof(int32_t));
-    L->touched = TRN_ALIGN_UP((size_t)L->src_h);
-    L->u = TRN_ALIGN_UP((size_t)L->src_h * 2u * sizeof(int32_t));
-    L->hit = TRN_ALIGN_UP((size_t)nz * (size_t)L->side_h);
     L->lok = TRN_ALIGN_UP(L->ncap);
     L->latan = TRN_ALIGN_UP(L->ncap * sizeof(double));
-    L->t = TRN_ALIGN_UP((size_t)L->src_h * (size_t)L->side_w * sizeof(float));
-    L->p = TRN_ALIGN_UP((size_t)nz * (size_t)L->side_w * (size_t)L->side_h * sizeof(float));
-    /* a ring of patch_cells rows of the nine C_d, their column sums, a prefix row */
-    L->sat = TRN_ALIGN_UP(((size_t)(2 * L->half + 1) + 1u) * 9u * (size_t)L->side_w *
-                          sizeof(int64_t)) +
-             TRN_ALIGN_UP(9u * ((size_t)L->side_w + 1u) * sizeof(int64_t));
-    L->total = L->joff + L->rowptr + L->src + L->lnpv + L->cxy + L->lat + L->nl + L->touched +
-               L->u + L->hit + L->lok + L->latan + L->t + L->p + L->sat;
+    L->ints = TRN_ALIGN_UP((size_t)L->nint * sizeof(trn_selpre_int_t));
+    L->jid = TRN_ALIGN_UP((size_t)mw * (size_t)mw);
+    L->jnext = TRN_ALIGN_UP((size_t)mw * (size_t)mw * sizeof(int32_t));
+    L->dcone = TRN_ALIGN_UP((size_t)mw * (size_t)mw * sizeof(uint16_t));
+    L->bval = TRN_ALIGN_UP((size_t)L->nint * plane * sizeof(int32_t));
+    L->bscr = TRN_ALIGN_UP((2u * (plane + (size_t)nx) + 4u * TRN_KERNEL_MAX_RADIUS + 2u) *
+                               sizeof(double) +
+                           plane * sizeof(int64_t));
+    L->bsat = TRN_ALIGN_UP(((size_t)L->side_w + 1u) * ((size_t)L->side_h + 1u) * sizeof(int64_t));
+    L->tc = TRN_ALIGN_UP(xcells * (size_t)nz * sizeof(float));
+    L->tstamp = TRN_ALIGN_UP(xcells * sizeof(uint32_t));
+    L->cdc = TRN_ALIGN_UP(region * 9u * sizeof(int64_t));
+    L->cstamp = TRN_ALIGN_UP(region * sizeof(uint32_t));
+    L->pcol = TRN_ALIGN_UP((size_t)nz * sizeof(float)) + TRN_ALIGN_UP(9u * sizeof(int64_t)) +
+              TRN_ALIGN_UP(9u * sizeof(double));
+    L->lb2 = TRN_ALIGN_UP(L->ncap * sizeof(double));
+    L->heap = TRN_ALIGN_UP(L->ncap * sizeof(uint32_t));
+    L->epoch = TRN_ALIGN_UP(sizeof(uint32_t));
+    L->total = L->joff + L->rowptr + L->src + L->lnpv + L->cxy + L->lat + L->nl + L->lok +
+               L->latan + L->ints + L->jid + L->jnext + L->dcone + L->bval + L->bscr + L->bsat +
+               L->tc + L->tstamp + L->cdc + L->cstamp + L->pcol + L->lb2 + L->heap + L->epoch;
     return 1;
 }
 
@@ -720,6 +787,228 @@ size_t trn_selpre_bytes(const trn_select_cfg_t *cfg, const trn_map_t *map, const
         return 0u;
     }
     return L.total;
+}
+
+/* The pruning's tables (select_pre.h, "Pruning"), carved from b: the
+ * intervals, jid and jnext over the offset table, and per interval [a, b]
+ * the row prefixes of bound(x, y) = sum_z (A > 0 ? A qmax : A qmin), where
+ * A = sum_d beta_d lnp(v + d) (beta: 4 at the centre, 1 on the edges, -2 at
+ * the corners: 3 x eq. 6's trace coefficients, so that 3 trace(-H) / scale =
+ * sum_v q A), and qmax, qmin bound the quantized eq. 9 of the voxel: P_G
+ * smoothed by the pointwise maximum (minimum) of the interval's kernels along
+ * x then y, widened by 1e-4 (the float rounding of trn_prob_local's at most
+ * 2 (2 R_9 + 1) positive terms is below 1e-5 relative) and by one unit of q
+ * for its rounding. Cells without the 3 x 3 neighbourhood (the map's rim;
+ * never a patch cell) hold 0. */
+static void pre_bounds_init(trn_selpre_t *s, const pre_layout_t *L, uint8_t *b)
+{
+    const trn_kernels_t *k = s->k;
+    const trn_select_cfg_t *cfg = s->cfg;
+    const float cell = s->map->cfg.terrain.cell_m;
+    const int32_t nx = s->nx, ny = s->ny, nz = s->nz, mw = 2 * s->m + 1;
+    const int32_t e = reach_cells(cfg, cell) + s->half;
+    const size_t plane = (size_t)nx * (size_t)ny;
+    const size_t lrow = (size_t)nx * (size_t)nz;
+    uint8_t used[TRN_KERNEL_COUNT * TRN_KERNEL_COUNT], idx[TRN_KERNEL_COUNT * TRN_KERNEL_COUNT];
+    trn_selpre_int_t *ints;
+    uint8_t *jid;
+    int32_t *jnext;
+    uint16_t *dcone;
+    int32_t *bval;
+    int64_t *bt;
+    double *tu, *td, *ru, *rd, *env;
+    int32_t i, x, y, z, t, sh;
+
+    ints = (trn_selpre_int_t *)(void *)b;
+    b += L->ints;
+    jid = b;
+    b += L->jid;
+    jnext = (int32_t *)(void *)b;
+    b += L->jnext;
+    dcone = (uint16_t *)(void *)b;
+    b += L->dcone;
+    bval = (int32_t *)(void *)b;
+    b += L->bval;
+    tu = (double *)(void *)b;
+    td = tu + plane;
+    ru = td + plane;
+    rd = ru + nx;
+    bt = (int64_t *)(void *)(rd + nx);
+    env = (double *)(void *)(bt + plane);
+    b += L->bscr;
+    s->bsat = (int64_t *)(void *)b;
+    b += L->bsat;
+    s->tc = (float *)(void *)b;
+    b += L->tc;
+    s->tstamp = (uint32_t *)(void *)b;
+    b += L->tstamp;
+    s->cdc = (int64_t *)(void *)b;
+    b += L->cdc;
+    s->cstamp = (uint32_t *)(void *)b;
+    b += L->cstamp;
+    s->pcol = (float *)(void *)b;
+    s->esum = (int64_t *)(void *)(b + TRN_ALIGN_UP((size_t)s->nz * sizeof(float)));
+    s->ell = (double *)(void *)(b + TRN_ALIGN_UP((size_t)s->nz * sizeof(float)) +
+                                TRN_ALIGN_UP(9u * sizeof(int64_t)));
+    b += L->pcol;
+    s->lb2 = (double *)(void *)b;
+    b += L->lb2;
+    s->heap = (uint32_t *)(void *)b;
+    b += L->heap;
+    s->epoch = (uint32_t *)(void *)b;
+    memset(s->tstamp, 0, (size_t)L->src_h * (size_t)L->side_w * sizeof(uint32_t));
+    memset(s->cstamp, 0, (size_t)L->side_h * (size_t)L->side_w * sizeof(uint32_t));
+    *s->epoch = 0u;
+
+    /* the intervals (the order of pre_used_intervals' first sightings is
+     * irrelevant: any numbering), then each patch offset's */
+    (void)pre_used_intervals(cfg, s->map, k, reach_cells(cfg, cell), s->half, used);
+    t = 0;
+    for (i = 0; i < TRN_KERNEL_COUNT * TRN_KERNEL_COUNT; ++i) {
+        idx[i] = 255u;
+        if (used[i] != 0u) {
+            ints[t].a = (uint8_t)(i / TRN_KERNEL_COUNT);
+            ints[t].b = (uint8_t)(i % TRN_KERNEL_COUNT);
+            idx[i] = (uint8_t)t;
+            ++t;
+        }
+    }
+    /* |bound| of a cell <= nz 16 lmax QMAX: the shift that fits it in int32 (a
+     * region's sum of int32 values then fits int64: <= TRN_MAX_DIM^2 2^31) */
+    {
+        const double amax = (double)nz * 16.0 * (double)s->lmax * (double)SEL_QMAX;
+        sh = 0;
+        s->bunit = 1.0;
+        while (amax / s->bunit + 1.0 > (double)INT32_MAX - 1.0) {
+            ++sh;
+            s->bunit *= 2.0;
+        }
+        s->bshift = sh;
+    }
+    memset(jid, 255, (size_t)mw * (size_t)mw);
+    memset(dcone, 0, (size_t)mw * (size_t)mw * sizeof *dcone);
+    for (y = -e; y <= e; ++y) {
+        for (x = -e; x <= e; ++x) {
+            uint8_t a, bb;
+            if (pre_patch_offset(cfg, cell, s->half, x, y)) {
+                const size_t o = (size_t)(y + s->m) * (size_t)mw + (size_t)(x + s->m);
+                dcone[o] = (uint16_t)pre_interval(k, &cfg->local_sigma, cell, x, y, &a, &bb);
+                jid[o] = idx[a * TRN_KERNEL_COUNT + bb];
+            }
+        }
+    }
+    for (y = 0; y < mw; ++y) {
+        const uint8_t *jr = jid + (size_t)y * (size_t)mw;
+        int32_t *nr = jnext + (size_t)y * (size_t)mw;
+        nr[mw - 1] = mw;
+        for (x = mw - 2; x >= 0; --x) {
+            nr[x] = jr[x + 1] != jr[x] ? x + 1 : nr[x + 1];
+        }
+    }
+
+    /* per interval: the bound of every cell, then its row prefixes */
+    for (t = 0; t < L->nint; ++t) {
+        const int32_t ja = ints[t].a, jb = ints[t].b;
+        const int32_t ru_r = k->radius[jb], rd_r = k->radius[ja];
+        double *up = env, *dn = env + 2 * TRN_KERNEL_MAX_RADIUS + 1;
+        int32_t *b32 = bval + (size_t)t * plane;
+        size_t c;
+        for (i = -ru_r; i <= ru_r; ++i) {
+            double hi = 0.0, lo = HUGE_VAL;
+            int32_t j;
+            for (j = ja; j <= jb; ++j) {
+                const double v = (i <= k->radius[j] && -i <= k->radius[j])
+                                     ? (double)k->taps[j][TRN_KERNEL_MAX_RADIUS + i]
+                                     : 0.0;
+                hi = v > hi ? v : hi;
+                lo = v < lo ? v : lo;
+            }
+            up[i + ru_r] = hi;
+            dn[i + ru_r] = lo;
+        }
+        memset(bt, 0, plane * sizeof *bt);
+        for (z = 0; z < nz; ++z) {
+            memset(tu, 0, 2u * plane * sizeof *tu);
+            for (y = 0; y < ny; ++y) { /* x pass from the nonzero sources */
+                const size_t r0 = s->rowptr[(size_t)z * (size_t)ny + (size_t)y];
+                const size_t r1 = s->rowptr[(size_t)z * (size_t)ny + (size_t)y + 1u];
+                size_t q;
+                for (q = r0; q < r1; ++q) {
+                    const int32_t sx = s->src[q].x;
+                    const double v = (double)s->src[q].v;
+                    const int32_t lo = sx - ru_r > 0 ? sx - ru_r : 0;
+                    const int32_t hi = sx + ru_r < nx - 1 ? sx + ru_r : nx - 1;
+                    for (x = lo; x <= hi; ++x) {
+                        tu[(size_t)y * (size_t)nx + (size_t)x] += up[x - sx + ru_r] * v;
+                        td[(size_t)y * (size_t)nx + (size_t)x] += dn[x - sx + ru_r] * v;
+                    }
+                }
+            }
+            for (y = 1; y < ny - 1; ++y) { /* y pass, then the cells' bounds */
+                int64_t *brow = bt + (size_t)y * (size_t)nx;
+                memset(ru, 0, 2u * (size_t)nx * sizeof *ru);
+                for (i = -ru_r; i <= ru_r; ++i) {
+                    const int32_t sy = y - i;
+                    const double cu = up[i + ru_r], cd = dn[i + ru_r];
+                    const double *tur, *tdr;
+                    if (sy < 0 || sy >= ny) {
+                        continue;
+                    }
+                    tur = tu + (size_t)sy * (size_t)nx;
+                    tdr = td + (size_t)sy * (size_t)nx;
+                    for (x = 0; x < nx; ++x) {
+                        ru[x] += cu * tur[x];
+                    }
+                    if (i <= rd_r && -i <= rd_r) { /* the minimum is 0 beyond R_a */
+                        for (x = 0; x < nx; ++x) {
+                            rd[x] += cd * tdr[x];
+                        }
+                    }
+                }
+                for (x = 1; x < nx - 1; ++x) {
+                    const int32_t *l0, *l1, *l2;
+                    double qd;
+                    int64_t a, qb;
+                    if (!(ru[x] > 0.0)) {
+                        continue; /* every term 0: q is 0 */
+                    }
+                    l0 = s->lnpv + ((size_t)(y - 1) * (size_t)nx + (size_t)(x - 1)) * (size_t)nz +
+                         (size_t)z;
+                    l1 = l0 + lrow;
+                    l2 = l1 + lrow;
+                    a = 4 * (int64_t)l1[nz] + (int64_t)l0[nz] + (int64_t)l1[0] +
+                        (int64_t)l1[2 * nz] + (int64_t)l2[nz] -
+                        2 * ((int64_t)l0[0] + (int64_t)l0[2 * nz] + (int64_t)l2[0] +
+                             (int64_t)l2[2 * nz]);
+                    if (a > 0) {
+                        qd = ru[x] * (double)TRN_SELECT_PROB_SCALE * (1.0 + 1.0e-4);
+                        qb = qd >= (double)SEL_QMAX ? (int64_t)SEL_QMAX : (int64_t)qd + 1;
+                        qb = qb < (int64_t)SEL_QMAX ? qb : (int64_t)SEL_QMAX;
+                    } else {
+                        qd = rd[x] * (double)TRN_SELECT_PROB_SCALE * (1.0 - 1.0e-4) - 1.0;
+                        qb = qd > 0.0 ? (int64_t)ceil(qd) : 0;
+                        qb = qb < (int64_t)SEL_QMAX ? qb : (int64_t)SEL_QMAX;
+                    }
+                    brow[x] += a * qb;
+                }
+            }
+        }
+        /* int32 in units of 2^bshift, rounded up: the window sums stay upper bounds */
+        for (c = 0; c < plane; ++c) {
+            const int64_t v = bt[c];
+            b32[c] = (int32_t)(v >= 0 ? (v + ((int64_t)1 << sh) - 1) >> sh : -((-v) >> sh));
+        }
+    }
+    s->ints = ints;
+    s->jid = jid;
+    s->jnext = jnext;
+    s->dcone = dcone;
+    s->bval = bval;
+    s->rcone = 0;
+    for (t = 0; t < L->nint; ++t) {
+        s->rcone = k->radius[ints[t].b] > s->rcone ? k->radius[ints[t].b] : s->rcone;
+    }
+    s->nint = L->nint;
 }
 
 trn_status_t trn_selpre_init(trn_selpre_t *s, const trn_map_t *map, const trn_kernels_t *k,
@@ -781,25 +1070,10 @@ trn_status_t trn_selpre_init(trn_selpre_t *s, const trn_map_t *map, const trn_ke
     s->nlo = (int32_t *)(void *)b;
     s->nhi = s->nlo + L.side_h;
     b += L.nl;
-    s->touched = b;
-    b += L.touched;
-    s->ulo = (int32_t *)(void *)b;
-    s->uhi = s->ulo + L.src_h;
-    b += L.u;
-    s->hit = b;
-    b += L.hit;
     lok = b;
     b += L.lok;
     latan = (double *)(void *)b;
     b += L.latan;
-    s->t = (float *)(void *)b;
-    b += L.t;
-    s->p = (float *)(void *)b;
-    b += L.p;
-    s->ring = (int64_t *)(void *)b;
-    s->colsum = s->ring + (size_t)(2 * L.half + 1) * 9u * (size_t)L.side_w;
-    s->prefix = (int64_t *)(void *)(b + TRN_ALIGN_UP(((size_t)(2 * L.half + 1) + 1u) * 9u *
-                                                     (size_t)L.side_w * sizeof(int64_t)));
 
     /* kernel index by offset, and the largest radius any offset uses */
     mw = 2 * L.m + 1;
@@ -876,108 +1150,8 @@ trn_status_t trn_selpre_init(trn_selpre_t *s, const trn_map_t *map, const trn_ke
     s->rowptr = rowptr;
     s->src = src;
     s->lnpv = lnpv;
+    pre_bounds_init(s, &L, b);
     return TRN_OK;
-}
-
-/* Eq. 9 over the region, slice z, into s->p: trn_prob_local's x and y passes
- * restricted to the nonzero sources and to the patch columns nlo..nhi. */
-static void pre_eq9_slice(const trn_selpre_t *s, const trn_window_t *roi, int32_t rx, int32_t ry,
-                          int32_t z)
-{
-    const trn_kernels_t *k = s->k;
-    const int32_t w = roi->x1 - roi->x0 + 1, h = roi->y1 - roi->y0 + 1;
-    const int32_t sy0 = roi->y0 - s->rmax > 0 ? roi->y0 - s->rmax : 0;
-    const int32_t sy1 = roi->y1 + s->rmax < s->ny - 1 ? roi->y1 + s->rmax : s->ny - 1;
-    const size_t mw = 2u * (size_t)s->m + 1u;
-    float *pz = s->p + (size_t)z * (size_t)w * (size_t)h;
-    int32_t sy, r;
-    /* x pass: each source row's values over the region's columns */
-    for (sy = sy0; sy <= sy1; ++sy) {
-        const size_t row = (size_t)(sy - sy0);
-        const size_t jb = (size_t)(sy - ry + s->m) * mw;
-        const trn_selpre_src_t *e = s->src + s->rowptr[(size_t)z * (size_t)s->ny + (size_t)sy];
-        const trn_selpre_src_t *end = s->src +
-                                      s->rowptr[(size_t)z * (size_t)s->ny + (size_t)sy + 1u];
-        float *trow = s->t + row * (size_t)w;
-        const int32_t ua = roi->x0 + s->ulo[row], ub = roi->x0 + s->uhi[row];
-        const int32_t xmin = ua - s->rmax, xmax = ub + s->rmax;
-        size_t lo_i = 0u, hi_i = (size_t)(end - e);
-        s->touched[row] = 0u;
-        if (ua > ub) {
-            continue;
-        }
-        while (lo_i < hi_i) { /* first source at x >= xmin */
-            const size_t mid = lo_i + (hi_i - lo_i) / 2u;
-            if (e[mid].x < xmin) {
-                lo_i = mid + 1u;
-            } else {
-                hi_i = mid;
-            }
-        }
-        for (e += lo_i; e < end && e->x <= xmax; ++e) {
-            const int32_t sx = e->x;
-            const int32_t j = (int32_t)s->joff[jb + (size_t)(sx - rx + s->m)];
-            const int32_t rr = k->radius[j];
-            const int32_t lo = sx - rr > ua ? sx - rr : ua;
-            const int32_t hi = sx + rr < ub ? sx + rr : ub;
-            if (lo <= hi) {
-                if (s->touched[row] == 0u) {
-                    memset(trow + s->ulo[row], 0,
-                           (size_t)(s->uhi[row] - s->ulo[row] + 1) * sizeof *trow);
-                    s->touched[row] = 1u;
-                }
-                pre_axpy(trow + (lo - roi->x0),
-                         k->taps[j] + (TRN_KERNEL_MAX_RADIUS - rr) + (lo - sx + rr), e->v,
-                         hi - lo + 1);
-            }
-        }
-    }
-    /* y pass into the patch columns of each region row */
-    for (r = 0; r < h; ++r) {
-        s->hit[(size_t)z * (size_t)h + (size_t)r] = 0u;
-        if (s->nlo[r] <= s->nhi[r]) {
-            memset(pz + (size_t)r * (size_t)w + (size_t)s->nlo[r], 0,
-                   (size_t)(s->nhi[r] - s->nlo[r] + 1) * sizeof *pz);
-        }
-    }
-    for (sy = sy0; sy <= sy1; ++sy) {
-        const size_t row = (size_t)(sy - sy0);
-        const size_t jb = (size_t)(sy - ry + s->m) * mw + (size_t)(roi->x0 - rx + s->m);
-        const float *trow = s->t + row * (size_t)w;
-        const int32_t xend = s->uhi[row] + 1;
-        int32_t x = s->ulo[row];
-        if (s->touched[row] == 0u) {
-            continue;
-        }
-        while (x < xend) {
-            int32_t xe, j, rr, lo, hi, gy;
-            const float *tp;
-            if (trow[x] == 0.0f) {
-                ++x;
-                continue;
-            }
-            j = (int32_t)s->joff[jb + (size_t)x];
-            xe = x + 1;
-            while (xe < xend && trow[xe] != 0.0f && (int32_t)s->joff[jb + (size_t)xe] == j) {
-                ++xe;
-            }
-            rr = k->radius[j];
-            tp = k->taps[j] + (TRN_KERNEL_MAX_RADIUS - rr);
-            lo = sy - rr > roi->y0 ? sy - rr : roi->y0;
-            hi = sy + rr < roi->y1 ? sy + rr : roi->y1;
-            for (gy = lo; gy <= hi; ++gy) {
-                const int32_t gr = gy - roi->y0;
-                const int32_t a = x > s->nlo[gr] ? x : s->nlo[gr];
-                const int32_t bb = xe - 1 < s->nhi[gr] ? xe - 1 : s->nhi[gr];
-                if (a <= bb) {
-                    s->hit[(size_t)z * (size_t)h + (size_t)gr] = 1u;
-                    pre_axpy(pz + (size_t)gr * (size_t)w + (size_t)a, trow + a, tp[gy - sy + rr],
-                             bb - a + 1);
-                }
-            }
-            x = xe;
-        }
-    }
 }
 
 /* 1 when the eq. 6 fit of ll cannot give an uncertainty below best (m):
@@ -1010,116 +1184,324 @@ static int pre_cannot_beat(const double ll[9], double cell_m, double head_m2, do
     return (4.0 / tr * cell_m * cell_m + head_m2) * (1.0 - 1.0e-6) > best * best;
 }
 
-/* Region rows in order: the nine C_d of the row (from the nonzero P voxels of
- * the slices the y pass wrote; cells outside every patch are never read),
- * the column sums of the last patch_cells rows (a ring of rows: the row
- * leaving is subtracted before its slot is reused), and on a row where
- * candidates' patches end, prefix sums along it, their nine window sums
- * (exact int64: the values trn_select's summed-area tables give) and their
- * fits, in candidate order (so the first lowest wins, as in trn_select). */
-static void pre_windows(const trn_selpre_t *s, const trn_window_t *roi, const geom_t *g, size_t nc,
-                        double *best, int *found)
+/* One position of the pruned path: the rover cell, the region and its epoch. */
+typedef struct {
+    int32_t rx, ry, x0, y0, sy0, w, nb; /* nb: x-pass blocks per row */
+    uint32_t ep;
+} pre_pos_t;
+
+/* Columns per x-pass block (the cache's unit). */
+#define PRE_TBLOCK 16
+
+/* The x pass of trn_prob_local at cell (x, sy), every bin (s->tc, cached by
+ * blocks of PRE_TBLOCK region columns): the sources of row sy in rising x,
+ * each adding v * tap to the columns within its own kernel's radius, as
+ * trn_prob_local's x pass does (spread.c's axpy: y += a x with a the source
+ * value), so the same floats. */
+static const float *pre_tcol(const trn_selpre_t *s, const pre_pos_t *pp, int32_t x, int32_t sy)
+{
+    const size_t nz = (size_t)s->nz;
+    const size_t row = (size_t)(sy - pp->sy0);
+    const int32_t bx = (x - pp->x0) / PRE_TBLOCK;
+    const size_t st = row * (size_t)pp->nb + (size_t)bx;
+    float *tr = s->tc + row * (size_t)pp->w * nz;
+    if (s->tstamp[st] != pp->ep) {
+        const trn_kernels_t *k = s->k;
+        const size_t jb = (size_t)(sy - pp->ry + s->m) * (2u * (size_t)s->m + 1u);
+        const int32_t xa = pp->x0 + bx * PRE_TBLOCK;
+        const int32_t xb = xa + PRE_TBLOCK - 1 < pp->x0 + pp->w - 1 ? xa + PRE_TBLOCK - 1
+                                                                    : pp->x0 + pp->w - 1;
+        size_t z;
+        s->tstamp[st] = pp->ep;
+        memset(tr + (size_t)(xa - pp->x0) * nz, 0, (size_t)(xb - xa + 1) * nz * sizeof *tr);
+        for (z = 0; z < nz; ++z) {
+            const trn_selpre_src_t *e = s->src + s->rowptr[z * (size_t)s->ny + (size_t)sy];
+            const trn_selpre_src_t *end = s->src + s->rowptr[z * (size_t)s->ny + (size_t)sy + 1u];
+            size_t lo_i = 0u, hi_i = (size_t)(end - e);
+            while (lo_i < hi_i) { /* first source at x >= xa - rcone */
+                const size_t mid = lo_i + (hi_i - lo_i) / 2u;
+                if (e[mid].x < xa - s->rcone) {
+                    lo_i = mid + 1u;
+                } else {
+                    hi_i = mid;
+                }
+            }
+            for (e += lo_i; e < end && e->x <= xb + s->rcone; ++e) {
+                const int32_t j = (int32_t)s->joff[jb + (size_t)(e->x - pp->rx + s->m)];
+                const int32_t rr = k->radius[j];
+                const int32_t lo = e->x - rr > xa ? e->x - rr : xa;
+                const int32_t hi = e->x + rr < xb ? e->x + rr : xb;
+                const float *tap = k->taps[j] + TRN_KERNEL_MAX_RADIUS - e->x;
+                int32_t c;
+                for (c = lo; c <= hi; ++c) {
+                    tr[(size_t)(c - pp->x0) * nz + z] += e->v * tap[c];
+                }
+            }
+        }
+    }
+    return tr + (size_t)(x - pp->x0) * nz;
+}
+
+/* The nine C_d of region cell (x, y) (s->cdc, cached): eq. 9 of each bin by
+ * trn_prob_local's y pass (the intermediate cells of column x within the
+ * cell's cone distance, in rising row, each adding tap * T as trn_prob_local's
+ * y pass does),
+ * quantized as trn_select does, times ln p at the nine pose offsets (the
+ * cell's 3 x 3 neighbours are on the map: it is a patch cell). */
+static const int64_t *pre_cd(const trn_selpre_t *s, const pre_pos_t *pp, int32_t x, int32_t y)
+{
+    const size_t c = (size_t)(y - pp->y0) * (size_t)pp->w + (size_t)(x - pp->x0);
+    int64_t *cd = s->cdc + c * 9u;
+    const trn_kernels_t *k = s->k;
+    const size_t mw = 2u * (size_t)s->m + 1u, nz = (size_t)s->nz;
+    const size_t lrow = (size_t)s->nx * nz;
+    const size_t jc = (size_t)(x - pp->rx + s->m);
+    const int32_t dc = (int32_t)s->dcone[(size_t)(y - pp->ry + s->m) * mw + jc];
+    const int32_t sa = y - dc > 0 ? y - dc : 0;
+    const int32_t sb = y + dc < s->ny - 1 ? y + dc : s->ny - 1;
+    float *p = s->pcol;
+    int32_t sy, d;
+    size_t z;
+    if (s->cstamp[c] == pp->ep) {
+        return cd;
+    }
+    s->cstamp[c] = pp->ep;
+    memset(p, 0, nz * sizeof *p);
+    for (sy = sa; sy <= sb; ++sy) {
+        const int32_t j = (int32_t)s->joff[(size_t)(sy - pp->ry + s->m) * mw + jc];
+        const int32_t dy = y - sy;
+        const float *t;
+        float tap;
+        if (dy > k->radius[j] || -dy > k->radius[j]) {
+            continue;
+        }
+        tap = k->taps[j][TRN_KERNEL_MAX_RADIUS + dy];
+        t = pre_tcol(s, pp, x, sy);
+        for (z = 0; z < nz; ++z) {
+            p[z] += tap * t[z];
+        }
+    }
+    for (d = 0; d < 9; ++d) {
+        cd[d] = 0;
+    }
+    for (z = 0; z < nz; ++z) {
+        const float v = p[z];
+        const int32_t *l0, *l1, *l2;
+        int64_t q;
+        if (!(v > 0.0f)) {
+            continue;
+        }
+        q = v >= 4.0f ? (int64_t)SEL_QMAX
+                      : (int64_t)(int32_t)(v * (float)TRN_SELECT_PROB_SCALE + 0.5f);
+        l0 = s->lnpv + ((size_t)(y - 1) * (size_t)s->nx + (size_t)(x - 1)) * nz + z;
+        l1 = l0 + lrow;
+        l2 = l1 + lrow;
+        cd[0] += q * l0[0];
+        cd[1] += q * l0[nz];
+        cd[2] += q * l0[2u * nz];
+        cd[3] += q * l1[0];
+        cd[4] += q * l1[nz];
+        cd[5] += q * l1[2u * nz];
+        cd[6] += q * l2[0];
+        cd[7] += q * l2[nz];
+        cd[8] += q * l2[2u * nz];
+    }
+    return cd;
+}
+
+/* This position's summed-area table of the cells' bounds over the region:
+ * each patch cell's value from its interval's table (runs of one interval
+ * along a row by jnext), 0 elsewhere. Returns 0 when a patch cell has no
+ * interval (never: every candidate's patch offset has one). */
+static int pre_bound_sat(const trn_selpre_t *s, const pre_pos_t *pp, int32_t h)
+{
+    const size_t mw = 2u * (size_t)s->m + 1u, w1 = (size_t)pp->w + 1u;
+    const size_t plane = (size_t)s->nx * (size_t)s->ny;
+    const int32_t off = s->m - pp->rx; /* table column of map column x: x + off */
+    int64_t *sat = s->bsat;
+    int32_t r, x;
+    memset(sat, 0, w1 * sizeof *sat);
+    for (r = 0; r < h; ++r) {
+        const int32_t y = pp->y0 + r;
+        const size_t rb = (size_t)(y - pp->ry + s->m) * mw;
+        const int64_t *up = sat + (size_t)r * w1;
+        int64_t *cur = sat + (size_t)(r + 1) * w1;
+        int64_t run = 0;
+        int32_t c = 0;
+        cur[0] = 0;
+        x = s->nlo[r] <= s->nhi[r] ? s->nlo[r] : pp->w;
+        for (; c < x; ++c) {
+            cur[c + 1] = up[c + 1];
+        }
+        while (x <= s->nhi[r]) {
+            const size_t o = rb + (size_t)(pp->x0 + x + off);
+            const uint8_t t = s->jid[o];
+            const int32_t *bv;
+            int32_t e;
+            if (t == 255u) {
+                return 0;
+            }
+            e = s->jnext[o] - off - pp->x0 - 1;
+            e = e < s->nhi[r] ? e : s->nhi[r];
+            bv = s->bval + (size_t)t * plane + (size_t)y * (size_t)s->nx + (size_t)pp->x0;
+            for (; x <= e; ++x) {
+                run += (int64_t)bv[x];
+                cur[x + 1] = up[x + 1] + run;
+            }
+        }
+        for (c = x; c < pp->w; ++c) {
+            cur[c + 1] = up[c + 1] + run;
+        }
+    }
+    return 1;
+}
+
+/* Binary min-heap of candidate indices by s->lb2. */
+static void pre_sift(const trn_selpre_t *s, size_t n, size_t i)
+{
+    uint32_t *h = s->heap;
+    for (;;) {
+        const size_t l = 2u * i + 1u, r = l + 1u;
+        size_t m = i;
+        uint32_t t;
+        if (l < n && s->lb2[h[l]] < s->lb2[h[m]]) {
+            m = l;
+        }
+        if (r < n && s->lb2[h[r]] < s->lb2[h[m]]) {
+            m = r;
+        }
+        if (m == i) {
+            return;
+        }
+        t = h[i];
+        h[i] = h[m];
+        h[m] = t;
+        i = m;
+    }
+}
+
+/* Candidate ci exactly: its nine window sums from the cells' C_d (the
+ * values trn_select's tables give), then the skip test and the fit. */
+static void pre_exact(const trn_selpre_t *s, const pre_pos_t *pp, const geom_t *g, size_t ci,
+                      double *best, int *found)
 {
     const double sh2c2 = (double)s->cfg->sigma_heading_rad * (double)s->cfg->sigma_heading_rad *
                          g->cell * g->cell;
-    const int32_t w = roi->x1 - roi->x0 + 1, h = roi->y1 - roi->y0 + 1;
-    const int32_t ph = 2 * g->half + 1;
-    const size_t wz = (size_t)w, w1 = wz + 1u, rowsz = 9u * wz;
-    const size_t pplane = (size_t)w * (size_t)h, nz = (size_t)s->nz;
-    const size_t lrow = (size_t)s->nx * nz;
     const double scale = 1.0 / ((double)TRN_SELECT_PROB_SCALE * (double)TRN_LNP_SCALE);
-    int64_t *vs = s->colsum, *pre = s->prefix;
-    size_t ci = 0u, z;
-    int32_t r, x, d;
-    memset(vs, 0, rowsz * sizeof *vs);
-    for (r = 0; r < h && ci < nc; ++r) {
-        const int32_t lo = s->nlo[r], hi = s->nhi[r];
-        const int32_t gy = roi->y0 + r;
-        int64_t *acc = s->ring + (size_t)(r % ph) * rowsz;
-        if (r >= ph && s->nlo[r - ph] <= s->nhi[r - ph]) { /* the row leaving the window */
+    const int32_t cx = s->cxy[2u * ci], cy = s->cxy[2u * ci + 1u];
+    const double ox = (double)cx - g->rxf, oy = (double)cy - g->ryf;
+    int64_t *sum = s->esum; /* 9 sums and the 9 ll in the workspace: the deepest stack path */
+    double *ll = s->ell, cov[3];
+    trn_peak_t pk;
+    int32_t x, y, d;
+    for (d = 0; d < 9; ++d) {
+        sum[d] = 0;
+    }
+    for (y = cy - g->half; y <= cy + g->half; ++y) {
+        for (x = cx - g->half; x <= cx + g->half; ++x) {
+            const int64_t *cd = pre_cd(s, pp, x, y);
             for (d = 0; d < 9; ++d) {
-                for (x = s->nlo[r - ph]; x <= s->nhi[r - ph]; ++x) {
-                    vs[(size_t)d * wz + (size_t)x] -= acc[(size_t)d * wz + (size_t)x];
-                }
+                sum[d] += cd[d];
             }
         }
-        if (lo <= hi) {
-            /* patch cells: their 3 x 3 neighbours lie on the map (patches keep
-             * a one-cell margin inside it, trn_select's rule) */
-            const size_t row0 = (size_t)(gy - 1) * (size_t)s->nx;
-            for (d = 0; d < 9; ++d) {
-                memset(acc + (size_t)d * wz + (size_t)lo, 0, (size_t)(hi - lo + 1) * sizeof *acc);
-            }
-            for (z = 0; z < nz; ++z) {
-                const float *prow = s->p + z * pplane + (size_t)r * wz;
-                if (s->hit[z * (size_t)h + (size_t)r] == 0u) {
-                    continue;
-                }
-                for (x = lo; x <= hi; ++x) {
-                    const float v = prow[x];
-                    int64_t q;
-                    const int32_t *l0, *l1, *l2;
-                    int64_t *ac = acc + (size_t)x;
-                    if (!(v > 0.0f)) {
-                        continue;
-                    }
-                    q = v >= 4.0f ? (int64_t)SEL_QMAX
-                                  : (int64_t)(int32_t)(v * (float)TRN_SELECT_PROB_SCALE + 0.5f);
-                    l0 = s->lnpv + (row0 + (size_t)(roi->x0 + x - 1)) * nz + z;
-                    l1 = l0 + lrow;
-                    l2 = l1 + lrow;
-                    ac[0] += q * l0[0];
-                    ac[wz] += q * l0[nz];
-                    ac[2u * wz] += q * l0[2u * nz];
-                    ac[3u * wz] += q * l1[0];
-                    ac[4u * wz] += q * l1[nz];
-                    ac[5u * wz] += q * l1[2u * nz];
-                    ac[6u * wz] += q * l2[0];
-                    ac[7u * wz] += q * l2[nz];
-                    ac[8u * wz] += q * l2[2u * nz];
-                }
-            }
-            for (d = 0; d < 9; ++d) {
-                for (x = lo; x <= hi; ++x) {
-                    vs[(size_t)d * wz + (size_t)x] += acc[(size_t)d * wz + (size_t)x];
-                }
-            }
+    }
+    for (d = 0; d < 9; ++d) {
+        ll[d] = (double)sum[d] * scale;
+    }
+    if (*found && pre_cannot_beat(ll, g->cell, sh2c2 * (ox * ox + oy * oy), *best)) {
+        return;
+    }
+    if (trn_peak_fit(ll, &pk) == TRN_OK) {
+        const double sx = pk.sigma_x * g->cell, sy = pk.sigma_y * g->cell;
+        const double u = sh2c2 > 0.0 ? sel_heading_cov(&pk, g->cell, sh2c2, ox, oy, cov)
+                                     : sqrt(sx * sx + sy * sy);
+        if (!*found || u < *best) {
+            *best = u;
+            *found = 1;
         }
-        if (s->cxy[2u * ci + 1u] + g->half != gy) {
-            continue;
+    }
+}
+
+/* The pruned path (select_pre.h, "Pruning") after trn_selpre_best's
+ * candidates and region: every candidate's bound, then exact evaluations in
+ * rising bound while the bound can beat the best (pre_cannot_beat's margin). */
+static void pre_pruned(const trn_selpre_t *s, const trn_window_t *roi, const geom_t *g, size_t nc,
+                       double *best, int *found)
+{
+    const double sh2c2 = (double)s->cfg->sigma_heading_rad * (double)s->cfg->sigma_heading_rad *
+                         g->cell * g->cell;
+    const double scale = 1.0 / ((double)TRN_SELECT_PROB_SCALE * (double)TRN_LNP_SCALE);
+    pre_pos_t pp;
+    size_t i, nh = 0u, first = 0u;
+    int ok;
+    pp.rx = g->rx;
+    pp.ry = g->ry;
+    pp.x0 = roi->x0;
+    pp.y0 = roi->y0;
+    pp.sy0 = roi->y0 - s->rcone > 0 ? roi->y0 - s->rcone : 0;
+    pp.w = roi->x1 - roi->x0 + 1;
+    pp.nb = (pp.w + PRE_TBLOCK - 1) / PRE_TBLOCK;
+    if (++*s->epoch == 0u) { /* wrapped: every stamp is old again */
+        memset(s->tstamp, 0, (size_t)s->src_h * (size_t)s->side_w * sizeof(uint32_t));
+        memset(s->cstamp, 0, (size_t)s->side_h * (size_t)s->side_w * sizeof(uint32_t));
+        *s->epoch = 1u;
+    }
+    pp.ep = *s->epoch;
+    ok = pre_bound_sat(s, &pp, roi->y1 - roi->y0 + 1);
+    for (i = 0; i < nc; ++i) {
+        const int32_t cx = s->cxy[2u * i], cy = s->cxy[2u * i + 1u];
+        const double ox = (double)cx - g->rxf, oy = (double)cy - g->ryf;
+        const size_t w1 = (size_t)pp.w + 1u;
+        const size_t x0 = (size_t)(cx - g->half - pp.x0), x1 = (size_t)(cx + g->half - pp.x0) + 1u;
+        const size_t y0 = (size_t)(cy - g->half - pp.y0), y1 = (size_t)(cy + g->half - pp.y0) + 1u;
+        const int64_t tb = s->bsat[y1 * w1 + x1] - s->bsat[y0 * w1 + x1] - s->bsat[y1 * w1 + x0] +
+                           s->bsat[y0 * w1 + x0];
+        if (ok && tb <= 0) {
+            continue; /* trace(-H) <= 0: the fit fails (never informative) */
         }
-        for (d = 0; d < 9; ++d) {
-            int64_t run = 0;
-            pre[(size_t)d * w1] = 0;
-            for (x = 0; x < w; ++x) {
-                run += vs[(size_t)d * wz + (size_t)x];
-                pre[(size_t)d * w1 + (size_t)x + 1u] = run;
-            }
+        s->lb2[i] = ok ? 12.0 / ((double)tb * s->bunit * scale) * g->cell * g->cell +
+                             sh2c2 * (ox * ox + oy * oy)
+                       : 0.0;
+        if (nh == 0u || s->lb2[i] < s->lb2[first]) {
+            first = i;
         }
-        for (; ci < nc && s->cxy[2u * ci + 1u] + g->half == gy; ++ci) {
-            const size_t x0 = (size_t)(s->cxy[2u * ci] - g->half - roi->x0);
-            const size_t x1 = (size_t)(s->cxy[2u * ci] + g->half - roi->x0) + 1u;
-            /* the rover-to-target offset as trn_select forms it (c->x - g.rxf) */
-            const double ox = (double)s->cxy[2u * ci] - g->rxf;
-            const double oy = (double)s->cxy[2u * ci + 1u] - g->ryf;
-            double ll[9], cov[3];
-            trn_peak_t pk;
-            for (d = 0; d < 9; ++d) {
-                ll[d] = (double)(pre[(size_t)d * w1 + x1] - pre[(size_t)d * w1 + x0]) * scale;
-            }
-            if (*found && pre_cannot_beat(ll, g->cell, sh2c2 * (ox * ox + oy * oy), *best)) {
-                continue;
-            }
-            if (trn_peak_fit(ll, &pk) == TRN_OK) {
-                const double sx = pk.sigma_x * g->cell, sy = pk.sigma_y * g->cell;
-                const double u = sh2c2 > 0.0 ? sel_heading_cov(&pk, g->cell, sh2c2, ox, oy, cov)
-                                             : sqrt(sx * sx + sy * sy);
-                if (!*found || u < *best) {
-                    *best = u;
-                    *found = 1;
+        s->heap[nh++] = (uint32_t)i;
+    }
+    /* the lowest bound first; once it gave a best, only the candidates whose
+     * bound can beat that best enter the heap */
+    if (nh > 0u) {
+        const size_t n0 = nh;
+        pre_exact(s, &pp, g, first, best, found);
+        if (*found) {
+            size_t m = 0u;
+            for (i = 0; i < n0; ++i) {
+                const uint32_t c = s->heap[i];
+                if ((size_t)c != first && !(s->lb2[c] * (1.0 - 1.0e-6) > *best * *best)) {
+                    s->heap[m++] = c;
                 }
             }
+            nh = m;
+        } else { /* no best yet: the others, the first taken out */
+            for (i = 0; i < n0; ++i) {
+                if ((size_t)s->heap[i] == first) {
+                    s->heap[i] = s->heap[n0 - 1u];
+                    break;
+                }
+            }
+            nh = n0 - 1u;
         }
+    }
+    for (i = nh / 2u; i-- > 0u;) {
+        pre_sift(s, nh, i);
+    }
+    while (nh > 0u) {
+        const size_t ci = s->heap[0];
+        if (*found && s->lb2[ci] * (1.0 - 1.0e-6) > *best * *best) {
+            break; /* no candidate left can beat the best */
+        }
+        s->heap[0] = s->heap[--nh];
+        pre_sift(s, nh, 0u);
+        pre_exact(s, &pp, g, ci, best, found);
     }
 }
 
@@ -1129,7 +1511,7 @@ trn_status_t trn_selpre_best(const trn_selpre_t *s, int32_t rx, int32_t ry, floa
     geom_t g;
     trn_window_t roi, pw;
     size_t nc = 0u;
-    int32_t i_x, i_y, r, z, side_w, side_h;
+    int32_t i_x, i_y, r, side_w, side_h;
     double best = HUGE_VAL;
     int found = 0;
     const trn_select_cfg_t *cfg = s->cfg;
@@ -1207,30 +1589,8 @@ trn_status_t trn_selpre_best(const trn_selpre_t *s, int32_t rx, int32_t ry, floa
         }
     }
 
-    /* per source row: the region columns its y pass can reach that a patch needs */
-    {
-        const int32_t sy0 = roi.y0 - s->rmax > 0 ? roi.y0 - s->rmax : 0;
-        const int32_t sy1 = roi.y1 + s->rmax < s->ny - 1 ? roi.y1 + s->rmax : s->ny - 1;
-        int32_t sy;
-        for (sy = sy0; sy <= sy1; ++sy) {
-            const int32_t g0 = sy - s->rmax > roi.y0 ? sy - s->rmax : roi.y0;
-            const int32_t g1 = sy + s->rmax < roi.y1 ? sy + s->rmax : roi.y1;
-            int32_t a = side_w, b = -1, gy;
-            for (gy = g0; gy <= g1; ++gy) {
-                const int32_t rr = gy - roi.y0;
-                a = s->nlo[rr] < a ? s->nlo[rr] : a;
-                b = s->nhi[rr] > b ? s->nhi[rr] : b;
-            }
-            s->ulo[sy - sy0] = a;
-            s->uhi[sy - sy0] = b;
-        }
-    }
-
-    /* 2. eq. 9 slice by slice, 3. the nine tables */
-    for (z = 0; z < s->nz; ++z) {
-        pre_eq9_slice(s, &roi, rx, ry, z);
-    }
-    pre_windows(s, &roi, &g, nc, &best, &found);
+    /* 2. bounds, then exact evaluations in rising bound */
+    pre_pruned(s, &roi, &g, nc, &best, &found);
     if (!found) {
         return TRN_E_NOTARGET;
     }

@@ -18,8 +18,22 @@
  *  - a candidate's eq. 6 fit is skipped when the trace bound shows it cannot
  *    beat the best so far.
  *
+ * Pruning (docs/modules/field.md, "bounds"): eq. 6's trace is linear in the
+ * quantized P of the patch, and P of a cell lies between P_G smoothed by the
+ * pointwise minimum and maximum of the kernels that can reach the cell. Per
+ * interval of kernels, a map-sized table of row prefixes of the resulting
+ * bound on sum_z q A (A: the trace's 3 x 3 stencil of ln p) is built once, so
+ * each candidate's lower bound on its uncertainty costs a few lookups per
+ * patch row. Candidates are then evaluated exactly, in rising bound, eq. 9
+ * gathered cell by cell in trn_prob_local's order (so the same floats), until
+ * the next bound cannot beat the best found: the same minimum, with eq. 9 on
+ * a few per cent of the region.
+ *
  * Memory (trn_selpre_bytes): the P_G nonzeros (8 bytes each), ln p per voxel
- * (4 bytes), the offset table and one position's region buffers. */
+ * (4 bytes), the offset tables, one position's region buffers, and for the
+ * pruning 8 bytes per map cell per kernel interval, the build's two map-sized
+ * double planes, and the exact evaluation's caches (4 bytes per bin per
+ * x-pass cell, 72 per region cell). */
 #ifndef TRN_SELECT_PRE_H
 #define TRN_SELECT_PRE_H
 
@@ -29,6 +43,11 @@ typedef struct {
     int32_t x;
     float v;
 } trn_selpre_src_t;
+
+/* One bound table per interval [a, b] of kernel indices. */
+typedef struct {
+    uint8_t a, b; /* kernels a..b */
+} trn_selpre_int_t;
 
 typedef struct {
     const trn_map_t *map;
@@ -41,21 +60,34 @@ typedef struct {
     const trn_selpre_src_t *src; /* nonzero P_G by (z, y) row, ascending x */
     const int32_t *lnpv;         /* lnp[min(D, cap)], index (y * nx + x) * nz + z */
     int32_t *cxy;                /* candidate centres, 2 per candidate */
-    double *ll;                  /* 9 per candidate */
     size_t ncap;
     int32_t *latlo, *lathi; /* per lattice row: leftmost, rightmost centre */
     int32_t *nlo, *nhi;     /* per region row: columns inside some patch */
-    uint8_t *touched;       /* per source row: holds an x-pass value */
-    int32_t *ulo, *uhi;     /* per source row: region columns some patch row it reaches needs */
-    uint8_t *hit;           /* per slice and region row: the y pass wrote to it */
     const uint8_t *lok;     /* per lattice offset: range and footprint rules hold */
     const double *latan;    /* per lattice offset: atan2(dy, dx) */
     int full_pan;           /* pan limits are the whole circle: no bearing test */
-    float *t;               /* x pass, src_h rows x side_w */
-    float *p;               /* eq. 9 over the region, nz slices */
-    int64_t *ring;          /* the nine C_d of the last patch_cells region rows */
-    int64_t *colsum;        /* their column sums, 9 x side_w */
-    int64_t *prefix;        /* prefix sums of colsum along a row, 9 x (side_w + 1) */
+    /* the pruning (see above) */
+    int32_t nint;                 /* kernel intervals with a table */
+    const trn_selpre_int_t *ints; /* their kernels */
+    const uint8_t *jid;           /* interval of a patch cell by offset, (2m+1)^2; 255: none */
+    const int32_t *jnext;  /* per offset: the next column of its table row where jid changes */
+    const uint16_t *dcone; /* per offset: the Chebyshev distance eq. 9 reaches it from */
+    int32_t rcone;         /* the largest radius in any patch cell's cone (<= rmax) */
+    const int32_t *bval;   /* nint tables, ny x nx: each cell's bound of sum_z q A, in
+                                    units of 2^bshift rounded up */
+    int32_t bshift;
+    double bunit;     /* 2^bshift */
+    int64_t *bsat;    /* one position's summed-area table of its cells' bounds */
+    float *tc;        /* x-pass cache, src_h x side_w cells x nz bins */
+    uint32_t *tstamp; /* its stamps (the position's epoch when computed) */
+    int64_t *cdc;     /* C_d cache, side_h x side_w cells x 9 */
+    uint32_t *cstamp; /* its stamps */
+    float *pcol;      /* one cell's eq. 9, nz */
+    int64_t *esum;    /* one candidate's nine window sums */
+    double *ell;      /* and its nine ll */
+    double *lb2;      /* per candidate: its lower bound (m^2) */
+    uint32_t *heap;   /* candidates by rising bound */
+    uint32_t *epoch;  /* the position counter */
 } trn_selpre_t;
 
 /* Bytes of trn_selpre_init's memory for this map and P_G (0 if invalid). */

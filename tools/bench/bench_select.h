@@ -12,7 +12,8 @@ typedef struct {
     double field_ms, field_naive_est_ms;
     unsigned field_evals, field_cells;
     double field_fast_ms;             /* trn_field_fast, same field as field_ms */
-    double fpaper_ms, fpaper_fast_ms; /* paper defaults, 64 x 64 area: trn_field, trn_field_fast */
+    double fpaper_ms, fpaper_fast_ms; /* paper defaults: trn_field, trn_field_fast */
+    int32_t fpaper_side;              /* over this square area (the whole map up to 256) */
     unsigned fpaper_evals;
     size_t fpaper_ws, fpaper_fast_ws; /* workspace bytes of the two */
     int wrong;                        /* a fast answer differed from the naive one */

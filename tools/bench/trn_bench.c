@@ -1317,8 +1317,10 @@ int main(int argc, char **argv)
         printf("target all candidates of one rover position < 20 ms%s: %s (%d: %.2f ms)\n",
                res[i].n >= 512 ? "" : " (info below 512)", b->select_ms < 20.0 ? "PASS" : "MISS",
                (int)res[i].n, b->select_ms);
-        printf("target trn_field_fast >= 10x trn_field (paper defaults, 64x64 area, same field): "
-               "%s (%d: %.2fx; small reach, whole map: %.2fx)\n",
+        printf("target trn_field_fast >= 10x trn_field (paper defaults, %dx%d area, same "
+               "field)%s: %s (%d: %.2fx; small reach, whole map: %.2fx)\n",
+               (int)b->fpaper_side, (int)b->fpaper_side,
+               b->fpaper_side == res[i].n ? "" : " (info: the target is the whole 256 map)",
                b->fpaper_ms >= 10.0 * b->fpaper_fast_ms ? "PASS" : "MISS", (int)res[i].n,
                b->fpaper_ms / b->fpaper_fast_ms, b->field_ms / b->field_fast_ms);
     }
