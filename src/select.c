@@ -11,6 +11,8 @@
 
 #define SEL_PI 3.14159265358979323846
 #define SEL_QMAX (4 * TRN_SELECT_PROB_SCALE) /* P clamped to [0, 4] */
+#define PRE_CDN 10          /* ground path, per cached cell: the nine C_d, the bound's excess */
+#define PRE_REFINE_SHIFT 20 /* the cached cells refine bounds up to this shift (int64 sums) */
 
 void trn_select_cfg_default(trn_select_cfg_t *cfg)
 {
@@ -700,7 +702,7 @@ static int pre_layout(const trn_select_cfg_t *cfg, const trn_map_t *map, const t
           (double)nnz * (double)sizeof(trn_selpre_src_t) +
           (double)nx * (double)ny * ((double)nz * 4.0 + (double)L->nint * 4.0 + 40.0) +
           (double)L->src_h * (double)L->side_w * ((double)nz * 4.0 + 4.0) +
-          ((double)L->side_w + 1.0) * ((double)L->side_h + 1.0) * 84.0 + (double)L->ncap * 29.0 +
+          ((double)L->side_w + 1.0) * ((double)L->side_h + 1.0) * 84.0 + (double)L->ncap * 41.0 +
           (double)nz * 4.0 + (double)L->side_h * 8.0 + 1.0e6;
     if (tot > (double)(SIZE_MAX / 2u)) {
         return 0;
@@ -728,11 +730,12 @@ static int pre_layout(const trn_select_cfg_t *cfg, const trn_map_t *map, const t
     L->bsat = TRN_ALIGN_UP(((size_t)L->side_w + 1u) * ((size_t)L->side_h + 1u) * sizeof(int64_t));
     L->tc = TRN_ALIGN_UP(xcells * (size_t)nz * sizeof(float));
     L->tstamp = TRN_ALIGN_UP(xcells * sizeof(uint32_t));
-    L->cdc = TRN_ALIGN_UP(region * 9u * sizeof(int64_t));
+    L->cdc = TRN_ALIGN_UP(region * (size_t)PRE_CDN * sizeof(int64_t));
     L->cstamp = TRN_ALIGN_UP(region * sizeof(uint32_t));
     L->pcol = TRN_ALIGN_UP((size_t)nz * sizeof(float)) + TRN_ALIGN_UP(9u * sizeof(int64_t)) +
               TRN_ALIGN_UP(9u * sizeof(double));
-    L->lb2 = TRN_ALIGN_UP(L->ncap * sizeof(double));
+    L->lb2 = TRN_ALIGN_UP(L->ncap * sizeof(double)) + TRN_ALIGN_UP(L->ncap * sizeof(int64_t)) +
+             TRN_ALIGN_UP(L->ncap * sizeof(uint32_t));
     L->heap = TRN_ALIGN_UP(L->ncap * sizeof(uint32_t));
     L->epoch = TRN_ALIGN_UP(sizeof(uint32_t));
     L->total = L->joff + L->rowptr + L->src + L->lnpv + L->cxy + L->lat + L->nl + L->lok +
@@ -789,17 +792,18 @@ size_t trn_selpre_bytes(const trn_select_cfg_t *cfg, const trn_map_t *map, const
     return L.total;
 }
 
-/* The pruning's tables (select_pre.h, "Pruning"), carved from b: the
- * intervals, jid and jnext over the offset table, and per interval [a, b]
- * the row prefixes of bound(x, y) = sum_z (A > 0 ? A qmax : A qmin), where
- * A = sum_d beta_d lnp(v + d) (beta: 4 at the centre, 1 on the edges, -2 at
- * the corners: 3 x eq. 6's trace coefficients, so that 3 trace(-H) / scale =
- * sum_v q A), and qmax, qmin bound the quantized eq. 9 of the voxel: P_G
- * smoothed by the pointwise maximum (minimum) of the interval's kernels along
- * x then y, widened by 1e-4 (the float rounding of trn_prob_local's at most
- * 2 (2 R_9 + 1) positive terms is below 1e-5 relative) and by one unit of q
- * for its rounding. Cells without the 3 x 3 neighbourhood (the map's rim;
- * never a patch cell) hold 0. */
+/* The pruning's tables (select_pre.h), carved from b: the intervals, jid,
+ * jnext and dcone over the offset table, the position caches, and per
+ * interval [a, b] every cell's bound(x, y) = sum_z (A > 0 ? A qmax : A qmin),
+ * where A = sum_d beta_d lnp(v + d) (beta: 4 at the centre, 1 on the edges,
+ * -2 at the corners: 3 x eq. 6's trace coefficients, so that
+ * 3 trace(-H) / scale = sum_v q A), and qmax, qmin bound the quantized eq. 9
+ * of the voxel: P_G smoothed by the pointwise maximum (minimum) of the
+ * interval's kernels along x then y, widened by 1e-4 (the float rounding of
+ * trn_prob_local's at most 2 (2 R_9 + 1) positive terms is below 1e-5
+ * relative) and by one unit of q for its rounding; stored as int32 in units
+ * of 2^bshift, rounded up (so window sums stay upper bounds). Cells without
+ * the 3 x 3 neighbourhood (the map's rim; never a patch cell) hold 0. */
 static void pre_bounds_init(trn_selpre_t *s, const pre_layout_t *L, uint8_t *b)
 {
     const trn_kernels_t *k = s->k;
@@ -852,6 +856,9 @@ static void pre_bounds_init(trn_selpre_t *s, const pre_layout_t *L, uint8_t *b)
                                 TRN_ALIGN_UP(9u * sizeof(int64_t)));
     b += L->pcol;
     s->lb2 = (double *)(void *)b;
+    s->tbu = (int64_t *)(void *)(b + TRN_ALIGN_UP(L->ncap * sizeof(double)));
+    s->rst = (uint32_t *)(void *)(b + TRN_ALIGN_UP(L->ncap * sizeof(double)) +
+                                  TRN_ALIGN_UP(L->ncap * sizeof(int64_t)));
     b += L->lb2;
     s->heap = (uint32_t *)(void *)b;
     b += L->heap;
@@ -906,7 +913,7 @@ static void pre_bounds_init(trn_selpre_t *s, const pre_layout_t *L, uint8_t *b)
         }
     }
 
-    /* per interval: the bound of every cell, then its row prefixes */
+    /* per interval: the bound of every cell */
     for (t = 0; t < L->nint; ++t) {
         const int32_t ja = ints[t].a, jb = ints[t].b;
         const int32_t ru_r = k->radius[jb], rd_r = k->radius[ja];
@@ -1188,6 +1195,7 @@ static int pre_cannot_beat(const double ll[9], double cell_m, double head_m2, do
 typedef struct {
     int32_t rx, ry, x0, y0, sy0, w, nb; /* nb: x-pass blocks per row */
     uint32_t ep;
+    uint32_t ncd; /* cells whose C_d this position has computed */
 } pre_pos_t;
 
 /* Columns per x-pass block (the cache's unit). */
@@ -1248,10 +1256,10 @@ static const float *pre_tcol(const trn_selpre_t *s, const pre_pos_t *pp, int32_t
  * y pass does),
  * quantized as trn_select does, times ln p at the nine pose offsets (the
  * cell's 3 x 3 neighbours are on the map: it is a patch cell). */
-static const int64_t *pre_cd(const trn_selpre_t *s, const pre_pos_t *pp, int32_t x, int32_t y)
+static const int64_t *pre_cd(const trn_selpre_t *s, pre_pos_t *pp, int32_t x, int32_t y)
 {
     const size_t c = (size_t)(y - pp->y0) * (size_t)pp->w + (size_t)(x - pp->x0);
-    int64_t *cd = s->cdc + c * 9u;
+    int64_t *cd = s->cdc + c * PRE_CDN;
     const trn_kernels_t *k = s->k;
     const size_t mw = 2u * (size_t)s->m + 1u, nz = (size_t)s->nz;
     const size_t lrow = (size_t)s->nx * nz;
@@ -1266,6 +1274,7 @@ static const int64_t *pre_cd(const trn_selpre_t *s, const pre_pos_t *pp, int32_t
         return cd;
     }
     s->cstamp[c] = pp->ep;
+    ++pp->ncd;
     memset(p, 0, nz * sizeof *p);
     for (sy = sa; sy <= sb; ++sy) {
         const int32_t j = (int32_t)s->joff[(size_t)(sy - pp->ry + s->m) * mw + jc];
@@ -1305,6 +1314,18 @@ static const int64_t *pre_cd(const trn_selpre_t *s, const pre_pos_t *pp, int32_t
         cd[6] += q * l2[0];
         cd[7] += q * l2[nz];
         cd[8] += q * l2[2u * nz];
+    }
+    /* the cell's bound less its exact sum_z q A (>= 0), for pre_refined */
+    {
+        const uint8_t t = s->jid[(size_t)(y - pp->ry + s->m) * mw + jc];
+        const int64_t ex = 4 * cd[4] + cd[1] + cd[3] + cd[5] + cd[7] -
+                           2 * (cd[0] + cd[2] + cd[6] + cd[8]);
+        cd[9] = (t == 255u || s->bshift > PRE_REFINE_SHIFT)
+                    ? 0
+                    : (int64_t)s->bval[(size_t)t * (size_t)s->nx * (size_t)s->ny +
+                                       (size_t)y * (size_t)s->nx + (size_t)x] *
+                              ((int64_t)1 << s->bshift) -
+                          ex;
     }
     return cd;
 }
@@ -1380,9 +1401,52 @@ static void pre_sift(const trn_selpre_t *s, size_t n, size_t i)
     }
 }
 
+/* Candidate ci's bound refined by the cells this position has computed:
+ * their exact sum_z q A replaces their bound (pre_cd's excess subtracted).
+ * Returns the refined sum (units of 1); *ok 0 when it cannot be formed. */
+static int64_t pre_refined(const trn_selpre_t *s, const pre_pos_t *pp, int32_t half, size_t ci,
+                           int *ok)
+{
+    const int32_t cx = s->cxy[2u * ci], cy = s->cxy[2u * ci + 1u];
+    int64_t ex = 0;
+    int32_t x, y;
+    *ok = s->bshift <= PRE_REFINE_SHIFT && s->tbu[ci] < ((int64_t)1 << 40) &&
+          s->tbu[ci] > -((int64_t)1 << 40);
+    if (!*ok) {
+        return 0;
+    }
+    for (y = cy - half; y <= cy + half; ++y) {
+        const size_t r = (size_t)(y - pp->y0) * (size_t)pp->w;
+        for (x = cx - half; x <= cx + half; ++x) {
+            const size_t c = r + (size_t)(x - pp->x0);
+            if (s->cstamp[c] == pp->ep) {
+                ex += s->cdc[c * PRE_CDN + 9u];
+            }
+        }
+    }
+    return s->tbu[ci] * ((int64_t)1 << s->bshift) - ex;
+}
+
+/* Insert candidate c into the heap of n. */
+static void pre_push(const trn_selpre_t *s, size_t n, uint32_t c)
+{
+    uint32_t *h = s->heap;
+    size_t i = n;
+    h[i] = c;
+    while (i > 0u) {
+        const size_t up = (i - 1u) / 2u;
+        if (!(s->lb2[h[i]] < s->lb2[h[up]])) {
+            break;
+        }
+        h[i] = h[up];
+        h[up] = c;
+        i = up;
+    }
+}
+
 /* Candidate ci exactly: its nine window sums from the cells' C_d (the
  * values trn_select's tables give), then the skip test and the fit. */
-static void pre_exact(const trn_selpre_t *s, const pre_pos_t *pp, const geom_t *g, size_t ci,
+static void pre_exact(const trn_selpre_t *s, pre_pos_t *pp, const geom_t *g, size_t ci,
                       double *best, int *found)
 {
     const double sh2c2 = (double)s->cfg->sigma_heading_rad * (double)s->cfg->sigma_heading_rad *
@@ -1441,6 +1505,7 @@ static void pre_pruned(const trn_selpre_t *s, const trn_window_t *roi, const geo
     pp.sy0 = roi->y0 - s->rcone > 0 ? roi->y0 - s->rcone : 0;
     pp.w = roi->x1 - roi->x0 + 1;
     pp.nb = (pp.w + PRE_TBLOCK - 1) / PRE_TBLOCK;
+    pp.ncd = 0u;
     if (++*s->epoch == 0u) { /* wrapped: every stamp is old again */
         memset(s->tstamp, 0, (size_t)s->src_h * (size_t)s->side_w * sizeof(uint32_t));
         memset(s->cstamp, 0, (size_t)s->side_h * (size_t)s->side_w * sizeof(uint32_t));
@@ -1459,6 +1524,8 @@ static void pre_pruned(const trn_selpre_t *s, const trn_window_t *roi, const geo
         if (ok && tb <= 0) {
             continue; /* trace(-H) <= 0: the fit fails (never informative) */
         }
+        s->tbu[i] = ok ? tb : INT64_MAX; /* INT64_MAX: no refinement */
+        s->rst[i] = 0u;
         s->lb2[i] = ok ? 12.0 / ((double)tb * s->bunit * scale) * g->cell * g->cell +
                              sh2c2 * (ox * ox + oy * oy)
                        : 0.0;
@@ -1501,6 +1568,27 @@ static void pre_pruned(const trn_selpre_t *s, const trn_window_t *roi, const geo
         }
         s->heap[0] = s->heap[--nh];
         pre_sift(s, nh, 0u);
+        if (s->rst[ci] != pp.ncd) { /* cells computed since its bound: refine it */
+            int rok;
+            const int64_t tr = pre_refined(s, &pp, g->half, ci, &rok);
+            s->rst[ci] = pp.ncd;
+            if (rok) {
+                const double ox = (double)s->cxy[2u * ci] - g->rxf;
+                const double oy = (double)s->cxy[2u * ci + 1u] - g->ryf;
+                if (tr <= 0) {
+                    continue; /* trace(-H) <= 0: never informative */
+                }
+                s->lb2[ci] = 12.0 / ((double)tr * scale) * g->cell * g->cell +
+                             sh2c2 * (ox * ox + oy * oy);
+                if (*found && s->lb2[ci] * (1.0 - 1.0e-6) > *best * *best) {
+                    continue;
+                }
+                if (nh > 0u && s->lb2[ci] > s->lb2[s->heap[0]]) {
+                    pre_push(s, nh++, (uint32_t)ci); /* another bound is lower now */
+                    continue;
+                }
+            }
+        }
         pre_exact(s, &pp, g, ci, best, found);
     }
 }

@@ -5,35 +5,25 @@
  * rover cell is the best uncertainty trn_select gives there, bit for bit:
  *
  *  - the kernel index of eq. 9 depends only on the integer offset of a cell
- *    from the rover cell, so it is tabulated once (joff);
- *  - eq. 9 is evaluated from the nonzero P_G voxels only (compressed rows,
- *    ascending x), every output value receiving the same products in the
- *    same order as trn_prob_local's x and y passes (so the same floats);
- *  - ln p of the capped distance is stored per voxel with z innermost, and
- *    each candidate's nine exact int64 window sums come from one pass over
- *    the region's rows: C_d of the row from the nonzero P voxels, column sums
- *    of the last patch_cells rows, prefix sums along the row where patches
- *    end (exact integer sums: the order of the additions does not matter,
- *    so the same values as trn_select's summed-area tables);
- *  - a candidate's eq. 6 fit is skipped when the trace bound shows it cannot
- *    beat the best so far.
- *
- * Pruning (docs/modules/field.md, "bounds"): eq. 6's trace is linear in the
- * quantized P of the patch, and P of a cell lies between P_G smoothed by the
- * pointwise minimum and maximum of the kernels that can reach the cell. Per
- * interval of kernels, a map-sized table of row prefixes of the resulting
- * bound on sum_z q A (A: the trace's 3 x 3 stencil of ln p) is built once, so
- * each candidate's lower bound on its uncertainty costs a few lookups per
- * patch row. Candidates are then evaluated exactly, in rising bound, eq. 9
- * gathered cell by cell in trn_prob_local's order (so the same floats), until
- * the next bound cannot beat the best found: the same minimum, with eq. 9 on
- * a few per cent of the region.
+ *    from the rover cell, so it is tabulated once (joff), and so is the
+ *    interval of kernels that can reach a cell and its cone distance;
+ *  - eq. 6's trace is linear in the quantized P of the patch (sum q A, A the
+ *    trace's 3 x 3 stencil of ln p), and P of a cell lies between P_G
+ *    smoothed by the pointwise minimum and maximum of the kernels of its
+ *    interval: per interval a map-sized int32 table of each cell's bound of
+ *    sum_z q A is built once, and per position one summed-area table of the
+ *    cells' bounds gives every candidate a lower bound on its uncertainty;
+ *  - candidates are evaluated exactly in rising bound: eq. 9 of a patch cell
+ *    gathered from the nonzero P_G voxels with trn_prob_local's products in
+ *    its order (so the same floats), its nine C_d cached (exact int64: the
+ *    values of trn_select's summed-area tables), the computed cells' exact
+ *    sums replacing their bounds in the later candidates' bounds, until the
+ *    lowest bound left cannot beat the best found: the same minimum.
  *
  * Memory (trn_selpre_bytes): the P_G nonzeros (8 bytes each), ln p per voxel
- * (4 bytes), the offset tables, one position's region buffers, and for the
- * pruning 8 bytes per map cell per kernel interval, the build's two map-sized
- * double planes, and the exact evaluation's caches (4 bytes per bin per
- * x-pass cell, 72 per region cell). */
+ * (4 bytes), the offset tables (8 bytes per offset), 4 bytes per map cell
+ * per kernel interval, the build's scratch (40 bytes per map cell), and one
+ * position's caches (4 bytes per bin per x-pass cell, 92 per region cell). */
 #ifndef TRN_SELECT_PRE_H
 #define TRN_SELECT_PRE_H
 
@@ -80,12 +70,14 @@ typedef struct {
     int64_t *bsat;    /* one position's summed-area table of its cells' bounds */
     float *tc;        /* x-pass cache, src_h x side_w cells x nz bins */
     uint32_t *tstamp; /* its stamps (the position's epoch when computed) */
-    int64_t *cdc;     /* C_d cache, side_h x side_w cells x 9 */
+    int64_t *cdc;     /* C_d cache, side_h x side_w cells x 10 (C_d, excess) */
     uint32_t *cstamp; /* its stamps */
     float *pcol;      /* one cell's eq. 9, nz */
     int64_t *esum;    /* one candidate's nine window sums */
     double *ell;      /* and its nine ll */
     double *lb2;      /* per candidate: its lower bound (m^2) */
+    int64_t *tbu;     /* its bound's sum (units of 2^bshift); INT64_MAX: none */
+    uint32_t *rst;    /* the cells computed when its bound was last formed */
     uint32_t *heap;   /* candidates by rising bound */
     uint32_t *epoch;  /* the position counter */
 } trn_selpre_t;
