@@ -11,8 +11,7 @@
 
 #define SEL_PI 3.14159265358979323846
 #define SEL_QMAX (4 * TRN_SELECT_PROB_SCALE) /* P clamped to [0, 4] */
-#define PRE_CDN 10          /* ground path, per cached cell: the nine C_d, the bound's excess */
-#define PRE_REFINE_SHIFT 20 /* the cached cells refine bounds up to this shift (int64 sums) */
+#define PRE_CDN 10 /* ground path, per cached cell: the nine C_d, the bound's excess */
 
 void trn_select_cfg_default(trn_select_cfg_t *cfg)
 {
@@ -652,7 +651,7 @@ static int32_t pre_used_intervals(const trn_select_cfg_t *cfg, const trn_map_t *
     const float cell = map->cfg.terrain.cell_m;
     const int32_t e = reach + half;
     int32_t ox, oy, n = 0;
-    memset(used, 0, TRN_KERNEL_COUNT * TRN_KERNEL_COUNT);
+    memset(used, 0, (size_t)TRN_KERNEL_COUNT * (size_t)TRN_KERNEL_COUNT);
     for (oy = -e; oy <= e; ++oy) {
         for (ox = -e; ox <= e; ++ox) {
             uint8_t a, b;
@@ -724,7 +723,7 @@ static int pre_layout(const trn_select_cfg_t *cfg, const trn_map_t *map, const t
     L->jnext = TRN_ALIGN_UP((size_t)mw * (size_t)mw * sizeof(int32_t));
     L->dcone = TRN_ALIGN_UP((size_t)mw * (size_t)mw * sizeof(uint16_t));
     L->bval = TRN_ALIGN_UP((size_t)L->nint * plane * sizeof(int32_t));
-    L->bscr = TRN_ALIGN_UP((2u * (plane + (size_t)nx) + 4u * TRN_KERNEL_MAX_RADIUS + 2u) *
+    L->bscr = TRN_ALIGN_UP((2u * (plane + (size_t)nx) + 4u * (size_t)TRN_KERNEL_MAX_RADIUS + 2u) *
                                sizeof(double) +
                            plane * sizeof(int64_t));
     L->bsat = TRN_ALIGN_UP(((size_t)L->side_w + 1u) * ((size_t)L->side_h + 1u) * sizeof(int64_t));
@@ -891,6 +890,12 @@ static void pre_bounds_init(trn_selpre_t *s, const pre_layout_t *L, uint8_t *b)
             s->bunit *= 2.0;
         }
         s->bshift = sh;
+        /* refinement by computed cells in int64: a patch's sums of cells'
+         * excesses (each below 2^(32 + bshift)) and of its bound (int32
+         * values times 2^bshift) stay below 2^62 */
+        s->refine = (double)(2 * s->half + 1) * (double)(2 * s->half + 1) * s->bunit *
+                        8589934592.0 <=
+                    4.611686018427388e18;
     }
     memset(jid, 255, (size_t)mw * (size_t)mw);
     memset(dcone, 0, (size_t)mw * (size_t)mw * sizeof *dcone);
@@ -917,7 +922,7 @@ static void pre_bounds_init(trn_selpre_t *s, const pre_layout_t *L, uint8_t *b)
     for (t = 0; t < L->nint; ++t) {
         const int32_t ja = ints[t].a, jb = ints[t].b;
         const int32_t ru_r = k->radius[jb], rd_r = k->radius[ja];
-        double *up = env, *dn = env + 2 * TRN_KERNEL_MAX_RADIUS + 1;
+        double *up = env, *dn = env + (2 * (size_t)TRN_KERNEL_MAX_RADIUS + 1u);
         int32_t *b32 = bval + (size_t)t * plane;
         size_t c;
         for (i = -ru_r; i <= ru_r; ++i) {
@@ -984,9 +989,9 @@ static void pre_bounds_init(trn_selpre_t *s, const pre_layout_t *L, uint8_t *b)
                     l1 = l0 + lrow;
                     l2 = l1 + lrow;
                     a = 4 * (int64_t)l1[nz] + (int64_t)l0[nz] + (int64_t)l1[0] +
-                        (int64_t)l1[2 * nz] + (int64_t)l2[nz] -
-                        2 * ((int64_t)l0[0] + (int64_t)l0[2 * nz] + (int64_t)l2[0] +
-                             (int64_t)l2[2 * nz]);
+                        (int64_t)l1[2u * (size_t)nz] + (int64_t)l2[nz] -
+                        2 * ((int64_t)l0[0] + (int64_t)l0[2u * (size_t)nz] + (int64_t)l2[0] +
+                             (int64_t)l2[2u * (size_t)nz]);
                     if (a > 0) {
                         qd = ru[x] * (double)TRN_SELECT_PROB_SCALE * (1.0 + 1.0e-4);
                         qb = qd >= (double)SEL_QMAX ? (int64_t)SEL_QMAX : (int64_t)qd + 1;
@@ -1263,7 +1268,8 @@ static const int64_t *pre_cd(const trn_selpre_t *s, pre_pos_t *pp, int32_t x, in
     const trn_kernels_t *k = s->k;
     const size_t mw = 2u * (size_t)s->m + 1u, nz = (size_t)s->nz;
     const size_t lrow = (size_t)s->nx * nz;
-    const size_t jc = (size_t)(x - pp->rx + s->m);
+    const int32_t jcol = x - pp->rx + s->m; /* the cell's offset-table column */
+    const size_t jc = (size_t)jcol;
     const int32_t dc = (int32_t)s->dcone[(size_t)(y - pp->ry + s->m) * mw + jc];
     const int32_t sa = y - dc > 0 ? y - dc : 0;
     const int32_t sb = y + dc < s->ny - 1 ? y + dc : s->ny - 1;
@@ -1320,7 +1326,7 @@ static const int64_t *pre_cd(const trn_selpre_t *s, pre_pos_t *pp, int32_t x, in
         const uint8_t t = s->jid[(size_t)(y - pp->ry + s->m) * mw + jc];
         const int64_t ex = 4 * cd[4] + cd[1] + cd[3] + cd[5] + cd[7] -
                            2 * (cd[0] + cd[2] + cd[6] + cd[8]);
-        cd[9] = (t == 255u || s->bshift > PRE_REFINE_SHIFT)
+        cd[9] = (t == 255u || !s->refine)
                     ? 0
                     : (int64_t)s->bval[(size_t)t * (size_t)s->nx * (size_t)s->ny +
                                        (size_t)y * (size_t)s->nx + (size_t)x] *
@@ -1410,8 +1416,7 @@ static int64_t pre_refined(const trn_selpre_t *s, const pre_pos_t *pp, int32_t h
     const int32_t cx = s->cxy[2u * ci], cy = s->cxy[2u * ci + 1u];
     int64_t ex = 0;
     int32_t x, y;
-    *ok = s->bshift <= PRE_REFINE_SHIFT && s->tbu[ci] < ((int64_t)1 << 40) &&
-          s->tbu[ci] > -((int64_t)1 << 40);
+    *ok = s->refine && s->tbu[ci] != INT64_MAX;
     if (!*ok) {
         return 0;
     }
