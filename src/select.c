@@ -803,8 +803,9 @@ size_t trn_selpre_bytes(const trn_select_cfg_t *cfg, const trn_map_t *map, const
  * relative) and by one unit of q for its rounding; stored as int32 in units
  * of 2^bshift, rounded up (so window sums stay upper bounds). Cells without
  * the 3 x 3 neighbourhood (the map's rim; never a patch cell) hold 0. */
-static void pre_bounds_init(trn_selpre_t *s, const pre_layout_t *L, uint8_t *b)
+static void pre_bounds_init(trn_selpre_t *s, const pre_layout_t *L, uint8_t *base)
 {
+    uint8_t *b = base;
     const trn_kernels_t *k = s->k;
     const trn_select_cfg_t *cfg = s->cfg;
     const float cell = s->map->cfg.terrain.cell_m;
@@ -885,9 +886,11 @@ static void pre_bounds_init(trn_selpre_t *s, const pre_layout_t *L, uint8_t *b)
         const double amax = (double)nz * 16.0 * (double)s->lmax * (double)SEL_QMAX;
         sh = 0;
         s->bunit = 1.0;
+        s->bunit_i = 1;
         while (amax / s->bunit + 1.0 > (double)INT32_MAX - 1.0) {
             ++sh;
             s->bunit *= 2.0;
+            s->bunit_i *= 2;
         }
         s->bshift = sh;
         /* refinement by computed cells in int64: a patch's sums of cells'
@@ -1008,7 +1011,7 @@ static void pre_bounds_init(trn_selpre_t *s, const pre_layout_t *L, uint8_t *b)
         /* int32 in units of 2^bshift, rounded up: the window sums stay upper bounds */
         for (c = 0; c < plane; ++c) {
             const int64_t v = bt[c];
-            b32[c] = (int32_t)(v >= 0 ? (v + ((int64_t)1 << sh) - 1) >> sh : -((-v) >> sh));
+            b32[c] = (int32_t)(v >= 0 ? (v + s->bunit_i - 1) / s->bunit_i : -((-v) / s->bunit_i));
         }
     }
     s->ints = ints;
@@ -1330,7 +1333,7 @@ static const int64_t *pre_cd(const trn_selpre_t *s, pre_pos_t *pp, int32_t x, in
                     ? 0
                     : (int64_t)s->bval[(size_t)t * (size_t)s->nx * (size_t)s->ny +
                                        (size_t)y * (size_t)s->nx + (size_t)x] *
-                              ((int64_t)1 << s->bshift) -
+                              s->bunit_i -
                           ex;
     }
     return cd;
@@ -1384,9 +1387,10 @@ static int pre_bound_sat(const trn_selpre_t *s, const pre_pos_t *pp, int32_t h)
 }
 
 /* Binary min-heap of candidate indices by s->lb2. */
-static void pre_sift(const trn_selpre_t *s, size_t n, size_t i)
+static void pre_sift(const trn_selpre_t *s, size_t n, size_t i0)
 {
     uint32_t *h = s->heap;
+    size_t i = i0;
     for (;;) {
         const size_t l = 2u * i + 1u, r = l + 1u;
         size_t m = i;
@@ -1429,7 +1433,7 @@ static int64_t pre_refined(const trn_selpre_t *s, const pre_pos_t *pp, int32_t h
             }
         }
     }
-    return s->tbu[ci] * ((int64_t)1 << s->bshift) - ex;
+    return s->tbu[ci] * s->bunit_i - ex;
 }
 
 /* Insert candidate c into the heap of n. */
@@ -1511,11 +1515,12 @@ static void pre_pruned(const trn_selpre_t *s, const trn_window_t *roi, const geo
     pp.w = roi->x1 - roi->x0 + 1;
     pp.nb = (pp.w + PRE_TBLOCK - 1) / PRE_TBLOCK;
     pp.ncd = 0u;
-    if (++*s->epoch == 0u) { /* wrapped: every stamp is old again */
+    if (*s->epoch == UINT32_MAX) { /* about to wrap: every stamp is made old again */
         memset(s->tstamp, 0, (size_t)s->src_h * (size_t)s->side_w * sizeof(uint32_t));
         memset(s->cstamp, 0, (size_t)s->side_h * (size_t)s->side_w * sizeof(uint32_t));
-        *s->epoch = 1u;
+        *s->epoch = 0u;
     }
+    *s->epoch += 1u;
     pp.ep = *s->epoch;
     ok = pre_bound_sat(s, &pp, roi->y1 - roi->y0 + 1);
     for (i = 0; i < nc; ++i) {

@@ -67,6 +67,7 @@ typedef struct {
                                     units of 2^bshift rounded up */
     int32_t bshift;
     double bunit;     /* 2^bshift */
+    int64_t bunit_i;  /* the same, int64 */
     int refine;       /* 1: computed cells refine the bounds (int64 sums fit) */
     int64_t *bsat;    /* one position's summed-area table of its cells' bounds */
     float *tc;        /* x-pass cache, src_h x side_w cells x nz bins */
