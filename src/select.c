@@ -900,7 +900,10 @@ static void pre_bounds_init(trn_selpre_t *s, const pre_layout_t *L, uint8_t *bas
                         8589934592.0 <=
                     4.611686018427388e18;
     }
-    memset(jid, 255, (size_t)mw * (size_t)mw);
+    /* offsets that are no patch cell's (pre_patch_offset is conservative, so
+     * no candidate's patch reaches them) get interval 0: every lookup stays
+     * inside the tables */
+    memset(jid, 0, (size_t)mw * (size_t)mw);
     memset(dcone, 0, (size_t)mw * (size_t)mw * sizeof *dcone);
     for (y = -e; y <= e; ++y) {
         for (x = -e; x <= e; ++x) {
@@ -1169,36 +1172,6 @@ trn_status_t trn_selpre_init(trn_selpre_t *s, const trn_map_t *map, const trn_ke
     return TRN_OK;
 }
 
-/* 1 when the eq. 6 fit of ll cannot give an uncertainty below best (m):
- * the fit's covariance is -H^-1 of its quadratic's Hessian H, and
- * sigma_x^2 + sigma_y^2 = trace(-H^-1) = 1/l1 + 1/l2 >= 4 / (l1 + l2) =
- * 4 / trace(-H) for the eigenvalues l1, l2 > 0 of -H (harmonic <= arithmetic
- * mean); trace(-H) = 4 s0 / 3 - sxx - syy from the same sums trn_peak_fit
- * forms. The bound is taken 1e-6 below itself, far beyond the rounding of
- * either computation, so a skipped candidate is never the lowest or a tie. A
- * fit that would fail (not informative) is never the lowest either. With an
- * uncertain heading the candidate's scalar^2 is that trace plus its heading
- * term head_m2 = s_h^2 r^2 (sel_heading_cov: the trace of s_h^2 r^2 t t^T),
- * so the bound adds it (0 with a known heading). */
-static int pre_cannot_beat(const double ll[9], double cell_m, double head_m2, double best)
-{
-    double s0 = 0.0, sxx = 0.0, syy = 0.0, tr;
-    int x, y;
-    for (y = -1; y <= 1; ++y) {
-        for (x = -1; x <= 1; ++x) {
-            const double v = ll[(y + 1) * 3 + (x + 1)] - ll[4];
-            s0 += v;
-            sxx += (double)(x * x) * v;
-            syy += (double)(y * y) * v;
-        }
-    }
-    tr = 4.0 * s0 / 3.0 - sxx - syy;
-    if (!(tr > 0.0) || !isfinite(tr)) {
-        return 0; /* no bound: fit it */
-    }
-    return (4.0 / tr * cell_m * cell_m + head_m2) * (1.0 - 1.0e-6) > best * best;
-}
-
 /* One position of the pruned path: the rover cell, the region and its epoch. */
 typedef struct {
     int32_t rx, ry, x0, y0, sy0, w, nb; /* nb: x-pass blocks per row */
@@ -1283,7 +1256,7 @@ static const int64_t *pre_cd(const trn_selpre_t *s, pre_pos_t *pp, int32_t x, in
         return cd;
     }
     s->cstamp[c] = pp->ep;
-    ++pp->ncd;
+    pp->ncd += (uint32_t)s->refine; /* stays 0 (no refinement) when the sums could overflow */
     memset(p, 0, nz * sizeof *p);
     for (sy = sa; sy <= sb; ++sy) {
         const int32_t j = (int32_t)s->joff[(size_t)(sy - pp->ry + s->m) * mw + jc];
@@ -1329,21 +1302,18 @@ static const int64_t *pre_cd(const trn_selpre_t *s, pre_pos_t *pp, int32_t x, in
         const uint8_t t = s->jid[(size_t)(y - pp->ry + s->m) * mw + jc];
         const int64_t ex = 4 * cd[4] + cd[1] + cd[3] + cd[5] + cd[7] -
                            2 * (cd[0] + cd[2] + cd[6] + cd[8]);
-        cd[9] = (t == 255u || !s->refine)
-                    ? 0
-                    : (int64_t)s->bval[(size_t)t * (size_t)s->nx * (size_t)s->ny +
-                                       (size_t)y * (size_t)s->nx + (size_t)x] *
-                              s->bunit_i -
-                          ex;
+        cd[9] = (int64_t)s->bval[(size_t)t * (size_t)s->nx * (size_t)s->ny +
+                                 (size_t)y * (size_t)s->nx + (size_t)x] *
+                    s->bunit_i -
+                ex;
     }
     return cd;
 }
 
 /* This position's summed-area table of the cells' bounds over the region:
  * each patch cell's value from its interval's table (runs of one interval
- * along a row by jnext), 0 elsewhere. Returns 0 when a patch cell has no
- * interval (never: every candidate's patch offset has one). */
-static int pre_bound_sat(const trn_selpre_t *s, const pre_pos_t *pp, int32_t h)
+ * along a row by jnext), 0 elsewhere. */
+static void pre_bound_sat(const trn_selpre_t *s, const pre_pos_t *pp, int32_t h)
 {
     const size_t mw = 2u * (size_t)s->m + 1u, w1 = (size_t)pp->w + 1u;
     const size_t plane = (size_t)s->nx * (size_t)s->ny;
@@ -1368,9 +1338,6 @@ static int pre_bound_sat(const trn_selpre_t *s, const pre_pos_t *pp, int32_t h)
             const uint8_t t = s->jid[o];
             const int32_t *bv;
             int32_t e;
-            if (t == 255u) {
-                return 0;
-            }
             e = s->jnext[o] - off - pp->x0 - 1;
             e = e < s->nhi[r] ? e : s->nhi[r];
             bv = s->bval + (size_t)t * plane + (size_t)y * (size_t)s->nx + (size_t)pp->x0;
@@ -1383,7 +1350,6 @@ static int pre_bound_sat(const trn_selpre_t *s, const pre_pos_t *pp, int32_t h)
             cur[c + 1] = up[c + 1] + run;
         }
     }
-    return 1;
 }
 
 /* Binary min-heap of candidate indices by s->lb2. */
@@ -1413,17 +1379,13 @@ static void pre_sift(const trn_selpre_t *s, size_t n, size_t i0)
 
 /* Candidate ci's bound refined by the cells this position has computed:
  * their exact sum_z q A replaces their bound (pre_cd's excess subtracted).
- * Returns the refined sum (units of 1); *ok 0 when it cannot be formed. */
-static int64_t pre_refined(const trn_selpre_t *s, const pre_pos_t *pp, int32_t half, size_t ci,
-                           int *ok)
+ * Returns the refined sum (units of 1; the int64 sums fit when s->refine,
+ * the only case that calls it). */
+static int64_t pre_refined(const trn_selpre_t *s, const pre_pos_t *pp, int32_t half, size_t ci)
 {
     const int32_t cx = s->cxy[2u * ci], cy = s->cxy[2u * ci + 1u];
     int64_t ex = 0;
     int32_t x, y;
-    *ok = s->refine && s->tbu[ci] != INT64_MAX;
-    if (!*ok) {
-        return 0;
-    }
     for (y = cy - half; y <= cy + half; ++y) {
         const size_t r = (size_t)(y - pp->y0) * (size_t)pp->w;
         for (x = cx - half; x <= cx + half; ++x) {
@@ -1454,7 +1416,8 @@ static void pre_push(const trn_selpre_t *s, size_t n, uint32_t c)
 }
 
 /* Candidate ci exactly: its nine window sums from the cells' C_d (the
- * values trn_select's tables give), then the skip test and the fit. */
+ * values trn_select's tables give), then the fit (its value against the
+ * best: the minimum is trn_select's). */
 static void pre_exact(const trn_selpre_t *s, pre_pos_t *pp, const geom_t *g, size_t ci,
                       double *best, int *found)
 {
@@ -1481,9 +1444,6 @@ static void pre_exact(const trn_selpre_t *s, pre_pos_t *pp, const geom_t *g, siz
     for (d = 0; d < 9; ++d) {
         ll[d] = (double)sum[d] * scale;
     }
-    if (*found && pre_cannot_beat(ll, g->cell, sh2c2 * (ox * ox + oy * oy), *best)) {
-        return;
-    }
     if (trn_peak_fit(ll, &pk) == TRN_OK) {
         const double sx = pk.sigma_x * g->cell, sy = pk.sigma_y * g->cell;
         const double u = sh2c2 > 0.0 ? sel_heading_cov(&pk, g->cell, sh2c2, ox, oy, cov)
@@ -1495,9 +1455,16 @@ static void pre_exact(const trn_selpre_t *s, pre_pos_t *pp, const geom_t *g, siz
     }
 }
 
-/* The pruned path (select_pre.h, "Pruning") after trn_selpre_best's
- * candidates and region: every candidate's bound, then exact evaluations in
- * rising bound while the bound can beat the best (pre_cannot_beat's margin). */
+/* The pruned path (select_pre.h) after trn_selpre_best's candidates and
+ * region: every candidate's bound, then exact evaluations in rising bound
+ * while the bound can beat the best. The bound: sigma_x^2 + sigma_y^2 =
+ * trace(-H^-1) = 1/l1 + 1/l2 >= 4 / (l1 + l2) = 4 / trace(-H) for the
+ * eigenvalues l1, l2 > 0 of -H (harmonic <= arithmetic mean; the fit fails
+ * unless -H is positive definite), plus the heading's term s_h^2 r^2 when it
+ * is uncertain (sel_heading_cov: the trace of s_h^2 r^2 t t^T), with an
+ * upper bound on trace(-H); a candidate is passed over only when its bound
+ * times (1 - 1e-6) exceeds the best found, a margin far beyond the rounding
+ * of either computation, so it is never the lowest or a tie. */
 static void pre_pruned(const trn_selpre_t *s, const trn_window_t *roi, const geom_t *g, size_t nc,
                        double *best, int *found)
 {
@@ -1506,7 +1473,6 @@ static void pre_pruned(const trn_selpre_t *s, const trn_window_t *roi, const geo
     const double scale = 1.0 / ((double)TRN_SELECT_PROB_SCALE * (double)TRN_LNP_SCALE);
     pre_pos_t pp;
     size_t i, nh = 0u, first = 0u;
-    int ok;
     pp.rx = g->rx;
     pp.ry = g->ry;
     pp.x0 = roi->x0;
@@ -1522,7 +1488,7 @@ static void pre_pruned(const trn_selpre_t *s, const trn_window_t *roi, const geo
     }
     *s->epoch += 1u;
     pp.ep = *s->epoch;
-    ok = pre_bound_sat(s, &pp, roi->y1 - roi->y0 + 1);
+    pre_bound_sat(s, &pp, roi->y1 - roi->y0 + 1);
     for (i = 0; i < nc; ++i) {
         const int32_t cx = s->cxy[2u * i], cy = s->cxy[2u * i + 1u];
         const double ox = (double)cx - g->rxf, oy = (double)cy - g->ryf;
@@ -1531,14 +1497,13 @@ static void pre_pruned(const trn_selpre_t *s, const trn_window_t *roi, const geo
         const size_t y0 = (size_t)(cy - g->half - pp.y0), y1 = (size_t)(cy + g->half - pp.y0) + 1u;
         const int64_t tb = s->bsat[y1 * w1 + x1] - s->bsat[y0 * w1 + x1] - s->bsat[y1 * w1 + x0] +
                            s->bsat[y0 * w1 + x0];
-        if (ok && tb <= 0) {
+        if (tb <= 0) {
             continue; /* trace(-H) <= 0: the fit fails (never informative) */
         }
-        s->tbu[i] = ok ? tb : INT64_MAX; /* INT64_MAX: no refinement */
+        s->tbu[i] = tb;
         s->rst[i] = 0u;
-        s->lb2[i] = ok ? 12.0 / ((double)tb * s->bunit * scale) * g->cell * g->cell +
-                             sh2c2 * (ox * ox + oy * oy)
-                       : 0.0;
+        s->lb2[i] = 12.0 / ((double)tb * s->bunit * scale) * g->cell * g->cell +
+                    sh2c2 * (ox * ox + oy * oy);
         if (nh == 0u || s->lb2[i] < s->lb2[first]) {
             first = i;
         }
@@ -1578,25 +1543,23 @@ static void pre_pruned(const trn_selpre_t *s, const trn_window_t *roi, const geo
         }
         s->heap[0] = s->heap[--nh];
         pre_sift(s, nh, 0u);
-        if (s->rst[ci] != pp.ncd) { /* cells computed since its bound: refine it */
-            int rok;
-            const int64_t tr = pre_refined(s, &pp, g->half, ci, &rok);
+        if (s->rst[ci] != pp.ncd) { /* cells computed since its bound (never without
+                                       s->refine: ncd stays 0): refine it */
+            const int64_t tr = pre_refined(s, &pp, g->half, ci);
+            const double ox = (double)s->cxy[2u * ci] - g->rxf;
+            const double oy = (double)s->cxy[2u * ci + 1u] - g->ryf;
             s->rst[ci] = pp.ncd;
-            if (rok) {
-                const double ox = (double)s->cxy[2u * ci] - g->rxf;
-                const double oy = (double)s->cxy[2u * ci + 1u] - g->ryf;
-                if (tr <= 0) {
-                    continue; /* trace(-H) <= 0: never informative */
-                }
-                s->lb2[ci] = 12.0 / ((double)tr * scale) * g->cell * g->cell +
-                             sh2c2 * (ox * ox + oy * oy);
-                if (*found && s->lb2[ci] * (1.0 - 1.0e-6) > *best * *best) {
-                    continue;
-                }
-                if (nh > 0u && s->lb2[ci] > s->lb2[s->heap[0]]) {
-                    pre_push(s, nh++, (uint32_t)ci); /* another bound is lower now */
-                    continue;
-                }
+            if (tr <= 0) {
+                continue; /* trace(-H) <= 0: never informative */
+            }
+            s->lb2[ci] = 12.0 / ((double)tr * scale) * g->cell * g->cell +
+                         sh2c2 * (ox * ox + oy * oy);
+            if (*found && s->lb2[ci] * (1.0 - 1.0e-6) > *best * *best) {
+                continue;
+            }
+            if (nh > 0u && s->lb2[ci] > s->lb2[s->heap[0]]) {
+                pre_push(s, nh++, (uint32_t)ci); /* another bound is lower now */
+                continue;
             }
         }
         pre_exact(s, &pp, g, ci, best, found);

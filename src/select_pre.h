@@ -59,7 +59,7 @@ typedef struct {
     /* the pruning (see above) */
     int32_t nint;                 /* kernel intervals with a table */
     const trn_selpre_int_t *ints; /* their kernels */
-    const uint8_t *jid;           /* interval of a patch cell by offset, (2m+1)^2; 255: none */
+    const uint8_t *jid;           /* interval of a patch cell by offset, (2m+1)^2 (0 off patches) */
     const int32_t *jnext;  /* per offset: the next column of its table row where jid changes */
     const uint16_t *dcone; /* per offset: the Chebyshev distance eq. 9 reaches it from */
     int32_t rcone;         /* the largest radius in any patch cell's cone (<= rmax) */
@@ -78,7 +78,7 @@ typedef struct {
     int64_t *esum;    /* one candidate's nine window sums */
     double *ell;      /* and its nine ll */
     double *lb2;      /* per candidate: its lower bound (m^2) */
-    int64_t *tbu;     /* its bound's sum (units of 2^bshift); INT64_MAX: none */
+    int64_t *tbu;     /* its bound's sum (units of 2^bshift) */
     uint32_t *rst;    /* the cells computed when its bound was last formed */
     uint32_t *heap;   /* candidates by rising bound */
     uint32_t *epoch;  /* the position counter */
