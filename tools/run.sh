@@ -65,10 +65,10 @@ if [ "$rc" -ne 0 ]; then
   exit "$rc"
 fi
 
-# The whole 256 x 256 field with the library's defaults: about 5,200 selections (12.7x fewer
-# than cells) by trn_field_fast (the same raster as trn_field), 11-17 s wall on the shared 2-core
-# development machine (2026-12-01; trn_field, `--reference`, 52 s).
-step "3/5 field (every rover position of the map, coarse to fine; about 15 s)"
+# The whole 256 x 256 field with the library's defaults: 4,887 selections (13.4x fewer than
+# cells) by trn_field_fast (the same raster as trn_field), 2.5 s wall on the shared 2-core
+# development machine (2026-12-04; trn_field, `--reference`, 39 s).
+step "3/5 field (every rover position of the map, coarse to fine; a few seconds)"
 "$T" field --dem terrain.tif --out field.tif --evaluated-out evaluated.tif --json > field.json
 
 step "4/5 experiment"
