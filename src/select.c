@@ -867,19 +867,6 @@ static void pre_bounds_init(trn_selpre_t *s, const pre_layout_t *L, uint8_t *bas
     memset(s->cstamp, 0, (size_t)L->side_h * (size_t)L->side_w * sizeof(uint32_t));
     *s->epoch = 0u;
 
-    /* the intervals (the order of pre_used_intervals' first sightings is
-     * irrelevant: any numbering), then each patch offset's */
-    (void)pre_used_intervals(cfg, s->map, k, reach_cells(cfg, cell), s->half, used);
-    t = 0;
-    for (i = 0; i < TRN_KERNEL_COUNT * TRN_KERNEL_COUNT; ++i) {
-        idx[i] = 255u;
-        if (used[i] != 0u) {
-            ints[t].a = (uint8_t)(i / TRN_KERNEL_COUNT);
-            ints[t].b = (uint8_t)(i % TRN_KERNEL_COUNT);
-            idx[i] = (uint8_t)t;
-            ++t;
-        }
-    }
     /* |bound| of a cell <= nz 16 lmax QMAX: the shift that fits it in int32 (a
      * region's sum of int32 values then fits int64: <= TRN_MAX_DIM^2 2^31) */
     {
@@ -900,9 +887,11 @@ static void pre_bounds_init(trn_selpre_t *s, const pre_layout_t *L, uint8_t *bas
                         8589934592.0 <=
                     4.611686018427388e18;
     }
-    /* offsets that are no patch cell's (pre_patch_offset is conservative, so
-     * no candidate's patch reaches them) get interval 0: every lookup stays
-     * inside the tables */
+    /* each patch offset's interval, coded a * TRN_KERNEL_COUNT + b (< 100)
+     * and then renumbered in the order of the codes; offsets that are no
+     * patch cell's (pre_patch_offset is conservative, so no candidate's patch
+     * reaches them) get interval 0: every lookup stays inside the tables */
+    memset(used, 0, sizeof used);
     memset(jid, 0, (size_t)mw * (size_t)mw);
     memset(dcone, 0, (size_t)mw * (size_t)mw * sizeof *dcone);
     for (y = -e; y <= e; ++y) {
@@ -911,8 +900,25 @@ static void pre_bounds_init(trn_selpre_t *s, const pre_layout_t *L, uint8_t *bas
             if (pre_patch_offset(cfg, cell, s->half, x, y)) {
                 const size_t o = (size_t)(y + s->m) * (size_t)mw + (size_t)(x + s->m);
                 dcone[o] = (uint16_t)pre_interval(k, &cfg->local_sigma, cell, x, y, &a, &bb);
-                jid[o] = idx[a * TRN_KERNEL_COUNT + bb];
+                jid[o] = (uint8_t)(a * TRN_KERNEL_COUNT + bb);
+                used[jid[o]] = 1u;
             }
+        }
+    }
+    t = 0;
+    for (i = 0; i < TRN_KERNEL_COUNT * TRN_KERNEL_COUNT; ++i) {
+        idx[i] = 0u;
+        if (used[i] != 0u) {
+            ints[t].a = (uint8_t)(i / TRN_KERNEL_COUNT);
+            ints[t].b = (uint8_t)(i % TRN_KERNEL_COUNT);
+            idx[i] = (uint8_t)t;
+            ++t;
+        }
+    }
+    for (y = -e; y <= e; ++y) {
+        for (x = -e; x <= e; ++x) {
+            const size_t o = (size_t)(y + s->m) * (size_t)mw + (size_t)(x + s->m);
+            jid[o] = idx[jid[o]];
         }
     }
     for (y = 0; y < mw; ++y) {
