@@ -2,14 +2,15 @@
 # SPDX-License-Identifier: Apache-2.0
 """tools/real/bench_real.py - seeded real-terrain benchmark: trn against two peers.
 
-    /usr/bin/python3 tools/real/bench_real.py [--dem ID ...] [--cases N] [--seed S]
+    /usr/bin/python3 tools/real/bench_real.py [--dem ID ...] [--dem-file PATH ...] [--cases N] [--seed S]
         [--radius R] [--resample bilinear|cubic] [--truth-fine K] [--fine-map mean|point]
         [--subcell axis|quad2d]
         [--trn PATH] [--trn-mode auto|batch|single]
         [--out DIR] [--keep-cases] [--no-plot] [-- TRN_ARGS...]
 
 For each DEM of tools/real/dems.py (default: all but the fresh ones, dems.DEFAULT; made or
-found under build/real/), N seeded cases (tools/real/cases.py: a rover at a random
+found under build/real/) and each --dem-file (a user's own projected DEM; with only
+--dem-file given, only those run), N seeded cases (tools/real/cases.py: a rover at a random
 off-centre position, its (2R+1)^2 rover-frame local DEM with a height offset,
 range-dependent noise and a 120 deg field of view; a prior within +-4 cells; a +-6 cell
 search window) are localized by
@@ -87,6 +88,9 @@ def parse_args(argv):
     ap = Parser(prog="bench_real.py", description=__doc__.split("\n\n")[0])
     ap.add_argument("--dem", action="append",
                     help="DEM id of tools/real/dems.py (repeatable; default all but the fresh ones)")
+    ap.add_argument("--dem-file", action="append", default=[], metavar="PATH",
+                    help="a DEM of your own (repeatable): any raster GDAL reads, projected (metres), "
+                         "north-up, square cells; its id is the file's name without extension")
     ap.add_argument("--cases", type=int, default=200, help="cases per DEM (default 200)")
     ap.add_argument("--seed", type=int, default=1, help="seed (default 1)")
     ap.add_argument("--radius", type=int, default=20, help="local map radius R, cells (default 20)")
@@ -110,10 +114,19 @@ def parse_args(argv):
                     help="one extra argument for trn localize (repeatable; or put them after --)")
     a = ap.parse_args(argv)
     a.trn_extra = a.trn_arg + trn_extra
-    a.dem = a.dem or list(dems.DEFAULT)
+    a.dem = a.dem or ([] if a.dem_file else list(dems.DEFAULT))
     for d in a.dem:
         if d not in dems.BY_ID:
             raise Fail(f"unknown DEM '{d}' (known: {', '.join(dems.BY_ID)})")
+    a.files = {}
+    for f in a.dem_file:
+        if not os.path.isfile(f):
+            raise Fail(f"--dem-file {f}: no such file")
+        d = os.path.splitext(os.path.basename(f))[0]
+        if d in dems.BY_ID or d in a.files:
+            raise Fail(f"--dem-file {f}: its id '{d}' is taken (rename the file)")
+        a.files[d] = os.path.abspath(f)
+        a.dem.append(d)
     if a.cases < 1:
         raise Fail(f"--cases {a.cases}: must be >= 1")
     if a.truth_fine is not None and a.truth_fine < 2:
@@ -292,10 +305,16 @@ def print_table(dem_id, meta, ms):
 # --- one DEM --------------------------------------------------------------------
 def bench_dem(a, dem_id, batch):
     os.environ.setdefault("TRN", a.trn)  # the synthetic DEM is made by this trn
-    try:
-        path = dems.get(dem_id)
-    except Exception as e:  # a recipe failed: name it
-        raise Fail(f"DEM {dem_id}: {e}")
+    if dem_id in a.files:
+        path = a.files[dem_id]
+        entry = {"character": "user file", "held_out": True, "description": path}
+    else:
+        try:
+            path = dems.get(dem_id)
+        except Exception as e:  # a recipe failed: name it
+            raise Fail(f"DEM {dem_id}: {e}")
+        d = dems.BY_ID[dem_id]
+        entry = {"character": d.character, "held_out": d.held_out, "description": d.description}
     dem = casemod.read_dem(path)
     fine = None
     if a.truth_fine:
@@ -342,8 +361,8 @@ def bench_dem(a, dem_id, batch):
                 r["err_cells"] = radial_cells(r, cs_.truth, dem.c)
                 rec[name] = r
             records.append(rec)
-        meta = {"path": path, "character": dems.BY_ID[dem_id].character,
-                "held_out": dems.BY_ID[dem_id].held_out, "description": dems.BY_ID[dem_id].description,
+        meta = {"path": path, "character": entry["character"],
+                "held_out": entry["held_out"], "description": entry["description"],
                 "cell_m": dem.c, "rows": dem.z.shape[0], "cols": dem.z.shape[1], "radius": a.radius,
                 "window_m": p.window_cells * dem.c, "prior_cells": p.prior_cells, "resample": a.resample,
                 "trn_mode": "batch" if batch else "single", "trn_wall_ms": trn_wall,

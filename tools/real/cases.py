@@ -68,8 +68,12 @@ def read_dem(path):
     except RuntimeError as e:
         raise InputError(f"cannot open {path}: {str(e).strip()}")
     gt = ds.GetGeoTransform()
+    srs = ds.GetSpatialRef()
+    if srs is not None and srs.IsGeographic():
+        raise InputError(f"{path}: geographic CRS (degrees); reproject it to metres first, e.g. "
+                         f"gdalwarp -t_srs EPSG:<UTM zone> -r bilinear {os.path.basename(path)} out.tif")
     if gt[2] != 0 or gt[4] != 0 or gt[5] >= 0:
-        raise InputError(f"{path}: not north-up")
+        raise InputError(f"{path}: not north-up (gdalwarp it to a north-up grid)")
     if abs(gt[1] + gt[5]) > 1e-9 * gt[1]:
         raise InputError(f"{path}: cells not square ({gt[1]:g} x {-gt[5]:g})")
     b = ds.GetRasterBand(1)

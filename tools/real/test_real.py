@@ -29,6 +29,8 @@ On small synthetic DEMs with analytic surfaces (no download, ~10 s):
   at the coarse centres, K odd and even;
 * dems.float_nan_tif: no-data to NaN in float32, same grid, the CRS kept or set;
 * bench_real.py exits 1 with one line on bad input;
+* --dem-file (a user's DEM): a missing or geographic file exits 1 with one line; a
+  projected synthetic DEM runs end to end under its file name (when trn is built);
 * if build/host-release/trn exists: trn localize recovers the noiseless integer case
   (frame agreement of the local file with trn; reported, not required).
 """
@@ -414,6 +416,60 @@ def test_cli():
               f"bench_real {what}: exit 1, one line ({r.stderr.strip()})")
 
 
+def test_dem_file():
+    """--dem-file: a user's own DEM. Missing and geographic files exit 1 with one line;
+    a projected one runs end to end (when trn is built) under its file name's id."""
+    import json
+    from osgeo import osr
+    b = os.path.join(HERE, "bench_real.py")
+    trn = os.path.join(os.path.dirname(os.path.dirname(HERE)), "build", "host-release", "trn")
+    with tempfile.TemporaryDirectory() as tmp:
+        rng = np.random.default_rng(3)
+        n = 120
+        yy, xx = np.mgrid[0:n, 0:n].astype(np.float64)
+        z = np.zeros((n, n))
+        for _ in range(12):  # rolling terrain of several wave directions, 8-30 cells
+            k = 2 * math.pi / rng.uniform(8.0, 30.0)
+            t = rng.uniform(0.0, math.pi)
+            z += rng.uniform(1.0, 4.0) * np.sin(k * (xx * math.cos(t) + yy * math.sin(t)) + rng.uniform(0, 6.3))
+        paths = {}
+        for name, epsg, cell in (("geo_dem", 4326, 0.001), ("my_hills", 32633, 10.0)):
+            paths[name] = os.path.join(tmp, name + ".tif")
+            ds = gdal.GetDriverByName("GTiff").Create(paths[name], n, n, 1, gdal.GDT_Float32)
+            ds.SetGeoTransform((500000.0 if epsg != 4326 else 15.0, cell, 0.0,
+                                5000000.0 if epsg != 4326 else 45.0, 0.0, -cell))
+            sr = osr.SpatialReference()
+            sr.ImportFromEPSG(epsg)
+            ds.SetProjection(sr.ExportToWkt())
+            ds.GetRasterBand(1).WriteArray(z.astype(np.float32))
+            ds = None
+        out = os.path.join(tmp, "out")
+        for args, what, want in ((["--dem-file", os.path.join(tmp, "none.tif")], "missing file", "no such file"),
+                                 (["--dem-file", paths["geo_dem"], "--cases", "2", "--out", out],
+                                  "geographic file", "geographic CRS")):
+            if not os.path.exists(trn) and what == "geographic file":
+                continue  # parse_args refuses a missing trn first
+            r = subprocess.run([sys.executable, b] + args, capture_output=True, text=True)
+            check(r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1 and want in r.stderr,
+                  f"bench_real --dem-file, {what}: exit 1, one line naming it ({r.stderr.strip()})")
+        if not os.path.exists(trn):
+            print("skip bench_real --dem-file run (no build/host-release/trn)")
+            return
+        r = subprocess.run([sys.executable, b, "--dem-file", paths["my_hills"], "--cases", "20", "--seed", "3",
+                            "--radius", "12", "--no-plot", "--out", out], capture_output=True, text=True)
+        ok = r.returncode == 0 and os.path.exists(os.path.join(out, "bench.json"))
+        j = json.load(open(os.path.join(out, "bench.json"))) if ok else {"dems": {}}
+        d = j["dems"].get("my_hills")
+        check(ok and list(j["dems"]) == ["my_hills"] and d["meta"]["character"] == "user file"
+              and len(d["cases"]) == 20 and all(k in d["metrics"] for k in ("trn", "ssd", "ncc")),
+              f"bench_real --dem-file my_hills.tif: only that DEM, 20 cases, trn and both peers "
+              f"(exit {r.returncode}{'' if ok else ': ' + r.stderr.strip()[-200:]})")
+        if ok:
+            rate = d["metrics"]["trn"]["rate"]
+            check(rate >= 0.9, f"bench_real --dem-file: trn right in {100 * rate:.0f} % of 20 noisy cases "
+                               f"on smooth rolling terrain (>= 90 %)")
+
+
 def main():
     test_frame()
     test_file()
@@ -425,6 +481,7 @@ def main():
     test_point_sample()
     test_float_nan_tif()
     test_cli()
+    test_dem_file()
     if FAILS:
         print(f"test_real: {len(FAILS)} check(s) failed", file=sys.stderr)
         return 1
