@@ -4,6 +4,7 @@
 
     /usr/bin/python3 tools/real/bench_real.py [--dem ID ...] [--dem-file PATH ...] [--cases N] [--seed S]
         [--radius R] [--resample bilinear|cubic] [--truth-fine K] [--fine-map mean|point]
+        [--fine-local point|mean]
         [--subcell axis|quad2d]
         [--trn PATH] [--trn-mode auto|batch|single]
         [--out DIR] [--keep-cases] [--no-plot] [-- TRN_ARGS...]
@@ -30,7 +31,9 @@ local DEM is sampled from the ORIGINAL DEM (bilinear on the fine grid at the coa
 cell spacing, centred on the rover): the rover sees the true terrain, the map is a
 smoothed coarser product. With --fine-map point the map is the DEM's point samples
 every K cells instead (OUT/ID_pointK.tif): a map that samples the terrain at its cell
-centres, so that what it cannot resolve is aliased, not smoothed. Radius, prior,
+centres, so that what it cannot resolve is aliased, not smoothed. With --fine-local
+mean each local cell is the mean of the original over the cell instead of its value
+at the cell's centre (a rover averaging the stereo points that fall in a cell). Radius, prior,
 window, noise and errors are then in coarse cells (tools/real/cases.py).
 
 Metrics per DEM and method: success (radial error <= 1.5 cells) rate, median error
@@ -101,6 +104,9 @@ def parse_args(argv):
     ap.add_argument("--fine-map", default="mean", choices=("mean", "point"),
                     help="with --truth-fine: the map is the K x K block mean (default) or the point "
                          "samples every K cells")
+    ap.add_argument("--fine-local", default="point", choices=("point", "mean"),
+                    help="with --truth-fine: each local cell samples the DEM at its centre (default) or "
+                         "is its mean over the cell (a rover averaging its stereo points per cell)")
     ap.add_argument("--subcell", default="axis", choices=("axis", "quad2d"),
                     help="peers' sub-cell fit: a parabola per axis (default) or the 3x3 2-D quadratic")
     ap.add_argument("--trn", default=os.path.join(dems.ROOT, "build", "host-release", "trn"),
@@ -279,8 +285,10 @@ def fmt(v, spec):
 def print_table(dem_id, meta, ms):
     how = "point samples (every K-th cell) of" if meta.get("fine_map") == "point" else "block mean of"
     kk = meta.get("truth_fine")
+    lhow = "each local cell its mean over the cell" if meta.get("fine_local") == "mean" else \
+        "each local cell its value at the cell's centre"
     fine = (f", map = {kk} x {kk} {how} the {meta['fine_cell_m']:g} m "
-            f"DEM the local maps are sampled from") if kk else ""
+            f"DEM the local maps are sampled from ({lhow})") if kk else ""
     print(f"\n{dem_id} ({meta['character']}, held_out={meta['held_out']}): {meta['cols']} x {meta['rows']} "
           f"cells of {meta['cell_m']:g} m, {ms['trn']['n']} cases, R = {meta['radius']} cells, "
           f"{meta['resample']}, trn {meta['trn_mode']}{fine}")
@@ -327,7 +335,8 @@ def bench_dem(a, dem_id, batch):
         path = casemod.write_global(os.path.join(a.out, f"{dem_id}_{a.fine_map}{a.truth_fine}.tif"), dem,
                                     like=fine.path)
         dem.path = path
-    p = casemod.CaseParams(radius=a.radius, resample=a.resample)
+    p = casemod.CaseParams(radius=a.radius, resample=a.resample,
+                           local_mean=bool(a.truth_fine) and a.fine_local == "mean")
     tmp = tempfile.mkdtemp(prefix=f"bench_real_{dem_id}_")
     try:
         t0 = time.perf_counter()
@@ -368,6 +377,7 @@ def bench_dem(a, dem_id, batch):
                 "trn_mode": "batch" if batch else "single", "trn_wall_ms": trn_wall,
                 "opencv_mask": peers.mask_supported(), "truth_fine": a.truth_fine,
                 "fine_map": a.fine_map if a.truth_fine else None,
+                "fine_local": a.fine_local if a.truth_fine else None,
                 "fine_cell_m": fine.c if fine is not None else None,
                 "fine_path": fine.path if fine is not None else None}
         # the figure's case: the first trn success (else case 0); keep its local DEM

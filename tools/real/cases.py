@@ -24,8 +24,10 @@ KJ..KJ+K-1)), or, with --fine-map point, F's point samples every K cells
 (point_sample: coarse cell (I, J) is F's cell (KI + K//2, KJ + K//2), centred on
 it), and the local DEM is sampled from F instead (bilinear on F's grid at
 truth + ((j-R)c, (R-i)c), c the COARSE cell): the rover sees the true surface, the
-map is a smoothed coarser product. Truth, prior, window, radius, visibility and
-noise are all in coarse cells, as without `fine`.
+map is a smoothed coarser product. With --fine-local mean each local cell is instead
+the mean of F over the cell (K x K sub-samples at F's spacing, bilinear on F): a rover
+that grids its dense stereo points into the map's cells by averaging. Truth, prior,
+window, radius, visibility and noise are all in coarse cells, as without `fine`.
 
 Map coordinates of global cell (row, col)'s centre: x = x0 + (col + 0.5) c,
 y = y0 - (row + 0.5) c, with (x0, c, 0, y0, 0, -c) the DEM's geotransform.
@@ -195,6 +197,7 @@ class CaseParams:
     full_view: bool = False  # tests: every cell within R seen
     resample: str = "bilinear"
     min_valid: float = 0.95
+    local_mean: bool = False  # with `fine`: each local cell the mean of the fine surface over it
 
     @property
     def margin_cells(self):
@@ -247,15 +250,24 @@ def make_local(dem, truth, p, rng=None, azimuth_deg=0.0, offset_m=0.0, fine=None
     src = dem if fine is None else fine
     scale = 1.0 if fine is None else dem.c / fine.c  # source cells per local cell
     fr, fc = src.frac_index(*truth)
-    k = np.arange(-R, R + 1)
-    if turn_deg == 0.0:
-        rows = fr + k[:, None] * scale + 0 * k[None, :]
-        cols = fc + k[None, :] * scale + 0 * k[:, None]
-    else:  # column offset x (east), row offset y (south): (x c + y s, -x s + y c)
-        ct, st = math.cos(math.radians(turn_deg)), math.sin(math.radians(turn_deg))
-        rows = fr + (-k[None, :] * st + k[:, None] * ct) * scale
-        cols = fc + (k[None, :] * ct + k[:, None] * st) * scale
-    h = sample(src.z, rows, cols, p.resample) + offset_m
+    k = np.arange(-R, R + 1, dtype=np.float64)
+    ct, st = math.cos(math.radians(turn_deg)), math.sin(math.radians(turn_deg))
+    # sub-samples per local cell axis: one (its centre), or with local_mean and `fine`
+    # the fine cells' count across it, spread evenly (a rover gridding dense stereo
+    # into the map's cells by averaging)
+    ns = max(1, int(round(scale))) if (fine is not None and p.local_mean) else 1
+    subs = (np.arange(ns) + 0.5) / ns - 0.5
+    h = np.zeros((2 * R + 1, 2 * R + 1))
+    for du in subs:  # du along the local columns (east), dv along its rows (south)
+        for dv in subs:
+            x, y = k[None, :] + du, k[:, None] + dv
+            if turn_deg == 0.0:
+                rows, cols = fr + y * scale + 0 * x, fc + x * scale + 0 * y
+            else:  # column offset x (east), row offset y (south): (x c + y s, -x s + y c)
+                rows = fr + (-x * st + y * ct) * scale
+                cols = fc + (x * ct + y * st) * scale
+            h += sample(src.z, rows, cols, p.resample)
+    h = h / (ns * ns) + offset_m
     seen = visibility(R, dem.c, azimuth_deg, p)
     if p.noise and rng is not None:
         e, n = rover_frame_offsets(R, dem.c)

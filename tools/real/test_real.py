@@ -29,6 +29,8 @@ On small synthetic DEMs with analytic surfaces (no download, ~10 s):
   at the coarse centres, K odd and even;
 * dems.float_nan_tif: no-data to NaN in float32, same grid, the CRS kept or set;
 * bench_real.py exits 1 with one line on bad input;
+* --fine-local mean: on a plane the cell means equal the centre samples; a pattern
+  alternating +-1 along the fine columns averages to exactly 0 in every local cell;
 * --dem-file (a user's DEM): a missing or geographic file exits 1 with one line; a
   projected synthetic DEM runs end to end under its file name (when trn is built);
 * if build/host-release/trn exists: trn localize recovers the noiseless integer case
@@ -416,6 +418,38 @@ def test_cli():
               f"bench_real {what}: exit 1, one line ({r.stderr.strip()})")
 
 
+def test_local_mean():
+    """--fine-local mean: a local cell is the fine surface's mean over the cell. On a plane it
+    equals the centre sample; on a surface alternating +-1 along the fine columns (K = 2) the
+    two sub-samples across a cell are one fine cell apart, so bilinear gives v and -v: every
+    local cell is exactly 0, wherever the rover is, while the centre samples are not."""
+    K, cf = 2, 10.0
+    fine = synth_dem(plane, n=240, c=cf)
+    g = cm.block_average(fine, K)
+    R = 6
+    pm = cm.CaseParams(radius=R, noise=False, full_view=True, min_range_cells=0, local_mean=True)
+    pp = cm.CaseParams(radius=R, noise=False, full_view=True, min_range_cells=0)
+    truth = (fine.x0 + 120 * cf + 3.7, fine.y0 - 120 * cf - 6.1)
+    lm, _ = cm.make_local(g, truth, pm, None, 0.0, 0.0, fine)
+    lp, _ = cm.make_local(g, truth, pp, None, 0.0, 0.0, fine)
+    check(np.allclose(lm, lp, rtol=0.0, atol=1e-9, equal_nan=True) and np.isfinite(lm).sum() > 100,
+          f"local mean on a plane = the centre samples "
+          f"(max diff {np.nanmax(np.abs(lm - lp)):.2e})")
+    alt = synth_dem(plane, n=240, c=cf)
+    alt.z = np.tile(np.where(np.arange(240) % 2 == 0, 1.0, -1.0), (240, 1))
+    g = cm.block_average(alt, K)
+    worst = 0.0
+    spread = 0.0
+    for tx, ty in ((3.7, 6.1), (0.0, 0.0), (12.5, 2.2), (7.3, 19.9)):
+        truth = (alt.x0 + 120 * cf + tx, alt.y0 - 120 * cf - ty)
+        lm, _ = cm.make_local(g, truth, pm, None, 0.0, 0.0, alt)
+        lp, _ = cm.make_local(g, truth, pp, None, 0.0, 0.0, alt)
+        worst = max(worst, float(np.nanmax(np.abs(lm))))
+        spread = max(spread, float(np.nanmax(np.abs(lp))))
+    check(worst < 1e-9 and spread > 0.5, f"local mean of a +-1 fine-column pattern (K = 2): every cell 0 "
+                                         f"(max {worst:.1e}); the centre samples reach {spread:.2f}")
+
+
 def test_dem_file():
     """--dem-file: a user's own DEM. Missing and geographic files exit 1 with one line;
     a projected one runs end to end (when trn is built) under its file name's id."""
@@ -481,6 +515,7 @@ def main():
     test_point_sample()
     test_float_nan_tif()
     test_cli()
+    test_local_mean()
     test_dem_file()
     if FAILS:
         print(f"test_real: {len(FAILS)} check(s) failed", file=sys.stderr)
