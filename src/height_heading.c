@@ -575,6 +575,36 @@ static int refine_starts(const trn_map_t *map, const trn_grid_f32_t *local, int3
     return found;
 }
 
+/* 1 (out->loc.noise_scale set) if the residuals at the answer reject the
+ * noise model rc by more than TRN_NOISE_SCALE_Z sds of the estimate of its
+ * variance factor (trn_refine_noise_scale, the local map turned by the
+ * answer's heading), else 0: trn_localize_dem's rule. The answer is ref
+ * when the refinement succeeded, else the search's best (pose, heading)
+ * with its offset and model variance, written into tmp. */
+static int rescale_noise3(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
+                          const trn_refine_cfg_t *rc, const trn_height_best3_t *b,
+                          const trn_refine3_t *ref, trn_refine3_t *tmp, trn_heading_result_t *out)
+{
+    double k2, sd, heading = out->heading_rad;
+    const trn_refine_t *at = &tmp->pos;
+    if (ref != NULL) {
+        at = &ref->pos;
+        heading = ref->heading_rad;
+    } else {
+        tmp->pos.x = (double)b->x;
+        tmp->pos.y = (double)b->y;
+        tmp->pos.dz_m = b->dz_m;
+        tmp->pos.model_m = b->model_m;
+        tmp->pos.interp_mix = TRN_REFINE_MIX_MEAN;
+    }
+    if (trn_refine_noise_scale(&map->heights, local, rx, ry, at, heading, rc, &k2, &sd) != TRN_OK ||
+        !(fabs(k2 - 1.0) > TRN_NOISE_SCALE_Z * sd)) {
+        return 0;
+    }
+    out->loc.noise_scale = sqrt(k2);
+    return 1;
+}
+
 trn_status_t trn_localize_heights3_(const trn_map_t *map, const trn_grid_f32_t *local,
                                     int32_t rover_x, int32_t rover_y, const trn_window_t *win,
                                     const trn_heading_cfg_t *cfg, void *ws, size_t ws_bytes,
@@ -588,7 +618,8 @@ trn_status_t trn_localize_heights3_(const trn_map_t *map, const trn_grid_f32_t *
     trn_refine3_t *ref;
     trn_loc_basins_t *far;
     double step, *grid;
-    int32_t kk;
+    int32_t kk, pass;
+    int found = 0;
 
     if (!window_in(map, win)) {
         return TRN_E_RANGE;
@@ -604,20 +635,27 @@ trn_status_t trn_localize_heights3_(const trn_map_t *map, const trn_grid_f32_t *
     ref = (trn_refine3_t *)(void *)(b + lay.ref);
     grid = (double *)(void *)(b + lay.grid);
     far = (trn_loc_basins_t *)(void *)(b + lay.basins);
-    rc.cell_m = map->cfg.terrain.cell_m;
-    rc.noise_m = map->cfg.noise_m;
-    rc.noise_k_per_m = map->cfg.noise_k_per_m;
-    rc.inlier_prob = map->cfg.inlier_prob;
-    if ((st = trn_height_search_heading(&map->heights, local, rover_x, rover_y, win, cfg, &rc,
-                                        map->cfg.inlier_prob, b + lay.search, ws_bytes - lay.search,
-                                        grid, best)) != TRN_OK) {
-        return st;
-    }
-    search_result(best, win, cfg, out);
-    trn_loc_find_basins3_(grid, win, kk, map->cfg.min_exclusion_cells, best->x, best->y, far);
-    if (refine_starts(map, local, rover_x, rover_y, win, grid, best, out->heading_rad,
-                      cfg->window_rad > 0.0 ? TRN_REFINE_MAX_TURN_STEPS * step : 0.0, &rc, ref,
-                      (trn_refine3_t *)(void *)(b + lay.cand), far)) {
+    out->loc.noise_scale = 1.0;
+    pass = 0;
+    do {
+        /* the configured noise model; once more, rescaled, if the residuals
+         * at the answer reject it (trn_localize_dem's rule) */
+        trn_loc_refine_cfg_(map, &out->loc, &rc);
+        if ((st = trn_height_search_heading(&map->heights, local, rover_x, rover_y, win, cfg, &rc,
+                                            map->cfg.inlier_prob, b + lay.search,
+                                            ws_bytes - lay.search, grid, best)) != TRN_OK) {
+            return st;
+        }
+        search_result(best, win, cfg, out);
+        trn_loc_find_basins3_(grid, win, kk, map->cfg.min_exclusion_cells, best->x, best->y, far);
+        found = refine_starts(map, local, rover_x, rover_y, win, grid, best, out->heading_rad,
+                              cfg->window_rad > 0.0 ? TRN_REFINE_MAX_TURN_STEPS * step : 0.0, &rc,
+                              ref, (trn_refine3_t *)(void *)(b + lay.cand), far);
+        pass += 1;
+    } while (pass == 1 && map->cfg.noise_auto != 0 &&
+             rescale_noise3(map, local, rover_x, rover_y, &rc, best, found ? ref : NULL,
+                            (trn_refine3_t *)(void *)(b + lay.cand), out) != 0);
+    if (found) {
         if (far->moved) { /* the answer's start moved to a far basin's */
             out->loc.ix = far->mx;
             out->loc.iy = far->my;

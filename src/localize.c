@@ -31,6 +31,7 @@ void trn_map_cfg_default(trn_map_cfg_t *cfg)
     cfg->noise_k_per_m = 0.004f;
     cfg->match = TRN_MATCH_VOXEL;
     cfg->max_failure_prob = 1.0f;
+    cfg->noise_auto = 0;
 }
 
 static trn_lik_cfg_t lik_of(const trn_map_cfg_t *cfg)
@@ -60,7 +61,7 @@ trn_status_t trn_map_cfg_check(const trn_map_cfg_t *cfg)
     if (cfg->levels < 1 || cfg->levels > TRN_MAX_LEVELS || cfg->min_exclusion_cells < 1 ||
         cfg->min_exclusion_cells > TRN_MAX_DIM ||
         (cfg->local_highpass != TRN_LOCAL_HP_BOX && cfg->local_highpass != TRN_LOCAL_HP_MAP) ||
-        (cfg->refine != 0 && cfg->refine != 1) ||
+        (cfg->refine != 0 && cfg->refine != 1) || (cfg->noise_auto != 0 && cfg->noise_auto != 1) ||
         (cfg->match != TRN_MATCH_VOXEL && cfg->match != TRN_MATCH_HEIGHTS) ||
         !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
         !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f) ||
@@ -253,6 +254,7 @@ trn_status_t trn_map_cfg_auto(trn_map_cfg_t *cfg, const trn_grid_f32_t *dem, flo
     c.match = TRN_MATCH_HEIGHTS;
     c.min_exclusion_cells = 1; /* failure: the answer 2 or more cells off (1.5 radial) */
     c.max_failure_prob = (float)TRN_MAP_MAX_FAILURE_PROB_AUTO;
+    c.noise_auto = 1;
     if (!(cell_m > 0.0f && cell_m <= 1000.0f) || trn_map_cfg_check(&c) != TRN_OK) {
         return TRN_E_ARG;
     }
@@ -539,6 +541,8 @@ static trn_status_t highpass_by_map(const trn_map_t *map, const trn_grid_f32_t *
 void trn_loc_take_refinement_(const trn_map_t *map, trn_loc_result_t *out)
 {
     double cell = (double)map->cfg.terrain.cell_m;
+    /* the configured noise, not the rescaled one: a rescale must not make
+     * the flag more lenient */
     double lim = map->roughness_m > (double)map->cfg.noise_m ? map->roughness_m
                                                              : (double)map->cfg.noise_m;
     out->refined = 1;
@@ -551,6 +555,14 @@ void trn_loc_take_refinement_(const trn_map_t *map, trn_loc_result_t *out)
     out->sigma_x_m = sqrt(out->cov_m2[0]);
     out->sigma_y_m = sqrt(out->cov_m2[1]);
     out->rho = out->cov_m2[2] / (out->sigma_x_m * out->sigma_y_m);
+}
+
+void trn_loc_refine_cfg_(const trn_map_t *map, const trn_loc_result_t *out, trn_refine_cfg_t *rc)
+{
+    rc->cell_m = map->cfg.terrain.cell_m;
+    rc->noise_m = (float)((double)map->cfg.noise_m * out->noise_scale);
+    rc->noise_k_per_m = (float)((double)map->cfg.noise_k_per_m * out->noise_scale);
+    rc->inlier_prob = map->cfg.inlier_prob;
 }
 
 /* 1 if the integer pose (sx, sy) is a start for the refinement beside the
@@ -578,10 +590,7 @@ static void refine_result(const trn_map_t *map, const trn_grid_f32_t *local, int
 {
     trn_refine_cfg_t rc;
     int32_t found, k;
-    rc.cell_m = map->cfg.terrain.cell_m;
-    rc.noise_m = map->cfg.noise_m;
-    rc.noise_k_per_m = map->cfg.noise_k_per_m;
-    rc.inlier_prob = map->cfg.inlier_prob;
+    trn_loc_refine_cfg_(map, out, &rc);
     out->refined = 0;
     out->misfit = 0;
     found = trn_refine_pose(&map->heights, local, rx, ry, out->ix, out->iy, &rc,
@@ -604,6 +613,35 @@ static void refine_result(const trn_map_t *map, const trn_grid_f32_t *local, int
 }
 
 
+/* 1 (out->noise_scale set) if the residuals at the answer reject the noise
+ * model rc by more than TRN_NOISE_SCALE_Z sds of the estimate of its
+ * variance factor (trn_refine_noise_scale), else 0. The answer is the
+ * refinement, or where it failed the search's best integer pose with its
+ * offset and model variance (at an integer pose the mix does not enter);
+ * tmp is scratch for that. */
+static int rescale_noise(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
+                         const trn_refine_cfg_t *rc, const trn_height_best_t *best,
+                         trn_refine_t *tmp, trn_loc_result_t *out)
+{
+    double k2, sd;
+    const trn_refine_t *at = &out->refinement;
+    if (!out->refined) {
+        *tmp = out->refinement;
+        tmp->x = (double)best->x;
+        tmp->y = (double)best->y;
+        tmp->dz_m = best->dz_m;
+        tmp->model_m = best->model_m;
+        tmp->interp_mix = TRN_REFINE_MIX_MEAN;
+        at = tmp;
+    }
+    if (trn_refine_noise_scale(&map->heights, local, rx, ry, at, 0.0, rc, &k2, &sd) != TRN_OK ||
+        !(fabs(k2 - 1.0) > TRN_NOISE_SCALE_Z * sd)) {
+        return 0;
+    }
+    out->noise_scale = sqrt(k2);
+    return 1;
+}
+
 /* TRN_MATCH_HEIGHTS: height search, refinement, competing hypothesis. */
 static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
                                      int32_t ry, const trn_window_t *win, double *ll_grid,
@@ -615,34 +653,39 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
     trn_refine_cfg_t rc;
     trn_exclusion_t ex;
     double infl = 1.0;
-    int32_t radius = map->cfg.min_exclusion_cells;
+    int32_t radius = map->cfg.min_exclusion_cells, pass;
 
-
-    rc.cell_m = map->cfg.terrain.cell_m;
-    rc.noise_m = map->cfg.noise_m;
-    rc.noise_k_per_m = map->cfg.noise_k_per_m;
-    rc.inlier_prob = map->cfg.inlier_prob;
-    if ((st = trn_height_search(&map->heights, local, rx, ry, win, NULL, &rc, map->cfg.inlier_prob,
-                                1.0, ll_grid, &best)) != TRN_OK) {
-        return st;
-    }
-    out->ix = best.x;
-    out->iy = best.y;
-    out->ll_best = best.ll;
-    out->n_points = 0u;
-    out->stats.poses_scored = best.poses;
-    out->stats.blocks_bounded = 0u;
-    out->on_window_edge = (best.x == win->x0 || best.x == win->x1 || best.y == win->y0 ||
-                           best.y == win->y1)
-                              ? 1
-                              : 0;
-    out->x = (double)best.x;
-    out->y = (double)best.y;
-    out->sigma_x_m = out->sigma_y_m = (double)INFINITY;
-    out->rho = 0.0;
-    out->cov_m2[0] = out->cov_m2[1] = (double)INFINITY;
-    out->cov_m2[2] = 0.0;
-    refine_result(map, local, rx, ry, win, ll_grid, cand, out);
+    out->noise_scale = 1.0;
+    pass = 0;
+    do {
+        /* the configured noise model; once more, rescaled, if the residuals
+         * at the answer reject it (docs/method.md 9, "the sensor's noise
+         * from the data") */
+        trn_loc_refine_cfg_(map, out, &rc);
+        if ((st = trn_height_search(&map->heights, local, rx, ry, win, NULL, &rc,
+                                    map->cfg.inlier_prob, 1.0, ll_grid, &best)) != TRN_OK) {
+            return st;
+        }
+        out->ix = best.x;
+        out->iy = best.y;
+        out->ll_best = best.ll;
+        out->n_points = 0u;
+        out->stats.poses_scored = best.poses;
+        out->stats.blocks_bounded = 0u;
+        out->on_window_edge = (best.x == win->x0 || best.x == win->x1 || best.y == win->y0 ||
+                               best.y == win->y1)
+                                  ? 1
+                                  : 0;
+        out->x = (double)best.x;
+        out->y = (double)best.y;
+        out->sigma_x_m = out->sigma_y_m = (double)INFINITY;
+        out->rho = 0.0;
+        out->cov_m2[0] = out->cov_m2[1] = (double)INFINITY;
+        out->cov_m2[2] = 0.0;
+        refine_result(map, local, rx, ry, win, ll_grid, cand, out);
+        pass += 1;
+    } while (pass == 1 && map->cfg.noise_auto != 0 &&
+             rescale_noise(map, local, rx, ry, &rc, &best, cand, out) != 0);
     if (out->refined) {
         trn_loc_find_basins_(ll_grid, win, radius, out, bs);
         trn_loc_refine_basins_(map, local, rx, ry, ll_grid, win, bs, cand, out);
@@ -725,6 +768,7 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
     if ((st = trn_ws_check(ws, ws_bytes, lay.total)) != TRN_OK) {
         return st;
     }
+    out->noise_scale = 1.0;
     if (map->cfg.match == TRN_MATCH_HEIGHTS) {
         st = localize_heights(map, local_dem, rover_x, rover_y, win,
                               (double *)(void *)(b + lay.llgrid),
@@ -767,6 +811,7 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
         st = trn_localize_points(map, pts, n, win, b + lay.search, ws_bytes - lay.search, out);
     }
     if ((st == TRN_OK || st == TRN_E_ILLCOND) && map->cfg.refine != 0) {
+        out->noise_scale = 1.0;
         refine_result(map, local_dem, rover_x, rover_y, win, NULL, NULL, out);
         /* No consistent height match around the voxel optimum: flag it. */
         st = out->refined && !out->misfit ? TRN_OK : TRN_E_ILLCOND;

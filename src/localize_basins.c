@@ -76,10 +76,7 @@ static void refine_basins(const trn_map_t *map, const trn_grid_f32_t *local, int
 {
     trn_refine_cfg_t rc;
     int32_t i;
-    rc.cell_m = map->cfg.terrain.cell_m;
-    rc.noise_m = map->cfg.noise_m;
-    rc.noise_k_per_m = map->cfg.noise_k_per_m;
-    rc.inlier_prob = map->cfg.inlier_prob;
+    trn_loc_refine_cfg_(map, out, &rc);
     for (i = 0; i < b->n; ++i) {
         b->ok[i] = trn_refine_pose(&map->heights, local, rx, ry, b->x[i], b->y[i], &rc, cand) ==
                    TRN_OK;

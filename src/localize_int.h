@@ -32,6 +32,8 @@ size_t trn_loc_basins_bytes_(void);
 /* The refinement in out->refinement becomes the answer: pose, covariance,
  * sigmas and the misfit flag (src/localize.c). */
 void trn_loc_take_refinement_(const trn_map_t *map, trn_loc_result_t *out);
+/* The refinement's noise model: the map's, its sd times out->noise_scale. */
+void trn_loc_refine_cfg_(const trn_map_t *map, const trn_loc_result_t *out, trn_refine_cfg_t *rc);
 
 /* Find the far basins of the ln L grid ll_grid over win (outside radius of
  * the answer's start out->ix, out->iy); then, in a second call (so that the

@@ -736,6 +736,95 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
     return TRN_OK;
 }
 
+/* One pass of trn_refine_noise_scale at variance factor k2 and model
+ * variance m2: the weighted normal equations of r^2 = k2 s^2 + m2 over the
+ * points within the clip, in n[0..4] = sums of q s^4, q s^2, q, q r^2 s^2,
+ * q r^2 (q = 1 / v^2, r^2 over TRN_CLIP_MEAN_SQUARE); returns the count. */
+static int32_t noise_pass(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
+                          int32_t ry, const trn_refine_t *at, const double cs_sn[2],
+                          const trn_refine_cfg_t *cfg, double k2, double m2, double n[5])
+{
+    int32_t i, j, cnt = 0;
+    n[0] = n[1] = n[2] = n[3] = n[4] = 0.0;
+    for (j = 0; j < local->height; ++j) {
+        for (i = 0; i < local->width; ++i) {
+            double h = (double)TRN_GRID_AT(local, i, j), s3[3], dcb, s2, v, r2, q;
+            const double ox = (double)(i - rx), oy = (double)(j - ry);
+            /* the offset turned by the heading, as trn_refine_pose_heading's */
+            if (!isfinite(h) ||
+                !sample_mix(global, at->x + ox * cs_sn[0] + oy * cs_sn[1],
+                            at->y - ox * cs_sn[1] + oy * cs_sn[0], at->interp_mix, s3, &dcb)) {
+                continue;
+            }
+            s2 = noise_var(cfg, i, j, rx, ry);
+            v = k2 * s2 + m2;
+            r2 = h - at->dz_m - s3[0];
+            r2 *= r2;
+            if (!(r2 <= TRN_REFINE_CLIP * TRN_REFINE_CLIP * v)) {
+                continue;
+            }
+            r2 /= TRN_CLIP_MEAN_SQUARE;
+            q = 1.0 / (v * v);
+            n[0] += q * s2 * s2;
+            n[1] += q * s2;
+            n[2] += q;
+            n[3] += q * r2 * s2;
+            n[4] += q * r2;
+            cnt += 1;
+        }
+    }
+    return cnt;
+}
+
+trn_status_t trn_refine_noise_scale(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
+                                    int32_t rover_x, int32_t rover_y, const trn_refine_t *at,
+                                    double heading_rad, const trn_refine_cfg_t *cfg, double *k2,
+                                    double *k2_sd)
+{
+    trn_status_t st;
+    double kk = 1.0, mm, n[5], det, var = 0.0, cs_sn[2];
+    int32_t it;
+    if (k2 == NULL || k2_sd == NULL) {
+        return TRN_E_NULL;
+    }
+    if ((st = trn_refine_args_(global, local, rover_x, rover_y, cfg, at)) != TRN_OK) {
+        return st;
+    }
+    if (!isfinite(at->x) || !isfinite(at->y) || !isfinite(at->dz_m) || !isfinite(at->interp_mix) ||
+        !(at->model_m >= 0.0) || !isfinite(at->model_m) ||
+        !(fabs(heading_rad) <= TRN_HEADING_MAX_WINDOW_RAD)) {
+        return TRN_E_ARG;
+    }
+    trn_heading_trig_(heading_rad, &cs_sn[0], &cs_sn[1]);
+    mm = at->model_m * at->model_m;
+    for (it = 0; it < 4; ++it) {
+        if (noise_pass(global, local, rover_x, rover_y, at, cs_sn, cfg, kk, mm, n) < 8) {
+            return TRN_E_NODATA;
+        }
+        det = n[0] * n[2] - n[1] * n[1];
+        if (!(det > 1e-12 * n[0] * n[2])) {
+            return TRN_E_ILLCOND;
+        }
+        kk = (n[3] * n[2] - n[1] * n[4]) / det;
+        mm = (n[0] * n[4] - n[1] * n[3]) / det;
+        /* the sd of the unconstrained estimate, also where a bound below
+         * is met: a bound pins no variance down */
+        var = 2.0 * n[2] / det;
+        if (mm < 0.0) {
+            /* the model variance at its bound: the noise scale alone */
+            mm = 0.0;
+            kk = n[3] / n[0];
+        }
+        if (kk < TRN_NOISE_SCALE2_MIN) {
+            kk = TRN_NOISE_SCALE2_MIN;
+            mm = fmax(0.0, (n[4] - kk * n[1]) / n[2]);
+        }
+    }
+    *k2 = kk;
+    *k2_sd = sqrt(var);
+    return TRN_OK;
+}
+
 /* Spread of the seen local heights (standard deviation about their mean), and
  * their count. */
 static double local_spread(const trn_grid_f32_t *local, int32_t *n_seen)

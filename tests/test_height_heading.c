@@ -114,7 +114,7 @@ static void local_dem(double rx, double ry, double delta, double dz, int noise)
             g_loc[(j + LR) * LW + (i + LR)] = (i * i + j * j <= LR * LR)
                                                   ? (float)(synth_height(&g_w.t, (rx + mx) * CELL,
                                                                          (ry + my) * CELL) +
-                                                            dz + (noise ? sd * gauss() : 0.0))
+                                                            dz + (double)noise * sd * gauss())
                                                   : NAN;
         }
     }
@@ -348,6 +348,26 @@ static void test_refine_turned(void **state)
 /* Headings recovered by trn_localize_dem_heading: 40 local maps with the
  * issue's noise and a height offset, true error uniform in +-6 deg, window
  * +-8 deg, prior within +-3 cells, window +-5 cells. */
+/* One case of test_recovers_heading's kind: a rover at a random position of
+ * the rock field, its local map turned by up to +-6 degrees with `noise`
+ * times the configured noise, a window of +-5 cells within 3 of it, headings
+ * +-8 degrees searched. */
+static trn_status_t turned_case(trn_rng_t *r, int noise, double *rx, double *ry, double *delta,
+                                trn_heading_result_t *res)
+{
+    trn_heading_cfg_t c = {0.0, 8.0 * DEG, 0.0};
+    trn_window_t win;
+    int32_t cx, cy;
+    *rx = 36.0 + 56.0 * trn_rng_unit(r);
+    *ry = 36.0 + 56.0 * trn_rng_unit(r);
+    *delta = (trn_rng_unit(r) - 0.5) * 12.0 * DEG;
+    cx = (int32_t)floor(*rx + 0.5) + trn_rng_int(r, -3, 3);
+    cy = (int32_t)floor(*ry + 0.5) + trn_rng_int(r, -3, 3);
+    win = window_at(cx, cy, 5);
+    local_dem(*rx, *ry, *delta, 0.3 * (trn_rng_unit(r) - 0.5), noise);
+    return loc3(&win, &c, res);
+}
+
 static void test_recovers_heading(void **state)
 {
     trn_rng_t r;
@@ -357,16 +377,9 @@ static void test_recovers_heading(void **state)
     world_build(21, 0);
     trn_rng_seed(&r, 4242);
     for (k = 0; k < 40; ++k) {
-        const double rx = 36.0 + 56.0 * trn_rng_unit(&r), ry = 36.0 + 56.0 * trn_rng_unit(&r);
-        const double delta = (trn_rng_unit(&r) - 0.5) * 12.0 * DEG;
-        const int32_t cx = (int32_t)floor(rx + 0.5) + trn_rng_int(&r, -3, 3);
-        const int32_t cy = (int32_t)floor(ry + 0.5) + trn_rng_int(&r, -3, 3);
-        const trn_window_t win = window_at(cx, cy, 5);
-        trn_heading_cfg_t c = {0.0, 8.0 * DEG, 0.0};
+        double rx, ry, delta;
         trn_heading_result_t res;
-        trn_status_t st;
-        local_dem(rx, ry, delta, 0.3 * (trn_rng_unit(&r) - 0.5), 1);
-        st = loc3(&win, &c, &res);
+        const trn_status_t st = turned_case(&r, 1, &rx, &ry, &delta, &res);
         if (st == TRN_OK || st == TRN_E_AMBIGUOUS) {
             const double eh = res.heading_rad - delta, ex = res.loc.x - rx, ey = res.loc.y - ry;
             ++n;
@@ -382,6 +395,47 @@ static void test_recovers_heading(void **state)
     assert_true(right >= n - 1);
     assert_true(sqrt(se_h / n) < 0.25 * DEG);
     assert_true(sqrt(se_xy / n) < 0.3);
+}
+
+/* The noise model's scale from the data over heading (noise_auto, as
+ * trn_localize_dem's): local maps with 3 times the configured noise, turned
+ * by up to 6 degrees; the scale comes back within 20 % of 3 in at least 16
+ * of 20 and the answers stay right; with the configured noise the scale
+ * stays within 20 % of 1 in every case and is 1 in at least half (measured:
+ * 13 of 20; the rock field's residuals grow with range a little beyond the
+ * noise model, a heading misfit's lever arm, and the test rejects at 2 sd). */
+static void test_noise_scale_heading(void **state)
+{
+    trn_rng_t r;
+    int k, kept = 0, near1 = 0, near3 = 0, right = 0, pass;
+    (void)state;
+    world_build(21, 0);
+    assert_int_equal(g_w.map.cfg.noise_auto, 1);
+    for (pass = 0; pass < 2; ++pass) {
+        const int noise = pass == 0 ? 1 : 3;
+        trn_rng_seed(&r, 77);
+        for (k = 0; k < 20; ++k) {
+            double rx, ry, delta, eh, ex, ey;
+            trn_heading_result_t res;
+            (void)turned_case(&r, noise, &rx, &ry, &delta, &res);
+            eh = res.heading_rad - delta;
+            ex = res.loc.x - rx;
+            ey = res.loc.y - ry;
+            if (noise == 1) {
+                kept += res.loc.noise_scale == 1.0;
+                near1 += fabs(res.loc.noise_scale - 1.0) <= 0.2;
+            } else {
+                near3 += fabs(res.loc.noise_scale - 3.0) <= 0.6;
+                right += fabs(eh) < 2.0 * DEG && ex * ex + ey * ey < 1.5 * 1.5;
+            }
+        }
+    }
+    printf("noise scale over heading: at 1x the model kept in %d of 20, the scale within 20 %% of "
+           "1 in %d; at 3x within 20 %% of 3 in %d of 20, %d right\n",
+           kept, near1, near3, right);
+    assert_true(kept >= 10 && near1 == 20);
+    assert_true(near3 >= 16);
+    assert_true(right >= 18);
 }
 
 /* Calibration: heading errors against sigma_heading (a normal: 68.3 / 95.4
@@ -702,9 +756,20 @@ static void test_bad_localize(void **state)
     assert_int_equal(loc3(&win, &bc, &res), TRN_OK);
     assert_true(res.heading_rad == 2.0 * DEG && res.sigma_heading_rad == 0.0 &&
                 res.half_steps == 0 && res.cov3[8] == 0.0);
-    /* a local map from elsewhere: the refinement fits it badly or not at all */
+    /* a local map from elsewhere: the refinement fits it badly or not at all,
+     * or (with the noise model rescaled to its residuals, noise_auto) no pose
+     * stands out: never a fix */
     local_dem(20.0, 100.0, 0.0, 0.0, 1);
+    {
+        const trn_status_t st3 = loc3(&win, &c, &res);
+        printf("a local map from elsewhere: status %d, noise scale %.2f, failure probability "
+               "%.3f\n",
+               (int)st3, res.loc.noise_scale, res.loc.failure_probability);
+        assert_true(st3 == TRN_E_ILLCOND || st3 == TRN_E_AMBIGUOUS);
+    }
+    g_w.map.cfg.noise_auto = 0; /* the configured model alone: the misfit flag */
     assert_int_equal(loc3(&win, &c, &res), TRN_E_ILLCOND);
+    g_w.map.cfg.noise_auto = 1;
     /* a map that repeats every 3 cells along x: ambiguous */
     for (y = 0; y < N; ++y) {
         for (x = 0; x < N; ++x) {
@@ -989,17 +1054,32 @@ static void test_edges_localize(void **state)
     local_dem(60.0, 60.0, 0.0, 0.0, 1);
     assert_int_equal(loc3(&win, &c, &res), TRN_E_ILLCOND);
     assert_true(res.loc.refined == 0 && isinf(res.sigma_heading_rad));
+    assert_true(res.loc.noise_scale == 1.0); /* trn_map_cfg_default: noise_auto 0 */
+    /* with noise_auto the noise scale is taken at the search's best (pose,
+     * heading) where the refinement failed: noise-free heights on a flat map
+     * ask for the floor, and the second pass is ill-conditioned as well */
+    g_w.map.cfg.noise_auto = 1;
+    for (i = 0; i < LW * LW; ++i) {
+        g_loc[i] = isnan(g_loc[i]) ? NAN : 1.0f; /* the map's own flat heights */
+    }
+    assert_int_equal(loc3(&win, &c, &res), TRN_E_ILLCOND);
+    assert_true(res.loc.noise_scale == sqrt(TRN_NOISE_SCALE2_MIN));
+    /* one noise level for every point (noise_k_per_m 0): no scale can be
+     * estimated, the model is kept */
+    g_w.map.cfg.noise_k_per_m = 0.0f;
+    assert_int_equal(loc3(&win, &c, &res), TRN_E_ILLCOND);
+    assert_true(res.loc.noise_scale == 1.0);
 }
 
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_w0_bit_equal),   cmocka_unit_test(test_grid_vs_slow),
-        cmocka_unit_test(test_refine_turned),  cmocka_unit_test(test_recovers_heading),
-        cmocka_unit_test(test_calibration),    cmocka_unit_test(test_bad_search),
-        cmocka_unit_test(test_bad_refine),     cmocka_unit_test(test_bad_localize),
-        cmocka_unit_test(test_edges_search),   cmocka_unit_test(test_edges_refine),
-        cmocka_unit_test(test_edges_localize),
+        cmocka_unit_test(test_w0_bit_equal),  cmocka_unit_test(test_grid_vs_slow),
+        cmocka_unit_test(test_refine_turned), cmocka_unit_test(test_recovers_heading),
+        cmocka_unit_test(test_calibration),   cmocka_unit_test(test_noise_scale_heading),
+        cmocka_unit_test(test_bad_search),    cmocka_unit_test(test_bad_refine),
+        cmocka_unit_test(test_bad_localize),  cmocka_unit_test(test_edges_search),
+        cmocka_unit_test(test_edges_refine),  cmocka_unit_test(test_edges_localize),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -272,6 +272,114 @@ static void test_wedge_recovers_pose(void **state)
     wedges(&cfg, &g, "auto");
 }
 
+/* The sensor's noise from the data (trn_map_cfg_t.noise_auto, docs/method.md
+ * 9): wedges with noise k times the configured model (1 cm + 0.0004 r^2 /
+ * cell). With the model right (k = 1) the height matcher keeps it in at
+ * least 8 of 10 cases; with k = 3, unknown to it, it finds the scale within
+ * 20 % in at least 8 of 10 and stays within 0.5 cell of the truth, where the
+ * configured model alone (noise_auto 0) keeps noise_scale 1. */
+static int noise_auto_run(nat_t *w, double k, int *near_k, double *worst)
+{
+    trn_rng_t r;
+    int i, kept = 0;
+    trn_rng_seed(&r, 41);
+    *near_k = 0;
+    *worst = 0.0;
+    for (i = 0; i < 10; ++i) {
+        trn_loc_result_t res;
+        trn_window_t win;
+        double tx = trn_rng_int(&r, 30, 65) + trn_rng_unit(&r) - 0.5,
+               ty = trn_rng_int(&r, 30, 65) + trn_rng_unit(&r) - 0.5;
+        int x, y;
+        trn_grid_f32_t l;
+        trn_status_t st;
+        (void)make_wedge(&l, tx, ty, 12.0, 2.0 * PI * trn_rng_unit(&r));
+        for (y = 0; y < LW; ++y) {
+            for (x = 0; x < LW; ++x) {
+                double rr = (double)((x - LR) * (x - LR) + (y - LR) * (y - LR));
+                if (!isnan(l_data[y * LW + x])) {
+                    l_data[y * LW + x] += (float)(k * (0.01 + 0.0004 * rr) * trn_rng_gauss(&r));
+                }
+            }
+        }
+        win = window_at((int)floor(tx + 0.5) + trn_rng_int(&r, -3, 3),
+                        (int)floor(ty + 0.5) + trn_rng_int(&r, -3, 3), 6);
+        st = nat_localize(w, &l, LR, LR, &win, &res);
+        assert_true(st == TRN_OK || st == TRN_E_AMBIGUOUS || st == TRN_E_ILLCOND);
+        assert_true(res.noise_scale > 0.0 && isfinite(res.noise_scale));
+        kept += res.noise_scale == 1.0;
+        *near_k += fabs(res.noise_scale - k) <= 0.2 * k;
+        *worst = fmax(*worst, fmax(fabs(res.x - tx), fabs(res.y - ty)));
+    }
+    return kept;
+}
+
+static void test_noise_auto(void **state)
+{
+    trn_grid_f32_t g;
+    trn_map_cfg_t cfg;
+    nat_t w;
+    double sh, worst;
+    int kept, near_k;
+    (void)state;
+    make_global(&g);
+    auto_cfg(&cfg, &g, &sh);
+    assert_int_equal(cfg.noise_auto, 1);
+    nat_build(&w, &cfg, &g);
+    kept = noise_auto_run(&w, 1.0, &near_k, &worst);
+    printf("noise auto, k = 1: model kept in %d of 10, worst error %.3f cells\n", kept, worst);
+    assert_true(kept >= 8 && worst < 0.5);
+    kept = noise_auto_run(&w, 3.0, &near_k, &worst);
+    printf("noise auto, k = 3: scale within 20 %% of 3 in %d of 10 (1 in %d), worst error %.3f "
+           "cells\n",
+           near_k, kept, worst);
+    assert_true(near_k >= 8 && kept <= 2 && worst < 0.5);
+    nat_free(&w);
+    cfg.noise_auto = 0;
+    nat_build(&w, &cfg, &g);
+    kept = noise_auto_run(&w, 3.0, &near_k, &worst);
+    printf("noise auto off, k = 3: noise_scale 1 in %d of 10\n", kept);
+    assert_int_equal(kept, 10);
+    nat_free(&w);
+    /* one noise level for every point (noise_k_per_m 0): no scale can be
+     * estimated, the model is kept */
+    cfg.noise_auto = 1;
+    cfg.noise_k_per_m = 0.0f;
+    nat_build(&w, &cfg, &g);
+    kept = noise_auto_run(&w, 3.0, &near_k, &worst);
+    assert_int_equal(kept, 10);
+    nat_free(&w);
+}
+
+/* noise_auto where the refinement fails (flat ground): the scale is taken at
+ * the search's best integer pose; noise-free heights ask for the floor, and
+ * the second pass is ill-conditioned as well. */
+static void test_noise_auto_flat(void **state)
+{
+    trn_grid_f32_t g, l;
+    trn_map_cfg_t cfg;
+    trn_loc_result_t res;
+    trn_window_t win = window_at(48, 48, 4);
+    nat_t w;
+    double sh;
+    int i;
+    (void)state;
+    make_global(&g);
+    auto_cfg(&cfg, &g, &sh);
+    for (i = 0; i < GW * GW; ++i) {
+        g_data[i] = 5.0f;
+    }
+    nat_build(&w, &cfg, &g);
+    (void)make_wedge(&l, 48.0, 48.0, 0.0, 0.0);
+    for (i = 0; i < LW * LW; ++i) {
+        l_data[i] = isnan(l_data[i]) ? NAN : 5.0f;
+    }
+    assert_int_equal(nat_localize(&w, &l, LR, LR, &win, &res), TRN_E_ILLCOND);
+    assert_int_equal(res.refined, 0);
+    assert_true(res.noise_scale == sqrt(TRN_NOISE_SCALE2_MIN));
+    nat_free(&w);
+}
+
 /* The paper's local filter on a partial view is biased on a slope
  * (docs/method.md section 9, cause 1); the map's low-pass is not. Same
  * wedges on three slopes, each map's own auto bins, refinement off so the
@@ -697,6 +805,14 @@ static void test_cfg_check_new_fields(void **state)
     assert_int_equal(trn_map_cfg_check(&b), TRN_OK);
     b = c;
     b.local_highpass = 2;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    assert_int_equal(c.noise_auto, 0);
+    b = c;
+    b.noise_auto = 1;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_OK);
+    b.noise_auto = 2;
+    assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
+    b.noise_auto = -1;
     assert_int_equal(trn_map_cfg_check(&b), TRN_E_ARG);
     b = c;
     b.local_highpass = -1;
@@ -1455,6 +1571,8 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_wedge_recovers_pose),
+        cmocka_unit_test(test_noise_auto),
+        cmocka_unit_test(test_noise_auto_flat),
         cmocka_unit_test(test_box_bias_on_slope),
         cmocka_unit_test(test_constant_offset_invariance),
         cmocka_unit_test(test_second_pass),

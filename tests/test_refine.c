@@ -7,7 +7,8 @@
  * rounding); the same with Gaussian noise of the documented model, where the
  * statistical part of the reported covariance must cover the errors as a 2-D
  * normal does; outliers; the exhaustive height search against a brute-force
- * evaluation of its likelihood; trn_map_cfg_auto's rule;
+ * evaluation of its likelihood; trn_map_cfg_auto's rule; the noise scale
+ * (trn_refine_noise_scale) against a slow regression and as an estimator;
  * and one assertion per documented @retval.
  */
 #include <stdarg.h>
@@ -617,6 +618,200 @@ static void test_outliers(void **state)
     assert_true(out.n_used <= out.n_seen - 36);
 }
 
+/* trn_refine_noise_scale's regression written out: the residuals from
+ * this test's own interpolants (lin, bilin) at the refined pose, offset and
+ * mix, the same four fits of r^2 = k2 s^2 + m2 weighted by 1 / v^2 over the
+ * points within 3 sd, in double. */
+static void slow_noise_scale(const trn_refine_cfg_t *c, const trn_refine_t *o, double *k2,
+                             double *sd)
+{
+    double kk = 1.0, mm = o->model_m * o->model_m, var = 0.0;
+    int it, x, y, cc = LW / 2;
+    for (it = 0; it < 4; ++it) {
+        double a = 0.0, b = 0.0, d = 0.0, e = 0.0, f = 0.0, det;
+        for (y = 0; y < LW; ++y) {
+            for (x = 0; x < LW; ++x) {
+                double h = l_data[y * LW + x], px = o->x + x - cc, py = o->y + y - cc, g, r, rm, s2,
+                       v, q;
+                if (isnan(h)) {
+                    continue;
+                }
+                g = lin(px, py) + o->interp_mix * (bilin(px, py) - lin(px, py));
+                r = h - o->dz_m - g;
+                rm = c->cell_m * sqrt((double)((x - cc) * (x - cc) + (y - cc) * (y - cc)));
+                s2 = c->noise_m + c->noise_k_per_m * rm * rm;
+                s2 *= s2;
+                v = kk * s2 + mm;
+                if (r * r > 9.0 * v) {
+                    continue;
+                }
+                r = r * r / 0.973343;
+                q = 1.0 / (v * v);
+                a += q * s2 * s2;
+                b += q * s2;
+                d += q;
+                e += q * r * s2;
+                f += q * r;
+            }
+        }
+        det = a * d - b * b;
+        kk = (e * d - b * f) / det;
+        mm = (a * f - b * e) / det;
+        var = 2.0 * d / det;
+        if (mm < 0.0) {
+            mm = 0.0;
+            kk = e / a;
+        }
+        if (kk < 1e-4) {
+            kk = 1e-4;
+            mm = fmax(0.0, (f - kk * b) / d);
+        }
+    }
+    *k2 = kk;
+    *sd = sqrt(var);
+}
+
+/* trn_refine_noise_scale (the sensor's noise from the data, docs/method.md
+ * 9): against the slow regression above, and as an estimator. Local maps
+ * with noise k times the configured model (k = 0.5, 1, 2), half of them
+ * with a model error of 2 cm on top, a mix of 0.3: the estimate of k^2 is
+ * within 2 of its reported sds in at least 85 % of the cases per k, its
+ * median within 10 % of k^2, and with k = 1 the data reject the model
+ * (|k2 - 1| > TRN_NOISE_SCALE_Z sd) in at most 12 % of the cases. */
+static void test_noise_scale(void **state)
+{
+    trn_grid_f32_t g, l;
+    trn_refine_cfg_t c = cfg_of();
+    trn_refine_t out;
+    trn_rng_t r;
+    const double ks[3] = {0.5, 1.0, 2.0};
+    int kq, i, n = 100;
+    double worst_rel = 0.0;
+    (void)state;
+    trn_rng_seed(&r, 29);
+    make_global(&g);
+    for (kq = 0; kq < 3; ++kq) {
+        int within = 0, rejected = 0, j, m;
+        double rel[100];
+        for (i = 0; i < n; ++i) {
+            double tx = 24.0 + 12.0 * trn_rng_unit(&r), ty = 24.0 + 12.0 * trn_rng_unit(&r), k2, sd,
+                   k2s, sds;
+            make_local_mix(&l, tx, ty, 3.0, ks[kq], 0.3, &c, &r);
+            if (i % 2 == 1) {
+                for (j = 0; j < LW * LW; ++j) {
+                    l_data[j] += (float)(0.02 * trn_rng_gauss(&r));
+                }
+            }
+            assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, (int)floor(tx + 0.5),
+                                             (int)floor(ty + 0.5), &c, &out),
+                             TRN_OK);
+            assert_int_equal(
+                trn_refine_noise_scale(&g, &l, LW / 2, LW / 2, &out, 0.0, &c, &k2, &sd), TRN_OK);
+            slow_noise_scale(&c, &out, &k2s, &sds);
+            worst_rel = fmax(worst_rel, fmax(fabs(k2 - k2s) / k2s, fabs(sd - sds) / sds));
+            within += fabs(k2 - ks[kq] * ks[kq]) <= 2.0 * sd;
+            rejected += fabs(k2 - 1.0) > TRN_NOISE_SCALE_Z * sd;
+            rel[i] = k2 / (ks[kq] * ks[kq]);
+        }
+        /* the median of rel by counting */
+        for (i = 0, m = 0; i < n; ++i) {
+            int below = 0;
+            for (j = 0; j < n; ++j) {
+                below += rel[j] < rel[i];
+            }
+            if (below == n / 2) {
+                m = i;
+            }
+        }
+        printf("noise scale k = %.1f: k^2 within 2 sd in %d of %d, median k2 / k^2 %.3f, "
+               "model rejected in %d\n",
+               ks[kq], within, n, rel[m], rejected);
+        assert_true(within >= 85);
+        assert_true(fabs(rel[m] - 1.0) < 0.10);
+        if (ks[kq] == 1.0) {
+            assert_true(rejected <= 12);
+        } else {
+            assert_true(rejected >= 90);
+        }
+    }
+    printf("noise scale against the slow regression: worst relative difference %.2e\n", worst_rel);
+    assert_true(worst_rel < 1e-6);
+}
+
+static void test_noise_scale_errors(void **state)
+{
+    trn_grid_f32_t g, l;
+    trn_refine_cfg_t c = cfg_of(), bad;
+    trn_refine_t out, at;
+    trn_rng_t r;
+    double k2, sd;
+    int i;
+    (void)state;
+    trn_rng_seed(&r, 2);
+    make_global(&g);
+    make_local(&l, 30.2, 29.7, 1.0, 1.0, &c, &r);
+    assert_int_equal(trn_refine_pose(&g, &l, 15, 15, 30, 30, &c, &out), TRN_OK);
+    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &out, 0.0, &c, &k2, &sd), TRN_OK);
+    assert_true(k2 >= TRN_NOISE_SCALE2_MIN && sd > 0.0);
+    assert_int_equal(trn_refine_noise_scale(NULL, &l, 15, 15, &out, 0.0, &c, &k2, &sd), TRN_E_NULL);
+    assert_int_equal(trn_refine_noise_scale(&g, NULL, 15, 15, &out, 0.0, &c, &k2, &sd), TRN_E_NULL);
+    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, NULL, 0.0, &c, &k2, &sd), TRN_E_NULL);
+    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &out, 0.0, NULL, &k2, &sd), TRN_E_NULL);
+    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &out, 0.0, &c, NULL, &sd), TRN_E_NULL);
+    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &out, 0.0, &c, &k2, NULL), TRN_E_NULL);
+    bad = c;
+    bad.noise_m = 0.0f;
+    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &out, 0.0, &bad, &k2, &sd), TRN_E_ARG);
+    assert_int_equal(trn_refine_noise_scale(&g, &l, -TRN_MAX_DIM - 1, 15, &out, 0.0, &c, &k2, &sd),
+                     TRN_E_ARG);
+    at = out;
+    at.x = NAN;
+    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &at, 0.0, &c, &k2, &sd), TRN_E_ARG);
+    at = out;
+    at.y = NAN;
+    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &at, 0.0, &c, &k2, &sd), TRN_E_ARG);
+    at = out;
+    at.dz_m = NAN;
+    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &at, 0.0, &c, &k2, &sd), TRN_E_ARG);
+    at = out;
+    at.model_m = INFINITY;
+    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &at, 0.0, &c, &k2, &sd), TRN_E_ARG);
+    at = out;
+    at.model_m = -1.0;
+    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &at, 0.0, &c, &k2, &sd), TRN_E_ARG);
+    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &out, 4.0, &c, &k2, &sd), TRN_E_ARG);
+    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &out, NAN, &c, &k2, &sd), TRN_E_ARG);
+    at = out;
+    at.interp_mix = INFINITY;
+    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &at, 0.0, &c, &k2, &sd), TRN_E_ARG);
+    /* local cells over unknown map cells are left out */
+    for (i = 0; i < 10; ++i) {
+        g_data[30 * GW + 25 + i] = NAN;
+    }
+    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &out, 0.0, &c, &k2, &sd), TRN_OK);
+    make_global(&g);
+    /* noise-free heights at the exact pose: the residuals ask for no noise,
+     * the floor */
+    make_local(&l, 30.0, 30.0, 1.0, 0.0, &c, &r);
+    assert_int_equal(trn_refine_pose(&g, &l, 15, 15, 30, 30, &c, &at), TRN_OK);
+    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &at, 0.0, &c, &k2, &sd), TRN_OK);
+    assert_true(k2 == TRN_NOISE_SCALE2_MIN);
+    make_local(&l, 30.2, 29.7, 1.0, 1.0, &c, &r);
+    /* one noise level for every point: the sensor's part and the model's
+     * cannot be told apart */
+    bad = c;
+    bad.noise_k_per_m = 0.0f;
+    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &out, 0.0, &bad, &k2, &sd),
+                     TRN_E_ILLCOND);
+    g.width = 0;
+    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &out, 0.0, &c, &k2, &sd), TRN_E_SIZE);
+    make_global(&g);
+    for (i = 0; i < LW * LW; ++i) {
+        l_data[i] = (i % 160 == 0) ? l_data[i] : NAN; /* 7 seen points: under 8 */
+    }
+    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &out, 0.0, &c, &k2, &sd), TRN_E_NODATA);
+}
+
 static void test_errors(void **state)
 {
     trn_grid_f32_t g, l, flat;
@@ -903,12 +1098,19 @@ static void test_cfg_auto(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_exact_model),    cmocka_unit_test(test_interp_shift),
-        cmocka_unit_test(test_noise_coverage), cmocka_unit_test(test_outliers),
-        cmocka_unit_test(test_errors),         cmocka_unit_test(test_cfg_auto),
-        cmocka_unit_test(test_height_search),  cmocka_unit_test(test_mix),
-        cmocka_unit_test(test_sys_weight),     cmocka_unit_test(test_floors),
+        cmocka_unit_test(test_exact_model),
+        cmocka_unit_test(test_interp_shift),
+        cmocka_unit_test(test_noise_coverage),
+        cmocka_unit_test(test_outliers),
+        cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_cfg_auto),
+        cmocka_unit_test(test_height_search),
+        cmocka_unit_test(test_mix),
+        cmocka_unit_test(test_sys_weight),
+        cmocka_unit_test(test_floors),
         cmocka_unit_test(test_heading_mix),
+        cmocka_unit_test(test_noise_scale),
+        cmocka_unit_test(test_noise_scale_errors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -73,6 +73,13 @@ typedef struct {
                                       failure probability is above it; 1 (the default):
                                       never. trn_map_cfg_auto sets
                                       TRN_MAP_MAX_FAILURE_PROB_AUTO */
+    int32_t noise_auto;          /**< 1: the height matcher estimates the noise model's scale
+                                      from the residuals at its answer
+                                      (trn_refine_noise_scale) and, where they reject the
+                                      model by more than TRN_NOISE_SCALE_Z sds, searches
+                                      and refines again with it (trn_loc_result_t.noise_scale);
+                                      0: noise_m and noise_k_per_m as given.
+                                      trn_map_cfg_auto sets 1, trn_map_cfg_default 0 */
 } trn_map_cfg_t;
 
 /** A prepared global map. All pointers point into the caller's buffer. */
@@ -114,6 +121,13 @@ typedef struct {
                                            the local heights match nowhere in the window
                                            as well as the map can be matched (status
                                            TRN_E_ILLCOND) */
+    double noise_scale;               /**< factor the height matcher put on the configured
+                                           noise model's sd (noise_m and noise_k_per_m)
+                                           because the residuals rejected it by more than
+                                           TRN_NOISE_SCALE_Z sds (trn_refine_noise_scale;
+                                           the search and refinement then ran again with
+                                           it; over heading the same with the local map
+                                           turned); 1 otherwise, and on the voxel path */
 } trn_loc_result_t;
 
 /** Inlier probability a of trn_map_cfg_default (the paper's). */

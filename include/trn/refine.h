@@ -142,6 +142,46 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
                              int32_t rover_x, int32_t rover_y, int32_t ix, int32_t iy,
                              const trn_refine_cfg_t *cfg, trn_refine_t *out);
 
+/** The data must reject the configured noise model by this many sampling
+ *  standard deviations of trn_refine_noise_scale's estimate before
+ *  trn_localize_dem rescales it (a two-sided test at about 95 %). */
+#define TRN_NOISE_SCALE_Z 2.0
+/** Mean square of a unit normal truncated at +-TRN_REFINE_CLIP (3):
+ *  1 - 2 x 3 phi(3) / (2 Phi(3) - 1). Residuals kept within the clip have
+ *  this fraction of their variance as their mean square. */
+#define TRN_CLIP_MEAN_SQUARE 0.973343
+/** Smallest noise scale (variance factor) trn_refine_noise_scale reports. */
+#define TRN_NOISE_SCALE2_MIN 1e-4
+
+/**
+ * @brief The noise scale the residuals at a refined pose ask for: the local
+ * heights' residuals r_i at `at` (pose, offset dz_m, interp_mix), regressed
+ * as r_i^2 = k2 s_i^2 + m2 (s_i the configured sensor noise, m2 >= 0 a
+ * model variance common to all points) by least squares weighted by
+ * 1 / v_i^2, v_i = k2 s_i^2 + m2, over the points within TRN_REFINE_CLIP
+ * sqrt(v_i) (their mean squares divided by TRN_CLIP_MEAN_SQUARE), from k2 =
+ * 1 and m2 = at->model_m^2, four times. The sensor's noise grows with range
+ * and the model variance does not, which is what tells them apart; with a
+ * narrow range of s_i the estimate's sd is large. docs/method.md 9, "the
+ * sensor's noise from the data".
+ * @param[in]  at    a refinement of trn_refine_pose (TRN_OK) of this local map, or
+ *                   the pos of trn_refine_pose_heading's
+ * @param[in]  heading_rad the local map's turn at `at` (trn_refine3_t.heading_rad; 0
+ *                   for trn_refine_pose's), |heading_rad| <= TRN_HEADING_MAX_WINDOW_RAD
+ * @param[out] k2    the variance factor on the configured noise, >= TRN_NOISE_SCALE2_MIN
+ * @param[out] k2_sd its sampling sd were the model right: sqrt(2 (X^T Q X)^-1) of
+ *                   the two-parameter fit (Gaussian residuals), also where m2 met its bound
+ * @retval TRN_OK
+ * @retval TRN_E_NULL, TRN_E_SIZE (bad grids), TRN_E_ARG (cfg, rover cell, `at`
+ *         not finite, heading_rad out of range)
+ * @retval TRN_E_NODATA fewer than 8 points within the clip
+ * @retval TRN_E_ILLCOND the regression is singular (every s_i alike and m2 free)
+ */
+trn_status_t trn_refine_noise_scale(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
+                                    int32_t rover_x, int32_t rover_y, const trn_refine_t *at,
+                                    double heading_rad, const trn_refine_cfg_t *cfg, double *k2,
+                                    double *k2_sd);
+
 /**
  * @brief Exhaustive maximum-likelihood search of integer poses over heights
  * (the natural-terrain matcher, docs/method.md section 9). Every seen local

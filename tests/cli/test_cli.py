@@ -267,6 +267,16 @@ rp = run_json("localize", *pargs, "--map-config", "paper", "--json")
 check(rp.get("map_config", {}).get("max_failure_prob") == 1, "the paper's configuration never flags (limit 1)")
 for bad, why in (("0", "out of range"), ("1.5", "out of range"), ("nan", "not a finite number")):
     expect_error(1, why, "localize", *pargs, "--max-failure-prob", bad)
+# The noise model's scale from the data (--noise-auto, 1 with auto): the JSON says which scale was
+# used; with the option at 0 it is 1 and the configuration says so; a value other than 0 or 1 is
+# refused with one line.
+check(r_tif.get("noise_scale", 0) > 0 and ra.get("map_config", {}).get("noise_auto") == 1,
+      f"noise_scale {r_tif.get('noise_scale')} reported, auto's noise_auto 1")
+rn = run_json("localize", *pargs, "--noise-auto", "0", "--json")
+check(rn.get("noise_scale") == 1 and rn.get("map_config", {}).get("noise_auto") == 0,
+      f"--noise-auto 0: noise_scale {rn.get('noise_scale')}, noise_auto {rn.get('map_config', {}).get('noise_auto')}")
+for bad in ("2", "-1"):
+    expect_error(1, "out of range", "localize", *pargs, "--noise-auto", bad)
 
 # ---- localize: bad input ------------------------------------------------------
 common = ["--local", local_tif, "--prior", prior]

@@ -4,7 +4,7 @@
 
     /usr/bin/python3 tools/real/bench_real.py [--dem ID ...] [--dem-file PATH ...] [--cases N] [--seed S]
         [--radius R] [--resample bilinear|cubic] [--truth-fine K] [--fine-map mean|point]
-        [--fine-local point|mean]
+        [--fine-local point|mean] [--noise-scale F]
         [--subcell axis|quad2d]
         [--trn PATH] [--trn-mode auto|batch|single]
         [--out DIR] [--keep-cases] [--no-plot] [-- TRN_ARGS...]
@@ -107,6 +107,9 @@ def parse_args(argv):
     ap.add_argument("--fine-local", default="point", choices=("point", "mean"),
                     help="with --truth-fine: each local cell samples the DEM at its centre (default) or "
                          "is its mean over the cell (a rover averaging its stereo points per cell)")
+    ap.add_argument("--noise-scale", type=float, default=1.0, metavar="F",
+                    help="the local maps' height noise is F times the issue's model (default 1); trn is "
+                         "not told (its own --noise-m / --noise-k stay as given after --)")
     ap.add_argument("--subcell", default="axis", choices=("axis", "quad2d"),
                     help="peers' sub-cell fit: a parabola per axis (default) or the 3x3 2-D quadratic")
     ap.add_argument("--trn", default=os.path.join(dems.ROOT, "build", "host-release", "trn"),
@@ -135,6 +138,8 @@ def parse_args(argv):
         a.dem.append(d)
     if a.cases < 1:
         raise Fail(f"--cases {a.cases}: must be >= 1")
+    if not (a.noise_scale >= 0.0 and math.isfinite(a.noise_scale)):
+        raise Fail(f"--noise-scale {a.noise_scale}: must be a finite number >= 0")
     if a.truth_fine is not None and a.truth_fine < 2:
         raise Fail(f"--truth-fine {a.truth_fine}: must be >= 2")
     if not 2 <= a.radius <= 500:
@@ -163,6 +168,8 @@ def trn_result(j, wall_ms=None):
     out["cov_m2"] = cov
     if j.get("refinement") is not None:
         out["refinement"] = j["refinement"]
+    if j.get("noise_scale") is not None:
+        out["noise_scale"] = j["noise_scale"]
     if j.get("time_ms") is not None:
         out["time_ms"], out["time_includes_map_build"] = float(j["time_ms"]), False
     else:
@@ -289,9 +296,11 @@ def print_table(dem_id, meta, ms):
         "each local cell its value at the cell's centre"
     fine = (f", map = {kk} x {kk} {how} the {meta['fine_cell_m']:g} m "
             f"DEM the local maps are sampled from ({lhow})") if kk else ""
+    ns = meta.get("noise_scale", 1.0)
+    noise = f", local noise {ns:g} x the issue's (trn not told)" if ns != 1.0 else ""
     print(f"\n{dem_id} ({meta['character']}, held_out={meta['held_out']}): {meta['cols']} x {meta['rows']} "
           f"cells of {meta['cell_m']:g} m, {ms['trn']['n']} cases, R = {meta['radius']} cells, "
-          f"{meta['resample']}, trn {meta['trn_mode']}{fine}")
+          f"{meta['resample']}, trn {meta['trn_mode']}{fine}{noise}")
     print(f"  {'method':6s} {'success':>12s} {'med err':>8s} {'med err ok':>10s} {'med ms':>8s}  (errors in cells)")
     for k in METHODS:
         m = ms[k]
@@ -336,6 +345,8 @@ def bench_dem(a, dem_id, batch):
                                     like=fine.path)
         dem.path = path
     p = casemod.CaseParams(radius=a.radius, resample=a.resample,
+                           noise0_m=casemod.CaseParams.noise0_m * a.noise_scale,
+                           noise_k=casemod.CaseParams.noise_k * a.noise_scale,
                            local_mean=bool(a.truth_fine) and a.fine_local == "mean")
     tmp = tempfile.mkdtemp(prefix=f"bench_real_{dem_id}_")
     try:
@@ -378,6 +389,7 @@ def bench_dem(a, dem_id, batch):
                 "opencv_mask": peers.mask_supported(), "truth_fine": a.truth_fine,
                 "fine_map": a.fine_map if a.truth_fine else None,
                 "fine_local": a.fine_local if a.truth_fine else None,
+                "noise_scale": a.noise_scale,
                 "fine_cell_m": fine.c if fine is not None else None,
                 "fine_path": fine.path if fine is not None else None}
         # the figure's case: the first trn success (else case 0); keep its local DEM

@@ -412,7 +412,8 @@ def test_cli():
     for args, what in ((["--dem", "no_such_dem"], "unknown DEM"), (["--cases", "0"], "--cases 0"),
                        (["--fine-map", "median"], "--fine-map median"),
                        (["--trn", "/nonexistent/trn"], "missing trn"), (["--bogus"], "unknown option"),
-                      (["--truth-fine", "1"], "--truth-fine 1")):
+                      (["--truth-fine", "1"], "--truth-fine 1"), (["--noise-scale", "-1"], "--noise-scale -1"),
+                      (["--noise-scale", "nan"], "--noise-scale nan"), (["--fine-local", "median"], "--fine-local median")):
         r = subprocess.run([sys.executable, b] + args, capture_output=True, text=True)
         check(r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1 and r.stdout == "",
               f"bench_real {what}: exit 1, one line ({r.stderr.strip()})")

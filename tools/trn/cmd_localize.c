@@ -253,6 +253,7 @@ void cmd_localize_report_json(FILE *out, const cmd_localize_ctx_t *c, const char
     }
     json_str(&j, "status", status_word(o->st));
     json_bool(&j, "refined", o->res.refined != 0);
+    json_num(&j, "noise_scale", o->res.noise_scale);
     if (o->res.refined) {
         /* the refinement's own figures (docs/method.md 9), grid frame: x
          * east, y south, cells */

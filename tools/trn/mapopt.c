@@ -20,6 +20,7 @@ void mapopt_init(mapopt_t *m)
     m->noise_k = -1.0;
     m->local_hp = NULL;
     m->refine = -1;
+    m->noise_auto = -1;
     m->match = NULL;
     m->max_failure_prob = 0.0;
 }
@@ -61,6 +62,10 @@ void mapopt_cli(mapopt_t *m, cli_opt_t *o)
          0},
         {"--refine", CLI_LONG, &m->refine, 0, 1, 0, "0|1",
          "refine the pose over heights (default 1 with auto, 0 with paper)", 0},
+        {"--noise-auto", CLI_LONG, &m->noise_auto, 0, 1, 0, "0|1",
+         "height matcher: rescale the noise model when the residuals reject it (default 1 with "
+         "auto, 0 with paper)",
+         0},
         {"--match", CLI_STRING, &m->match, 0, 0, 0, "voxel|heights",
          "what localize matches: voxel occupancy (paper) or heights (auto) (default: "
          "--map-config's)",
@@ -154,6 +159,9 @@ int mapopt_config(const mapopt_t *m, const float *data, int width, int height, d
     if (m->refine >= 0) {
         cfg->refine = (int32_t)m->refine;
     }
+    if (m->noise_auto >= 0) {
+        cfg->noise_auto = (int32_t)m->noise_auto;
+    }
     if (m->match != NULL) {
         cfg->match = strcmp(m->match, "heights") == 0 ? TRN_MATCH_HEIGHTS : TRN_MATCH_VOXEL;
     }
@@ -186,6 +194,7 @@ void mapopt_json(json_t *j, const trn_map_cfg_t *cfg)
     json_num(j, "noise_k_per_m", cfg->noise_k_per_m);
     json_str(j, "local_highpass", cfg->local_highpass == TRN_LOCAL_HP_MAP ? "map" : "box");
     json_int(j, "refine", cfg->refine);
+    json_int(j, "noise_auto", cfg->noise_auto);
     json_str(j, "match", cfg->match == TRN_MATCH_HEIGHTS ? "heights" : "voxel");
     json_num(j, "max_failure_prob", cfg->max_failure_prob);
     json_obj_end(j);

@@ -19,7 +19,7 @@
 #include "cli.h"
 #include "trn/trn.h"
 
-#define MAPOPT_N 12 /* cli_opt_t entries mapopt_cli writes */
+#define MAPOPT_N 13 /* cli_opt_t entries mapopt_cli writes */
 
 typedef struct {
     const char *config;      /* "auto" | "paper" */
@@ -32,6 +32,7 @@ typedef struct {
     double noise_k;          /* local height noise, r^2 part, 1/m; < 0 = 0.0004 / cell */
     const char *local_hp;    /* NULL = from the configuration; "box" | "map" */
     long refine;             /* -1 = from the configuration; 0 | 1 */
+    long noise_auto;         /* -1 = from the configuration; 0 | 1 */
     const char *match;       /* NULL = from the configuration; "voxel" | "heights" */
     double max_failure_prob; /* acceptance limit; 0 = from the configuration */
 } mapopt_t;
