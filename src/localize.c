@@ -936,6 +936,7 @@ trn_status_t trn_localize_dem_heading_checked_(const trn_map_t *map,
         max_points == 0u || max_points > (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM) {
         return TRN_E_ARG;
     }
+    out->loc.noise_scale = 1.0;                /* the voxel path keeps the configured model */
     if (map->cfg.match == TRN_MATCH_HEIGHTS) { /* src/height_heading.c */
         return trn_localize_heights3_(map, local_dem, rover_x, rover_y, win, cfg, ws, ws_bytes,
                                       out);

@@ -762,8 +762,10 @@ static void test_dem_entry(void **state)
     wb = trn_localize_dem_heading_workspace_bytes(&g_w.map, LW, LW, MAXPTS, &win);
     wp = trn_localize_heading_workspace_bytes(&g_w.map, np, &win);
     assert_true(wb > 0u && wb + 16u <= sizeof g_ws && wp > 0u);
+    a.loc.noise_scale = NAN; /* the voxel path reports the configured model: 1 */
     sa = trn_localize_dem_heading(&g_w.map, &lg, LR, LR, MAXPTS, &win, &c, g_ws, wb, &a);
     assert_int_equal(sa, TRN_OK);
+    assert_true(a.loc.noise_scale == 1.0);
     sb = trn_localize_points_heading(&g_w.map, g_pts, np, &win, &c, g_ws, wp, &b);
     assert_int_equal(sa, sb);
     assert_true(a.loc.x == b.loc.x && a.loc.y == b.loc.y && a.heading_rad == b.heading_rad);

@@ -71,6 +71,7 @@ static trn_status_t localize_heading(const cmd_localize_ctx_t *c, const trn_grid
     if (ws == NULL) {
         return TRN_E_WORKSPACE;
     }
+    memset(&hr, 0, sizeof hr); /* nothing unset reaches the JSON on an early error */
     st = trn_localize_dem_heading(&c->map, lg, rx, ry, max_pts, win, &hc, ws, wb, &hr);
     free(raw);
     o->res = hr.loc;
