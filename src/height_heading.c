@@ -575,17 +575,16 @@ static int refine_starts(const trn_map_t *map, const trn_grid_f32_t *local, int3
     return found;
 }
 
-/* 1 (out->loc.noise_scale set) if the residuals at the answer reject the
- * noise model rc by more than TRN_NOISE_SCALE_Z sds of the estimate of its
- * variance factor (trn_refine_noise_scale, the local map turned by the
- * answer's heading), else 0: trn_localize_dem's rule. The answer is ref
+/* 1 (out->loc.noise_scale set) if the residuals at the answer, the local
+ * map turned by its heading, reject the noise model rc
+ * (trn_loc_noise_rejected_, trn_localize_dem's rule), else 0. The answer is ref
  * when the refinement succeeded, else the search's best (pose, heading)
  * with its offset and model variance, written into tmp. */
 static int rescale_noise3(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
                           const trn_refine_cfg_t *rc, const trn_height_best3_t *b,
                           const trn_refine3_t *ref, trn_refine3_t *tmp, trn_heading_result_t *out)
 {
-    double k2, sd, heading = out->heading_rad;
+    double heading = out->heading_rad;
     const trn_refine_t *at = &tmp->pos;
     if (ref != NULL) {
         at = &ref->pos;
@@ -597,12 +596,7 @@ static int rescale_noise3(const trn_map_t *map, const trn_grid_f32_t *local, int
         tmp->pos.model_m = b->model_m;
         tmp->pos.interp_mix = TRN_REFINE_MIX_MEAN;
     }
-    if (trn_refine_noise_scale(&map->heights, local, rx, ry, at, heading, rc, &k2, &sd) != TRN_OK ||
-        !(fabs(k2 - 1.0) > TRN_NOISE_SCALE_Z * sd)) {
-        return 0;
-    }
-    out->loc.noise_scale = sqrt(k2);
-    return 1;
+    return trn_loc_noise_rejected_(map, local, rx, ry, at, heading, rc, &out->loc.noise_scale);
 }
 
 trn_status_t trn_localize_heights3_(const trn_map_t *map, const trn_grid_f32_t *local,

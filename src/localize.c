@@ -613,17 +613,29 @@ static void refine_result(const trn_map_t *map, const trn_grid_f32_t *local, int
 }
 
 
+int trn_loc_noise_rejected_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
+                            int32_t ry, const trn_refine_t *at, double heading_rad,
+                            const trn_refine_cfg_t *rc, double *scale)
+{
+    double k2, sd;
+    if (trn_refine_noise_scale(&map->heights, local, rx, ry, at, heading_rad, rc, &k2, &sd) !=
+            TRN_OK ||
+        !(fabs(k2 - 1.0) > TRN_NOISE_SCALE_Z * sd)) {
+        return 0;
+    }
+    *scale = sqrt(k2);
+    return 1;
+}
+
 /* 1 (out->noise_scale set) if the residuals at the answer reject the noise
- * model rc by more than TRN_NOISE_SCALE_Z sds of the estimate of its
- * variance factor (trn_refine_noise_scale), else 0. The answer is the
- * refinement, or where it failed the search's best integer pose with its
- * offset and model variance (at an integer pose the mix does not enter);
- * tmp is scratch for that. */
+ * model rc (trn_loc_noise_rejected_), else 0. The answer is the refinement,
+ * or where it failed the search's best integer pose with its offset and
+ * model variance (at an integer pose the mix does not enter); tmp is
+ * scratch for that. */
 static int rescale_noise(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
                          const trn_refine_cfg_t *rc, const trn_height_best_t *best,
                          trn_refine_t *tmp, trn_loc_result_t *out)
 {
-    double k2, sd;
     const trn_refine_t *at = &out->refinement;
     if (!out->refined) {
         *tmp = out->refinement;
@@ -634,12 +646,7 @@ static int rescale_noise(const trn_map_t *map, const trn_grid_f32_t *local, int3
         tmp->interp_mix = TRN_REFINE_MIX_MEAN;
         at = tmp;
     }
-    if (trn_refine_noise_scale(&map->heights, local, rx, ry, at, 0.0, rc, &k2, &sd) != TRN_OK ||
-        !(fabs(k2 - 1.0) > TRN_NOISE_SCALE_Z * sd)) {
-        return 0;
-    }
-    out->noise_scale = sqrt(k2);
-    return 1;
+    return trn_loc_noise_rejected_(map, local, rx, ry, at, 0.0, rc, &out->noise_scale);
 }
 
 /* TRN_MATCH_HEIGHTS: height search, refinement, competing hypothesis. */

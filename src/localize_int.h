@@ -32,6 +32,13 @@ size_t trn_loc_basins_bytes_(void);
 /* The refinement in out->refinement becomes the answer: pose, covariance,
  * sigmas and the misfit flag (src/localize.c). */
 void trn_loc_take_refinement_(const trn_map_t *map, trn_loc_result_t *out);
+/* 1 if the residuals at `at` (the local map turned by heading_rad) reject
+ * the noise model rc by more than TRN_NOISE_SCALE_Z sds of
+ * trn_refine_noise_scale's estimate of its variance factor; *scale is then
+ * the sd's factor, sqrt(k2). 0, *scale untouched, otherwise (src/localize.c). */
+int trn_loc_noise_rejected_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
+                            int32_t ry, const trn_refine_t *at, double heading_rad,
+                            const trn_refine_cfg_t *rc, double *scale);
 /* The refinement's noise model: the map's, its sd times out->noise_scale. */
 void trn_loc_refine_cfg_(const trn_map_t *map, const trn_loc_result_t *out, trn_refine_cfg_t *rc);
 

@@ -764,26 +764,17 @@ static void test_noise_scale_errors(void **state)
     assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &out, 0.0, &bad, &k2, &sd), TRN_E_ARG);
     assert_int_equal(trn_refine_noise_scale(&g, &l, -TRN_MAX_DIM - 1, 15, &out, 0.0, &c, &k2, &sd),
                      TRN_E_ARG);
+    /* each field of `at` not finite (or a negative model error) */
     at = out;
-    at.x = NAN;
-    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &at, 0.0, &c, &k2, &sd), TRN_E_ARG);
-    at = out;
-    at.y = NAN;
-    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &at, 0.0, &c, &k2, &sd), TRN_E_ARG);
-    at = out;
-    at.dz_m = NAN;
-    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &at, 0.0, &c, &k2, &sd), TRN_E_ARG);
-    at = out;
-    at.model_m = INFINITY;
-    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &at, 0.0, &c, &k2, &sd), TRN_E_ARG);
-    at = out;
-    at.model_m = -1.0;
-    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &at, 0.0, &c, &k2, &sd), TRN_E_ARG);
+    for (i = 0; i < 6; ++i) {
+        double *const field[6] = {&at.x, &at.y, &at.dz_m, &at.model_m, &at.model_m, &at.interp_mix};
+        const double bad_v[6] = {NAN, NAN, NAN, INFINITY, -1.0, INFINITY};
+        at = out;
+        *field[i] = bad_v[i];
+        assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &at, 0.0, &c, &k2, &sd), TRN_E_ARG);
+    }
     assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &out, 4.0, &c, &k2, &sd), TRN_E_ARG);
     assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &out, NAN, &c, &k2, &sd), TRN_E_ARG);
-    at = out;
-    at.interp_mix = INFINITY;
-    assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &at, 0.0, &c, &k2, &sd), TRN_E_ARG);
     /* local cells over unknown map cells are left out */
     for (i = 0; i < 10; ++i) {
         g_data[30 * GW + 25 + i] = NAN;
