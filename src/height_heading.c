@@ -556,7 +556,8 @@ static int refine_starts(const trn_map_t *map, const trn_grid_f32_t *local, int3
         far->px[k] = cand->pos.x;
         far->py[k] = cand->pos.y;
         far->rll[k] = cand->pos.ll;
-        if (far->ok[k] && cand->pos.ll > ref->pos.ll + TRN_REFINE_FAR_NATS) {
+        if (far->ok[k] && trn_loc_far_wins_(cand->pos.x, cand->pos.y, cand->pos.ll, ref->pos.x,
+                                            ref->pos.y, ref->pos.ll, ref->pos.ll_inflation)) {
             const trn_refine3_t t = *ref;
             const int32_t sx = far->x[k], sy = far->y[k], sk = far->k[k];
             far->x[k] = far->moved ? far->mx : b->x; /* the answer's start so far */

@@ -67,9 +67,21 @@ static void far_basins(const double *g, const trn_window_t *win, int32_t bx, int
     }
 }
 
-/* Refine from each far basin's start; the answer moves to the one whose
- * refined ln L is highest if that beats the answer's by more than
- * TRN_REFINE_FAR_NATS (the answer it replaced takes the basin's slot). */
+/* 1 if a far basin's refinement c (pose cx, cy; ln L cll) replaces the
+ * answer's (ax, ay; all, its inflation infl): it ends more than
+ * TRN_FAIL_RADIUS_CELLS away (one that came back to the answer's own basin
+ * is not a move, whatever its ln L) and beats the answer's ln L, over the
+ * inflation, by more than TRN_REFINE_FAR_NATS. */
+int trn_loc_far_wins_(double cx, double cy, double cll, double ax, double ay, double all,
+                      double infl)
+{
+    const double dx = cx - ax, dy = cy - ay;
+    return dx * dx + dy * dy > TRN_FAIL_RADIUS_CELLS * TRN_FAIL_RADIUS_CELLS &&
+           cll - all > TRN_REFINE_FAR_NATS * fmax(1.0, infl);
+}
+
+/* Refine from each far basin's start; the answer moves to one that wins
+ * (trn_loc_far_wins_; the answer it replaced takes the basin's slot). */
 static void refine_basins(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
                           const double *g, const trn_window_t *win, trn_loc_basins_t *b,
                           trn_refine_t *cand, trn_loc_result_t *out)
@@ -83,7 +95,9 @@ static void refine_basins(const trn_map_t *map, const trn_grid_f32_t *local, int
         b->px[i] = cand->x;
         b->py[i] = cand->y;
         b->rll[i] = cand->ll;
-        if (b->ok[i] && cand->ll > out->refinement.ll + TRN_REFINE_FAR_NATS) {
+        if (b->ok[i] &&
+            trn_loc_far_wins_(cand->x, cand->y, cand->ll, out->refinement.x, out->refinement.y,
+                              out->refinement.ll, out->refinement.ll_inflation)) {
             int32_t sx = b->x[i], sy = b->y[i];
             b->x[i] = out->ix;
             b->y[i] = out->iy;

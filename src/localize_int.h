@@ -65,5 +65,9 @@ void trn_loc_find_basins3_(const double *grid, const trn_window_t *win, int32_t 
 
 /* The refined far basins' share of the failure probability (see the .c). */
 double trn_loc_basins_failure_(const trn_loc_basins_t *b, double infl, const trn_loc_result_t *out);
+/* 1 if a far basin refined to (cx, cy), ln L cll, replaces the answer at
+ * (ax, ay), ln L all, inflation infl (TRN_REFINE_FAR_NATS). */
+int trn_loc_far_wins_(double cx, double cy, double cll, double ax, double ay, double all,
+                      double infl);
 
 #endif /* TRN_LOCALIZE_INT_H */

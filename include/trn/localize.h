@@ -154,9 +154,12 @@ typedef struct {
  *  half-cell shift on terrain a cell wide), so the best integer pose is not
  *  always in the best refined basin (docs/method.md 9). */
 #define TRN_REFINE_BASINS 4
-/** A far basin replaces the answer only if its refined ln L is higher by
- *  more than this many nats (docs/method.md 9). */
-#define TRN_REFINE_FAR_NATS 30.0
+/** A far basin replaces the answer only if its refinement ends more than
+ *  TRN_FAIL_RADIUS_CELLS from the answer's and its refined ln L, over the
+ *  inflation (the failure probability's scale), is higher by more than this
+ *  many nats: odds of e^3 = 20 to 1, the 5 % level; closer basins are a tie
+ *  the data do not break (docs/method.md 9). */
+#define TRN_REFINE_FAR_NATS 3.0
 /** A localization fails when its answer is more than this many cells from
  *  the truth: the event of the failure probability (docs/method.md 9). */
 #define TRN_FAIL_RADIUS_CELLS 1.5
