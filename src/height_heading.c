@@ -676,7 +676,11 @@ trn_status_t trn_localize_heights3_(const trn_map_t *map, const trn_grid_f32_t *
             out->loc.failure_probability,
             trn_loc_basins_failure_(far, ref->pos.ll_inflation, &out->loc));
     }
-    if (!out->loc.refined || out->loc.misfit) {
+    /* the best pose on the window's edge, or the refined heading beyond the
+     * heading window: the likelihood may rise beyond what was searched, so
+     * no fix (trn_localize_dem's rule, over heading too) */
+    if (!out->loc.refined || out->loc.misfit || out->loc.on_window_edge ||
+        (cfg->window_rad > 0.0 && fabs(out->heading_rad - cfg->center_rad) > cfg->window_rad)) {
         return TRN_E_ILLCOND;
     }
     return out->loc.failure_probability > (double)map->cfg.max_failure_prob ? TRN_E_AMBIGUOUS

@@ -731,7 +731,10 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
     } else {
         return st;
     }
-    return out->refined && !out->misfit ? TRN_OK : TRN_E_ILLCOND;
+    /* an answer on the window's edge is no fix: the likelihood may rise beyond
+     * the window, where neither the search nor the failure probability looks
+     * (a prior that missed the truth; docs/method.md 9, "the window's edge") */
+    return out->refined && !out->misfit && !out->on_window_edge ? TRN_OK : TRN_E_ILLCOND;
 }
 
 /* The acceptance test: an answer otherwise good whose failure probability

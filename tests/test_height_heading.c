@@ -763,8 +763,11 @@ static void test_bad_localize(void **state)
     {
         const trn_status_t st3 = loc3(&win, &c, &res);
         printf("a local map from elsewhere: status %d, noise scale %.2f, failure probability "
-               "%.3f\n",
-               (int)st3, res.loc.noise_scale, res.loc.failure_probability);
+               "%.3f, model error %.3f m, points %d of %d, inflation %.2f, ll inflation %.2f\n",
+               (int)st3, res.loc.noise_scale, res.loc.failure_probability,
+               res.loc.refinement.model_m, (int)res.loc.refinement.n_used,
+               (int)res.loc.refinement.n_seen, res.loc.refinement.inflation,
+               res.loc.refinement.ll_inflation);
         assert_true(st3 == TRN_E_ILLCOND || st3 == TRN_E_AMBIGUOUS);
     }
     g_w.map.cfg.noise_auto = 0; /* the configured model alone: the misfit flag */
@@ -1033,10 +1036,28 @@ static void test_edges_localize(void **state)
                                                   g_ws, wb, &res),
                          TRN_E_RANGE);
     }
-    /* the answer on each edge of the window */
+    /* the answer on each edge of the window: found and refined, but no fix
+     * (the likelihood may rise beyond the window: a prior that missed) */
     for (i = 0; i < 4; ++i) {
-        assert_int_equal(loc3(&edge[i], &c, &res), TRN_OK);
-        assert_true(res.loc.on_window_edge == 1 && res.loc.ix == 60 && res.loc.iy == 60);
+        assert_int_equal(loc3(&edge[i], &c, &res), TRN_E_ILLCOND);
+        assert_true(res.loc.on_window_edge == 1 && res.loc.ix == 60 && res.loc.iy == 60 &&
+                    res.loc.refined == 1 && res.loc.misfit == 0);
+    }
+    /* the heading beyond its window (the map turned 2 deg; the window ends
+     * two steps short of it): the refined heading lies beyond the window, no
+     * fix; inside, a fix */
+    {
+        double step;
+        int32_t half;
+        trn_heading_cfg_t ce = c;
+        assert_int_equal(trn_height_heading_steps(&g_lg, LR, LR, &c, &step, &half), TRN_OK);
+        ce.center_rad = 2.0 * DEG - c.window_rad - 2.0 * step;
+        assert_int_equal(loc3(&win, &ce, &res), TRN_E_ILLCOND);
+        assert_true(res.half_steps > 0 && res.heading_rad > ce.center_rad + ce.window_rad &&
+                    res.loc.on_window_edge == 0 && res.loc.refined == 1 && res.loc.misfit == 0);
+        ce.center_rad = 2.0 * DEG; /* the truth at the heading window's centre */
+        assert_int_equal(loc3(&win, &ce, &res), TRN_OK);
+        assert_true(abs(res.best_step) < res.half_steps);
     }
     /* a 3 x 3 window inside the zone: no competitor */
     {

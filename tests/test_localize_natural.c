@@ -947,6 +947,58 @@ static void test_ambiguous_acceptance(void **state)
     nat_free(&w);
 }
 
+/* The height matcher's answer on the window's edge is no fix: a wedge of
+ * the natural surface at a sub-cell truth, windows whose edge passes 1-3
+ * cells short of it (the prior missed it) on each side: the best pose lies
+ * on that edge, refined, status TRN_E_ILLCOND; the same window moved to
+ * hold the truth 2 or more cells inside its edges: TRN_OK and right. */
+static void test_window_edge_not_a_fix(void **state)
+{
+    trn_grid_f32_t g, l;
+    trn_map_cfg_t cfg;
+    nat_t w;
+    double sh;
+    int k;
+    (void)state;
+    make_global(&g);
+    auto_cfg(&cfg, &g, &sh);
+    nat_build(&w, &cfg, &g);
+    (void)make_wedge(&l, 48.3, 47.6, 1.0, 0.7);
+    for (k = 0; k < 12; ++k) {
+        const int side = k % 4, gap = 1 + k / 4; /* the truth beyond the edge */
+        trn_window_t win = window_at(48, 48, 4);
+        trn_loc_result_t res;
+        trn_status_t st;
+        if (side == 0) { /* x1 = 48 - gap */
+            win.x0 -= 4 + gap;
+            win.x1 -= 4 + gap;
+        } else if (side == 1) {
+            win.x0 += 4 + gap;
+            win.x1 += 4 + gap;
+        } else if (side == 2) {
+            win.y0 -= 4 + gap;
+            win.y1 -= 4 + gap;
+        } else {
+            win.y0 += 4 + gap;
+            win.y1 += 4 + gap;
+        }
+        st = nat_localize(&w, &l, LR, LR, &win, &res);
+        printf("truth %d cells beyond edge %d: status %d, pose (%d, %d), refined %d, failure "
+               "probability %.3g\n",
+               gap, side, (int)st, (int)res.ix, (int)res.iy, res.refined, res.failure_probability);
+        assert_int_equal(st, TRN_E_ILLCOND);
+        assert_int_equal(res.on_window_edge, 1);
+    }
+    {
+        trn_window_t win = window_at(48, 48, 4);
+        trn_loc_result_t res;
+        assert_int_equal(nat_localize(&w, &l, LR, LR, &win, &res), TRN_OK);
+        assert_true(res.on_window_edge == 0 && fabs(res.x - 48.3) < 0.1 &&
+                    fabs(res.y - 47.6) < 0.1);
+    }
+    nat_free(&w);
+}
+
 /* sigma_H by the documented rule on the public filter: standard deviation
  * of trn_highpass with a 10-cell half-width. */
 static double sigma_h_of(const trn_grid_f32_t *g, float cell)
@@ -1578,6 +1630,7 @@ int main(void)
         cmocka_unit_test(test_second_pass),
         cmocka_unit_test(test_map_filter_unseen_cells),
         cmocka_unit_test(test_refine_failure_is_illcond),
+        cmocka_unit_test(test_window_edge_not_a_fix),
         cmocka_unit_test(test_cfg_check_new_fields),
         cmocka_unit_test(test_cfg_auto_regimes),
         cmocka_unit_test(test_map_build_heights),

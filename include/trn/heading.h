@@ -131,7 +131,9 @@ size_t trn_localize_dem_heading_workspace_bytes(const trn_map_t *map, int32_t wi
  * @retval as trn_localize_points_heading, plus TRN_E_ARG (a voxel map that
  *         refines), TRN_E_CAPACITY (more than max_points occupied voxels),
  *         TRN_E_NODATA (local DEM all missing) and, with a height map,
- *         TRN_E_AMBIGUOUS (as trn_localize_dem); TRN_E_RANGE also when the
+ *         TRN_E_AMBIGUOUS and TRN_E_ILLCOND as trn_localize_dem's (the
+ *         window's edge including a refined heading beyond centre +- W);
+ *         TRN_E_RANGE also when the
  *         window is not inside the map or the local DEM's size is out of
  *         range.
  */

@@ -110,7 +110,8 @@ typedef struct {
     int32_t has_second;               /**< 0 when the window holds no pose outside the zone */
     int32_t exclusion_cells;          /**< radius of the zone around (ix, iy) */
     double failure_probability;       /**< trn_failure_probability; 0 without a second */
-    int32_t on_window_edge;           /**< best pose on the window border: truth may lie outside */
+    int32_t on_window_edge;           /**< best pose on the window border: truth may lie outside
+                                           (the height matcher: status TRN_E_ILLCOND) */
     size_t n_points;                  /**< occupied local voxels matched */
     trn_search_stats_t stats;         /**< work of the first search */
     int32_t refined;                  /**< 1: x, y, sigmas and cov_m2 come from
@@ -250,6 +251,12 @@ size_t trn_localize_dem_workspace_bytes(const trn_map_t *map, int32_t width, int
  *         probability is above cfg.max_failure_prob: out is filled in as
  *         for TRN_OK; it is not a fix (the acceptance test,
  *         docs/method.md section 9).
+ * @retval TRN_E_ILLCOND also (TRN_MATCH_HEIGHTS) where the refinement
+ *         failed or misfits (out->misfit), or the best pose lies on the
+ *         window's edge (out->on_window_edge): the likelihood may rise
+ *         beyond the window, which neither the search nor the failure
+ *         probability sees (a prior that missed the truth; widen the
+ *         window). out is filled in.
  */
 trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_dem,
                               int32_t rover_x, int32_t rover_y, size_t max_points,

@@ -4,7 +4,7 @@
 
     /usr/bin/python3 tools/real/bench_real.py [--dem ID ...] [--dem-file PATH ...] [--cases N] [--seed S]
         [--radius R] [--resample bilinear|cubic] [--truth-fine K] [--fine-map mean|point]
-        [--fine-local point|mean] [--noise-scale F]
+        [--fine-local point|mean] [--noise-scale F] [--outliers P]
         [--subcell axis|quad2d]
         [--trn PATH] [--trn-mode auto|batch|single]
         [--out DIR] [--keep-cases] [--no-plot] [-- TRN_ARGS...]
@@ -110,6 +110,10 @@ def parse_args(argv):
     ap.add_argument("--noise-scale", type=float, default=1.0, metavar="F",
                     help="the local maps' height noise is F times the issue's model (default 1); trn is "
                          "not told (its own --noise-m / --noise-k stay as given after --)")
+    ap.add_argument("--outliers", type=float, default=0.0, metavar="P",
+                    help="share of the seen local cells that are stereo blunders: a height uniform over "
+                         "the seen heights' range widened by that range on each side (default 0); trn is "
+                         "not told")
     ap.add_argument("--subcell", default="axis", choices=("axis", "quad2d"),
                     help="peers' sub-cell fit: a parabola per axis (default) or the 3x3 2-D quadratic")
     ap.add_argument("--trn", default=os.path.join(dems.ROOT, "build", "host-release", "trn"),
@@ -140,6 +144,8 @@ def parse_args(argv):
         raise Fail(f"--cases {a.cases}: must be >= 1")
     if not (a.noise_scale >= 0.0 and math.isfinite(a.noise_scale)):
         raise Fail(f"--noise-scale {a.noise_scale}: must be a finite number >= 0")
+    if not 0.0 <= a.outliers < 1.0:
+        raise Fail(f"--outliers {a.outliers}: must be in [0, 1)")
     if a.truth_fine is not None and a.truth_fine < 2:
         raise Fail(f"--truth-fine {a.truth_fine}: must be >= 2")
     if not 2 <= a.radius <= 500:
@@ -298,6 +304,8 @@ def print_table(dem_id, meta, ms):
             f"DEM the local maps are sampled from ({lhow})") if kk else ""
     ns = meta.get("noise_scale", 1.0)
     noise = f", local noise {ns:g} x the issue's (trn not told)" if ns != 1.0 else ""
+    if meta.get("outliers"):
+        noise += f", {100 * meta['outliers']:g} % of the seen cells blunders (trn not told)"
     print(f"\n{dem_id} ({meta['character']}, held_out={meta['held_out']}): {meta['cols']} x {meta['rows']} "
           f"cells of {meta['cell_m']:g} m, {ms['trn']['n']} cases, R = {meta['radius']} cells, "
           f"{meta['resample']}, trn {meta['trn_mode']}{fine}{noise}")
@@ -347,7 +355,8 @@ def bench_dem(a, dem_id, batch):
     p = casemod.CaseParams(radius=a.radius, resample=a.resample,
                            noise0_m=casemod.CaseParams.noise0_m * a.noise_scale,
                            noise_k=casemod.CaseParams.noise_k * a.noise_scale,
-                           local_mean=bool(a.truth_fine) and a.fine_local == "mean")
+                           local_mean=bool(a.truth_fine) and a.fine_local == "mean",
+                           outlier_frac=a.outliers)
     tmp = tempfile.mkdtemp(prefix=f"bench_real_{dem_id}_")
     try:
         t0 = time.perf_counter()
@@ -389,7 +398,7 @@ def bench_dem(a, dem_id, batch):
                 "opencv_mask": peers.mask_supported(), "truth_fine": a.truth_fine,
                 "fine_map": a.fine_map if a.truth_fine else None,
                 "fine_local": a.fine_local if a.truth_fine else None,
-                "noise_scale": a.noise_scale,
+                "noise_scale": a.noise_scale, "outliers": a.outliers,
                 "fine_cell_m": fine.c if fine is not None else None,
                 "fine_path": fine.path if fine is not None else None}
         # the figure's case: the first trn success (else case 0); keep its local DEM

@@ -198,6 +198,7 @@ class CaseParams:
     resample: str = "bilinear"
     min_valid: float = 0.95
     local_mean: bool = False  # with `fine`: each local cell the mean of the fine surface over it
+    outlier_frac: float = 0.0  # share of seen cells that are stereo blunders (see make_local)
 
     @property
     def margin_cells(self):
@@ -274,6 +275,15 @@ def make_local(dem, truth, p, rng=None, azimuth_deg=0.0, offset_m=0.0, fine=None
         sigma = p.noise0_m + p.noise_k * (e**2 + n**2) / dem.c
         h = h + rng.standard_normal(h.shape) * sigma
     seen &= np.isfinite(h)
+    if p.outlier_frac > 0.0 and rng is not None and seen.any():
+        # stereo blunders (a wrong disparity): each seen cell, with probability outlier_frac,
+        # gets a height uniform over the seen heights' range widened by that range on each
+        # side, knowing nothing of the true height there (drawn only when asked, so the
+        # default cases stay bit-identical)
+        lo, hi = float(np.min(h[seen])), float(np.max(h[seen]))
+        span = max(hi - lo, 1e-6)
+        bad = seen & (rng.uniform(size=h.shape) < p.outlier_frac)
+        h = np.where(bad, rng.uniform(lo - span, hi + span, size=h.shape), h)
     return np.where(seen, h, np.nan), seen
 
 

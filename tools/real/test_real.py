@@ -413,7 +413,8 @@ def test_cli():
                        (["--fine-map", "median"], "--fine-map median"),
                        (["--trn", "/nonexistent/trn"], "missing trn"), (["--bogus"], "unknown option"),
                       (["--truth-fine", "1"], "--truth-fine 1"), (["--noise-scale", "-1"], "--noise-scale -1"),
-                      (["--noise-scale", "nan"], "--noise-scale nan"), (["--fine-local", "median"], "--fine-local median")):
+                      (["--noise-scale", "nan"], "--noise-scale nan"), (["--fine-local", "median"], "--fine-local median"),
+                      (["--outliers", "1"], "--outliers 1"), (["--outliers", "-0.1"], "--outliers -0.1")):
         r = subprocess.run([sys.executable, b] + args, capture_output=True, text=True)
         check(r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1 and r.stdout == "",
               f"bench_real {what}: exit 1, one line ({r.stderr.strip()})")
@@ -449,6 +450,33 @@ def test_local_mean():
         spread = max(spread, float(np.nanmax(np.abs(lp))))
     check(worst < 1e-9 and spread > 0.5, f"local mean of a +-1 fine-column pattern (K = 2): every cell 0 "
                                          f"(max {worst:.1e}); the centre samples reach {spread:.2f}")
+
+
+def test_outliers():
+    """--outliers P: each seen cell is a blunder with probability P, its height uniform over the
+    seen heights' range widened by that range on each side; unseen cells stay NaN. At P = 0 the
+    cases are the same bit for bit as without the option."""
+    dem = synth_dem(plane, n=200, c=1.0)
+    truth = (dem.x0 + 100.3, dem.y0 - 100.6)
+    p0 = cm.CaseParams(radius=20, noise=False)
+    ref, seen = cm.make_local(dem, truth, p0, np.random.default_rng(5), 30.0, 2.0)
+    same, _ = cm.make_local(dem, truth, cm.CaseParams(radius=20, noise=False, outlier_frac=0.0),
+                            np.random.default_rng(5), 30.0, 2.0)
+    check(np.array_equal(ref, same, equal_nan=True), "--outliers 0: the local map bit-identical")
+    lo, hi = float(np.nanmin(ref)), float(np.nanmax(ref))
+    shares, good = [], True
+    for s in range(20):
+        bad, seen2 = cm.make_local(dem, truth, cm.CaseParams(radius=20, noise=False, outlier_frac=0.2),
+                                   np.random.default_rng(100 + s), 30.0, 2.0)
+        moved = seen & (np.abs(bad - ref) > 1e-9)
+        inside = np.all((bad[moved] >= lo - (hi - lo) - 1e-9) & (bad[moved] <= hi + (hi - lo) + 1e-9))
+        good &= bool(np.array_equal(seen, seen2) and np.all(np.isnan(bad[~seen])) and inside)
+        shares.append(moved.sum() / seen.sum())
+    check(good, "--outliers 0.2, 20 maps: the same cells seen, unseen ones NaN, blunders within the "
+                "widened range")
+    m = float(np.mean(shares))
+    # 20 maps of ~390 seen cells at p = 0.2: the mean share's sd is about 0.005
+    check(abs(m - 0.2) < 0.025, f"--outliers 0.2: {100 * m:.1f} % of the seen cells changed (expected 20 %)")
 
 
 def test_dem_file():
@@ -517,6 +545,7 @@ def main():
     test_float_nan_tif()
     test_cli()
     test_local_mean()
+    test_outliers()
     test_dem_file()
     if FAILS:
         print(f"test_real: {len(FAILS)} check(s) failed", file=sys.stderr)

@@ -426,8 +426,10 @@ int cmd_localize_parse(int argc, char **argv, cmd_localize_params_t *p)
         "chosen from the global DEM (--map-config auto, docs/method.md section 9); every\n"
         "part of it can be set. Output: x_m, y_m (map), sigma_x_m (east), sigma_y_m (north),\n"
         "rho (east-north), cov_m2 [var_east, var_north, cov_en], failure_probability,\n"
-        "status (ok | ill_conditioned: no finite covariance, or the height refinement\n"
-        "found no consistent match | ambiguous: failure_probability above\n"
+        "status (ok | ill_conditioned: no finite covariance, the height refinement\n"
+        "found no consistent match, or the best pose lies on the window's edge\n"
+        "(on_window_edge; the truth may lie beyond it: widen --window-m) | ambiguous:\n"
+        "failure_probability above\n"
         "--max-failure-prob; both: treat as not localized), time_ms (the localization).",
         all, sizeof all / sizeof all[0]};
     int rc;
