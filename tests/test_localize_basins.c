@@ -223,7 +223,7 @@ static void test_decoy_loses_to_subcell_truth(void **state)
         trn_loc_result_t res;
         double truth_ll;
         int left = 0, k;
-        /* 2 cm: the truth's refined ln L beats the decoy's by 60-80 nats on
+        /* 2 cm: the truth's refined ln L beats the decoy's by 59-74 nats on
          * these terrains, so the answer moves */
         if (!decoy_case(s, 0.02, &m, &res)) {
             continue;
