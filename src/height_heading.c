@@ -165,12 +165,25 @@ static double pose_ll(const score_t *s, int32_t px, int32_t py, double a, double
 {
     const double two_pi = 6.283185307179586;
     size_t i;
+    int32_t n_all;
     double dz = 0.0, m2 = 0.0, ll = 0.0, lout = log((1.0 - a) * k);
-    if (pose_fit(s, px, py, -1.0, &dz, &m2) > 0 && pose_fit(s, px, py, -1.0, &dz, &m2) > 0) {
+    n_all = pose_fit(s, px, py, -1.0, &dz, &m2);
+    if (n_all > 0 && pose_fit(s, px, py, -1.0, &dz, &m2) > 0) {
+        /* then within the clip of the last fit, again while that drops
+         * points (trn_clip_again_) */
         double dz1 = dz, m21 = m2;
-        if (pose_fit(s, px, py, TRN_REFINE_CLIP, &dz1, &m21) > 0) {
+        int32_t n_prev = n_all, n, again;
+        for (again = 0; again <= TRN_CLIP_AGAIN; ++again) {
+            n = pose_fit(s, px, py, TRN_REFINE_CLIP, &dz1, &m21);
+            if (n <= 0) {
+                break;
+            }
             dz = dz1;
             m2 = m21;
+            if (!trn_clip_again_(n_all, n_prev, n)) {
+                break;
+            }
+            n_prev = n;
         }
     }
     for (i = 0; i < s->n; ++i) {

@@ -619,8 +619,20 @@ int trn_loc_noise_rejected_(const trn_map_t *map, const trn_grid_f32_t *local, i
 {
     double k2, sd;
     if (trn_refine_noise_scale(&map->heights, local, rx, ry, at, heading_rad, rc, &k2, &sd) !=
-            TRN_OK ||
-        !(fabs(k2 - 1.0) > TRN_NOISE_SCALE_Z * sd)) {
+        TRN_OK) {
+        return 0;
+    }
+    if (k2 > 1.0) {
+        /* a rescale up: only as far as the neighbours' differences support */
+        int32_t pairs = 0;
+        const double kd = trn_refine_noise_scale_diff_(&map->heights, local, rx, ry, at,
+                                                       heading_rad, rc, k2,
+                                                       at->model_m * at->model_m, &pairs);
+        if (pairs >= 8 && kd < k2) {
+            k2 = kd > 1.0 ? kd : 1.0;
+        }
+    }
+    if (!(fabs(k2 - 1.0) > TRN_NOISE_SCALE_Z * sd)) {
         return 0;
     }
     *scale = sqrt(k2);

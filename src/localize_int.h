@@ -34,8 +34,12 @@ size_t trn_loc_basins_bytes_(void);
 void trn_loc_take_refinement_(const trn_map_t *map, trn_loc_result_t *out);
 /* 1 if the residuals at `at` (the local map turned by heading_rad) reject
  * the noise model rc by more than TRN_NOISE_SCALE_Z sds of
- * trn_refine_noise_scale's estimate of its variance factor; *scale is then
- * the sd's factor, sqrt(k2). 0, *scale untouched, otherwise (src/localize.c). */
+ * trn_refine_noise_scale's estimate of its variance factor k2; *scale is
+ * then the sd's factor, sqrt(k2). A k2 above 1 is first cut to what the
+ * neighbouring residuals' differences support (trn_refine_noise_scale_diff_,
+ * at least 1): a smooth misfit (a wrong pose or heading) raises the
+ * residuals' level but cancels in their differences; sensor noise does not.
+ * 0, *scale untouched, otherwise (src/localize.c). */
 int trn_loc_noise_rejected_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
                             int32_t ry, const trn_refine_t *at, double heading_rad,
                             const trn_refine_cfg_t *rc, double *scale);

@@ -776,6 +776,63 @@ static int32_t noise_pass(const trn_grid_f32_t *global, const trn_grid_f32_t *lo
     return cnt;
 }
 
+/* Residual of local cell (i, j), i, j >= 0, at `at` (NaN where unseen, off
+ * the local grid or off the map). */
+static double resid_at(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
+                       int32_t ry, const trn_refine_t *at, const double cs_sn[2], int32_t i,
+                       int32_t j)
+{
+    double h, s3[3], dcb;
+    const double ox = (double)(i - rx), oy = (double)(j - ry);
+    if (i >= local->width || j >= local->height) {
+        return (double)NAN;
+    }
+    h = (double)TRN_GRID_AT(local, i, j);
+    if (!isfinite(h) ||
+        !sample_mix(global, at->x + ox * cs_sn[0] + oy * cs_sn[1],
+                    at->y - ox * cs_sn[1] + oy * cs_sn[0], at->interp_mix, s3, &dcb)) {
+        return (double)NAN;
+    }
+    return h - at->dz_m - s3[0];
+}
+
+double trn_refine_noise_scale_diff_(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
+                                    int32_t rx, int32_t ry, const trn_refine_t *at,
+                                    double heading_rad, const trn_refine_cfg_t *cfg, double k2,
+                                    double m2, int32_t *pairs)
+{
+    int32_t i, j, d, n = 0;
+    double sum = 0.0, cs_sn[2];
+    trn_heading_trig_(heading_rad, &cs_sn[0], &cs_sn[1]);
+    for (j = 0; j < local->height; ++j) {
+        for (i = 0; i < local->width; ++i) {
+            double r0 = resid_at(global, local, rx, ry, at, cs_sn, i, j), s0;
+            if (!isfinite(r0)) {
+                continue;
+            }
+            s0 = noise_var(cfg, i, j, rx, ry);
+            if (r0 * r0 > 9.0 * (k2 * s0 + m2)) {
+                continue;
+            }
+            for (d = 0; d < 2; ++d) {
+                const int32_t i1 = i + (d == 0 ? 1 : 0), j1 = j + (d == 0 ? 0 : 1);
+                double r1 = resid_at(global, local, rx, ry, at, cs_sn, i1, j1), s1;
+                if (!isfinite(r1)) {
+                    continue;
+                }
+                s1 = noise_var(cfg, i1, j1, rx, ry);
+                if (r1 * r1 > 9.0 * (k2 * s1 + m2)) {
+                    continue;
+                }
+                sum += (r1 - r0) * (r1 - r0) / (s0 + s1);
+                n += 1;
+            }
+        }
+    }
+    *pairs = n;
+    return n > 0 ? sum / (double)n : (double)NAN;
+}
+
 trn_status_t trn_refine_noise_scale(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
                                     int32_t rover_x, int32_t rover_y, const trn_refine_t *at,
                                     double heading_rad, const trn_refine_cfg_t *cfg, double *k2,
@@ -899,16 +956,27 @@ static double pose_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_t 
                       double *dz_out, double *m_out)
 {
     const double two_pi = 6.283185307179586;
-    int32_t x, y;
+    int32_t x, y, n_all;
     double dz = 0.0, m2 = 0.0, ll = 0.0, lout = log((1.0 - a) * k);
     /* dz and m2: over every point (m2 = 0 weights, then those of the first
      * m2), then over the points within the clip of that fit */
-    if (pose_fit(g, l, rx, ry, px, py, cfg, -1.0, &dz, &m2) > 0 &&
-        pose_fit(g, l, rx, ry, px, py, cfg, -1.0, &dz, &m2) > 0) {
+    n_all = pose_fit(g, l, rx, ry, px, py, cfg, -1.0, &dz, &m2);
+    if (n_all > 0 && pose_fit(g, l, rx, ry, px, py, cfg, -1.0, &dz, &m2) > 0) {
+        /* then within the clip of the last fit, again while that drops
+         * points (trn_clip_again_) */
         double dz1 = dz, m21 = m2;
-        if (pose_fit(g, l, rx, ry, px, py, cfg, TRN_REFINE_CLIP, &dz1, &m21) > 0) {
+        int32_t n_prev = n_all, n, again;
+        for (again = 0; again <= TRN_CLIP_AGAIN; ++again) {
+            n = pose_fit(g, l, rx, ry, px, py, cfg, TRN_REFINE_CLIP, &dz1, &m21);
+            if (n <= 0) {
+                break;
+            }
             dz = dz1;
             m2 = m21;
+            if (!trn_clip_again_(n_all, n_prev, n)) {
+                break;
+            }
+            n_prev = n;
         }
     }
     for (y = 0; y < l->height; ++y) {

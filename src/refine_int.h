@@ -81,6 +81,17 @@ static inline int32_t trn_pose_mom_end_(const trn_pose_mom_t *a, double *dz, dou
     return a->n;
 }
 
+/* The searches' clipped pose fit is repeated from its own estimate while a
+ * pass drops more than 1 % of the pose's points (a normal sample loses 0.27 %
+ * beyond 3 sd), at most TRN_CLIP_AGAIN (trn/refine.h) more times: one clip
+ * at the width that gross errors (stereo blunders) inflated keeps many of
+ * them (docs/method.md 9, "stereo blunders"). 1 if n_all points, n_prev in
+ * the last pass and n now call for another pass. */
+static inline int trn_clip_again_(int32_t n_all, int32_t n_prev, int32_t n)
+{
+    return n > 0 && 100 * (int64_t)(n_prev - n) > (int64_t)n_all;
+}
+
 /* The refinements' model variance from their precision-squared weighted
  * sums (rr of q r^2, noise2 of q s^2, q), never negative; and the weight of
  * the interpolants' disagreement, TRN_REFINE_SYS x m_s^2 / (m_s^2 + noise2
@@ -134,4 +145,15 @@ trn_status_t trn_localize_heights2d_(const trn_map_t *map, const trn_grid_f32_t 
                                      const trn_window_t *win, const trn_heading_cfg_t *cfg,
                                      void *ws, size_t ws_bytes, trn_heading_result_t *out);
 
+/* The noise model's variance factor that the differences of neighbouring
+ * residuals at `at` ask for: the mean of (r_a - r_b)^2 / (s_a^2 + s_b^2)
+ * over the pairs of seen local cells next to each other (right and below),
+ * each residual within 3 sds of the level fit (k2 s^2 + m2), s the
+ * configured noise; *pairs their count (NaN for none). A misfit that is
+ * smooth over a cell cancels in the differences; white sensor noise does
+ * not. Arguments as trn_refine_noise_scale's, checked by the caller. */
+double trn_refine_noise_scale_diff_(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
+                                    int32_t rx, int32_t ry, const trn_refine_t *at,
+                                    double heading_rad, const trn_refine_cfg_t *cfg, double k2,
+                                    double m2, int32_t *pairs);
 #endif /* TRN_REFINE_INT_H */

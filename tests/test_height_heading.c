@@ -201,15 +201,16 @@ static void test_w0_bit_equal(void **state)
 
 /* ln L of pose (px, py) at heading a, plainly: the offsets turned and
  * rounded, dz by the precision-weighted mean and m^2 by the squared
- * precision-weighted moments (twice over every point, then once over the
- * points within 3 sd), then the mixture's log-density summed. */
+ * precision-weighted moments (twice over every point, then over the points
+ * within 3 sd, again while a pass drops more than 1 % of the points, at
+ * most 1 + TRN_CLIP_AGAIN times), then the mixture's log-density summed. */
 static double slow_ll(double a, int32_t px, int32_t py, double kd)
 {
     static double res[LW * LW], var[LW * LW];
     static int have[LW * LW];
     const double ca = cos(a), sa = sin(a), al = (double)g_w.cfg.inlier_prob;
     double dz = 0.0, m2 = 0.0, ll = 0.0;
-    int i, j, n = 0, pass;
+    int i, j, n = 0, pass, n_all = 0, n_prev = 0;
     for (j = 0; j < LW; ++j) {
         for (i = 0; i < LW; ++i) {
             const float h = g_loc[j * LW + i];
@@ -228,12 +229,12 @@ static double slow_ll(double a, int32_t px, int32_t py, double kd)
             ++n;
         }
     }
-    for (pass = 0; pass < 3; ++pass) {
+    for (pass = 0; pass < 3 + TRN_CLIP_AGAIN; ++pass) {
         double sw = 0.0, swr = 0.0, sq = 0.0, sqe = 0.0;
         double d;
         int used = 0;
         for (i = 0; i < n; ++i) {
-            if (!have[i] || (pass == 2 && fabs(res[i] - dz) > 3.0 * sqrt(var[i] + m2))) {
+            if (!have[i] || (pass >= 2 && fabs(res[i] - dz) > 3.0 * sqrt(var[i] + m2))) {
                 continue;
             }
             sw += 1.0 / (var[i] + m2);
@@ -246,7 +247,7 @@ static double slow_ll(double a, int32_t px, int32_t py, double kd)
         d = swr / sw;
         for (i = 0; i < n; ++i) {
             const double q = 1.0 / ((var[i] + m2) * (var[i] + m2));
-            if (!have[i] || (pass == 2 && fabs(res[i] - dz) > 3.0 * sqrt(var[i] + m2))) {
+            if (!have[i] || (pass >= 2 && fabs(res[i] - dz) > 3.0 * sqrt(var[i] + m2))) {
                 continue;
             }
             sq += q;
@@ -254,6 +255,14 @@ static double slow_ll(double a, int32_t px, int32_t py, double kd)
         }
         dz = d;
         m2 = sqe / sq > 0.0 ? sqe / sq : 0.0;
+        if (pass == 0) {
+            n_all = n_prev = used;
+        } else if (pass >= 2) {
+            if (100 * (n_prev - used) <= n_all) {
+                break; /* this pass dropped at most 1 %: done */
+            }
+            n_prev = used;
+        }
     }
     for (i = 0; i < n; ++i) {
         if (!have[i]) {

@@ -40,6 +40,10 @@ extern "C" {
 
 /** Residual clip, in robust scales. */
 #define TRN_REFINE_CLIP 3.0
+/** The height searches' clipped pose fit is repeated from its own estimate
+ *  while a pass drops more than 1 % of the pose's points, at most this many
+ *  more times (stereo blunders; docs/method.md 9). */
+#define TRN_CLIP_AGAIN 4
 /** Farthest the refined pose may move from the integer start, cells per
  *  axis: the voxel search can land one cell off on a smooth slope (its
  *  height bins are coarse there); beyond this the start was not this peak. */
@@ -189,7 +193,9 @@ trn_status_t trn_refine_noise_scale(const trn_grid_f32_t *global, const trn_grid
  * r_i = h_i - G(pose + p_i) at integer cells; a point with no global height
  * under it (off the map, NaN) contributes ln((1 - a) K). Per pose, dz and m^2
  * are estimated (weighted mean; moments), then again without the points
- * beyond TRN_REFINE_CLIP (a profile likelihood). K = 1 / (10 sd of the local
+ * beyond TRN_REFINE_CLIP of that fit, repeated while a pass drops more than
+ * 1 % of the points (at most TRN_CLIP_AGAIN more times; a profile
+ * likelihood). K = 1 / (10 sd of the local
  * heights), one value per call, so scores compare across poses.
  * With an exclusion zone every pose is still scored (it counts in lse_all)
  * but the best is taken outside the zone; exp(lse_out - lse_all) is then the
