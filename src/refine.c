@@ -776,13 +776,15 @@ static int32_t noise_pass(const trn_grid_f32_t *global, const trn_grid_f32_t *lo
     return cnt;
 }
 
-/* Residual of local cell (i, j), i, j >= 0, at `at` (NaN where unseen, off
- * the local grid or off the map). */
-static double resid_at(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
-                       int32_t ry, const trn_refine_t *at, const double cs_sn[2], int32_t i,
-                       int32_t j)
+/* Residual of local cell (i, j), i, j >= 0, at `at`, and in *s2 its
+ * configured noise variance; NaN where unseen, off the local grid, off the
+ * map or beyond TRN_REFINE_CLIP sds of the level fit (k2 s2 + m2). */
+static double resid_in_clip(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
+                            int32_t ry, const trn_refine_t *at, const double cs_sn[2],
+                            const trn_refine_cfg_t *cfg, double k2, double m2, int32_t i, int32_t j,
+                            double *s2)
 {
-    double h, s3[3], dcb;
+    double h, s3[3], dcb, r;
     const double ox = (double)(i - rx), oy = (double)(j - ry);
     if (i >= local->width || j >= local->height) {
         return (double)NAN;
@@ -793,7 +795,9 @@ static double resid_at(const trn_grid_f32_t *global, const trn_grid_f32_t *local
                     at->y - ox * cs_sn[1] + oy * cs_sn[0], at->interp_mix, s3, &dcb)) {
         return (double)NAN;
     }
-    return h - at->dz_m - s3[0];
+    r = h - at->dz_m - s3[0];
+    *s2 = noise_var(cfg, i, j, rx, ry);
+    return r * r > TRN_REFINE_CLIP * TRN_REFINE_CLIP * (k2 * *s2 + m2) ? (double)NAN : r;
 }
 
 double trn_refine_noise_scale_diff_(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
@@ -806,26 +810,20 @@ double trn_refine_noise_scale_diff_(const trn_grid_f32_t *global, const trn_grid
     trn_heading_trig_(heading_rad, &cs_sn[0], &cs_sn[1]);
     for (j = 0; j < local->height; ++j) {
         for (i = 0; i < local->width; ++i) {
-            double r0 = resid_at(global, local, rx, ry, at, cs_sn, i, j), s0;
+            double s0 = 0.0;
+            const double r0 = resid_in_clip(global, local, rx, ry, at, cs_sn, cfg, k2, m2, i, j,
+                                            &s0);
             if (!isfinite(r0)) {
                 continue;
             }
-            s0 = noise_var(cfg, i, j, rx, ry);
-            if (r0 * r0 > 9.0 * (k2 * s0 + m2)) {
-                continue;
-            }
-            for (d = 0; d < 2; ++d) {
-                const int32_t i1 = i + (d == 0 ? 1 : 0), j1 = j + (d == 0 ? 0 : 1);
-                double r1 = resid_at(global, local, rx, ry, at, cs_sn, i1, j1), s1;
-                if (!isfinite(r1)) {
-                    continue;
+            for (d = 0; d < 2; ++d) { /* the neighbours to the right and below */
+                double s1 = 0.0;
+                const double r1 = resid_in_clip(global, local, rx, ry, at, cs_sn, cfg, k2, m2,
+                                                i + (d == 0 ? 1 : 0), j + (d == 0 ? 0 : 1), &s1);
+                if (isfinite(r1)) {
+                    sum += (r1 - r0) * (r1 - r0) / (s0 + s1);
+                    n += 1;
                 }
-                s1 = noise_var(cfg, i1, j1, rx, ry);
-                if (r1 * r1 > 9.0 * (k2 * s1 + m2)) {
-                    continue;
-                }
-                sum += (r1 - r0) * (r1 - r0) / (s0 + s1);
-                n += 1;
             }
         }
     }
