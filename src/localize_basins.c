@@ -6,6 +6,8 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "refine_int.h"
+
 size_t trn_loc_basins_bytes_(void) { return sizeof(trn_loc_basins_t); }
 
 static double grid_at(const double *g, const trn_window_t *win, int32_t x, int32_t y)
@@ -206,4 +208,16 @@ void trn_loc_find_basins3_(const double *grid, const trn_window_t *win, int32_t 
             }
         }
     }
+}
+
+double trn_loc_valley_failure_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
+                               int32_t ry, const trn_window_t *win, double infl,
+                               const trn_loc_result_t *out)
+{
+    const double lo[2] = {(double)win->x0, (double)win->y0};
+    const double hi[2] = {(double)win->x1, (double)win->y1};
+    trn_refine_cfg_t rc;
+    trn_loc_refine_cfg_(map, out, &rc);
+    return trn_refine_valley_fail_(&map->heights, local, rx, ry, &rc, &out->refinement, infl, lo,
+                                   hi);
 }

@@ -831,6 +831,112 @@ double trn_refine_noise_scale_diff_(const trn_grid_f32_t *global, const trn_grid
     return n > 0 ? sum / (double)n : (double)NAN;
 }
 
+/* ln L on the line through (px, py) across the valley: the pose (px, py) +
+ * o e2 with the perpendicular offset o and the offset dz at their best
+ * (Gauss-Newton from *o, *dz, at most TRN_VALLEY_ITER steps, the relief
+ * rule; the mix lam and the model variance model2 held). */
+static double valley_point(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
+                           int32_t ry, const trn_refine_cfg_t *cfg, double px, double py,
+                           const double e2[2], double lam, double model2, double *o, double *dz)
+{
+    accum_t acc;
+    int32_t it;
+    for (it = 0; it < TRN_VALLEY_ITER; ++it) {
+        double aoo, aoz, azz, bo, det, step;
+        accumulate(global, local, rx, ry, px + *o * e2[0], py + *o * e2[1], *dz, lam,
+                   TRN_REFINE_CLIP_RELIEF, model2, cfg, &acc);
+        aoo = e2[0] * e2[0] * acc.a[0] + 2.0 * e2[0] * e2[1] * acc.a[1] + e2[1] * e2[1] * acc.a[4];
+        aoz = e2[0] * acc.a[2] + e2[1] * acc.a[5];
+        azz = acc.a[8];
+        bo = e2[0] * acc.b[0] + e2[1] * acc.b[1];
+        det = aoo * azz - aoz * aoz;
+        if (acc.n_in < 8 || !(det > 1e-12 * aoo * azz)) {
+            break;
+        }
+        step = (azz * bo - aoz * acc.b[2]) / det;
+        step = step > 0.5 ? 0.5 : step < -0.5 ? -0.5 : step;
+        *dz += (aoo * acc.b[2] - aoz * bo) / det;
+        *o += step;
+        if (fabs(step) < 1e-3) {
+            break;
+        }
+    }
+    return refined_ll(global, local, rx, ry, px + *o * e2[0], py + *o * e2[1], *dz, lam, model2,
+                      cfg);
+}
+
+double trn_refine_valley_fail_(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
+                               int32_t rx, int32_t ry, const trn_refine_cfg_t *cfg,
+                               const trn_refine_t *at, double infl, const double lo[2],
+                               const double hi[2])
+{
+    const double h = TRN_VALLEY_STEP_CELLS;
+    const double a = at->cov_cells[0], b = at->cov_cells[1], c = at->cov_cells[2];
+    const double lam1 = 0.5 * (a + b) + sqrt(0.25 * (a - b) * (a - b) + c * c);
+    const double model2 = at->model_m * at->model_m;
+    double in = 1.0, out = 0.0, d1[2] = {-INFINITY, -INFINITY}, q, e1[2], e2[2], n;
+    int32_t side, k;
+    if (!(infl >= 1.0) || !isfinite(at->ll) || !isfinite(lam1)) {
+        return 0.0;
+    }
+    /* the major axis: the eigenvector of the larger eigenvalue, from the
+     * better conditioned of the two rows of (cov - lam1 I) */
+    if (a >= b) {
+        e1[0] = lam1 - b;
+        e1[1] = c;
+    } else {
+        e1[0] = c;
+        e1[1] = lam1 - a;
+    }
+    n = sqrt(e1[0] * e1[0] + e1[1] * e1[1]);
+    if (!(n > 0.0)) {
+        e1[0] = 1.0; /* a round ellipse: any axis */
+        e1[1] = 0.0;
+        n = 1.0;
+    }
+    e1[0] /= n;
+    e1[1] /= n;
+    e2[0] = -e1[1];
+    e2[1] = e1[0];
+    for (side = 0; side < 2; ++side) {
+        const double sg = side == 0 ? -1.0 : 1.0;
+        double o = 0.0, dz = at->dz_m;
+        for (k = 1; (double)k * h <= TRN_VALLEY_REACH_CELLS + 1e-9; ++k) {
+            const double t = sg * (double)k * h;
+            const double px = at->x + t * e1[0], py = at->y + t * e1[1];
+            double d;
+            if (px < lo[0] || px > hi[0] || py < lo[1] || py > hi[1]) {
+                break; /* the window: the prior puts no mass beyond it */
+            }
+            d = (valley_point(global, local, rx, ry, cfg, px, py, e2, at->interp_mix, model2, &o,
+                              &dz) -
+                 at->ll) /
+                infl;
+            if (!isfinite(d)) {
+                break;
+            }
+            if (k == 1) {
+                d1[side] = d;
+            }
+            if ((double)k * h > TRN_FAIL_RADIUS_CELLS) {
+                out += exp(fmin(d, 700.0));
+            } else {
+                in += exp(fmin(d, 700.0));
+            }
+            if (d < -TRN_VALLEY_NATS) {
+                break;
+            }
+        }
+    }
+    /* A centre narrower than the step: its mass is the quadratic's through
+     * t = -h, 0, h (Laplace), not the one sample at t = 0. */
+    q = -(d1[0] + d1[1]) / (h * h);
+    if (q > 0.0 && isfinite(q)) {
+        in += fmin(1.0, sqrt(6.283185307179586 / q) / h) - 1.0;
+    }
+    return out / (in + out);
+}
+
 trn_status_t trn_refine_noise_scale(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
                                     int32_t rover_x, int32_t rover_y, const trn_refine_t *at,
                                     double heading_rad, const trn_refine_cfg_t *cfg, double *k2,

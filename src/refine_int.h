@@ -156,4 +156,21 @@ double trn_refine_noise_scale_diff_(const trn_grid_f32_t *global, const trn_grid
                                     int32_t rx, int32_t ry, const trn_refine_t *at,
                                     double heading_rad, const trn_refine_cfg_t *cfg, double k2,
                                     double m2, int32_t *pairs);
+/* The valley's share of the failure probability (docs/method.md 9, "the
+ * valley"): ln L, over infl, along the major axis of at's covariance, t
+ * every TRN_VALLEY_STEP_CELLS out to TRN_VALLEY_REACH_CELLS each way (or
+ * to the window [lo, hi], global cells, or until TRN_VALLEY_NATS below the
+ * answer), each point's perpendicular offset and dz at their best; the
+ * profile's mass beyond TRN_FAIL_RADIUS_CELLS over its whole, the centre's
+ * by the quadratic through its first steps where narrower than a step. The
+ * integer grid samples a valley narrower than a cell across poorly, so its
+ * mass along the valley can vanish from the grid; this samples it along. */
+#define TRN_VALLEY_STEP_CELLS 0.25
+#define TRN_VALLEY_REACH_CELLS 4.0
+#define TRN_VALLEY_NATS 30.0
+#define TRN_VALLEY_ITER 3
+double trn_refine_valley_fail_(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
+                               int32_t rx, int32_t ry, const trn_refine_cfg_t *cfg,
+                               const trn_refine_t *at, double infl, const double lo[2],
+                               const double hi[2]);
 #endif /* TRN_REFINE_INT_H */
