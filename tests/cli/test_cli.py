@@ -248,7 +248,7 @@ check(r.get("status") == "ill_conditioned" and r.get("sigma_x_m", 0) is None and
       f"localize on a plain: ill_conditioned with null sigmas: {r}")
 
 # A map that repeats every 3 cells east-west: the match is as good 3 cells either side, the
-# failure probability about 2/3, so the default acceptance limit (0.05 with auto) answers
+# failure probability about 2/3, so the default acceptance limit (0.02 with auto) answers
 # "ambiguous" (exit 0, everything reported); --max-failure-prob 1 accepts the same answer.
 yy, xx = np.mgrid[0:96, 0:96]
 per = (0.3 * np.sin(2 * np.pi * xx / 3.0) + 0.4 * np.sin(0.37 * yy) + 0.15 * np.cos(0.61 * yy)).astype(np.float32)
@@ -258,7 +258,7 @@ pargs = ["--dem", p("periodic.tif"), "--local", p("periodic_local.tif"), "--prio
 ra = run_json("localize", *pargs, "--json")
 check(ra.get("status") == "ambiguous" and 0.05 < ra.get("failure_probability", 0) < 0.9,
       f"localize on a periodic map: ambiguous: {ra.get('status')} {ra.get('failure_probability')}")
-check(abs(ra.get("map_config", {}).get("max_failure_prob", 0) - 0.05) < 1e-7, "auto's acceptance limit 0.05 in the JSON")
+check(abs(ra.get("map_config", {}).get("max_failure_prob", 0) - 0.02) < 1e-7, "auto's acceptance limit 0.02 in the JSON")
 ro = run_json("localize", *pargs, "--max-failure-prob", "1", "--json")
 check(ro.get("status") == "ok" and ro.get("x_m") == ra.get("x_m") and
       ro.get("failure_probability") == ra.get("failure_probability"),
