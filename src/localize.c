@@ -734,9 +734,10 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
         double pf = fmax(exp(second.lse_out - second.lse_all),
                          out->refined ? trn_loc_basins_failure_(bs, infl, out) : 0.0);
         if (out->refined) {
-            /* ... and the valley's: mass along the answer's major axis that
-             * the integer grid misses (docs/method.md 9, "the valley") */
-            pf = fmax(pf, trn_loc_valley_failure_(map, local, rx, ry, win, infl, out));
+            /* ... and the answer's own peak's: mass along its major axis
+             * that the integer grid misses, and its covariance's tail
+             * beyond the failure radius (docs/method.md 9, "the valley") */
+            pf = fmax(pf, trn_loc_peak_failure_(map, local, rx, ry, win, infl, out));
         }
         out->has_second = 1;
         out->second_x = second.x;

@@ -210,14 +210,48 @@ void trn_loc_find_basins3_(const double *grid, const trn_window_t *win, int32_t 
     }
 }
 
-double trn_loc_valley_failure_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
-                               int32_t ry, const trn_window_t *win, double infl,
-                               const trn_loc_result_t *out)
+trn_status_t trn_prob_beyond(const double cov[3], double r, double *p)
+{
+    /* cos and sin of 2 pi / 128: the angles by rotation, no libm call */
+    const double c1 = 0.9987954562051724, s1 = 0.049067674327418015;
+    double a, b, c, m, d, cs = 1.0, sn = 0.0, sum = 0.0;
+    int32_t k;
+    if (cov == NULL || p == NULL) {
+        return TRN_E_NULL;
+    }
+    a = cov[0];
+    b = cov[1];
+    c = cov[2];
+    if (!(r > 0.0) || !isfinite(r) || !isfinite(a) || !isfinite(b) || !isfinite(c) || a < 0.0 ||
+        b < 0.0 || c * c > a * b * (1.0 + 1e-12)) {
+        return TRN_E_ARG;
+    }
+    m = 0.5 * (a + b);
+    d = sqrt(0.25 * (a - b) * (a - b) + c * c);
+    for (k = 0; k < 128; ++k) {
+        const double g = m + d * cs, t = cs * c1 - sn * s1;
+        if (g > 0.0) {
+            sum += exp(-0.5 * r * r / g);
+        }
+        sn = sn * c1 + cs * s1;
+        cs = t;
+    }
+    *p = sum / 128.0;
+    return TRN_OK;
+}
+
+double trn_loc_peak_failure_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
+                             int32_t ry, const trn_window_t *win, double infl,
+                             const trn_loc_result_t *out)
 {
     const double lo[2] = {(double)win->x0, (double)win->y0};
     const double hi[2] = {(double)win->x1, (double)win->y1};
     trn_refine_cfg_t rc;
+    double tail = 1.0;
     trn_loc_refine_cfg_(map, out, &rc);
-    return trn_refine_valley_fail_(&map->heights, local, rx, ry, &rc, &out->refinement, infl, lo,
-                                   hi);
+    if (trn_prob_beyond(out->refinement.cov_cells, TRN_FAIL_RADIUS_CELLS, &tail) != TRN_OK) {
+        tail = 1.0; /* a covariance that bounds nothing */
+    }
+    return fmax(tail, trn_refine_valley_fail_(&map->heights, local, rx, ry, &rc, &out->refinement,
+                                              infl, lo, hi));
 }

@@ -246,6 +246,44 @@ static void test_broad_peak_widens_exclusion(void **state)
 /* localize_points' remaining documented statuses: TRN_E_SIZE from a map
  * whose search pyramid has lost its base volume, and TRN_E_ILLCOND from a
  * flat map matched with a flat patch (every pose scores the same). */
+/* trn_prob_beyond: one assertion per documented @retval and per check. */
+static void test_prob_beyond_args(void **state)
+{
+    const double ok[3] = {1.0, 0.5, 0.2};
+    double cov[3], p = -1.0;
+    int i;
+    (void)state;
+    assert_int_equal(trn_prob_beyond(NULL, 1.0, &p), TRN_E_NULL);
+    assert_int_equal(trn_prob_beyond(ok, 1.0, NULL), TRN_E_NULL);
+    assert_int_equal(trn_prob_beyond(ok, 0.0, &p), TRN_E_ARG);
+    assert_int_equal(trn_prob_beyond(ok, -1.0, &p), TRN_E_ARG);
+    assert_int_equal(trn_prob_beyond(ok, (double)NAN, &p), TRN_E_ARG);
+    assert_int_equal(trn_prob_beyond(ok, (double)INFINITY, &p), TRN_E_ARG);
+    for (i = 0; i < 3; ++i) {
+        memcpy(cov, ok, sizeof cov);
+        cov[i] = (double)NAN;
+        assert_int_equal(trn_prob_beyond(cov, 1.0, &p), TRN_E_ARG);
+        cov[i] = (double)INFINITY;
+        assert_int_equal(trn_prob_beyond(cov, 1.0, &p), TRN_E_ARG);
+    }
+    cov[0] = -1e-9; /* a negative variance */
+    cov[1] = 1.0;
+    cov[2] = 0.0;
+    assert_int_equal(trn_prob_beyond(cov, 1.0, &p), TRN_E_ARG);
+    cov[0] = 1.0;
+    cov[1] = -1e-9;
+    assert_int_equal(trn_prob_beyond(cov, 1.0, &p), TRN_E_ARG);
+    cov[1] = 1.0;
+    cov[2] = 1.0 + 1e-9; /* |cov_xy| beyond sqrt(var_x var_y) */
+    assert_int_equal(trn_prob_beyond(cov, 1.0, &p), TRN_E_ARG);
+    cov[2] = -1.0 - 1e-9;
+    assert_int_equal(trn_prob_beyond(cov, 1.0, &p), TRN_E_ARG);
+    assert_true(p == -1.0); /* untouched on every error */
+    cov[2] = -1.0;          /* semi-definite: allowed */
+    assert_int_equal(trn_prob_beyond(cov, 1.0, &p), TRN_OK);
+    assert_true(p > 0.0 && p < 1.0);
+}
+
 static void test_localize_points_size_and_illcond(void **state)
 {
     trn_map_t map, bad;
@@ -290,6 +328,7 @@ int main(void)
         cmocka_unit_test(test_window_edge_flag_each_side),
         cmocka_unit_test(test_broad_peak_widens_exclusion),
         cmocka_unit_test(test_localize_points_size_and_illcond),
+        cmocka_unit_test(test_prob_beyond_args),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -968,6 +968,60 @@ static void test_ambiguous_acceptance(void **state)
     nat_free(&w);
 }
 
+/* P(|e| > r) of a 2-D normal written out: the density summed over a grid
+ * of step h (midpoints) on +-8 of the larger sd, outside the circle. */
+static double slow_beyond(const double cov[3], double r, double h)
+{
+    const double det = cov[0] * cov[1] - cov[2] * cov[2];
+    const double span = 8.0 * sqrt(fmax(cov[0], cov[1]));
+    double sum = 0.0, x, y;
+    for (y = -span + 0.5 * h; y < span; y += h) {
+        for (x = -span + 0.5 * h; x < span; x += h) {
+            if (x * x + y * y > r * r) {
+                const double q = (cov[1] * x * x - 2.0 * cov[2] * x * y + cov[0] * y * y) / det;
+                sum += exp(-0.5 * q);
+            }
+        }
+    }
+    return sum * h * h / (2.0 * PI * sqrt(det));
+}
+
+/* trn_prob_beyond against closed forms and a slow sum: an isotropic error
+ * (exp(-r^2 / 2 sigma^2), the Rayleigh tail) for several sigmas; one
+ * variance 0 (the 1-D tail, erfc(r / (sqrt 2 sigma))), along each axis and
+ * turned; elongated and turned ellipses against slow_beyond. */
+static void test_prob_beyond(void **state)
+{
+    const double ell[4][3] = {
+        {0.8, 0.25, 0.3}, {0.04, 0.9, -0.1}, {0.5, 0.5, 0.45}, {2.0, 1.0, 0.0}};
+    double p, cov[3], worst = 0.0;
+    int i;
+    (void)state;
+    for (i = 1; i <= 8; ++i) {
+        const double s = 0.25 * i;
+        cov[0] = cov[1] = s * s;
+        cov[2] = 0.0;
+        assert_int_equal(trn_prob_beyond(cov, 1.5, &p), TRN_OK);
+        assert_true(fabs(p - exp(-1.125 / (s * s))) < 1e-12);
+    }
+    for (i = 0; i < 3; ++i) {
+        const double s = 0.7, th = 0.4 * i;
+        cov[0] = s * s * cos(th) * cos(th);
+        cov[1] = s * s * sin(th) * sin(th);
+        cov[2] = s * s * cos(th) * sin(th);
+        assert_int_equal(trn_prob_beyond(cov, 1.5, &p), TRN_OK);
+        worst = fmax(worst, fabs(p - erfc(1.5 / (sqrt(2.0) * s))));
+    }
+    for (i = 0; i < 4; ++i) {
+        const double want = slow_beyond(ell[i], 1.5, 0.005);
+        assert_int_equal(trn_prob_beyond(ell[i], 1.5, &p), TRN_OK);
+        printf("ellipse %d: P(|e| > 1.5) %.6f, written out %.6f\n", i, p, want);
+        worst = fmax(worst, fabs(p - want));
+    }
+    printf("trn_prob_beyond: worst difference %.2e\n", worst);
+    assert_true(worst < 1e-4);
+}
+
 /* A straight kerb across the map's centre at 0.5 rad to the grid: tanh
  * across it, 3 cells wide, its height 1 m + 1e-4 m v^2 (v cells along it
  * from the centre): along the kerb a pose is pinned down to about a cell,
@@ -1145,7 +1199,11 @@ static void test_valley_failure(void **state)
             assert_int_not_equal(st, TRN_OK);
         }
         if (st == TRN_OK || st == TRN_E_AMBIGUOUS) {
+            double tail = 0.0;
             assert_true(res.refined == 1 && res.noise_scale == 1.0);
+            assert_int_equal(
+                trn_prob_beyond(res.refinement.cov_cells, TRN_FAIL_RADIUS_CELLS, &tail), TRN_OK);
+            assert_true(res.failure_probability >= tail);
             assert_true(res.failure_probability >= slow - 0.01 - 0.05 * slow);
             if (slow > 0.05) {
                 /* here the grid's and the far basins' shares are below it */
@@ -1849,6 +1907,7 @@ int main(void)
         cmocka_unit_test(test_localize_dem_statuses),
         cmocka_unit_test(test_ambiguous_acceptance),
         cmocka_unit_test(test_valley_failure),
+        cmocka_unit_test(test_prob_beyond),
         cmocka_unit_test(test_refine_grid_edges),
         cmocka_unit_test(test_refine_inlier_majority),
         cmocka_unit_test(test_refine_iteration_limits),

@@ -165,6 +165,28 @@ typedef struct {
  *  the truth: the event of the failure probability (docs/method.md 9). */
 #define TRN_FAIL_RADIUS_CELLS 1.5
 
+/**
+ * @brief Probability that a 2-D normal error lies beyond a radius:
+ * P(|e| > r), e ~ N(0, [[cov[0], cov[2]], [cov[2], cov[1]]]) (r in the unit
+ * whose square is cov's: cells with cov_cells, metres with cov_m2). In
+ * whitened coordinates the error's direction is uniform and its squared
+ * length chi-square with 2 degrees of freedom, so P = (1 / 2 pi) int
+ * exp(-r^2 / (2 g(psi))) dpsi, g = (a + b) / 2 + sqrt(((a - b) / 2)^2 +
+ * c^2) cos(psi), by the trapezoid rule over 128 angles (periodic and
+ * smooth: converged to rounding). The height matcher's failure probability
+ * is at least this of its covariance at TRN_FAIL_RADIUS_CELLS
+ * (docs/method.md 9, "the covariance's tail").
+ * @param[in]  cov var_x, var_y, cov_xy: finite, positive semi-definite
+ * @param[in]  r   radius, finite, > 0
+ * @param[out] p   the probability, [0, 1]
+ * @retval TRN_OK
+ * @retval TRN_E_NULL cov or p is NULL
+ * @retval TRN_E_ARG  r not finite or not > 0; cov not finite, or not
+ *         positive semi-definite (a negative variance or |cov_xy| beyond
+ *         sqrt(var_x var_y) by more than rounding)
+ */
+trn_status_t trn_prob_beyond(const double cov[3], double r, double *p);
+
 /** @brief The paper's configuration on its rock fields: 0.1 m cells and
  * bins, 1 m high-pass half-width, 16 bins, s = 0.1 m, a = 0.95, cap 60
  * (20 cells), 4 levels, exclusion at least 2 cells, the local DEM filtered on
