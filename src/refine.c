@@ -871,6 +871,7 @@ double trn_refine_valley_fail_(const trn_grid_f32_t *global, const trn_grid_f32_
                                const double hi[2])
 {
     const double h = TRN_VALLEY_STEP_CELLS;
+    const int32_t kmax = (int32_t)(TRN_VALLEY_REACH_CELLS / TRN_VALLEY_STEP_CELLS + 0.5);
     const double a = at->cov_cells[0], b = at->cov_cells[1], c = at->cov_cells[2];
     const double lam1 = 0.5 * (a + b) + sqrt(0.25 * (a - b) * (a - b) + c * c);
     const double model2 = at->model_m * at->model_m;
@@ -901,7 +902,7 @@ double trn_refine_valley_fail_(const trn_grid_f32_t *global, const trn_grid_f32_
     for (side = 0; side < 2; ++side) {
         const double sg = side == 0 ? -1.0 : 1.0;
         double o = 0.0, dz = at->dz_m;
-        for (k = 1; (double)k * h <= TRN_VALLEY_REACH_CELLS + 1e-9; ++k) {
+        for (k = 1; k <= kmax; ++k) {
             const double t = sg * (double)k * h;
             const double px = at->x + t * e1[0], py = at->y + t * e1[1];
             double d;

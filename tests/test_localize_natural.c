@@ -974,9 +974,13 @@ static double slow_beyond(const double cov[3], double r, double h)
 {
     const double det = cov[0] * cov[1] - cov[2] * cov[2];
     const double span = 8.0 * sqrt(fmax(cov[0], cov[1]));
-    double sum = 0.0, x, y;
-    for (y = -span + 0.5 * h; y < span; y += h) {
-        for (x = -span + 0.5 * h; x < span; x += h) {
+    const int n = (int)ceil(2.0 * span / h);
+    double sum = 0.0;
+    int i, j;
+    for (j = 0; j < n; ++j) {
+        const double y = -span + (j + 0.5) * h;
+        for (i = 0; i < n; ++i) {
+            const double x = -span + (i + 0.5) * h;
             if (x * x + y * y > r * r) {
                 const double q = (cov[1] * x * x - 2.0 * cov[2] * x * y + cov[0] * y * y) / det;
                 sum += exp(-0.5 * q);
