@@ -1150,8 +1150,9 @@ static double slow_valley(const trn_map_cfg_t *cfg, const trn_refine_t *at, cons
  * about a cell, across it to hundredths, so the integer poses sample the
  * valley only where it passes close to them, and its mass beyond the
  * failure radius can vanish from the grid (measured before the valley's
- * share: answers 1.2 and 2.7 cells off at failure probabilities 3e-9 and
- * 3e-12, both fixes). Local maps of the kerb (a disc of radius 20, the
+ * share: answers 0.88 and 2.65 cells off were fixes at failure
+ * probabilities 3e-9 and 3e-12, where the valley's share is 0.44 and
+ * 0.31). Local maps of the kerb (a disc of radius 20, the
  * noise model's noise) from 8 truths within a cell of its centre: every
  * refined answer's failure probability is at least the valley's, written
  * out (slow_valley), and where that is above 0.05, equal to it within 0.01
