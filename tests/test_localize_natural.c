@@ -1060,12 +1060,24 @@ static double mixed(double x, double y, double mix)
     return bilin(x, y) + mix * (c - bilin(x, y));
 }
 
+/* Local cell c's residual at pose (x, y) under the refinement's mix, and in
+ * *v its noise variance plus the model variance; NaN where unseen. */
+static double slow_resid(const trn_map_cfg_t *cfg, const trn_refine_t *at, double x, double y,
+                         int c, double *v)
+{
+    const int dx = c % LW - LR, dy = c / LW - LR;
+    const double s = (double)cfg->noise_m +
+                     (double)cfg->noise_k_per_m * (double)(dx * dx + dy * dy);
+    *v = s * s + at->model_m * at->model_m;
+    return isfinite(l_data[c]) ? l_data[c] - mixed(x + dx, y + dy, at->interp_mix) : (double)NAN;
+}
+
 /* The mixture ln L of the local map at pose (x, y) (global cells of the
  * rover cell) with the refinement's mix and model variance, the offset
  * the noise-weighted mean of the residuals: written out, slowly. */
 static double slow_pose_ll(const trn_map_cfg_t *cfg, const trn_refine_t *at, double x, double y)
 {
-    double mean = 0.0, var = 0.0, sw = 0.0, swr = 0.0, dz, k, ll = 0.0;
+    double mean = 0.0, var = 0.0, sw = 0.0, swr = 0.0, dz, k, ll = 0.0, v, r;
     const double a = (double)cfg->inlier_prob;
     int i, n = 0;
     for (i = 0; i < LW * LW; ++i) {
@@ -1081,23 +1093,19 @@ static double slow_pose_ll(const trn_map_cfg_t *cfg, const trn_refine_t *at, dou
         }
     }
     k = 1.0 / (10.0 * fmax(sqrt(var / n), (double)cfg->noise_m));
-    for (i = 0; i < 2 * LW * LW; ++i) {
-        const int c = i % (LW * LW), dx = c % LW - LR, dy = c / LW - LR;
-        const double s = (double)cfg->noise_m +
-                         (double)cfg->noise_k_per_m * (double)(dx * dx + dy * dy);
-        const double v = s * s + at->model_m * at->model_m;
-        double r;
-        if (!isfinite(l_data[c])) {
-            continue;
-        }
-        r = l_data[c] - mixed(x + dx, y + dy, at->interp_mix);
-        if (i < LW * LW) {
+    for (i = 0; i < LW * LW; ++i) { /* the offset */
+        r = slow_resid(cfg, at, x, y, i, &v);
+        if (isfinite(r)) {
             sw += 1.0 / v;
             swr += r / v;
-            continue;
         }
-        dz = swr / sw;
-        ll += log(a * exp(-0.5 * (r - dz) * (r - dz) / v) / sqrt(2.0 * PI * v) + (1.0 - a) * k);
+    }
+    dz = swr / sw;
+    for (i = 0; i < LW * LW; ++i) {
+        r = slow_resid(cfg, at, x, y, i, &v);
+        if (isfinite(r)) {
+            ll += log(a * exp(-0.5 * (r - dz) * (r - dz) / v) / sqrt(2.0 * PI * v) + (1.0 - a) * k);
+        }
     }
     return ll;
 }
