@@ -685,16 +685,13 @@ trn_status_t trn_localize_heights3_(const trn_map_t *map, const trn_grid_f32_t *
     out->loc.exclusion_cells = map->cfg.min_exclusion_cells;
     masses(grid, win, kk, out->loc.refined ? ref->pos.ll_inflation : 1.0, &out->loc);
     if (out->loc.refined) { /* the far basins' share (localize_int.h) */
-        double tail = 1.0;
         out->loc.failure_probability = fmax(
             out->loc.failure_probability,
             trn_loc_basins_failure_(far, ref->pos.ll_inflation, &out->loc));
         /* and the position ellipse's tail beyond the failure radius (the
          * valley's profile is the x-y path's only: docs/method.md 9) */
-        if (trn_prob_beyond(ref->pos.cov_cells, TRN_FAIL_RADIUS_CELLS, &tail) != TRN_OK) {
-            tail = 1.0;
-        }
-        out->loc.failure_probability = fmax(out->loc.failure_probability, tail);
+        out->loc.failure_probability = fmax(out->loc.failure_probability,
+                                            trn_loc_tail_failure_(ref->pos.cov_cells));
     }
     /* the best pose on the window's edge, or the refined heading beyond the
      * heading window: the likelihood may rise beyond what was searched, so

@@ -240,6 +240,15 @@ trn_status_t trn_prob_beyond(const double cov[3], double r, double *p)
     return TRN_OK;
 }
 
+double trn_loc_tail_failure_(const double cov_cells[3])
+{
+    double tail = 1.0;
+    if (trn_prob_beyond(cov_cells, TRN_FAIL_RADIUS_CELLS, &tail) != TRN_OK) {
+        tail = 1.0; /* a covariance that bounds nothing */
+    }
+    return tail;
+}
+
 double trn_loc_peak_failure_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
                              int32_t ry, const trn_window_t *win, double infl,
                              const trn_loc_result_t *out)
@@ -247,11 +256,8 @@ double trn_loc_peak_failure_(const trn_map_t *map, const trn_grid_f32_t *local, 
     const double lo[2] = {(double)win->x0, (double)win->y0};
     const double hi[2] = {(double)win->x1, (double)win->y1};
     trn_refine_cfg_t rc;
-    double tail = 1.0;
     trn_loc_refine_cfg_(map, out, &rc);
-    if (trn_prob_beyond(out->refinement.cov_cells, TRN_FAIL_RADIUS_CELLS, &tail) != TRN_OK) {
-        tail = 1.0; /* a covariance that bounds nothing */
-    }
-    return fmax(tail, trn_refine_valley_fail_(&map->heights, local, rx, ry, &rc, &out->refinement,
-                                              infl, lo, hi));
+    return fmax(
+        trn_loc_tail_failure_(out->refinement.cov_cells),
+        trn_refine_valley_fail_(&map->heights, local, rx, ry, &rc, &out->refinement, infl, lo, hi));
 }

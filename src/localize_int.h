@@ -46,10 +46,13 @@ int trn_loc_noise_rejected_(const trn_map_t *map, const trn_grid_f32_t *local, i
 /* The refinement's noise model: the map's, its sd times out->noise_scale. */
 void trn_loc_refine_cfg_(const trn_map_t *map, const trn_loc_result_t *out, trn_refine_cfg_t *rc);
 
+/* The refined answer's covariance's mass beyond TRN_FAIL_RADIUS_CELLS
+ * (trn_prob_beyond on cov_cells; 1 if it is not a covariance). */
+double trn_loc_tail_failure_(const double cov_cells[3]);
 /* The failure probability of the refined answer's own peak: the larger of
  * its valley's (trn_refine_valley_fail_ with the answer's noise model, over
- * the window win, ln L over infl) and its covariance's tail beyond
- * TRN_FAIL_RADIUS_CELLS (trn_prob_beyond; 1 if the covariance is not one);
+ * the window win, ln L over infl) and its covariance's tail
+ * (trn_loc_tail_failure_);
  * here, not in localize.c, so that its frame is not under
  * trn_localize_dem's on the stack. */
 double trn_loc_peak_failure_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
