@@ -155,11 +155,13 @@ typedef struct {
  *  half-cell shift on terrain a cell wide), so the best integer pose is not
  *  always in the best refined basin (docs/method.md 9). */
 #define TRN_REFINE_BASINS 4
-/** A far basin replaces the answer only if its refinement ends more than
- *  TRN_FAIL_RADIUS_CELLS from the answer's and its refined ln L, over the
- *  inflation (the failure probability's scale), is higher by more than this
- *  many nats: odds of e^3 = 20 to 1, the 5 % level; closer basins are a tie
- *  the data do not break (docs/method.md 9). */
+/** A far basin whose refinement ends more than TRN_FAIL_RADIUS_CELLS from
+ *  the answer's replaces it if its refined ln L, over the inflation (the
+ *  failure probability's scale), is higher by more than this many nats: odds
+ *  of e^3 = 20 to 1, the 5 % level. Within this margin either way the data
+ *  do not break the tie by the peaks: the zone holding more of the grid's
+ *  posterior mass wins, the answer most likely right (docs/method.md 9, "The
+ *  zone's mass"). */
 #define TRN_REFINE_FAR_NATS 3.0
 /** A localization fails when its answer is more than this many cells from
  *  the truth: the event of the failure probability (docs/method.md 9). */
