@@ -135,10 +135,10 @@ static void test_zone_lse_slow(void **state)
         }
     }
     /* the written-out masses of the two zones */
-    assert_true(fabs(trn_loc_zone_lse_(grid, &WIN, 1, 15, 25, 1, 1.0) -
-                     log(1.0 + 8.0 * exp(-6.0))) < 1e-12);
+    assert_true(fabs(trn_loc_zone_lse_(grid, &WIN, 1, 15, 25, 1, 1.0) - log1p(8.0 * exp(-6.0))) <
+                1e-12);
     assert_true(fabs(trn_loc_zone_lse_(grid, &WIN, 1, 22, 28, 1, 1.0) -
-                     (-0.8 + log(1.0 + 8.0 * exp(-0.05)))) < 1e-12);
+                     (-0.8 + log1p(8.0 * exp(-0.05)))) < 1e-12);
 }
 
 /* The rule with the answer at (ax, ay) refined to (ax + 0.2, ay), ln L all,
