@@ -473,7 +473,7 @@ double trn_refine_model2_(double rr, double noise2, double q)
 
 double trn_refine_sys_weight_(double rr, double noise2, double q, double vv)
 {
-    double m2s = (rr - noise2 - TRN_REFINE_SYS_Z * sqrt(vv)) / q;
+    double m2s = (rr - noise2 - TRN_REFINE_SYS_TERM_Z * sqrt(vv)) / q;
     m2s = m2s > 0.0 ? m2s : 0.0;
     return TRN_REFINE_SYS * m2s / (m2s + noise2 / q);
 }
@@ -675,7 +675,7 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
      * sampling sds of 1 (docs/method.md 9, "the floors"). */
     {
         /* q > 0: at least 8 inliers, each noise variance > 0. The systematic
-         * weight counts the misfit beyond TRN_REFINE_SYS_Z sampling sds of
+         * weight counts the misfit beyond TRN_REFINE_SYS_TERM_Z sampling sds of
          * what the noise alone would give (with no misfit, next_model2's
          * estimate is positive in about a third of the cases); taken before
          * block_meat reuses acc. */

@@ -557,7 +557,7 @@ static int iterate(const rctx_t *c, const double p0[3], double max_turn, double 
  * interpolants' shift weighted by the misfit's share of the residuals'
  * variance, sys_weight = TRN_REFINE_SYS m_s^2 / (m_s^2 + the
  * precision-squared weighted mean noise variance), m_s^2 the misfit beyond
- * TRN_REFINE_SYS_Z sampling sds. 0 when the normal matrix
+ * TRN_REFINE_SYS_TERM_Z sampling sds. 0 when the normal matrix
  * is singular or under half the points are inliers. */
 static int covariance(const rctx_t *c, const double p[5], double model2, acc4_t *acc,
                       double inv[16], double g[4], trn_refine3_t *out)

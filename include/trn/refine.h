@@ -26,7 +26,7 @@
  * of the shift bilinear heights would cause (the interpolants'
  * disagreement), sys_weight = TRN_REFINE_SYS x the
  * share in the residual variance of the misfit beyond its sampling noise
- * (TRN_REFINE_SYS_Z). docs/modules/refine.md.
+ * (TRN_REFINE_SYS_TERM_Z). docs/modules/refine.md.
  */
 #ifndef TRN_REFINE_H
 #define TRN_REFINE_H
@@ -57,13 +57,21 @@ extern "C" {
 #define TRN_REFINE_SYS 1.0
 #endif
 #ifndef TRN_REFINE_SYS_Z
+/** The covariance's reduced chi-square and block-sandwich ratio
+ *  (trn_refine_t.inflation) count only where above 1 by more than this many
+ *  of their sampling standard deviations under the noise model (the
+ *  systematic weight did too until session 20: TRN_REFINE_SYS_TERM_Z). */
+#define TRN_REFINE_SYS_Z 1.0
+#endif
+#ifndef TRN_REFINE_SYS_TERM_Z
 /** The misfit that weights the interpolants' disagreement counts only beyond
  *  this many sampling standard deviations of what the noise alone would
  *  give (sys_weight): with no misfit at all, the moment estimate of m^2 is
- *  positive in about a third of the cases (tests/test_refine.c). The same
- *  rule gates the covariance's reduced chi-square and block-sandwich
- *  ratio (trn_refine_t.inflation). */
-#define TRN_REFINE_SYS_Z 1.0
+ *  positive in about a third of the cases (tests/test_refine.c). Two, not
+ *  the factors' one: a false alarm here adds the whole disagreement, on a
+ *  smooth DEM many times the statistical variance, where a factor's adds
+ *  its ratio (docs/method.md 9, "The systematic term's test"). */
+#define TRN_REFINE_SYS_TERM_Z 2.0
 #endif
 /** Prior of the interpolants' mix (0 bilinear, 1 bicubic): its mean, the
  *  middle of the bracket the two interpolants make, */
@@ -116,7 +124,7 @@ typedef struct {
                                  bicubic, cells; sys_weight times its outer product is
                                  in the covariance */
     double sys_weight;      /**< TRN_REFINE_SYS x m_s^2 / (m_s^2 + the mean noise variance), m_s^2
-                                 the misfit beyond TRN_REFINE_SYS_Z sampling sds */
+                                 the misfit beyond TRN_REFINE_SYS_TERM_Z sampling sds */
     double interp_mix;      /**< the estimated mix of the interpolants: 0 bilinear,
                                  1 bicubic (beyond [0, 1]: sharper or smoother) */
     double ll;              /**< trn_height_search's mixture ln L at the refined pose
