@@ -24,6 +24,9 @@
  * - a twin: the terrain around the truth copied 17 and 14 cells away, so two
  *   basins are equal to the last bit: neither replaces the other, the failure
  *   probability is 0.3-0.75, status TRN_E_AMBIGUOUS;
+ * - the decoys at 2 cm through the search over heading held at 0: the same
+ *   answer, start, status and failure probability as trn_localize_dem's (its
+ *   far basins' move over heading, src/height_heading.c);
  * - with no decoy and no twin the answer is the truth and nothing moves.
  */
 #include <stdarg.h>
@@ -38,6 +41,7 @@
 #include <string.h>
 
 #include "rng.h"
+#include "trn/height_heading.h"
 #include "trn/localize.h"
 #include "trn/refine.h"
 
@@ -304,6 +308,61 @@ static void test_twin_is_ambiguous(void **state)
     }
 }
 
+/* The same decoys through the search over heading held at 0 (W = 0, centre
+ * 0: trn_localize_dem's answer; docs/modules/heading.md): its far basins
+ * (src/height_heading.c's refine_starts) move the answer to the truth by
+ * the same rule, so the answer, its start, status and failure probability
+ * are trn_localize_dem's. */
+static void test_decoy_over_heading(void **state)
+{
+    static const double tx = 30.45, ty = 33.35;
+    int s, held = 0;
+    (void)state;
+    for (s = 1; s <= 4; ++s) {
+        trn_grid_f32_t g, l;
+        trn_loc_result_t res;
+        trn_heading_result_t hr;
+        trn_heading_cfg_t hc;
+        trn_height_best_t gb;
+        trn_status_t st, sh;
+        world_t w;
+        size_t hb;
+        void *hws;
+        make_terrain((uint64_t)s);
+        make_local(tx, ty, &l);
+        plant(42, 40, 0.02);
+        build(&w, &g);
+        grid_best(&w, &g, &l, &WIN, &gb);
+        st = run(&w, &l, &WIN, &res);
+        hc.center_rad = 0.0;
+        hc.window_rad = 0.0;
+        hc.step_rad = 0.0;
+        hb = trn_localize_dem_heading_workspace_bytes_cfg(&w.map, &l, LR, LR, MAXPTS, &WIN, &hc);
+        assert_true(hb > 0u);
+        hws = malloc(hb);
+        assert_non_null(hws);
+        memset(&hr, 0, sizeof hr);
+        sh = trn_localize_dem_heading(&w.map, &l, LR, LR, MAXPTS, &WIN, &hc, hws, hb, &hr);
+        printf("seed %d over heading: answer (%.3f, %.3f) status [%s], failure probability %.3g "
+               "(trn_localize_dem: (%.3f, %.3f) [%s] %.3g)\n",
+               s, hr.loc.x, hr.loc.y, trn_strerror(sh), hr.loc.failure_probability, res.x, res.y,
+               trn_strerror(st), res.failure_probability);
+        free(hws);
+        done(&w);
+        if (gb.x != 42 || gb.y != 40) {
+            continue; /* the truth scores best on the grid: not the case */
+        }
+        ++held;
+        assert_int_equal(sh, st);
+        assert_true(fabs(hr.loc.x - tx) < 0.02 && fabs(hr.loc.y - ty) < 0.02);
+        assert_true(fabs(hr.loc.x - res.x) < 1e-9 && fabs(hr.loc.y - res.y) < 1e-9);
+        assert_true(hr.loc.ix == res.ix && hr.loc.iy == res.iy);
+        assert_true(hr.loc.on_window_edge == res.on_window_edge);
+        assert_true(fabs(hr.loc.failure_probability - res.failure_probability) < 1e-9);
+    }
+    assert_true(held >= 3);
+}
+
 static void test_alone_unchanged(void **state)
 {
     static const double tx = 30.45, ty = 33.35;
@@ -331,6 +390,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_decoy_loses_to_subcell_truth),
+        cmocka_unit_test(test_decoy_over_heading),
         cmocka_unit_test(test_twin_is_ambiguous),
         cmocka_unit_test(test_alone_unchanged),
     };
