@@ -24,9 +24,9 @@
  * - a twin: the terrain around the truth copied 17 and 14 cells away, so two
  *   basins are equal to the last bit: neither replaces the other, the failure
  *   probability is 0.3-0.75, status TRN_E_AMBIGUOUS;
- * - the decoys at 2 cm through the search over heading held at 0: the same
- *   answer, start, status and failure probability as trn_localize_dem's (its
- *   far basins' move over heading, src/height_heading.c);
+ * - the decoys at 2 cm through the search over heading (+-2 degrees): its
+ *   far basins (src/height_heading.c) move the answer to the truth too,
+ *   flagged by the grid's mass at the decoy;
  * - with no decoy and no twin the answer is the truth and nothing moves.
  */
 #include <stdarg.h>
@@ -308,11 +308,12 @@ static void test_twin_is_ambiguous(void **state)
     }
 }
 
-/* The same decoys through the search over heading held at 0 (W = 0, centre
- * 0: trn_localize_dem's answer; docs/modules/heading.md): its far basins
- * (src/height_heading.c's refine_starts) move the answer to the truth by
- * the same rule, so the answer, its start, status and failure probability
- * are trn_localize_dem's. */
+/* The same decoys through the search over heading (+-2 degrees about 0;
+ * W = 0 at centre 0 would be trn_localize_dem itself): its far basins
+ * (src/height_heading.c's refine_starts), at their own headings, move the
+ * answer to the truth by the same rule: within 0.02 cell of it, the
+ * heading within 0.2 degree of 0, the start no longer the decoy's, and the
+ * grid's mass, at the decoy, in the failure probability (above 1/2). */
 static void test_decoy_over_heading(void **state)
 {
     static const double tx = 30.45, ty = 33.35;
@@ -320,11 +321,10 @@ static void test_decoy_over_heading(void **state)
     (void)state;
     for (s = 1; s <= 4; ++s) {
         trn_grid_f32_t g, l;
-        trn_loc_result_t res;
         trn_heading_result_t hr;
         trn_heading_cfg_t hc;
         trn_height_best_t gb;
-        trn_status_t st, sh;
+        trn_status_t sh;
         world_t w;
         size_t hb;
         void *hws;
@@ -333,9 +333,8 @@ static void test_decoy_over_heading(void **state)
         plant(42, 40, 0.02);
         build(&w, &g);
         grid_best(&w, &g, &l, &WIN, &gb);
-        st = run(&w, &l, &WIN, &res);
         hc.center_rad = 0.0;
-        hc.window_rad = 0.0;
+        hc.window_rad = 2.0 * 3.14159265358979323846 / 180.0;
         hc.step_rad = 0.0;
         hb = trn_localize_dem_heading_workspace_bytes_cfg(&w.map, &l, LR, LR, MAXPTS, &WIN, &hc);
         assert_true(hb > 0u);
@@ -343,22 +342,21 @@ static void test_decoy_over_heading(void **state)
         assert_non_null(hws);
         memset(&hr, 0, sizeof hr);
         sh = trn_localize_dem_heading(&w.map, &l, LR, LR, MAXPTS, &WIN, &hc, hws, hb, &hr);
-        printf("seed %d over heading: answer (%.3f, %.3f) status [%s], failure probability %.3g "
-               "(trn_localize_dem: (%.3f, %.3f) [%s] %.3g)\n",
-               s, hr.loc.x, hr.loc.y, trn_strerror(sh), hr.loc.failure_probability, res.x, res.y,
-               trn_strerror(st), res.failure_probability);
+        printf("seed %d over heading: answer (%.3f, %.3f) at %.3f deg, start (%d, %d), status "
+               "[%s], failure probability %.3g\n",
+               s, hr.loc.x, hr.loc.y, hr.heading_rad * 180.0 / 3.14159265358979323846,
+               (int)hr.loc.ix, (int)hr.loc.iy, trn_strerror(sh), hr.loc.failure_probability);
         free(hws);
         done(&w);
         if (gb.x != 42 || gb.y != 40) {
             continue; /* the truth scores best on the grid: not the case */
         }
         ++held;
-        assert_int_equal(sh, st);
+        assert_int_equal(sh, TRN_E_AMBIGUOUS);
         assert_true(fabs(hr.loc.x - tx) < 0.02 && fabs(hr.loc.y - ty) < 0.02);
-        assert_true(fabs(hr.loc.x - res.x) < 1e-9 && fabs(hr.loc.y - res.y) < 1e-9);
-        assert_true(hr.loc.ix == res.ix && hr.loc.iy == res.iy);
-        assert_true(hr.loc.on_window_edge == res.on_window_edge);
-        assert_true(fabs(hr.loc.failure_probability - res.failure_probability) < 1e-9);
+        assert_true(fabs(hr.heading_rad) < 0.2 * 3.14159265358979323846 / 180.0);
+        assert_true(hr.loc.ix != 42 || hr.loc.iy != 40);
+        assert_true(hr.loc.failure_probability > 0.5);
     }
     assert_true(held >= 3);
 }
