@@ -437,10 +437,7 @@ static void search_result(const trn_height_best3_t *b, const trn_window_t *win,
     out->loc.n_points = 0u;
     out->loc.stats.poses_scored = b->poses;
     out->loc.stats.blocks_bounded = 0u;
-    out->loc.on_window_edge = (b->x == win->x0 || b->x == win->x1 || b->y == win->y0 ||
-                               b->y == win->y1)
-                                  ? 1
-                                  : 0;
+    out->loc.on_window_edge = trn_loc_on_edge_(win, b->x, b->y);
     out->loc.x = (double)b->x;
     out->loc.y = (double)b->y;
     out->loc.sigma_x_m = out->loc.sigma_y_m = (double)INFINITY;
@@ -584,8 +581,7 @@ static int refine_starts(const trn_map_t *map, const trn_grid_f32_t *local, int3
             const int32_t sx = far->x[k], sy = far->y[k], sk = far->k[k];
             /* a move by the zones' mass leaves the likelihood's highest pose
              * where it was: on the window's edge, still no fix */
-            far->edge = far->edge || (wins == 2 && (ax == win->x0 || ax == win->x1 ||
-                                                    ay == win->y0 || ay == win->y1));
+            far->edge = far->edge || (wins == 2 && trn_loc_on_edge_(win, ax, ay));
             far->x[k] = ax;
             far->y[k] = ay;
             far->k[k] = far->moved ? far->mk : b->k + b->half_steps;
@@ -685,10 +681,7 @@ trn_status_t trn_localize_heights3_(const trn_map_t *map, const trn_grid_f32_t *
                                         (size_t)(win->y1 - win->y0 + 1) +
                                     (size_t)(far->my - win->y0) * (size_t)(win->x1 - win->x0 + 1) +
                                     (size_t)(far->mx - win->x0)];
-            out->loc.on_window_edge = (far->mx == win->x0 || far->mx == win->x1 ||
-                                       far->my == win->y0 || far->my == win->y1 || far->edge)
-                                          ? 1
-                                          : 0;
+            out->loc.on_window_edge = trn_loc_on_edge_(win, far->mx, far->my) || far->edge;
         }
         refine_result(map, ref, out);
     }

@@ -385,10 +385,7 @@ trn_status_t trn_localize_points(const trn_map_t *map, const trn_point_t *pts, s
     out->iy = best.y;
     out->ll_best = nats(best.score);
     out->n_points = n;
-    out->on_window_edge = (best.x == win->x0 || best.x == win->x1 || best.y == win->y0 ||
-                           best.y == win->y1)
-                              ? 1
-                              : 0;
+    out->on_window_edge = trn_loc_on_edge_(win, best.x, best.y);
     for (i = 0; i < 9; ++i) {
         int64_t s;
         if (i == 4) {
@@ -691,10 +688,7 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
         out->n_points = 0u;
         out->stats.poses_scored = best.poses;
         out->stats.blocks_bounded = 0u;
-        out->on_window_edge = (best.x == win->x0 || best.x == win->x1 || best.y == win->y0 ||
-                               best.y == win->y1)
-                                  ? 1
-                                  : 0;
+        out->on_window_edge = trn_loc_on_edge_(win, best.x, best.y);
         out->x = (double)best.x;
         out->y = (double)best.y;
         out->sigma_x_m = out->sigma_y_m = (double)INFINITY;

@@ -40,7 +40,6 @@ static void far_basins(const double *g, const trn_window_t *win, int32_t bx, int
     int32_t x, y;
     b->n = 0;
     b->moved = 0;
-    b->edge = 0;
     for (y = win->y0; y <= win->y1; ++y) {
         for (x = win->x0; x <= win->x1; ++x) {
             double v = grid_at(g, win, x, y);
@@ -82,7 +81,6 @@ static int beyond_radius(double cx, double cy, double ax, double ay)
  * TRN_FAIL_RADIUS_CELLS away (one that came back to the answer's own basin
  * is not a move, whatever its ln L) and beats the answer's ln L, over the
  * inflation, by more than TRN_REFINE_FAR_NATS. */
-
 int trn_loc_far_wins_(double cx, double cy, double cll, double ax, double ay, double all,
                       double infl)
 {
@@ -173,10 +171,8 @@ static void refine_basins(const trn_map_t *map, const trn_grid_f32_t *local, int
             /* a move by the zones' mass leaves the likelihood's highest
              * pose where it was: on the window's edge it may still rise
              * beyond the window */
-            out->on_window_edge = (out->ix == win->x0 || out->ix == win->x1 || out->iy == win->y0 ||
-                                   out->iy == win->y1 || (wins == 2 && edge != 0))
-                                      ? 1
-                                      : 0;
+            out->on_window_edge = trn_loc_on_edge_(win, out->ix, out->iy) ||
+                                  (wins == 2 && edge != 0);
             trn_loc_take_refinement_(map, out);
         }
     }

@@ -28,6 +28,13 @@ typedef struct {
                                   edge (trn_loc_basin_wins_ 2) */
 } trn_loc_basins_t;
 
+/* 1 if pose (x, y) lies on the border of window win (the likelihood may
+ * rise beyond it: the height matchers' on_window_edge), else 0. */
+static inline int32_t trn_loc_on_edge_(const trn_window_t *win, int32_t x, int32_t y)
+{
+    return (x == win->x0 || x == win->x1 || y == win->y0 || y == win->y1) ? 1 : 0;
+}
+
 /* Bytes of a trn_loc_basins_t (the workspace's share). */
 size_t trn_loc_basins_bytes_(void);
 
