@@ -710,6 +710,9 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
      * hiding its competitors inside a wide zone. */
     if (out->refined) {
         infl = out->refinement.ll_inflation;
+        /* the final answer's ellipse: ln L's fall at 2 sds, not only its
+         * peak's curvature (docs/method.md 9, "The shoulders") */
+        trn_loc_shoulders_(map, local, rx, ry, out);
     }
     ex.cx = out->ix; /* the answer's start (refine_basins may move it) */
     ex.cy = out->iy;

@@ -309,6 +309,15 @@ double trn_loc_tail_failure_(const double cov_cells[3])
     return tail;
 }
 
+void trn_loc_shoulders_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
+                        trn_loc_result_t *out)
+{
+    trn_refine_cfg_t rc;
+    trn_loc_refine_cfg_(map, out, &rc);
+    trn_refine_shoulders_(&map->heights, local, rx, ry, &rc, &out->refinement);
+    trn_loc_take_refinement_(map, out);
+}
+
 double trn_loc_peak_failure_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
                              int32_t ry, const trn_window_t *win, double infl,
                              const trn_loc_result_t *out)

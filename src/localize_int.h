@@ -58,6 +58,11 @@ void trn_loc_refine_cfg_(const trn_map_t *map, const trn_loc_result_t *out, trn_
 /* The refined answer's covariance's mass beyond TRN_FAIL_RADIUS_CELLS
  * (trn_prob_beyond on cov_cells; 1 if it is not a covariance). */
 double trn_loc_tail_failure_(const double cov_cells[3]);
+/* The refined answer's covariance widened where ln L's shoulders are
+ * flatter than its peak (trn_refine_shoulders_ with the answer's noise
+ * model; docs/method.md 9, "The shoulders"), taken into out. */
+void trn_loc_shoulders_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
+                        trn_loc_result_t *out);
 /* The failure probability of the refined answer's own peak: the larger of
  * its valley's (trn_refine_valley_fail_ with the answer's noise model, over
  * the window win, ln L over infl) and its covariance's tail

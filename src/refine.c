@@ -565,6 +565,7 @@ static void set_fail(trn_refine_t *out, int32_t ix, int32_t iy)
     out->interp_shift[0] = out->interp_shift[1] = 0.0;
     out->interp_mix = TRN_REFINE_MIX_MEAN;
     out->sys_weight = 0.0;
+    out->shoulders = 1.0;
     out->ll = -(double)INFINITY;
 }
 
@@ -865,33 +866,27 @@ static double valley_point(const trn_grid_f32_t *global, const trn_grid_f32_t *l
                       cfg);
 }
 
-double trn_refine_valley_fail_(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
-                               int32_t rx, int32_t ry, const trn_refine_cfg_t *cfg,
-                               const trn_refine_t *at, double infl, const double lo[2],
-                               const double hi[2])
+/* The axes of a 2 x 2 covariance (var_x, var_y, cov_xy): lam[0] >= lam[1]
+ * its eigenvalues, e1 the unit eigenvector of lam[0] (from the better
+ * conditioned of the two rows of cov - lam[0] I; any axis for a round
+ * ellipse), e2 = e1 turned by 90 degrees. */
+static void cov_axes(const double cov[3], double lam[2], double e1[2], double e2[2])
 {
-    const double h = TRN_VALLEY_STEP_CELLS;
-    const int32_t kmax = (int32_t)(TRN_VALLEY_REACH_CELLS / TRN_VALLEY_STEP_CELLS + 0.5);
-    const double a = at->cov_cells[0], b = at->cov_cells[1], c = at->cov_cells[2];
-    const double lam1 = 0.5 * (a + b) + sqrt(0.25 * (a - b) * (a - b) + c * c);
-    const double model2 = at->model_m * at->model_m;
-    double in = 1.0, out = 0.0, d1[2] = {-INFINITY, -INFINITY}, q, e1[2], e2[2], n;
-    int32_t side, k;
-    if (!(infl >= 1.0) || !isfinite(at->ll) || !isfinite(lam1)) {
-        return 0.0;
-    }
-    /* the major axis: the eigenvector of the larger eigenvalue, from the
-     * better conditioned of the two rows of (cov - lam1 I) */
+    const double a = cov[0], b = cov[1], c = cov[2];
+    const double d = sqrt(0.25 * (a - b) * (a - b) + c * c);
+    double n;
+    lam[0] = 0.5 * (a + b) + d;
+    lam[1] = 0.5 * (a + b) - d;
     if (a >= b) {
-        e1[0] = lam1 - b;
+        e1[0] = lam[0] - b;
         e1[1] = c;
     } else {
         e1[0] = c;
-        e1[1] = lam1 - a;
+        e1[1] = lam[0] - a;
     }
     n = sqrt(e1[0] * e1[0] + e1[1] * e1[1]);
-    if (!(n > 0.0)) {
-        e1[0] = 1.0; /* a round ellipse: any axis */
+    if (!(n > 0.0) || !isfinite(n)) {
+        e1[0] = 1.0;
         e1[1] = 0.0;
         n = 1.0;
     }
@@ -899,6 +894,22 @@ double trn_refine_valley_fail_(const trn_grid_f32_t *global, const trn_grid_f32_
     e1[1] /= n;
     e2[0] = -e1[1];
     e2[1] = e1[0];
+}
+
+double trn_refine_valley_fail_(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
+                               int32_t rx, int32_t ry, const trn_refine_cfg_t *cfg,
+                               const trn_refine_t *at, double infl, const double lo[2],
+                               const double hi[2])
+{
+    const double h = TRN_VALLEY_STEP_CELLS;
+    const int32_t kmax = (int32_t)(TRN_VALLEY_REACH_CELLS / TRN_VALLEY_STEP_CELLS + 0.5);
+    const double model2 = at->model_m * at->model_m;
+    double in = 1.0, out = 0.0, d1[2] = {-INFINITY, -INFINITY}, q, lam[2], e1[2], e2[2];
+    int32_t side, k;
+    cov_axes(at->cov_cells, lam, e1, e2);
+    if (!(infl >= 1.0) || !isfinite(at->ll) || !isfinite(lam[0])) {
+        return 0.0;
+    }
     for (side = 0; side < 2; ++side) {
         const double sg = side == 0 ? -1.0 : 1.0;
         double o = 0.0, dz = at->dz_m;
@@ -1249,4 +1260,50 @@ trn_status_t trn_refine_args_(const trn_grid_f32_t *global, const trn_grid_f32_t
         return st;
     }
     return cfg->inlier_prob > 0.0f && cfg->inlier_prob < 1.0f ? TRN_OK : TRN_E_ARG;
+}
+
+/* The mean of ln L's fall over the two sides of the answer at distance t
+ * along the unit axis e, each point's offset along perp and dz at their
+ * best (valley_point), over t^2: the curvature of the quadratic through
+ * the answer and those two points. */
+static double fall_per_t2(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
+                          int32_t ry, const trn_refine_cfg_t *cfg, const trn_refine_t *at,
+                          const double e[2], const double perp[2], double t)
+{
+    const double model2 = at->model_m * at->model_m;
+    double fall = 0.0;
+    int32_t side;
+    for (side = 0; side < 2; ++side) {
+        const double sg = side == 0 ? -1.0 : 1.0;
+        double o = 0.0, dz = at->dz_m;
+        fall += at->ll - valley_point(global, local, rx, ry, cfg, at->x + sg * t * e[0],
+                                      at->y + sg * t * e[1], perp, at->interp_mix, model2, &o, &dz);
+    }
+    return 0.5 * fall / (t * t);
+}
+
+void trn_refine_shoulders_(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
+                           int32_t ry, const trn_refine_cfg_t *cfg, trn_refine_t *at)
+{
+    double lam[2], e[2][2], kap[2];
+    int32_t k;
+    cov_axes(at->cov_cells, lam, e[0], e[1]);
+    if (!isfinite(lam[0]) || !(lam[1] > 0.0) || !isfinite(at->ll)) {
+        return;
+    }
+    for (k = 0; k < 2; ++k) {
+        const double sd = sqrt(lam[k]);
+        const double near = fall_per_t2(global, local, rx, ry, cfg, at, e[k], e[1 - k],
+                                        TRN_SHOULDER_NEAR_SD * sd);
+        const double far = fall_per_t2(global, local, rx, ry, cfg, at, e[k], e[1 - k],
+                                       TRN_SHOULDER_FAR_SD * sd);
+        /* NaN (a point with no data) or a profile that does not fall: no
+         * factor from it (the failure probability sees a rising profile) */
+        kap[k] = near > 0.0 && far > 0.0 ? near / far : 1.0;
+        kap[k] = kap[k] < 1.0 ? 1.0 : kap[k] > TRN_SHOULDER_MAX ? TRN_SHOULDER_MAX : kap[k];
+    }
+    at->shoulders = kap[0] > kap[1] ? kap[0] : kap[1];
+    at->cov_cells[0] = kap[0] * lam[0] * e[0][0] * e[0][0] + kap[1] * lam[1] * e[1][0] * e[1][0];
+    at->cov_cells[1] = kap[0] * lam[0] * e[0][1] * e[0][1] + kap[1] * lam[1] * e[1][1] * e[1][1];
+    at->cov_cells[2] = kap[0] * lam[0] * e[0][0] * e[0][1] + kap[1] * lam[1] * e[1][0] * e[1][1];
 }

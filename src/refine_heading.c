@@ -456,6 +456,7 @@ static void set_fail(trn_refine3_t *out, int32_t ix, int32_t iy, double th)
     out->pos.interp_shift[0] = out->pos.interp_shift[1] = 0.0;
     out->pos.interp_mix = TRN_REFINE_MIX_MEAN;
     out->pos.sys_weight = 0.0;
+    out->pos.shoulders = 1.0;
     out->pos.ll = -(double)INFINITY;
     out->heading_rad = th;
     out->interp_shift_heading_rad = 0.0;

@@ -173,4 +173,14 @@ double trn_refine_valley_fail_(const trn_grid_f32_t *global, const trn_grid_f32_
                                int32_t rx, int32_t ry, const trn_refine_cfg_t *cfg,
                                const trn_refine_t *at, double infl, const double lo[2],
                                const double hi[2]);
+/* The covariance's shoulders (docs/method.md 9, "The shoulders"): along
+ * each axis of at's (x, y) covariance, ln L's fall over t^2 at
+ * TRN_SHOULDER_NEAR_SD and at TRN_SHOULDER_FAR_SD sds (both sides
+ * averaged; each point's offset across the axis and dz at their best, the
+ * mix and model variance held); where the far fall is smaller (ln L's
+ * shoulders flatter than its peak: a bilinear map's kinks at the cell
+ * edges), that axis's variance is multiplied by the ratio, in [1,
+ * TRN_SHOULDER_MAX]; at->shoulders the larger factor. */
+void trn_refine_shoulders_(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
+                           int32_t ry, const trn_refine_cfg_t *cfg, trn_refine_t *at);
 #endif /* TRN_REFINE_INT_H */

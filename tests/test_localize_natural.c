@@ -1163,9 +1163,9 @@ static double slow_valley(const trn_map_cfg_t *cfg, const trn_refine_t *at, cons
  * 0.31). Local maps of the kerb (a disc of radius 20, the
  * noise model's noise) from 8 truths within a cell of its centre: every
  * refined answer's failure probability is at least the valley's, written
- * out (slow_valley), and where that is above 0.05, equal to it within 0.01
- * + 5 % (measured: within 0.002); every answer more than 1.5 cells off is
- * no fix. */
+ * out (slow_valley), and where that is above 0.05, equal to the larger of
+ * it and the reported ellipse's tail within 0.01 + 5 % (measured: within
+ * 0.002); every answer more than 1.5 cells off is no fix. */
 static void test_valley_failure(void **state)
 {
     trn_grid_f32_t g, l;
@@ -1219,8 +1219,12 @@ static void test_valley_failure(void **state)
             assert_true(res.failure_probability >= tail);
             assert_true(res.failure_probability >= slow - 0.01 - 0.05 * slow);
             if (slow > 0.05) {
-                /* here the grid's and the far basins' shares are below it */
-                assert_true(fabs(res.failure_probability - slow) < 0.01 + 0.05 * slow);
+                /* here the grid's and the far basins' shares are below it:
+                 * the larger of the valley's and the ellipse's tail (the
+                 * ellipse widened by its shoulders along the valley since
+                 * session 21, docs/method.md 9) */
+                const double top = fmax(slow, tail);
+                assert_true(fabs(res.failure_probability - top) < 0.01 + 0.05 * top);
                 checked += 1;
             }
         }

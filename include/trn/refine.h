@@ -73,6 +73,20 @@ extern "C" {
  *  its ratio (docs/method.md 9, "The systematic term's test"). */
 #define TRN_REFINE_SYS_TERM_Z 2.0
 #endif
+/** The covariance's shoulders (trn_localize_dem's height matcher, x-y only;
+ *  docs/method.md 9, "The shoulders"): along each axis of the refined (x, y)
+ *  covariance ln L's fall over t^2 is compared at t = TRN_SHOULDER_NEAR_SD
+ *  and TRN_SHOULDER_FAR_SD sds; where it is smaller far out, ln L is not
+ *  the quadratic its peak's curvature describes (a bilinear map's kinks at
+ *  the cell edges: a sharp peak with broad shoulders), and that axis's
+ *  variance takes the ratio, at most TRN_SHOULDER_MAX. Two sds: the middle
+ *  of the 1, 2 and 3-sigma ellipses the calibration is judged by. */
+#define TRN_SHOULDER_FAR_SD 2.0
+/** ... near: half an sd, where the peak's own curvature rules */
+#define TRN_SHOULDER_NEAR_SD 0.5
+/** ... largest factor (a profile that hardly falls is the failure
+ *  probability's to report, not the ellipse's) */
+#define TRN_SHOULDER_MAX 16.0
 /** Prior of the interpolants' mix (0 bilinear, 1 bicubic): its mean, the
  *  middle of the bracket the two interpolants make, */
 #define TRN_REFINE_MIX_MEAN 0.5
@@ -125,6 +139,11 @@ typedef struct {
                                  in the covariance */
     double sys_weight;      /**< TRN_REFINE_SYS x m_s^2 / (m_s^2 + the mean noise variance), m_s^2
                                  the misfit beyond TRN_REFINE_SYS_TERM_Z sampling sds */
+    double shoulders;       /**< factor (>= 1) trn_localize_dem put on the (x, y)
+                                 covariance along an axis where ln L's fall at
+                                 TRN_SHOULDER_FAR_SD sds is flatter than at
+                                 TRN_SHOULDER_NEAR_SD (the larger axis's); 1 from
+                                 trn_refine_pose, over heading and where not applied */
     double interp_mix;      /**< the estimated mix of the interpolants: 0 bilinear,
                                  1 bicubic (beyond [0, 1]: sharper or smoother) */
     double ll;              /**< trn_height_search's mixture ln L at the refined pose
