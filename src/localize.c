@@ -7,6 +7,7 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "height_bound.h"
 #include "localize_int.h"
 #include "refine_int.h"
 #include "ws.h"
@@ -32,6 +33,8 @@ void trn_map_cfg_default(trn_map_cfg_t *cfg)
     cfg->match = TRN_MATCH_VOXEL;
     cfg->max_failure_prob = 1.0f;
     cfg->noise_auto = 0;
+    cfg->search = TRN_SEARCH_EXHAUSTIVE;
+    cfg->node_budget = 0u;
 }
 
 static trn_lik_cfg_t lik_of(const trn_map_cfg_t *cfg)
@@ -63,6 +66,7 @@ trn_status_t trn_map_cfg_check(const trn_map_cfg_t *cfg)
         (cfg->local_highpass != TRN_LOCAL_HP_BOX && cfg->local_highpass != TRN_LOCAL_HP_MAP) ||
         (cfg->refine != 0 && cfg->refine != 1) || (cfg->noise_auto != 0 && cfg->noise_auto != 1) ||
         (cfg->match != TRN_MATCH_VOXEL && cfg->match != TRN_MATCH_HEIGHTS) ||
+        (cfg->search != TRN_SEARCH_BOUNDED && cfg->search != TRN_SEARCH_EXHAUSTIVE) ||
         !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
         !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f) ||
         !(cfg->max_failure_prob > 0.0f && cfg->max_failure_prob <= 1.0f)) {
@@ -441,7 +445,7 @@ trn_status_t trn_localize_points(const trn_map_t *map, const trn_point_t *pts, s
  * (TRN_MATCH_HEIGHTS only)]. */
 
 typedef struct {
-    size_t hp, hpws, pts, search, llgrid, cand, basins, total;
+    size_t hp, hpws, pts, search, llgrid, cand, basins, hb, total;
 } loc_layout_t;
 
 static int loc_layout(const trn_map_t *map, int32_t w, int32_t h, size_t max_points,
@@ -459,13 +463,22 @@ static int loc_layout(const trn_map_t *map, int32_t w, int32_t h, size_t max_poi
     lay->hpws = trn_ws_offset(&ws, hpws);
     lay->pts = trn_ws_offset(&ws, max_points * sizeof(trn_point_t));
     lay->search = trn_ws_offset(&ws, sw);
-    lay->llgrid = lay->cand = lay->basins = ws.total;
+    lay->llgrid = lay->cand = lay->basins = lay->hb = ws.total;
     if (map->cfg.match == TRN_MATCH_HEIGHTS) { /* every pose's ln L (trn_height_search) */
         lay->llgrid = trn_ws_offset(&ws, (size_t)(win->x1 - win->x0 + 1) *
                                              (size_t)(win->y1 - win->y0 + 1) * sizeof(double));
         /* a refinement from a neighbouring start (refine_result) */
         lay->cand = trn_ws_offset(&ws, sizeof(trn_refine_t));
         lay->basins = trn_ws_offset(&ws, trn_loc_basins_bytes_()); /* far basins (refine_basins) */
+        if (map->cfg.search == TRN_SEARCH_BOUNDED) { /* the bounded search's state */
+            const size_t hbb = trn_hb_bytes(win, w, h);
+            if (hbb == 0u) {
+                return 0;
+            }
+            lay->hb = trn_ws_offset(&ws, hbb);
+        } else { /* the exhaustive search's scratch (trn_height_search_ws_) */
+            lay->hb = trn_ws_offset(&ws, 2u * (size_t)w * (size_t)h * sizeof(double));
+        }
     }
     lay->total = ws.total;
     return 1;
@@ -658,28 +671,112 @@ static int rescale_noise(const trn_map_t *map, const trn_grid_f32_t *local, int3
     return trn_loc_noise_rejected_(map, local, rx, ry, at, 0.0, rc, &out->noise_scale);
 }
 
-/* TRN_MATCH_HEIGHTS: height search, refinement, competing hypothesis. */
+/* One search of the window with the noise model rc: every pose scored
+ * (hbws the scratch), or the bounded search in hbws (*hb its state), the
+ * best pose's neighbours scored too (the second starts read them). */
+static trn_status_t search_window(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
+                                  int32_t ry, const trn_window_t *win, const trn_refine_cfg_t *rc,
+                                  double *ll_grid, void *hbws, uint64_t *work, trn_hb_t **hb,
+                                  trn_height_best_t *best)
+{
+    trn_status_t st;
+    int32_t k;
+    if (map->cfg.search == TRN_SEARCH_EXHAUSTIVE) {
+        const uint64_t poses =
+            (uint64_t)(win->x1 - win->x0 + 1) * (uint64_t)(win->y1 - win->y0 + 1);
+        if (map->cfg.node_budget != 0u && *work + poses > (uint64_t)map->cfg.node_budget) {
+            return TRN_E_BUDGET; /* before the pass: its cost is its poses */
+        }
+        *work += poses;
+        return trn_height_search_ws_(&map->heights, local, rx, ry, win, NULL, rc,
+                                     map->cfg.inlier_prob, 1.0, ll_grid, (double *)hbws, best);
+    }
+    if ((st = trn_hb_init(hb, hbws, &map->heights, local, rx, ry, win, rc, map->cfg.inlier_prob,
+                          ll_grid, work, (uint64_t)map->cfg.node_budget)) != TRN_OK ||
+        (st = trn_hb_best(*hb, NULL, best)) != TRN_OK) {
+        return st;
+    }
+    for (k = 0; k < 9; ++k) {
+        const int32_t sx = best->x + k % 3 - 1, sy = best->y + k / 3 - 1;
+        if (sx >= win->x0 && sx <= win->x1 && sy >= win->y0 && sy <= win->y1 &&
+            (st = trn_hb_eval(*hb, sx, sy)) != TRN_OK) {
+            return st;
+        }
+    }
+    best->poses = (*hb)->evals;
+    return TRN_OK;
+}
+
+/* The bounded search's far basins: the zone around the answer's start and
+ * every pose that could be one of the exhaustive search's (the
+ * TRN_REFINE_BASINS highest local maxima of the grid outside the zone, at
+ * any level: a basin's refined ln L is not bounded by its grid ln L) scored,
+ * then trn_loc_find_basins_ on the grid; their zones scored. */
+static trn_status_t bounded_basins(trn_hb_t *hb, const trn_window_t *win, int32_t radius,
+                                   const double *ll_grid, const trn_loc_result_t *out,
+                                   trn_loc_basins_t *bs)
+{
+    trn_status_t st;
+    int32_t i;
+    if ((st = trn_hb_eval_zone(hb, out->ix, out->iy, radius)) != TRN_OK ||
+        (st = trn_hb_basins(hb, -(double)INFINITY, out->ix, out->iy, radius,
+                            TRN_REFINE_BASINS)) != TRN_OK) {
+        return st;
+    }
+    trn_loc_find_basins_(ll_grid, win, radius, out, bs);
+    for (i = 0; i < bs->n; ++i) {
+        if ((st = trn_hb_eval_zone(hb, bs->x[i], bs->y[i], radius)) != TRN_OK) {
+            return st;
+        }
+    }
+    return TRN_OK;
+}
+
+/* The competitor and the masses (trn_height_mass's) of the bounded search:
+ * the zone ex scored, the best pose outside it found exactly, the masses
+ * within *err. */
+static trn_status_t bounded_mass(trn_hb_t *hb, const trn_exclusion_t *ex, double infl,
+                                 trn_height_best_t *second, double *err)
+{
+    trn_status_t st;
+    double lse_all, lse_out;
+    if ((st = trn_hb_eval_zone(hb, ex->cx, ex->cy, ex->radius)) != TRN_OK ||
+        (st = trn_hb_best(hb, ex, second)) != TRN_OK ||
+        (st = trn_hb_mass(hb, ex, infl, TRN_BOUND_EPS, &lse_all, &lse_out, err)) != TRN_OK) {
+        return st;
+    }
+    second->lse_all = lse_all;
+    second->lse_out = lse_out;
+    return TRN_OK;
+}
+
+/* TRN_MATCH_HEIGHTS: height search, refinement, competing hypothesis; the
+ * search exhaustive or bounded (map->cfg.search), its workspace in hbws. */
 static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
                                      int32_t ry, const trn_window_t *win, double *ll_grid,
-                                     trn_refine_t *cand, trn_loc_basins_t *bs,
+                                     trn_refine_t *cand, trn_loc_basins_t *bs, void *hbws,
                                      trn_loc_result_t *out)
 {
     trn_status_t st;
     trn_height_best_t best, second;
     trn_refine_cfg_t rc;
     trn_exclusion_t ex;
-    double infl = 1.0;
+    trn_hb_t *hb = NULL;
+    uint64_t work = 0u;
+    double infl = 1.0, err = 0.0;
     int32_t radius = map->cfg.min_exclusion_cells, pass;
 
     out->noise_scale = 1.0;
+    out->failure_prob_bound = 0.0;
+    out->search = map->cfg.search;
     pass = 0;
     do {
         /* the configured noise model; once more, rescaled, if the residuals
          * at the answer reject it (docs/method.md 9, "the sensor's noise
          * from the data") */
         trn_loc_refine_cfg_(map, out, &rc);
-        if ((st = trn_height_search(&map->heights, local, rx, ry, win, NULL, &rc,
-                                    map->cfg.inlier_prob, 1.0, ll_grid, &best)) != TRN_OK) {
+        if ((st = search_window(map, local, rx, ry, win, &rc, ll_grid, hbws, &work, &hb, &best)) !=
+            TRN_OK) {
             return st;
         }
         out->ix = best.x;
@@ -700,7 +797,13 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
     } while (pass == 1 && map->cfg.noise_auto != 0 &&
              rescale_noise(map, local, rx, ry, &rc, &best, cand, out) != 0);
     if (out->refined) {
-        trn_loc_find_basins_(ll_grid, win, radius, out, bs);
+        if (hb != NULL) {
+            if ((st = bounded_basins(hb, win, radius, ll_grid, out, bs)) != TRN_OK) {
+                return st;
+            }
+        } else {
+            trn_loc_find_basins_(ll_grid, win, radius, out, bs);
+        }
         trn_loc_refine_basins_(map, local, rx, ry, ll_grid, win, bs, cand, out);
     }
     out->n_points = (size_t)(out->refinement.n_seen > 0 ? out->refinement.n_seen : 0);
@@ -718,9 +821,18 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
     ex.cy = out->iy;
     ex.radius = radius;
     out->exclusion_cells = radius;
-    /* every pose was scored once: the competitor and the masses come from
-     * the stored grid */
-    st = trn_height_mass(ll_grid, win, &ex, infl, &second);
+    if (hb != NULL) {
+        /* the bounded search: the competitor exactly, the masses within err */
+        st = bounded_mass(hb, &ex, infl, &second, &err);
+        out->stats.poses_scored = hb->evals;
+        out->stats.blocks_bounded = hb->bounds;
+        /* ... and the sums' rounding (another order than the grid's) */
+        out->failure_prob_bound = err + 1e-12;
+    } else {
+        /* every pose was scored once: the competitor and the masses come
+         * from the stored grid */
+        st = trn_height_mass(ll_grid, win, &ex, infl, &second);
+    }
     if (st == TRN_OK) {
         /* The posterior mass outside the zone around the peak (uniform prior
          * over the window), not only the best competitor: many near-ties far
@@ -798,7 +910,8 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
         st = localize_heights(map, local_dem, rover_x, rover_y, win,
                               (double *)(void *)(b + lay.llgrid),
                               (trn_refine_t *)(void *)(b + lay.cand),
-                              (trn_loc_basins_t *)(void *)(b + lay.basins), out);
+                              (trn_loc_basins_t *)(void *)(b + lay.basins),
+                              (void *)(b + lay.hb), out);
         return accept(map, st, out);
     }
     pts = (trn_point_t *)(void *)(b + lay.pts);

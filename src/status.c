@@ -23,6 +23,7 @@ const char *trn_strerror(trn_status_t status)
     case TRN_E_FORMAT: return "malformed message or record";
     case TRN_E_CANCELLED: return "cancelled by the caller";
     case TRN_E_AMBIGUOUS: return "match ambiguous (failure probability above the acceptance limit)";
+    case TRN_E_BUDGET: return "search node budget exhausted";
     default: return "unknown status";
     }
 }

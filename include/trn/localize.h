@@ -50,6 +50,19 @@ typedef enum {
     TRN_MATCH_HEIGHTS = 1
 } trn_match_t;
 
+/** How the height matcher searches the window (TRN_MATCH_HEIGHTS). */
+typedef enum {
+    /** Every pose of the window scored: a fixed cost of the window's poses
+     *  (twice when the noise model is rescaled). The default. */
+    TRN_SEARCH_EXHAUSTIVE = 0,
+    /** Branch and bound over blocks of poses (src/height_bound.c): the
+     *  exhaustive search's best pose, far basins and competitor, its failure
+     *  probability within trn_loc_result_t.failure_prob_bound. Its cost
+     *  depends on the data (docs/method.md 9, "The bounded search": today
+     *  it prunes little on the terrain measured, so it is not the default). */
+    TRN_SEARCH_BOUNDED = 1
+} trn_search_t;
+
 /** Everything that shapes a prepared map. */
 typedef struct {
     trn_terrain_cfg_t terrain;   /**< filter and occupancy (cell_m is the map's cell) */
@@ -80,6 +93,14 @@ typedef struct {
                                       and refines again with it (trn_loc_result_t.noise_scale);
                                       0: noise_m and noise_k_per_m as given.
                                       trn_map_cfg_auto sets 1, trn_map_cfg_default 0 */
+    int32_t search;              /**< trn_search_t: the height matcher's search over (x, y)
+                                      (the search over heading is exhaustive) */
+    uint32_t node_budget;        /**< the height matcher's search over (x, y): most pose
+                                      scores (and, bounded, block bounds) in one
+                                      localization; beyond it trn_localize_dem gives up
+                                      with TRN_E_BUDGET (a hard bound on its time; the
+                                      exhaustive search checks each pass's poses before
+                                      it starts); 0: none */
 } trn_map_cfg_t;
 
 /** A prepared global map. All pointers point into the caller's buffer. */
@@ -129,6 +150,12 @@ typedef struct {
                                            the search and refinement then ran again with
                                            it; over heading the same with the local map
                                            turned); 1 otherwise, and on the voxel path */
+    double failure_prob_bound;        /**< the bounded search: failure_probability is within
+                                           this of the exhaustive search's (the unscored
+                                           poses' mass, bounded: at most TRN_BOUND_EPS);
+                                           0 when every pose was scored */
+    int32_t search;                   /**< trn_search_t that ran (the search over heading:
+                                           TRN_SEARCH_EXHAUSTIVE) */
 } trn_loc_result_t;
 
 /** Inlier probability a of trn_map_cfg_default (the paper's). */
@@ -166,6 +193,12 @@ typedef struct {
 /** A localization fails when its answer is more than this many cells from
  *  the truth: the event of the failure probability (docs/method.md 9). */
 #define TRN_FAIL_RADIUS_CELLS 1.5
+
+/** The bounded search's error budget on the failure probability: poses
+ *  whose bounded mass could add more than this share (over the window's
+ *  poses) of the scored mass are scored (docs/method.md 9, "The bounded
+ *  search"). */
+#define TRN_BOUND_EPS 1e-4
 
 /**
  * @brief Probability that a 2-D normal error lies beyond a radius:

@@ -32,7 +32,8 @@ typedef enum {
     TRN_E_FORMAT = -15,    /**< malformed message or record */
     TRN_E_CANCELLED = -16, /**< the caller's progress callback asked to stop */
     TRN_E_AMBIGUOUS =
-        -17 /**< a match was found, but its failure probability is above the acceptance limit: not a fix */
+        -17, /**< a match was found, but its failure probability is above the acceptance limit: not a fix */
+    TRN_E_BUDGET = -18 /**< the search's node budget ran out before it could prove its answer */
 } trn_status_t;
 
 /**

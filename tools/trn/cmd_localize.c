@@ -255,6 +255,12 @@ void cmd_localize_report_json(FILE *out, const cmd_localize_ctx_t *c, const char
     json_str(&j, "status", status_word(o->st));
     json_bool(&j, "refined", o->res.refined != 0);
     json_num(&j, "noise_scale", o->res.noise_scale);
+    if (c->cfg.match == TRN_MATCH_HEIGHTS) {
+        json_str(&j, "search", c->heading || o->res.search == TRN_SEARCH_EXHAUSTIVE ? "exhaustive"
+                                                                                    : "bounded");
+        json_num(&j, "failure_prob_bound", o->res.failure_prob_bound);
+        json_int(&j, "blocks_bounded", (long long)o->res.stats.blocks_bounded);
+    }
     if (o->res.refined) {
         /* the refinement's own figures (docs/method.md 9), grid frame: x
          * east, y south, cells */
@@ -387,7 +393,7 @@ void cmd_localize_params_default(cmd_localize_params_t *p)
 
 int cmd_localize_parse(int argc, char **argv, cmd_localize_params_t *p)
 {
-    cli_opt_t opts[10 + MAPOPT_N] = {
+    cli_opt_t opts[12 + MAPOPT_N] = {
         {"--dem", CLI_STRING, &p->dem_path, 0, 0, 1, "FILE",
          "global DEM (any GDAL raster; map frame)", 0},
         {"--local", CLI_STRING, &p->local_path, 0, 0, 0, "FILE",
@@ -413,11 +419,20 @@ int cmd_localize_parse(int argc, char **argv, cmd_localize_params_t *p)
          "farthest point); the height matcher (the auto configuration) refines it, the voxel "
          "matcher needs --refine 0 (default: heading known)",
          0},
+        {"--search", CLI_STRING, &p->search, 0, 0, 0, "exhaustive|bounded",
+         "the height matcher's search over (x, y): exhaustive (every pose scored; default) or "
+         "bounded (branch and bound: the same answer, the failure probability within "
+         "failure_prob_bound; docs/method.md 9); the search over heading is exhaustive",
+         0},
+        {"--node-budget", CLI_LONG, &p->node_budget, 0, 2000000000L, 0, "N",
+         "the height matcher gives up (exit 1, 'search node budget exhausted') beyond N pose "
+         "scores (bounded: and block bounds): a hard bound on its time (default 0: none)",
+         0},
     };
     cli_opt_t json_opt = {
         "--json", CLI_FLAG, &p->json, 0, 0, 0, NULL, "print one JSON object instead of the summary",
         0};
-    cli_opt_t all[11 + MAPOPT_N];
+    cli_opt_t all[13 + MAPOPT_N];
     const size_t n_all = sizeof all / sizeof all[0];
     cli_cmd_t cmd = {
         "localize",
@@ -435,9 +450,9 @@ int cmd_localize_parse(int argc, char **argv, cmd_localize_params_t *p)
         all, sizeof all / sizeof all[0]};
     int rc;
 
-    memcpy(all, opts, 10 * sizeof opts[0]);
-    mapopt_cli(&p->mo, all + 10);
-    all[10 + MAPOPT_N] = json_opt;
+    memcpy(all, opts, 12 * sizeof opts[0]);
+    mapopt_cli(&p->mo, all + 12);
+    all[12 + MAPOPT_N] = json_opt;
     rc = cli_parse(&cmd, argc, argv);
     if (rc != CLI_OK) {
         return rc;
@@ -482,6 +497,26 @@ int cmd_localize_prepare(const cmd_localize_params_t *p, cmd_localize_ctx_t *c, 
         snprintf(err, err_len, "--dem: %s", why);
         return CLI_BAD_INPUT;
     }
+    if (p->search != NULL && strcmp(p->search, "bounded") != 0 &&
+        strcmp(p->search, "exhaustive") != 0) {
+        snprintf(err, err_len, "--search must be bounded or exhaustive, not '%s'", p->search);
+        return CLI_BAD_INPUT;
+    }
+    if ((p->search != NULL || p->node_budget > 0) && c->cfg.match != TRN_MATCH_HEIGHTS) {
+        snprintf(err, err_len, "--search and --node-budget shape the height matcher's search "
+                               "(--match heights, the auto configuration), not the voxel matcher's");
+        return CLI_BAD_INPUT;
+    }
+    if (p->search != NULL && strcmp(p->search, "bounded") == 0 && c->heading &&
+        c->heading_win_deg > 0.0) {
+        snprintf(err, err_len, "--search bounded: the search over heading "
+                               "(--heading-window-deg) is exhaustive only");
+        return CLI_BAD_INPUT;
+    }
+    c->cfg.search = p->search != NULL && strcmp(p->search, "bounded") == 0
+                        ? TRN_SEARCH_BOUNDED
+                        : TRN_SEARCH_EXHAUSTIVE;
+    c->cfg.node_budget = (uint32_t)p->node_budget;
     if (c->heading && c->cfg.match == TRN_MATCH_VOXEL && c->cfg.refine != 0) {
         snprintf(err, err_len,
                  "--heading-deg/--heading-window-deg: the voxel matcher searches heading without "

@@ -134,6 +134,8 @@ typedef struct {
     int have_prior; /* --prior given */
     int heading;    /* search heading too (--heading-window-deg or --heading-deg given) */
     double heading_deg, heading_win_deg; /* centre and half-window, degrees counterclockwise */
+    const char *search; /* the height matcher's search: NULL (bounded), "bounded", "exhaustive" */
+    long node_budget;   /* its node budget; 0 = none */
     int json;
     mapopt_t mo;
 } cmd_localize_params_t;
