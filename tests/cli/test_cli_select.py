@@ -420,7 +420,7 @@ expect_error(1, "--nz: 0 is out of range", "select", "--dem", g_tif, *R, "--nz",
 expect_error(1, "--map-config must be auto or paper", "field", "--dem", g_tif, "--out", p("x.tif"), "--map-config", "x")
 expect_error(1, "must be on the DEM's grid", "field", "--dem", g_tif, "--out", p("x.tif"), "--global-error",
              p("err_small.tif"))
-FA = ["--area-m", f"{X0 + 4.0},{Y0 + 4.0},{X0 + 5.0},{Y0 + 5.0}", *SMALL, "--coarse-step-cells", "4", "--json"]
+FA = ["--area-m", f"{X0 + 4.0},{Y0 + 4.0},{X0 + 5.0},{Y0 + 5.0}", *FSMALL, "--coarse-step-cells", "4", "--json"]
 f1 = run_json("field", "--dem", g_tif, "--out", p("fa.tif"), *FA)
 f2 = run_json("field", "--dem", g_tif, "--out", p("fb.tif"), *FA, "--global-error", p("err_nan.tif"))
 f3 = run_json("field", "--dem", g_tif, "--out", p("fc.tif"), *FA, "--map-config", "auto", "--global-sigma-m", "0.1")

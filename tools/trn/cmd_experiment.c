@@ -297,8 +297,8 @@ static int experiment_parse(int argc, char **argv, cmd_experiment_params_t *p)
     mapopt_cli(&p->so.mo, opts + EXP_N_OWN + SELMAP_N_GERR_OPTS);
     experiment_help(p, opts, n_opts, h);
     cli_find(opts, n_opts, "--match")->help =
-        "the matcher: voxel (the voxel search; heights is refused until the height matcher is "
-        "wired into the experiment)";
+        "the matcher: voxel, the default and the only one (heights is refused until the height "
+        "matcher is wired into the experiment)";
     /* the localizer's options the voxel search of sampled points never reads */
     cmd.n_opts = cli_remove(opts, n_opts, mapopt_not_taken(MAPOPT_USE_VOXEL_SEARCH));
     rc = cli_parse(&cmd, argc, argv);

@@ -95,7 +95,9 @@ int mapopt_check_use(const mapopt_t *m, mapopt_use_t use, char *err, size_t err_
     const char *voxel_only = NULL;
     int auto_cfg, heights, refine, auto_bins;
     if ((strcmp(m->config, "auto") != 0 && strcmp(m->config, "paper") != 0) ||
-        (m->match != NULL && strcmp(m->match, "voxel") != 0 && strcmp(m->match, "heights") != 0)) {
+        (m->match != NULL && strcmp(m->match, "voxel") != 0 && strcmp(m->match, "heights") != 0) ||
+        (m->local_hp != NULL && strcmp(m->local_hp, "box") != 0 &&
+         strcmp(m->local_hp, "map") != 0)) {
         return 0; /* not a choice: mapopt_config says so (bad input) */
     }
     auto_cfg = strcmp(m->config, "auto") == 0;
