@@ -178,7 +178,7 @@ BASE = {
     "terrain": ["--out", "t.tif", "--size-cells", "32", "--json"],
     "localize": ["--dem", G, "--local", LOCAL, "--prior", PRIOR, "--window-m", "0.3", "--json"],
     "select": ["--dem", G, "--rover", "4.8,4.8", *SEL_SMALL, "--stride-cells", "2", "--json"],
-    "field": ["--dem", G, "--out", "f.tif", "--area-m", "3.5,3.5,6,6", *SEL_SMALL[:6], "--stride-cells", "2",
+    "field": ["--dem", G, "--out", "f.tif", "--area-m", "4,4,5.5,5.5", *SEL_SMALL[:6], "--stride-cells", "2",
               "--coarse-step-cells", "8", "--json"],
     "experiment": ["--trials", "2", "--size-cells", "128", "--json"],
     "profile": ["--map-cells", "64", "--local-cells", "16", "--window-cells", "2", "--runs", "1",
@@ -300,7 +300,7 @@ CASES = {
         "--area-m": effect("--area-m", "3,3,5,5"),
         "--coarse-step-cells": effect("--coarse-step-cells", "4"),
         "--margin-rel": effect("--margin-rel", "0"),
-        "--change-rel": effect("--change-rel", "0"),
+        "--change-rel": effect("--change-rel", "50"),
         "--evaluated-out": effect("--evaluated-out", "ev.tif"),
         # the same raster bit for bit by design (docs/modules/field.md): the
         # onboard algorithm's smaller workspace is what changes
@@ -396,7 +396,10 @@ def run_in(cmd, args, tag):
     d = p(f"run/{cmd}/{tag}")
     shutil.rmtree(d, ignore_errors=True)
     os.makedirs(d)
+    t0 = time.monotonic()
     proc = subprocess.run([TRN, cmd] + args, capture_output=True, text=True, timeout=300, cwd=d)
+    n, secs = RUNS.get(cmd, (0, 0.0))
+    RUNS[cmd] = (n + 1, secs + time.monotonic() - t0)
     try:
         out = json.dumps(strip(json.loads(proc.stdout), ECHO[cmd]), sort_keys=True)
     except ValueError:
@@ -455,6 +458,8 @@ ds = gdal.Open(G2)
 clitest.write_raster(p("gerr128.tif"), np.full((128, 128), 0.3, np.float32), ds.GetGeoTransform())
 ds = None
 
+import time  # noqa: E402
+RUNS = {}
 cmds = commands()
 check(set(cmds) == set(CASES), f"commands {sorted(cmds)} against the cases' {sorted(CASES)}")
 for cmd in cmds:
@@ -502,4 +507,6 @@ for cmd in cmds:
             check(sig != refs[tuple(against)],
                   f"{label}: changes nothing: trn {cmd} {' '.join(vargs)} gives what trn {cmd} "
                   f"{' '.join(against)} gives (JSON without its echo, stdout, files)")
+for cmd, (n, secs) in RUNS.items():
+    print(f"trn {cmd}: {n} runs, {secs:.1f} s")
 sys.exit(H.finish("cli_options"))
