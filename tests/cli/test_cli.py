@@ -331,7 +331,10 @@ expect_error(1, "--local-highpass must be box or map", "localize", "--dem", g_ti
 expect_error(1, "--nz: 0 is out of range", "localize", "--dem", g_tif, *common, "--nz", "0")
 expect_error(1, "--refine: 2 is out of range", "localize", "--dem", g_tif, *common, "--refine", "2")
 expect_error(1, "--zbin-m: -0.1 is out of range", "localize", "--dem", g_tif, *common, "--zbin-m", "-0.1")
-expect_error(1, "map configuration rejected", "localize", "--dem", g_tif, *common, "--highpass-m", "0.01")
+expect_error(1, "map configuration rejected", "localize", "--dem", g_tif, *common, "--match", "voxel",
+             "--highpass-m", "0.01")
+# a map option the matcher does not read is refused, not ignored (tests/cli/test_cli_options.py has all)
+expect_error(2, "--nz applies to the voxel matcher", "localize", "--dem", g_tif, *common, "--nz", "8")
 expect_error(1, "--batch " + p("missing.txt") + ": cannot open", "localize", "--dem", g_tif, "--batch", p("missing.txt"))
 # a map that cannot be prepared says why with --batch as without it (it printed nothing before)
 expect_error(1, "no_such_map.tif", "localize", "--dem", p("no_such_map.tif"), "--batch", p("missing.txt"))

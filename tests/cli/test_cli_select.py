@@ -55,6 +55,7 @@ N, CELL = 96, 0.1
 X0, Y0 = 1000.0, 2000.0  # south-west corner: a georeferenced map not at 0,0
 GT = (X0, CELL, 0.0, Y0 + N * CELL, 0.0, -CELL)
 SMALL = ["--max-range-m", "3", "--patch-m", "1", "--separation-m", "0.5"]  # short reach: quick under ASan
+FSMALL = SMALL[:4]  # field ranks no next-best targets: it takes no --separation-m
 
 for cmd in ("select", "field"):
     rc, out, err = run(cmd, "--help")
@@ -182,14 +183,13 @@ if "target" in h3 and "target" in sel:
 for bad, why in (("-1", "out of range"), ("29", "out of range"), ("nan", "not a finite number")):
     expect_error(1, why, "select", "--dem", g_tif, "--rover", f"{rover[0]},{rover[1]}", "--heading-sigma-deg", bad)
 
-# --heading-search 1 (the target matched with the heading searched, docs/method.md 4): nothing
-# changes with a known heading; with 3 deg the heading's part is the (x, y, heading) marginal's,
-# never above the lever arm to the information-weighted centroid, reported in the JSON
-hs0 = run_json("select", "--dem", g_tif, "--rover", f"{rover[0]},{rover[1]}", *SMALL, "--heading-search", "1",
-               "--next-best", "4", "--json")
-check(hs0.get("heading_search") == 1 and hs0.get("target") == sel.get("target")
-      and hs0.get("uncertainty_m") == sel.get("uncertainty_m"),
-      "--heading-search 1 with a known heading: the default's target and uncertainty")
+# --heading-search 1 (the target matched with the heading searched, docs/method.md 4): with a
+# known heading there is nothing to search, so it is refused (it would change nothing); with
+# 3 deg the heading's part is the (x, y, heading) marginal's, never above the lever arm to the
+# information-weighted centroid, reported in the JSON
+for cmd, extra in (("select", ["--rover", f"{rover[0]},{rover[1]}"]), ("field", ["--out", p("hs.tif")])):
+    expect_error(2, "--heading-search 1 needs --heading-sigma-deg above 0", cmd, "--dem", g_tif, *extra,
+                 *FSMALL, "--heading-search", "1")
 hs3 = run_json("select", "--dem", g_tif, "--rover", f"{rover[0]},{rover[1]}", *SMALL, "--heading-sigma-deg", "3",
                "--heading-search", "1", "--next-best", "4", "--json")
 check(hs3.get("heading_search") == 1 and hs3.get("heading_sigma_deg") == 3, "heading_search in the JSON")
@@ -213,7 +213,7 @@ check(sel_asc.get("target") == sel.get("target") and sel_asc.get("uncertainty_m"
 g_crs = p("global_utm.tif")
 gdal.Translate(g_crs, g_tif, outputSRS="EPSG:32611")
 rc, out, err = run("select", "--dem", g_crs, "--rover", f"{rover[0]},{rover[1]}", *SMALL, "--out-map", p("cand_utm.tif"))
-rc2, out2, err2 = run("field", "--dem", g_crs, "--out", p("field_utm.tif"), *SMALL, "--area-m",
+rc2, out2, err2 = run("field", "--dem", g_crs, "--out", p("field_utm.tif"), *FSMALL, "--area-m",
                       "1004,2004,1005,2005", "--coarse-step-cells", "4")
 for path, ok in ((p("cand_utm.tif"), rc == 0), (p("field_utm.tif"), rc2 == 0)):
     ds = gdal.Open(path) if ok else None
@@ -258,7 +258,7 @@ expect_error(2, "unknown option '--prior'", "select", "--dem", g_tif, *R, "--pri
 
 # ---- field ------------------------------------------------------------------------
 AREA = "1002.4,2002.4,1007.2,2007.2"  # 48 x 48 rover positions inside the map
-FCFG = [*SMALL, "--coarse-step-cells", "8", "--area-m", AREA]
+FCFG = [*FSMALL, "--coarse-step-cells", "8", "--area-m", AREA]
 fj = run_json("field", "--dem", g_tif, "--out", p("field.tif"), "--evaluated-out", p("ev.tif"), *FCFG, "--json")
 for key in ("file", "width", "height", "cells", "evaluations", "best", "seconds"):
     check(key in fj, f"field --json has {key}")
@@ -420,7 +420,7 @@ expect_error(1, "--nz: 0 is out of range", "select", "--dem", g_tif, *R, "--nz",
 expect_error(1, "--map-config must be auto or paper", "field", "--dem", g_tif, "--out", p("x.tif"), "--map-config", "x")
 expect_error(1, "must be on the DEM's grid", "field", "--dem", g_tif, "--out", p("x.tif"), "--global-error",
              p("err_small.tif"))
-FA = ["--area-m", f"{X0 + 4.0},{Y0 + 4.0},{X0 + 5.0},{Y0 + 5.0}", *SMALL, "--coarse-step-cells", "4", "--json"]
+FA = ["--area-m", f"{X0 + 4.0},{Y0 + 4.0},{X0 + 5.0},{Y0 + 5.0}", *FSMALL, "--coarse-step-cells", "4", "--json"]
 f1 = run_json("field", "--dem", g_tif, "--out", p("fa.tif"), *FA)
 f2 = run_json("field", "--dem", g_tif, "--out", p("fb.tif"), *FA, "--global-error", p("err_nan.tif"))
 f3 = run_json("field", "--dem", g_tif, "--out", p("fc.tif"), *FA, "--map-config", "auto", "--global-sigma-m", "0.1")

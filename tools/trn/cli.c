@@ -314,6 +314,21 @@ cli_opt_t *cli_find(cli_opt_t *opts, size_t n, const char *name)
     return NULL;
 }
 
+size_t cli_remove(cli_opt_t *opts, size_t n, const char *const *names)
+{
+    size_t k, out = 0, i;
+    for (k = 0; k < n; ++k) {
+        int drop = 0;
+        for (i = 0; names != NULL && names[i] != NULL; ++i) {
+            drop |= strcmp(opts[k].name, names[i]) == 0;
+        }
+        if (!drop) {
+            opts[out++] = opts[k];
+        }
+    }
+    return out;
+}
+
 /* A non-option argument a ("-" included): the next positional entry of cmd
  * takes it. For a command with positional entries "-x" is an unknown option
  * unless it comes after `--` (only_pos). */

@@ -73,6 +73,11 @@ int cli_parse(cli_cmd_t *cmd, int argc, char **argv);
  * looked up by name, never by position in a table. */
 cli_opt_t *cli_find(cli_opt_t *opts, size_t n, const char *name);
 
+/* Remove the entries named in names (NULL-terminated) from opts[0..n),
+ * keeping the others in order; returns the new count. For a table built from
+ * shared parts (mapopt_cli) whose options a command does not read. */
+size_t cli_remove(cli_opt_t *opts, size_t n, const char *const *names);
+
 /* Print the usage of cmd (synopsis, options with defaults and ranges). */
 void cli_usage(const cli_cmd_t *cmd, FILE *out);
 

@@ -23,7 +23,19 @@ static int map_cfg_cb(void *ctx, const float *dem, int width, int height, double
                       trn_map_cfg_t *cfg, char *err, size_t err_len)
 {
     cmd_experiment_result_t *r = ctx;
-    return mapopt_config(r->mo, dem, width, height, cell_m, cfg, &r->sigma_h, err, err_len);
+    if (mapopt_config(r->mo, dem, width, height, cell_m, cfg, &r->sigma_h, err, err_len) != 0) {
+        return -1;
+    }
+    /* what the experiment does, whatever the configuration would do in trn
+     * localize: sampled points, the voxel search (trn_localize_points), a local
+     * DEM (--sensor dem) filtered on its own, no refinement, no acceptance
+     * limit; the JSON's map_config says so */
+    cfg->match = TRN_MATCH_VOXEL;
+    cfg->refine = 0;
+    cfg->noise_auto = 0;
+    cfg->local_highpass = TRN_LOCAL_HP_BOX;
+    cfg->max_failure_prob = 1.0f;
+    return 0;
 }
 
 static int on_progress(void *ctx, long done, long total)
@@ -110,7 +122,29 @@ static int experiment_usage(cmd_experiment_params_t *p, cli_opt_t *opts, size_t 
 {
     static const char *const synth[] = {"--coverage", "--terrain-seed", "--min-diameter-m",
                                         "--relief-m", "--size-cells"};
+    char err[512];
     size_t i;
+    if (mapopt_check_use(&p->so.mo, MAPOPT_USE_VOXEL_SEARCH, err, sizeof err) != 0) {
+        fprintf(stderr, "trn experiment: %s\n", err);
+        return CLI_USAGE;
+    }
+    if (!(p->heading_err > 0.0)) { /* no heading error: no 3-DOF search to shape */
+        static const char *const h3[] = {"--heading-window-deg", "--select-heading-search"};
+        for (i = 0; i < sizeof h3 / sizeof h3[0]; ++i) {
+            if (cli_find(opts, n_opts, h3[i])->seen) {
+                fprintf(stderr,
+                        "trn experiment: %s shapes the 3-DOF search, which runs only with "
+                        "--heading-error-deg above 0\n",
+                        h3[i]);
+                return CLI_USAGE;
+            }
+        }
+    }
+    if (p->dem_path == NULL && cli_find(opts, n_opts, "--band")->seen) {
+        fprintf(stderr, "trn experiment: --band picks a band of --dem; it does not apply without "
+                        "--dem\n");
+        return CLI_USAGE;
+    }
     if (p->dem_path != NULL) {
         for (i = 0; i < sizeof synth / sizeof synth[0]; ++i) {
             if (cli_find(opts, n_opts, synth[i])->seen) {
@@ -262,9 +296,13 @@ static int experiment_parse(int argc, char **argv, cmd_experiment_params_t *p)
     selmap_gerr_opts(&p->so, opts + EXP_N_OWN);
     mapopt_cli(&p->so.mo, opts + EXP_N_OWN + SELMAP_N_GERR_OPTS);
     experiment_help(p, opts, n_opts, h);
-    cmd.n_opts = n_opts;
+    cli_find(opts, n_opts, "--match")->help =
+        "the matcher: voxel, the default and the only one (heights is refused until the height "
+        "matcher is wired into the experiment)";
+    /* the localizer's options the voxel search of sampled points never reads */
+    cmd.n_opts = cli_remove(opts, n_opts, mapopt_not_taken(MAPOPT_USE_VOXEL_SEARCH));
     rc = cli_parse(&cmd, argc, argv);
-    return rc != CLI_OK ? rc : experiment_usage(p, opts, n_opts);
+    return rc != CLI_OK ? rc : experiment_usage(p, opts, cmd.n_opts);
 }
 
 /* --dem and --global-error into r, the experiment's DEM fields of r->p. */

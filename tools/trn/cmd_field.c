@@ -111,6 +111,8 @@ void cmd_field_params_default(cmd_field_params_t *p)
 
 int cmd_field_parse(int argc, char **argv, cmd_field_params_t *p)
 {
+    static const char *const k_not_field[] = {"--separation-m", NULL};
+    int rc;
     cli_opt_t opts[7 + SELMAP_N_OPTS + 2];
     cli_cmd_t cmd = {
         "field",
@@ -197,8 +199,13 @@ int cmd_field_parse(int argc, char **argv, cmd_field_params_t *p)
         "run the onboard algorithm trn_field (same raster, slower, "
         "less memory) instead of trn_field_fast",
         0};
-    cmd.n_opts = sizeof opts / sizeof opts[0];
-    return cli_parse(&cmd, argc, argv);
+    /* the localizer's options (--match, --refine ...) and the ranking of distinct
+     * next-best targets (--separation-m): the field keeps each position's best only */
+    cmd.n_opts = cli_remove(opts, sizeof opts / sizeof opts[0],
+                            mapopt_not_taken(MAPOPT_USE_VOXEL_MAP));
+    cmd.n_opts = cli_remove(opts, cmd.n_opts, k_not_field);
+    rc = cli_parse(&cmd, argc, argv);
+    return rc != CLI_OK ? rc : selmap_check_use("field", &p->so);
 }
 
 /* The options that need no DEM; box: --area-m's numbers. */

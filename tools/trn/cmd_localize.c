@@ -391,6 +391,17 @@ void cmd_localize_params_default(cmd_localize_params_t *p)
     mapopt_init(&p->mo);
 }
 
+/* A map option the configured matcher does not read is refused (mapopt_check_use). */
+static int localize_check_use(const cmd_localize_params_t *p)
+{
+    char err[512];
+    if (mapopt_check_use(&p->mo, MAPOPT_USE_LOCALIZE, err, sizeof err) != 0) {
+        fprintf(cli_message_stream(), "trn localize: %s\n", err);
+        return CLI_USAGE;
+    }
+    return CLI_OK;
+}
+
 int cmd_localize_parse(int argc, char **argv, cmd_localize_params_t *p)
 {
     cli_opt_t opts[12 + MAPOPT_N] = {
@@ -470,7 +481,7 @@ int cmd_localize_parse(int argc, char **argv, cmd_localize_params_t *p)
                                       "one or the other (see --help)\n");
         return CLI_USAGE;
     }
-    return CLI_OK;
+    return localize_check_use(p);
 }
 
 int cmd_localize_prepare(const cmd_localize_params_t *p, cmd_localize_ctx_t *c, char *err,

@@ -68,6 +68,7 @@ int cmd_select_parse(int argc, char **argv, cmd_select_params_t *p)
         "error is eq. 8's S0 + K r^2 (--global-sigma-m, --global-sigma-k) or a per-cell raster\n"
         "(--global-error, the model where it has no data).",
         opts, 0};
+    int rc;
 
     opts[0] = (cli_opt_t){
         "--dem", CLI_STRING, &p->dem_path, 0,
@@ -100,8 +101,11 @@ int cmd_select_parse(int argc, char **argv, cmd_select_params_t *p)
     opts[4 + SELMAP_N_OPTS] = (cli_opt_t){
         "--json", CLI_FLAG, &p->json, 0, 0, 0, NULL, "print one JSON object instead of the summary",
         0};
-    cmd.n_opts = sizeof opts / sizeof opts[0];
-    return cli_parse(&cmd, argc, argv);
+    /* the localizer's options (--match, --refine ...): no selection reads them */
+    cmd.n_opts = cli_remove(opts, sizeof opts / sizeof opts[0],
+                            mapopt_not_taken(MAPOPT_USE_VOXEL_MAP));
+    rc = cli_parse(&cmd, argc, argv);
+    return rc != CLI_OK ? rc : selmap_check_use("select", &p->so);
 }
 
 /* --out-map: each candidate's uncertainty at its centre cell, +inf where ill-conditioned, NaN elsewhere. */

@@ -79,6 +79,81 @@ void mapopt_cli(mapopt_t *m, cli_opt_t *o)
     memcpy(o, t, sizeof t);
 }
 
+const char *const *mapopt_not_taken(mapopt_use_t use)
+{
+    /* read only by trn_localize_dem and the height matcher */
+    static const char *const k_search[] = {"--local-highpass", "--refine", "--noise-auto",
+                                           "--max-failure-prob", NULL};
+    static const char *const k_map[] = {"--local-highpass",   "--refine", "--noise-auto",
+                                        "--max-failure-prob", "--match",  NULL};
+    static const char *const k_none[] = {NULL};
+    return use == MAPOPT_USE_VOXEL_MAP ? k_map : use == MAPOPT_USE_VOXEL_SEARCH ? k_search : k_none;
+}
+
+int mapopt_check_use(const mapopt_t *m, mapopt_use_t use, char *err, size_t err_len)
+{
+    const char *voxel_only = NULL;
+    int auto_cfg, heights, refine, auto_bins;
+    if ((strcmp(m->config, "auto") != 0 && strcmp(m->config, "paper") != 0) ||
+        (m->match != NULL && strcmp(m->match, "voxel") != 0 && strcmp(m->match, "heights") != 0) ||
+        (m->local_hp != NULL && strcmp(m->local_hp, "box") != 0 &&
+         strcmp(m->local_hp, "map") != 0)) {
+        return 0; /* not a choice: mapopt_config says so (bad input) */
+    }
+    auto_cfg = strcmp(m->config, "auto") == 0;
+    heights = m->match != NULL ? strcmp(m->match, "heights") == 0 : auto_cfg;
+    refine = m->refine >= 0 ? m->refine != 0 : auto_cfg;
+    /* the auto configuration's height bin and bin count come from the noise model */
+    auto_bins = auto_cfg && !(m->zbin_m > 0.0 && m->nz > 0);
+    if (use != MAPOPT_USE_LOCALIZE) {
+        if (use == MAPOPT_USE_VOXEL_SEARCH && heights && m->match != NULL) {
+            snprintf(err, err_len,
+                     "--match heights: the experiment localizes with the voxel search only (the "
+                     "height matcher is not wired into it yet)");
+            return -1;
+        }
+        if ((m->noise_m > 0.0 || m->noise_k >= 0.0) && !auto_bins) {
+            snprintf(err, err_len,
+                     "%s: the local noise model only sets the height bins of --map-config auto "
+                     "(without both --zbin-m and --nz) here; it changes nothing else",
+                     m->noise_m > 0.0 ? "--noise-m" : "--noise-k");
+            return -1;
+        }
+        return 0;
+    }
+    if (heights) {
+        voxel_only = m->zbin_m > 0.0       ? "--zbin-m"
+                     : m->nz > 0           ? "--nz"
+                     : m->highpass_m > 0.0 ? "--highpass-m"
+                     : m->sigma_m > 0.0    ? "--sigma-m"
+                     : m->local_hp != NULL ? "--local-highpass"
+                     : m->refine >= 0      ? "--refine"
+                                           : NULL;
+        if (voxel_only != NULL) {
+            snprintf(err, err_len,
+                     "%s applies to the voxel matcher (--match voxel, or --map-config paper); the "
+                     "height matcher matches the DEM's heights and always refines",
+                     voxel_only);
+            return -1;
+        }
+        return 0;
+    }
+    if (m->noise_auto >= 0) {
+        snprintf(err, err_len,
+                 "--noise-auto applies to the height matcher (--match heights); the voxel matcher "
+                 "keeps the configured noise model (also with --refine 1)");
+        return -1;
+    }
+    if ((m->noise_m > 0.0 || m->noise_k >= 0.0) && !refine && !auto_bins) {
+        snprintf(err, err_len,
+                 "%s: the voxel matcher reads the local noise model only in its refinement "
+                 "(--refine 1) or for the auto configuration's height bins",
+                 m->noise_m > 0.0 ? "--noise-m" : "--noise-k");
+        return -1;
+    }
+    return 0;
+}
+
 static void *alloc16(size_t n, void **raw)
 {
     uint8_t *p = malloc(n + 16u);

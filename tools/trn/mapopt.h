@@ -50,6 +50,32 @@ void mapopt_cli(mapopt_t *m, cli_opt_t *out);
 int mapopt_config(const mapopt_t *m, const float *data, int width, int height, double cell_m,
                   trn_map_cfg_t *cfg, double *sigma_h, char *err, size_t err_len);
 
+/* What a command does with the map: which of the options above apply.
+ *   MAPOPT_USE_LOCALIZE      trn localize: a local DEM matched by either matcher
+ *                            (every option, each where that matcher reads it);
+ *   MAPOPT_USE_VOXEL_SEARCH  trn experiment: sampled points, the voxel search
+ *                            alone (no local DEM, no refinement, no acceptance);
+ *   MAPOPT_USE_VOXEL_MAP     trn select, trn field: the voxel map alone, no
+ *                            localization. */
+typedef enum { MAPOPT_USE_LOCALIZE, MAPOPT_USE_VOXEL_SEARCH, MAPOPT_USE_VOXEL_MAP } mapopt_use_t;
+
+/* The options a command of this use never reads (NULL-terminated names):
+ * they are left out of its table (cli_remove), so its --help does not offer
+ * them and cli_parse refuses them as unknown. */
+const char *const *mapopt_not_taken(mapopt_use_t use);
+
+/* After cli_parse: 0 if every map option given on the command line applies
+ * to use under the configuration it resolves to (--map-config, --match,
+ * --refine), else -1 with the one-line reason in err (a usage error: the
+ * command exits CLI_USAGE). An option that would change nothing is refused,
+ * never silently ignored: with the height matcher the voxel map's --zbin-m,
+ * --nz, --highpass-m, --sigma-m, --local-highpass and --refine; with the
+ * voxel matcher --noise-auto, and --noise-m / --noise-k unless --refine 1 or
+ * the auto configuration's bins read them; --match heights where only the
+ * voxel search runs. Values that are not one of the choices pass here and are
+ * refused by mapopt_config as before. */
+int mapopt_check_use(const mapopt_t *m, mapopt_use_t use, char *err, size_t err_len);
+
 /* Write the configuration as the JSON object "map_config". */
 void mapopt_json(json_t *j, const trn_map_cfg_t *cfg);
 

@@ -248,6 +248,23 @@ void selmap_opts(selmap_opts_t *o, cli_opt_t *d)
     }
 }
 
+int selmap_check_use(const char *cmd, const selmap_opts_t *o)
+{
+    char err[512];
+    if (mapopt_check_use(&o->mo, MAPOPT_USE_VOXEL_MAP, err, sizeof err) != 0) {
+        fprintf(cli_message_stream(), "trn %s: %s\n", cmd, err);
+        return CLI_USAGE;
+    }
+    if (o->heading_search == 1 && !(o->heading_sigma_deg > 0.0)) {
+        fprintf(cli_message_stream(),
+                "trn %s: --heading-search 1 needs --heading-sigma-deg above 0 (with the heading "
+                "known there is no heading to search)\n",
+                cmd);
+        return CLI_USAGE;
+    }
+    return CLI_OK;
+}
+
 void selmap_free(selmap_t *w)
 {
     free(w->mraw);

@@ -85,6 +85,12 @@ void selmap_json_config(json_t *j, const selmap_opts_t *o, const trn_map_cfg_t *
 /* Defaults (trn_select_cfg_default in map terms, heading 0, stride given). */
 void selmap_opts_default(selmap_opts_t *o, long stride_cells);
 
+/* After cli_parse of `trn cmd` (select, field): the usage rules between the
+ * options (mapopt_check_use for the voxel map; --heading-search 1 only with
+ * --heading-sigma-deg above 0, the only case it changes a prediction).
+ * CLI_OK, or CLI_USAGE with the one-line message printed. */
+int selmap_check_use(const char *cmd, const selmap_opts_t *o);
+
 /* Fill SELMAP_N_OPTS option table entries pointing into o. */
 void selmap_opts(selmap_opts_t *o, cli_opt_t *dst);
 
