@@ -131,32 +131,40 @@ static void range_text(const cli_opt_t *o, char *buf, size_t n)
     }
 }
 
-/* " (default V)" from the option's variable (its value before parsing: the
- * default the command set, from the core's *_cfg_default where there is
- * one), unless the help text speaks of its default itself (a sentinel value
- * meaning "chosen later") or there is none. */
-static void default_text(const cli_opt_t *o, char *buf, size_t n)
+/* The default V of an option, from its variable (its value before parsing:
+ * the default the command set, from the core's *_cfg_default where there is
+ * one), into buf; 0 (buf "") when the help text speaks of its default itself
+ * (a sentinel value meaning "chosen later") or there is none. */
+static int default_value(const cli_opt_t *o, char *buf, size_t n)
 {
     buf[0] = '\0';
     if (o->required || o->dst == NULL || (o->help != NULL && strstr(o->help, "default") != NULL)) {
-        return;
+        return 0;
     }
     switch (o->kind) {
-    case CLI_LONG: snprintf(buf, n, " (default %ld)", *(const long *)o->dst); break;
-    case CLI_U64:
-        snprintf(buf, n, " (default %llu)", (unsigned long long)*(const uint64_t *)o->dst);
-        break;
-    case CLI_DOUBLE: snprintf(buf, n, " (default %g)", *(const double *)o->dst); break;
+    case CLI_LONG: snprintf(buf, n, "%ld", *(const long *)o->dst); break;
+    case CLI_U64: snprintf(buf, n, "%llu", (unsigned long long)*(const uint64_t *)o->dst); break;
+    case CLI_DOUBLE: snprintf(buf, n, "%g", *(const double *)o->dst); break;
     case CLI_XY:
-        snprintf(buf, n, " (default %g,%g)", ((const double *)o->dst)[0],
-                 ((const double *)o->dst)[1]);
+        snprintf(buf, n, "%g,%g", ((const double *)o->dst)[0], ((const double *)o->dst)[1]);
         break;
     case CLI_STRING:
         if (*(const char *const *)o->dst != NULL) {
-            snprintf(buf, n, " (default %s)", *(const char *const *)o->dst);
+            snprintf(buf, n, "%s", *(const char *const *)o->dst);
         }
         break;
     case CLI_FLAG: break;
+    }
+    return buf[0] != '\0';
+}
+
+/* " (default V)", or "" without a default (default_value). */
+static void default_text(const cli_opt_t *o, char *buf, size_t n)
+{
+    char v[96];
+    buf[0] = '\0';
+    if (default_value(o, v, sizeof v)) {
+        snprintf(buf, n, " (default %s)", v);
     }
 }
 
@@ -239,13 +247,11 @@ static void md_cell(const char *s, FILE *out)
 /* One table row of option o: | `name` | `METAVAR` | help | default | range | */
 static void md_row(const cli_opt_t *o, FILE *out)
 {
-    char range[64], dflt[128];
+    char range[64], dflt[96];
     const char *d = dflt;
     range_text(o, range, sizeof range);
-    default_text(o, dflt, sizeof dflt);
-    if (strncmp(dflt, " (default ", 10) == 0) { /* " (default V)" -> "V" */
-        dflt[strlen(dflt) - 1] = '\0';
-        d = dflt + 10;
+    if (default_value(o, dflt, sizeof dflt)) {
+        d = dflt;
     } else if (o->required) {
         d = "required";
     } else if (o->help != NULL && strstr(o->help, "default") != NULL) {
