@@ -248,7 +248,7 @@ static void md_cell(const char *s, FILE *out)
 static void md_row(const cli_opt_t *o, FILE *out)
 {
     char range[64], dflt[96];
-    const char *d = dflt;
+    const char *d;
     range_text(o, range, sizeof range);
     if (default_value(o, dflt, sizeof dflt)) {
         d = dflt;
