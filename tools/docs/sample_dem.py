@@ -7,6 +7,7 @@ Tennessee (Debian python-matplotlib-data, `bash tools/setup.sh real`), 403 x
 coordinates (WGS 84, degrees), as an SRTM tile arrives. Row 0 is the north
 edge. The walkthrough's test (tools/test.d/48-walkthrough.sh) uses it too."""
 import glob
+import os
 import sys
 
 import numpy as np
@@ -22,6 +23,7 @@ def main(argv):
         print("sample_dem.py: matplotlib's sample data are not installed (bash tools/setup.sh real)",
               file=sys.stderr)
         return 1
+    os.makedirs(os.path.dirname(os.path.abspath(argv[0])), exist_ok=True)
     d = np.load(found[0])
     z = d["elevation"].astype(np.float32)
     north = max(float(d["ymin"]), float(d["ymax"]))
