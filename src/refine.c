@@ -68,7 +68,7 @@ double trn_refine_weight_(const trn_grid_f32_t *g, double x, double y, double re
     if (!(fabs(res) > k * sd)) {
         return 1.0;
     }
-    /* sample_bilinear's cell lookup, written out: a shared helper added a
+    /* sample_bilinear's cell lookup, written out: a shared function added a
      * frame under the heading refinement's deepest chain, which then met
      * TRN_STACK_LIMIT_BYTES exactly (2048, host-release) */
     if (!(x >= 0.0 && y >= 0.0 && x <= (double)(g->width - 1) && y <= (double)(g->height - 1)) ||

@@ -24,7 +24,7 @@
  * or on the wrong rows; off-by-one overlapping last blocks; no overflow
  * clamp; a missing scalar tail or forgotten occupancy start; NODATA, cap
  * range and overlap checks removed. Correct variants (other chunk sizes, no
- * scan skipping) pass. Session 3 moved all in-row work into the forward pass
+ * scan skipping) pass. The later design moved all in-row work into the forward pass
  * (both directions, rows with an occupied voxel); against that design these
  * mutants each fail test_matches_dijkstra_random: the backward in-row scan
  * dropped, the forward one dropped, the closure skipped on plane 0, or on
@@ -46,7 +46,7 @@
 #include "ref_chamfer.h"
 #include "rng.h"
 
-/* ------------------------------------------------------------------ helpers */
+/* ---------------------------------------------------------- support code */
 
 static size_t vol_n(int nx, int ny, int nz) { return (size_t)nx * (size_t)ny * (size_t)nz; }
 

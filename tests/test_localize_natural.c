@@ -1221,8 +1221,8 @@ static void test_valley_failure(void **state)
             if (slow > 0.05) {
                 /* here the grid's and the far basins' shares are below it:
                  * the larger of the valley's and the ellipse's tail (the
-                 * ellipse widened by its shoulders along the valley since
-                 * session 21, docs/method.md 9) */
+                 * ellipse widened by its shoulders along the valley,
+                 * docs/method.md 9) */
                 const double top = fmax(slow, tail);
                 assert_true(fabs(res.failure_probability - top) < 0.01 + 0.05 * top);
                 checked += 1;

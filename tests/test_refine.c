@@ -336,8 +336,8 @@ static void test_mix(void **state)
 /* The systematic term's weight follows a misfit only beyond its sampling
  * noise: on local maps that are the model plus the documented noise the
  * moment estimate of m^2 is positive by chance in 61 of these 200 cases
- * (measured with the test's level at 0 sds; 19 at 1, the level until
- * session 20; 2 at TRN_REFINE_SYS_TERM_Z, 2), so the weight must stay 0 in
+ * (measured with the test's level at 0 sds; 19 at 1, the level before
+ * 2026-12-05; 2 at TRN_REFINE_SYS_TERM_Z, 2), so the weight must stay 0 in
  * at least 190 (the level of 1 fails that); with an extra error of 5 cm on
  * every cell (a misfit five times the nearest cells' noise) it must be above
  * half in nearly all (200 of 200 at 2). */

@@ -44,6 +44,10 @@ declare -A PKG_GROUPS=(
   # CAN bus tools: the cantools cross-check of the DBC runs in the project
   # venv (.venv, cantools from PyPI); can-utils to record and replay logs.
   [can]="python3 python3-venv can-utils"
+  # The documentation (tools/test.d/47-docs.sh): Doxygen for the API reference
+  # (CMake target `docs`); python3 for the words, link and command-line
+  # reference checks (tools/docs/).
+  [docs]="doxygen python3 git"
   # The formatting rule (.clang-format, CTest `format`): clang-format 14.
   [format]="clang-format"
   # Assurance stages (docs/assurance.md): static analysis (cppcheck + its
@@ -68,7 +72,7 @@ declare -A PKG_GROUPS=(
   [real]="python3 python3-venv python3-opencv python3-numpy python3-gdal gdal-bin
           python3-matplotlib python-matplotlib-data"
 )
-GROUP_ORDER=(core gpiod2 bench gdal can plot vm assure format profile real python)
+GROUP_ORDER=(core gpiod2 bench gdal can plot vm assure format docs profile real python)
 
 usage() {
   echo "usage: $0 [group...]   (default: core)"

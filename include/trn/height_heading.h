@@ -66,11 +66,11 @@ typedef struct {
  * @brief Heading step and K for the seen cells of a local DEM: as
  * trn_heading_steps with the farthest seen cell from the rover as r_max.
  * @retval TRN_OK
- * @retval TRN_E_NULL, TRN_E_SIZE (bad grid)
+ * @retval TRN_E_NULL
+ * @retval TRN_E_SIZE bad grid, or more than TRN_MAX_HEADING_STEPS headings
  * @retval TRN_E_ARG  cfg out of range or NaN, or the rover cell farther than
  *         TRN_MAX_DIM from the grid
  * @retval TRN_E_NODATA no seen cell, or only the rover's own with a window
- * @retval TRN_E_SIZE more than TRN_MAX_HEADING_STEPS headings
  */
 trn_status_t trn_height_heading_steps(const trn_grid_f32_t *local, int32_t rover_x, int32_t rover_y,
                                       const trn_heading_cfg_t *cfg, double *step_rad,
@@ -93,9 +93,9 @@ size_t trn_height_heading_workspace_bytes(int32_t width, int32_t height);
  *                     heading step k at pose (x, y) at
  *                     [((k + K) (y1 - y0 + 1) + y - y0) (x1 - x0 + 1) + x - x0]
  * @retval TRN_OK
- * @retval TRN_E_NULL, TRN_E_SIZE (bad grids)
+ * @retval TRN_E_NULL
+ * @retval TRN_E_SIZE bad grids, or more than TRN_MAX_HEADING_STEPS headings
  * @retval TRN_E_ARG  rcfg, a, hcfg (NaN or out of range) or the rover cell
- * @retval TRN_E_SIZE more than TRN_MAX_HEADING_STEPS headings
  * @retval TRN_E_RANGE window empty or not inside the global grid
  * @retval TRN_E_WORKSPACE ws_bytes too small or ws misaligned
  * @retval TRN_E_NODATA fewer than 8 seen local points

@@ -162,7 +162,7 @@ typedef struct {
 #define TRN_MAP_INLIER_PROB_DEFAULT 0.95
 /** trn_map_cfg_auto's acceptance limit on the failure probability: an
  *  answer is a fix only if the probability that it is more than 1.5 cells
- *  off is at most 2 % (0.05 until session 19; docs/method.md section 9). */
+ *  off is at most 2 % (0.05 before 2026-12-05; docs/method.md section 9). */
 #define TRN_MAP_MAX_FAILURE_PROB_AUTO 0.02
 /** High-pass half-width of the tools' and trn_map_cfg_auto's maps, cells. */
 #define TRN_MAP_HIGHPASS_CELLS 10

@@ -60,7 +60,7 @@ extern "C" {
 /** The covariance's reduced chi-square and block-sandwich ratio
  *  (trn_refine_t.inflation) count only where above 1 by more than this many
  *  of their sampling standard deviations under the noise model (the
- *  systematic weight did too until session 20: TRN_REFINE_SYS_TERM_Z). */
+ *  systematic weight did too before 2026-12-05: TRN_REFINE_SYS_TERM_Z). */
 #define TRN_REFINE_SYS_Z 1.0
 #endif
 #ifndef TRN_REFINE_SYS_TERM_Z

@@ -73,7 +73,7 @@ trn_status_t trn_highpass(const trn_grid_f32_t *dem, const trn_terrain_cfg_t *cf
  * @brief Occupancy volume of a filtered DEM (step 2). occ must be
  * width x height x cfg->nz; it is overwritten (1 = occupied, 0 = free).
  * @param[out] n_occupied number of occupied voxels (may be NULL).
- * @retval TRN_OK, TRN_E_NULL, TRN_E_SIZE, TRN_E_ARG,
+ * @retval TRN_OK, TRN_E_NULL, TRN_E_SIZE, TRN_E_ARG
  * @retval TRN_E_NODATA nothing occupied (every height missing).
  */
 trn_status_t trn_occupancy(const trn_grid_f32_t *hp, const trn_terrain_cfg_t *cfg,

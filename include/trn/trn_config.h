@@ -6,7 +6,7 @@
  * Works like lwIP's opt.h: if the integrator defines TRN_USER_CONFIG_H (for
  * example `-DTRN_USER_CONFIG_H="rover_trn_opts.h"`), that header is read first
  * and may override any value below; every value here is a guarded default; an
- * inconsistent configuration stops the build with #error.
+ * inconsistent configuration stops the build with \#error.
  *
  * Every compile-time maximum of the core is here, and some size public
  * structs (trn_kernels_t, trn_lnp_table_t, trn_pyramid_t, trn_map_t), so the

@@ -32,7 +32,7 @@
 #define TRN_LCAN_TXQ_RETRY_NS 1000000L
 
 /* ------------------------------------------------------------------------ */
-/* time and polling helpers                                                  */
+/* time and polling functions                                                */
 
 static int64_t now_ms(void)
 {

@@ -3,7 +3,7 @@
 # tests/integration/run-vm.sh - run static test programs inside a small Linux
 # under QEMU (vcan0 and a gpio-sim chip set up by init.sh) and report.
 #
-#   run-vm.sh --exit-helper KT_EXIT [--shell] PROGRAM...
+#   run-vm.sh --exit-program KT_EXIT [--shell] PROGRAM...
 #
 # Steps: build-kernel.sh (cached; builds on the first run), an initramfs in a
 # temporary directory (busybox-static, iproute2's `ip` with its shared
@@ -18,18 +18,18 @@
 set -euo pipefail
 
 HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
-helper=""
+exit_prog=""
 shell=0
 progs=()
 while [ $# -gt 0 ]; do
   case $1 in
-    --exit-helper) helper=$2; shift 2 ;;
+    --exit-program) exit_prog=$2; shift 2 ;;
     --shell) shell=1; shift ;;
     *) progs+=("$1"); shift ;;
   esac
 done
 die() { echo "run-vm: $*" >&2; exit 1; }
-[ -n "$helper" ] && [ -x "$helper" ] || die "--exit-helper (the kt_exit program) missing"
+[ -n "$exit_prog" ] && [ -x "$exit_prog" ] || die "--exit-program (the kt_exit program) missing"
 [ ${#progs[@]} -gt 0 ] || [ $shell -eq 1 ] || die "no test program given"
 for t in busybox qemu-system-x86_64 cpio gzip timeout; do
   command -v "$t" >/dev/null || die "$t not found (bash tools/setup.sh vm)"
@@ -64,7 +64,7 @@ if cdump=$(command -v candump); then
     cp -L "$lib" "$root$lib"
   done
 fi
-cp "$helper" "$root/bin/kt_exit"
+cp "$exit_prog" "$root/bin/kt_exit"
 cp "$HERE/init.sh" "$root/init"
 chmod 755 "$root/init"
 for p in "${progs[@]}"; do

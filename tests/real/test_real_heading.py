@@ -16,7 +16,7 @@ configuration. Per DEM, over the answers with status ok whose position is within
 cells (right):
   * at least 90 % of the cases are ok and right (rock field: 75 %; a 120 deg wedge of 2 m sees
     few rocks, and many of its answers are near-ties flagged ambiguous; measured 85.5 % of 200
-    at the acceptance limit 0.05, 77.5 % at 0.02 with the ellipse's tail, both since session 19:
+    at the acceptance limit 0.05, 77.5 % at 0.02 with the ellipse's tail, both since 2026-12-05:
     docs/method.md 9);
   * RMS heading error at most 0.5 deg (Rhine: 2 deg, its noise at 20 cells is 144 m; rock
     field: 1.5 deg, measured 1.08);

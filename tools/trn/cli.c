@@ -131,32 +131,40 @@ static void range_text(const cli_opt_t *o, char *buf, size_t n)
     }
 }
 
-/* " (default V)" from the option's variable (its value before parsing: the
- * default the command set, from the core's *_cfg_default where there is
- * one), unless the help text speaks of its default itself (a sentinel value
- * meaning "chosen later") or there is none. */
-static void default_text(const cli_opt_t *o, char *buf, size_t n)
+/* The default V of an option, from its variable (its value before parsing:
+ * the default the command set, from the core's *_cfg_default where there is
+ * one), into buf; 0 (buf "") when the help text speaks of its default itself
+ * (a sentinel value meaning "chosen later") or there is none. */
+static int default_value(const cli_opt_t *o, char *buf, size_t n)
 {
     buf[0] = '\0';
     if (o->required || o->dst == NULL || (o->help != NULL && strstr(o->help, "default") != NULL)) {
-        return;
+        return 0;
     }
     switch (o->kind) {
-    case CLI_LONG: snprintf(buf, n, " (default %ld)", *(const long *)o->dst); break;
-    case CLI_U64:
-        snprintf(buf, n, " (default %llu)", (unsigned long long)*(const uint64_t *)o->dst);
-        break;
-    case CLI_DOUBLE: snprintf(buf, n, " (default %g)", *(const double *)o->dst); break;
+    case CLI_LONG: snprintf(buf, n, "%ld", *(const long *)o->dst); break;
+    case CLI_U64: snprintf(buf, n, "%llu", (unsigned long long)*(const uint64_t *)o->dst); break;
+    case CLI_DOUBLE: snprintf(buf, n, "%g", *(const double *)o->dst); break;
     case CLI_XY:
-        snprintf(buf, n, " (default %g,%g)", ((const double *)o->dst)[0],
-                 ((const double *)o->dst)[1]);
+        snprintf(buf, n, "%g,%g", ((const double *)o->dst)[0], ((const double *)o->dst)[1]);
         break;
     case CLI_STRING:
         if (*(const char *const *)o->dst != NULL) {
-            snprintf(buf, n, " (default %s)", *(const char *const *)o->dst);
+            snprintf(buf, n, "%s", *(const char *const *)o->dst);
         }
         break;
     case CLI_FLAG: break;
+    }
+    return buf[0] != '\0';
+}
+
+/* " (default V)", or "" without a default (default_value). */
+static void default_text(const cli_opt_t *o, char *buf, size_t n)
+{
+    char v[96];
+    buf[0] = '\0';
+    if (default_value(o, v, sizeof v)) {
+        snprintf(buf, n, " (default %s)", v);
     }
 }
 
@@ -173,12 +181,14 @@ static void usage_line(const cli_opt_t *o, FILE *out)
     fprintf(out, "  %-22s %s%s%s\n", head, o->help, dflt, range);
 }
 
-void cli_usage(const cli_cmd_t *cmd, FILE *out)
+/* "trn CMD [--opt V] ... ARG\n": options first, then positional arguments;
+ * returns 1 if cmd has positional arguments. */
+static int cli_usage_synopsis(const cli_cmd_t *cmd, FILE *out)
 {
     size_t i;
     int pass, any_pos = 0;
-    fprintf(out, "usage: trn %s", cmd->name);
-    for (pass = 0; pass < 2; ++pass) { /* options first, then positional arguments */
+    fprintf(out, "trn %s", cmd->name);
+    for (pass = 0; pass < 2; ++pass) {
         for (i = 0; i < cmd->n_opts; ++i) {
             const cli_opt_t *o = &cmd->opts[i];
             if (is_positional(o) != pass) {
@@ -189,7 +199,17 @@ void cli_usage(const cli_cmd_t *cmd, FILE *out)
                     o->metavar ? o->metavar : "", o->required ? "" : "]");
         }
     }
-    fprintf(out, "\n\n%s\n\n", cmd->summary);
+    fputc('\n', out);
+    return any_pos;
+}
+
+void cli_usage(const cli_cmd_t *cmd, FILE *out)
+{
+    size_t i;
+    int any_pos;
+    fprintf(out, "usage: ");
+    any_pos = cli_usage_synopsis(cmd, out);
+    fprintf(out, "\n%s\n\n", cmd->summary);
     if (any_pos) {
         fprintf(out, "arguments:\n");
         for (i = 0; i < cmd->n_opts; ++i) {
@@ -210,6 +230,88 @@ void cli_usage(const cli_cmd_t *cmd, FILE *out)
         fprintf(out, "\n%s\n", cmd->details);
     }
     fputc('\n', out);
+    cli_exit_status_help(cmd->name, out);
+}
+
+/* s with '|' escaped, for a Markdown table cell. */
+static void md_cell(const char *s, FILE *out)
+{
+    for (; s != NULL && *s != '\0'; ++s) {
+        if (*s == '|') {
+            fputc('\\', out);
+        }
+        fputc(*s, out);
+    }
+}
+
+/* One table row of option o: | `name` | `METAVAR` | help | default | range | */
+static void md_row(const cli_opt_t *o, FILE *out)
+{
+    char range[64], dflt[96];
+    const char *d;
+    range_text(o, range, sizeof range);
+    if (default_value(o, dflt, sizeof dflt)) {
+        d = dflt;
+    } else if (o->required) {
+        d = "required";
+    } else if (o->help != NULL && strstr(o->help, "default") != NULL) {
+        d = "see the description";
+    } else {
+        d = "-";
+    }
+    fprintf(out, "| `%s` | ", o->name);
+    if (o->metavar != NULL) {
+        fputc('`', out);
+        md_cell(o->metavar, out);
+        fputc('`', out);
+    }
+    fprintf(out, " | ");
+    md_cell(o->help, out);
+    fprintf(out, " | ");
+    md_cell(d, out);
+    fprintf(out, " | %s |\n", range[0] != '\0' ? range + 1 : "");
+}
+
+void cli_usage_markdown(const cli_cmd_t *cmd, FILE *out)
+{
+    size_t i;
+    int pass;
+    fprintf(out,
+            "<!-- Generated from the option table of `trn %s` (tools/trn/), the table that prints "
+            "its --help,\n     by tools/docs/gen_cli_reference.py. Do not edit: the test command "
+            "checks it is current. -->\n",
+            cmd->name);
+    fprintf(out, "# trn %s\n\n%s\n\n## Synopsis\n\n```\n", cmd->name, cmd->summary);
+    cli_usage_synopsis(cmd, out);
+    fprintf(out, "```\n");
+    for (pass = 1; pass >= 0; --pass) { /* positional arguments, then options */
+        int any = 0;
+        for (i = 0; i < cmd->n_opts; ++i) {
+            const cli_opt_t *o = &cmd->opts[i];
+            if (is_positional(o) != pass) {
+                continue;
+            }
+            if (!any) {
+                fprintf(out,
+                        "\n## %s\n\n| %s | value | meaning | default | range |\n"
+                        "| --- | --- | --- | --- | --- |\n",
+                        pass ? "Arguments" : "Options", pass ? "argument" : "option");
+                any = 1;
+            }
+            md_row(o, out);
+        }
+        if (!pass) {
+            if (!any) {
+                fprintf(out, "\n## Options\n\n| option | value | meaning | default | range |\n"
+                             "| --- | --- | --- | --- | --- |\n");
+            }
+            fprintf(out, "| `--help` |  | this text |  |  |\n");
+        }
+    }
+    if (cmd->details != NULL) {
+        fprintf(out, "\n## Details\n\n%s\n", cmd->details);
+    }
+    fprintf(out, "\n## Exit status\n\n");
     cli_exit_status_help(cmd->name, out);
 }
 
@@ -371,6 +473,10 @@ int cli_parse(cli_cmd_t *cmd, int argc, char **argv)
     for (i = 1; i < argc && !(has_pos && strcmp(argv[i], "--") == 0); ++i) {
         if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
             cli_usage(cmd, stdout);
+            return CLI_HELP;
+        }
+        if (strcmp(argv[i], "--help-markdown") == 0) { /* the reference page, docs/cli/ */
+            cli_usage_markdown(cmd, stdout);
             return CLI_HELP;
         }
     }

@@ -13,7 +13,8 @@
  *   3  no result (select, field: no informative target; profile --check: a
  *      stage over its budget)
  * `--help` / `-h` prints the subcommand's usage on stdout, with the statuses
- * that subcommand uses (cli_exit_status_help), and exits 0.
+ * that subcommand uses (cli_exit_status_help), and exits 0; `--help-markdown`
+ * prints the same as the command's reference page (docs/cli/).
  *
  * Every JSON object the tool prints starts with "version" (json_begin), the
  * version of trn/version.h. */
@@ -80,6 +81,13 @@ size_t cli_remove(cli_opt_t *opts, size_t n, const char *const *names);
 
 /* Print the usage of cmd (synopsis, options with defaults and ranges). */
 void cli_usage(const cli_cmd_t *cmd, FILE *out);
+
+/* The same, as the command's Markdown reference page (docs/cli/<cmd>.md):
+ * synopsis, a table of the arguments and options (value, meaning, default,
+ * range), the details and the exit statuses. `trn <cmd> --help-markdown`
+ * prints it (cli_parse, like --help); tools/docs/gen_cli_reference.py writes
+ * the pages from it. */
+void cli_usage_markdown(const cli_cmd_t *cmd, FILE *out);
 
 /* The "exit status: ..." line(s) of `trn <cmd> --help`: 0, 1 and 2 for
  * every command, 3 with its meaning for the commands that use it. cmd NULL:

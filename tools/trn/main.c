@@ -42,6 +42,32 @@ static void usage(FILE *out)
     cli_exit_status_help(NULL, out);
 }
 
+/* `trn --help-markdown`: the index of the command-line reference
+ * (docs/cli/README.md), one line per command linking its page. */
+static void usage_markdown(FILE *out)
+{
+    size_t i;
+    fprintf(out, "<!-- Generated from tools/trn/commands.def by tools/docs/gen_cli_reference.py "
+                 "(`trn --help-markdown`).\n     Do not edit: the test command checks it is "
+                 "current. -->\n");
+    fprintf(out, "# The `trn` command line\n\n`trn <command> [options]`; `trn <command> --help` "
+                 "prints the same as its page.\nPositions `X,Y` are map metres from the DEM's "
+                 "geotransform; every DEM argument is any raster\nGDAL reads (band 1 by default; "
+                 "no-data and NaN mean \"not seen\"); `--json` prints one JSON object\nwhose "
+                 "first key is `\"version\"`.\n\n| command | what it does |\n| --- | --- |\n");
+    for (i = 0; i < N_COMMANDS; ++i) {
+        if (k_commands[i].run == cmd_version) {
+            fprintf(out, "| `%s` | %s |\n", k_commands[i].name, k_commands[i].summary);
+        } else {
+            fprintf(out, "| [`%s`](%s.md) | %s |\n", k_commands[i].name, k_commands[i].name,
+                    k_commands[i].summary);
+        }
+    }
+    fprintf(out, "\nOptions of `trn` itself: `--version` (also `trn version`), `--help`.\n\n"
+                 "## Exit status\n\n");
+    cli_exit_status_help(NULL, out);
+}
+
 static int cmd_version(int argc, char **argv)
 {
     (void)argc;
@@ -60,6 +86,10 @@ int main(int argc, char **argv)
     if (strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0 ||
         strcmp(argv[1], "help") == 0) {
         usage(stdout);
+        return 0;
+    }
+    if (strcmp(argv[1], "--help-markdown") == 0) {
+        usage_markdown(stdout);
         return 0;
     }
     if (strcmp(argv[1], "--version") == 0) {
