@@ -72,6 +72,7 @@ int trn_py_raster_put(const float *data, int width, int height, const double *gt
                       double nodata, const char *crs, const char *label, char *name,
                       size_t name_len, char *err, size_t err_len);
 int trn_py_raster_name(char *name, size_t name_len);
+int trn_py_crs_wkt(const char *crs, char **wkt, char *err, size_t err_len);
 void trn_py_raster_drop(const char *name);
 int trn_py_raster_read(const char *path, int band, int raw, float **data, int *width, int *height,
                        double *gt, char **crs, char *err, size_t err_len);
@@ -383,4 +384,17 @@ int trn_py_raster_write(const char *path, const float *data, int width, int heig
     }
     return dem_write_gtiff(path, data, width, height, gt, crs, err, err_len) == 0 ? CLI_OK
                                                                                   : CLI_BAD_INPUT;
+}
+
+/* A CRS text (EPSG:n, WKT, PROJ ...) as WKT, through GDAL (which must load).
+ * *wkt is malloc'd: trn_py_free it. */
+int trn_py_crs_wkt(const char *crs, char **wkt, char *err, size_t err_len)
+{
+    *wkt = NULL;
+    if (crs == NULL || *crs == '\0') {
+        snprintf(err, err_len, "no CRS given");
+        return CLI_BAD_INPUT;
+    }
+    *wkt = dem_srs_to_wkt(crs, err, err_len);
+    return *wkt != NULL ? CLI_OK : CLI_BAD_INPUT;
 }

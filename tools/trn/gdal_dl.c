@@ -107,6 +107,11 @@ static int try_lib(const char *name, char *tried, size_t tried_len)
     return 1; /* kept open for the life of the process */
 }
 
+/* How to get libgdal, for the reasons below. */
+#define INSTALL_HINT                                                                              \
+    "install libgdal (Debian/Ubuntu: apt install libgdal-dev, or the release's libgdalNN; "       \
+    "Fedora: dnf install gdal-libs; conda: conda install -c conda-forge libgdal)"
+
 static int find_gdal(void)
 {
     char tried[400] = "";
@@ -120,9 +125,9 @@ static int find_gdal(void)
             return 0;
         }
         snprintf(load_why, sizeof load_why,
-                 "reading or writing a raster file needs GDAL's C library, and TRN_GDAL_LIBRARY=%s "
-                 "does not load (%s); point it at a libgdal.so or unset it (numpy arrays need no "
-                 "GDAL)",
+                 "reading or writing a raster file needs GDAL's C library (libgdal), and "
+                 "TRN_GDAL_LIBRARY=%s does not load (%s): point it at a libgdal.so, or unset it "
+                 "and " INSTALL_HINT "; numpy arrays need no GDAL",
                  env, tried);
         return -1;
     }
@@ -154,10 +159,8 @@ static int find_gdal(void)
     }
     snprintf(load_why, sizeof load_why,
              "reading or writing a raster file needs GDAL's C library (libgdal), which is not "
-             "installed or not found (tried %s): install it "
-             "(Debian/Ubuntu: apt install libgdal-dev, or the libgdalNN of the release; Fedora: dnf "
-             "install gdal-libs; conda: conda install -c conda-forge libgdal) or set "
-             "TRN_GDAL_LIBRARY to its path; numpy arrays need no GDAL",
+             "installed or not found (tried %s): " INSTALL_HINT
+             ", or set TRN_GDAL_LIBRARY to its path; numpy arrays need no GDAL",
              tried);
     return -1;
 }
