@@ -387,7 +387,7 @@ def _progress_fn(progress: Progress) -> Tuple[Optional[Callable[[int, int], Any]
         except ImportError as e:
             raise TrnError("bad_input", "progress=True draws a tqdm bar: pip install tqdm "
                                         "(or pip install trn[progress])") from e
-        bar = tqdm_mod.tqdm(total=0, unit="eval", desc="trn field", leave=False)
+        bar = tqdm_mod.tqdm(total=0, unit="eval", desc="trn field")
 
         def tick(done: int, total: int) -> None:
             if bar.total != total:
@@ -449,8 +449,9 @@ class Map:
         """A Map from a 2-D xarray.DataArray (dims y, x; row 0 north or
         south, either is normalised): its transform and CRS from rioxarray
         (da.rio.transform(), da.rio.crs; `pip install trn[xarray]`) when it is
-        installed, else from the regular x/y coordinates and the CF
-        "spatial_ref" coordinate's crs_wkt (what rioxarray writes); nodata
+        installed, else from the CF "spatial_ref" coordinate rioxarray writes
+        (GeoTransform, crs_wkt) or, without one, the regular x/y cell-centre
+        coordinates (the cell size then to rounding of the coordinates); nodata
         from da.rio.nodata (or the _FillValue attribute) unless given. The
         coordinates are kept, so field_dataarray() returns the field on
         them."""
@@ -470,12 +471,13 @@ class Map:
             if nodata is None and rio.nodata is not None:
                 nodata = float(rio.nodata)
         else:
-            gt = _transform_from_coords(np.asarray(da[xdim].values, dtype=float),
-                                        np.asarray(da[ydim].values, dtype=float))
-            crs = None
-            if "spatial_ref" in da.coords:
-                attrs = da.coords["spatial_ref"].attrs
-                crs = attrs.get("crs_wkt") or attrs.get("spatial_ref")
+            attrs = da.coords["spatial_ref"].attrs if "spatial_ref" in da.coords else {}
+            if "GeoTransform" in attrs:  # rioxarray's own record of the transform, exact
+                gt = [float(v) for v in str(attrs["GeoTransform"]).split()]
+            else:
+                gt = _transform_from_coords(np.asarray(da[xdim].values, dtype=float),
+                                            np.asarray(da[ydim].values, dtype=float))
+            crs = attrs.get("crs_wkt") or attrs.get("spatial_ref")
             if nodata is None and "_FillValue" in da.attrs:
                 nodata = float(da.attrs["_FillValue"])
         m = cls(np.asarray(da.values), transform=gt, crs=crs, nodata=nodata)

@@ -15,7 +15,7 @@ import numpy.typing as npt
 
 __all__ = [
     "XY", "XYHeading", "Area", "Best", "MapConfig", "Refinement", "GlobalError", "Target", "NextBest",
-    "LocalizeResult", "SelectResult", "FieldResult", "Raster", "Transform",
+    "LocalizeResult", "SelectResult", "FieldResult", "Raster", "Transform", "RasterRead", "CrsLike",
 ]
 
 #: A GDAL geotransform: (x0, dx, 0, y0, 0, -dy), metres.

@@ -130,6 +130,16 @@ def plan_tiles(width: int, height: int, tile: int, halo: int,
     return tiles
 
 
+def _distributed() -> Any:
+    """dask.distributed (`pip install trn[dask]`)."""
+    import importlib
+    try:
+        return importlib.import_module("distributed")
+    except ImportError as e:
+        raise trn.TrnError("bad_input", "the tiled field runs on dask.distributed: pip install dask distributed "
+                                        "(or pip install trn[dask])") from e
+
+
 def _osgeo() -> Any:
     """osgeo.gdal, or None when GDAL's Python bindings are not installed."""
     try:
@@ -344,7 +354,8 @@ def tiled_field(dtm: Any, out: Any, tile: int = 512, workers: int = 2, scheduler
 
     own = None
     if client is None:
-        from distributed import Client, LocalCluster
+        dist: Any = _distributed()
+        Client, LocalCluster = dist.Client, dist.LocalCluster
         if scheduler is not None:
             client = own = Client(scheduler)
         else:
@@ -373,7 +384,7 @@ def tiled_field(dtm: Any, out: Any, tile: int = 512, workers: int = 2, scheduler
         gdal_out = out is not None and _osgeo() is not None
         ds = _create_out(out, info) if gdal_out else None
         whole = None if gdal_out else np.full((info["height"], info["width"]), np.nan, dtype=np.float32)
-        from distributed import as_completed
+        as_completed = _distributed().as_completed
         done, evals, stats = 0, 0, []
         for fut in as_completed(futs):
             r = fut.result()
