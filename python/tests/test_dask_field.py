@@ -19,7 +19,7 @@ pytest.importorskip("distributed")  # trn[dask]; not in the clean venv of 47-pyt
 pytest.importorskip("osgeo")  # read() below checks the GeoTIFF's tiling with GDAL's bindings
 
 from trn import dask_field  # noqa: E402
-from trn.dask_field import halo_cells  # noqa: E402, plan_tiles, tiled_field
+from trn.dask_field import halo_cells, plan_tiles, tiled_field  # noqa: E402
 
 # Debian's tornado 6.2 under distributed 2022.12 warns at every LocalCluster start
 pytestmark = pytest.mark.filterwarnings("ignore:make_current is deprecated:DeprecationWarning")

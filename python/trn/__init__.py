@@ -284,9 +284,9 @@ def _read(path: str, band: int, raw: bool) -> RasterRead:
         raise TrnError(_STATUS.get(rc, "bad_input"), err.value.decode(errors="replace"))
     try:
         n = w.value * h.value
-        buf = (ctypes.c_float * n).from_address(cast(int, data.value))
-        a = np.array(np.frombuffer(buf, dtype=np.float32, count=n).reshape(h.value, w.value))
-        wkt = ctypes.string_at(crs.value).decode() if crs.value else None
+        buf = ctypes.string_at(cast(int, data.value), n * 4)  # the C side's float32 buffer, copied
+        a = np.frombuffer(buf, dtype=np.float32, count=n).reshape(h.value, w.value).copy()
+        wkt = ctypes.string_at(crs.value).decode() if crs.value is not None else None
     finally:
         _lib.trn_py_free(data)
         _lib.trn_py_free(crs)
@@ -329,7 +329,7 @@ def write_raster(path: Union[str, "os.PathLike[str]"], heights: npt.ArrayLike, t
         if _lib.trn_py_crs_wkt(text.encode(), ctypes.byref(w), err, _L.ERR_LEN) != 0:
             raise TrnError("bad_input", err.value.decode(errors="replace"))
         try:
-            text = ctypes.string_at(w.value).decode()
+            text = ctypes.string_at(cast(int, w.value)).decode()
         finally:
             _lib.trn_py_free(w)
     rc = _lib.trn_py_raster_write(p.encode(), a.ctypes.data_as(_L.F32P), a.shape[1], a.shape[0], gt,
@@ -351,7 +351,7 @@ def options(cmd: str) -> List[Dict[str, Any]]:
     if rc != 0:
         raise TrnError(_STATUS.get(rc, "usage"), err.value.decode(errors="replace"))
     try:
-        table = json.loads(ctypes.string_at(out.value).decode())
+        table = json.loads(ctypes.string_at(cast(int, out.value)).decode())
     finally:
         _lib.trn_py_free(out)
     return cast(List[Dict[str, Any]], table["options"])
@@ -512,7 +512,7 @@ class Map:
         if rc != 0:
             raise TrnError(_STATUS.get(rc, f"status_{rc}"), err.value.decode(errors="replace"))
         try:
-            return cast(Dict[str, Any], json.loads(ctypes.string_at(out.value).decode()))
+            return cast(Dict[str, Any], json.loads(ctypes.string_at(cast(int, out.value)).decode()))
         finally:
             _lib.trn_py_free(out)
 

@@ -263,10 +263,11 @@ def _run_tile(info: Dict[str, Any], band: int, tile: Tile, sensors: List[Tuple[f
     k0, l0, k1, l1 = tile.core
     xa, ya = _cell_to_map(tgt, k0 - c0, l1 - 1 - r0)
     xb, yb = _cell_to_map(tgt, k1 - 1 - c0, l0 - r0)
+    r: Dict[str, Any]
     with trn.Map(a, transform=tgt, crs=info["crs"] or None, nodata=info["nodata"]) as m:
         try:
-            r = m.field(area=(xa, ya, xb, yb), coarse_step_cells=1, sensors=sensors, outlier_density=k,
-                        **options)
+            r = dict(m.field(area=(xa, ya, xb, yb), coarse_step_cells=1, sensors=sensors, outlier_density=k,
+                             **options))
         except trn.TrnError as e:
             if e.status != "no_result":
                 raise
@@ -349,7 +350,7 @@ def tiled_field(dtm: Any, out: Any, tile: int = 512, workers: int = 2, scheduler
         halo = halo_cells(info["gt"][1], options.get("max_range_m"), options.get("patch_m"),
                           options.get("highpass_m"))
     tiles = plan_tiles(info["width"], info["height"], tile, halo, area_c)
-    sensors = [tuple(float(c) for c in s) for s in (sensors if sensors is not None else _default_sensors(info))]
+    sensors = [(float(s[0]), float(s[1])) for s in (sensors if sensors is not None else _default_sensors(info))]
     options = dict(options, map_config=map_config)
 
     own = None
@@ -405,6 +406,7 @@ def tiled_field(dtm: Any, out: Any, tile: int = 512, workers: int = 2, scheduler
             ds.FlushCache()
             ds = None
         elif out is not None:
+            assert whole is not None
             trn.write_raster(out, whole, info["gt"], info["crs"] or None)
     finally:
         if own is not None:
@@ -446,7 +448,10 @@ def main(argv: Optional[List[str]] = None) -> int:
         key, _, val = kv.partition("=")
         opts[key.replace("-", "_")] = val
     area = tuple(float(v) for v in a.area_m.split(",")) if a.area_m else None
-    sensors = ([tuple(float(c) for c in s.split(",")) for s in a.sensors.split(";")] if a.sensors else None)
+    sensors = None
+    if a.sensors:
+        pairs = [s.split(",") for s in a.sensors.split(";")]
+        sensors = [(float(xy[0]), float(xy[1])) for xy in pairs]
     try:
         r = tiled_field(a.dtm, a.out, tile=a.tile, workers=a.workers, scheduler=a.scheduler, area=area,
                         sensors=sensors, halo=a.halo, outlier_density=a.outlier_density, **opts)
