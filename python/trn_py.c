@@ -330,10 +330,7 @@ int trn_py_options(const char *cmd, char **json, char *err, size_t err_len)
 
 /* 0 when GDAL's C library loads (files can be read and written), else 1
  * with the reason, which names the fix. */
-int trn_py_gdal(char *err, size_t err_len)
-{
-    return trn_gdal_load(err, err_len) == 0 ? 0 : 1;
-}
+int trn_py_gdal(char *err, size_t err_len) { return trn_gdal_load(err, err_len) == 0 ? 0 : 1; }
 
 int trn_py_raster_put(const float *data, int width, int height, const double *gt, int has_nodata,
                       double nodata, const char *crs, const char *label, char *name,
@@ -379,7 +376,8 @@ int trn_py_raster_write(const char *path, const float *data, int width, int heig
                         const double *gt, const char *crs, char *err, size_t err_len)
 {
     if (path == NULL || data == NULL || gt == NULL || width < 1 || height < 1) {
-        snprintf(err, err_len, "write: want a path, data of at least 1 x 1 cells and a geotransform");
+        snprintf(err, err_len,
+                 "write: want a path, data of at least 1 x 1 cells and a geotransform");
         return CLI_BAD_INPUT;
     }
     return dem_write_gtiff(path, data, width, height, gt, crs, err, err_len) == 0 ? CLI_OK

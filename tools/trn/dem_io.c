@@ -41,10 +41,7 @@ static void set_err(char *err, size_t n, const char *fmt, ...)
 /* GDAL once per process, quiet: its messages reach the user through our
  * one-line reasons (CPLGetLastErrorMsg), not on their own (trn_gdal_load).
  * 0, or -1 with the reason (libgdal missing, and how to install it). */
-static int gdal_ready(char *err, size_t err_len)
-{
-    return trn_gdal_load(err, err_len);
-}
+static int gdal_ready(char *err, size_t err_len) { return trn_gdal_load(err, err_len); }
 
 static const char *last_gdal_msg(void)
 {
@@ -274,8 +271,8 @@ static int band_height_scale(GDALRasterBandH b, int band, const char *path, doub
 /* Check band, size and geotransform (north-up up to flips, nonzero finite
  * pixel size) of a raster named path with nbands bands of w x h cells; has_gt
  * 0: it has no geotransform. 0, or -1 with the reason. */
-static int check_grid(const char *path, int band, int nbands, int w, int h, int max_dim,
-                      int has_gt, const double gt[6], char *err, size_t err_len)
+static int check_grid(const char *path, int band, int nbands, int w, int h, int max_dim, int has_gt,
+                      const double gt[6], char *err, size_t err_len)
 {
     if (band < 1 || band > nbands) {
         set_err(err, err_len, "'%s' has %d band%s, no band %d", path, nbands,
@@ -322,8 +319,8 @@ static GDALDatasetH open_checked(const char *path, int band, int max_dim, int *w
     *w = GDALGetRasterXSize(ds);
     *h = GDALGetRasterYSize(ds);
     has_gt = GDALGetGeoTransform(ds, gt) == CE_None;
-    if (check_grid(path, band, GDALGetRasterCount(ds), *w, *h, max_dim, has_gt, gt, err,
-                   err_len) == 0) {
+    if (check_grid(path, band, GDALGetRasterCount(ds), *w, *h, max_dim, has_gt, gt, err, err_len) ==
+        0) {
         return ds;
     }
     GDALClose(ds);
@@ -538,9 +535,12 @@ static const char *wkt_kind(const char *crs)
     static const struct {
         const char *kw;
         const char *kind;
-    } kws[] = {{"GEOGCS[", "geographic"},          {"GEOGCRS[", "geographic"},
-               {"GEOGRAPHICCRS[", "geographic"},   {"GEOCCS[", "geocentric"},
-               {"GEODCRS[", "geographic or geocentric"}, {"GEODETICCRS[", "geographic or geocentric"}};
+    } kws[] = {{"GEOGCS[", "geographic"},
+               {"GEOGCRS[", "geographic"},
+               {"GEOGRAPHICCRS[", "geographic"},
+               {"GEOCCS[", "geocentric"},
+               {"GEODCRS[", "geographic or geocentric"},
+               {"GEODETICCRS[", "geographic or geocentric"}};
     size_t i;
     while (*crs == ' ' || *crs == '\t' || *crs == '\n' || *crs == '\r') {
         ++crs;
@@ -593,8 +593,9 @@ int dem_mem_put(const float *data, int width, int height, const double gt[6], in
             OSRDestroySpatialReference(srs);
         }
         if (bad) {
-            set_err(err, err_len, "'%s': crs '%s' is not a coordinate reference system GDAL knows: %s",
-                    label, crs, last_gdal_msg());
+            set_err(err, err_len,
+                    "'%s': crs '%s' is not a coordinate reference system GDAL knows: %s", label,
+                    crs, last_gdal_msg());
             return -1;
         }
     }
@@ -722,8 +723,9 @@ static int mem_read(const char *path, int band, int max_dim, dem_t *dem, char *e
         srs = OSRNewSpatialReference(NULL);
         CPLErrorReset();
         if (srs == NULL || OSRSetFromUserInput(srs, c.crs) != OGRERR_NONE) {
-            set_err(err, err_len, "'%s': crs '%s' is not a coordinate reference system GDAL knows: %s",
-                    c.label, c.crs, last_gdal_msg());
+            set_err(err, err_len,
+                    "'%s': crs '%s' is not a coordinate reference system GDAL knows: %s", c.label,
+                    c.crs, last_gdal_msg());
             goto fail;
         }
         if (crs_to_metres(srs, c.label, c.gt, &msrs, &vert_to_m, err, err_len) != 0) {
@@ -784,8 +786,8 @@ fail:
 
 /* dem_write_gtiff to an in-memory name: the raster kept (owned) under it,
  * replacing what it held. */
-static int mem_write(const char *path, const float *data, int width, int height,
-                     const double gt[6], const char *srs_wkt, char *err, size_t err_len)
+static int mem_write(const char *path, const float *data, int width, int height, const double gt[6],
+                     const char *srs_wkt, char *err, size_t err_len)
 {
     unsigned long id = mem_id(path);
     size_t n = (size_t)width * (size_t)height;
@@ -880,8 +882,8 @@ int dem_read(const char *path, int band, int max_dim, dem_t *dem, char *err, siz
     nodata = GDALGetRasterNoDataValue(b, &has_nodata);
     heights_to_m(data, (size_t)w * (size_t)h, has_nodata, nodata, zscale, zoffset, zunit);
     north_up(data, w, h, gt);
-    dem->srs_wkt =
-        handed_wkt(GDALGetSpatialRef(ds), GDALGetProjectionRef(ds), msrs, zunit, vert_to_m);
+    dem->srs_wkt = handed_wkt(GDALGetSpatialRef(ds), GDALGetProjectionRef(ds), msrs, zunit,
+                              vert_to_m);
     GDALClose(ds);
 
     dem->data = data;

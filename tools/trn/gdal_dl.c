@@ -12,7 +12,10 @@
 
 trn_gdal_fn_t trn_gdal_fn;
 
-#define FN(name) {#name, offsetof(trn_gdal_fn_t, name)}
+#define FN(name) \
+    { \
+#name, offsetof(trn_gdal_fn_t, name) \
+    }
 static const struct {
     const char *name;
     size_t off;
@@ -108,8 +111,8 @@ static int try_lib(const char *name, char *tried, size_t tried_len)
 }
 
 /* How to get libgdal, for the reasons below. */
-#define INSTALL_HINT                                                                              \
-    "install libgdal (Debian/Ubuntu: apt install libgdal-dev, or the release's libgdalNN; "       \
+#define INSTALL_HINT \
+    "install libgdal (Debian/Ubuntu: apt install libgdal-dev, or the release's libgdalNN; " \
     "Fedora: dnf install gdal-libs; conda: conda install -c conda-forge libgdal)"
 
 static int find_gdal(void)

@@ -33,10 +33,10 @@ typedef void *GDALDatasetH;
 typedef void *GDALRasterBandH;
 typedef void *GDALDriverH;
 typedef void *OGRSpatialReferenceH;
-typedef int CPLErr;     /* enum CPLErr */
-typedef int OGRErr;     /* int in GDAL too */
+typedef int CPLErr;       /* enum CPLErr */
+typedef int OGRErr;       /* int in GDAL too */
 typedef int GDALDataType; /* enum GDALDataType */
-typedef int GDALRWFlag; /* enum GDALRWFlag */
+typedef int GDALRWFlag;   /* enum GDALRWFlag */
 typedef void (*CPLErrorHandler)(CPLErr, int, const char *);
 
 #define CE_None 0
@@ -64,8 +64,8 @@ typedef struct {
     void (*VSIFree)(void *);
     char **(*CSLSetNameValue)(char **, const char *, const char *);
     void (*CSLDestroy)(char **);
-    GDALDatasetH (*GDALOpenEx)(const char *, unsigned int, const char *const *,
-                               const char *const *, const char *const *);
+    GDALDatasetH (*GDALOpenEx)(const char *, unsigned int, const char *const *, const char *const *,
+                               const char *const *);
     GDALDatasetH (*GDALCreate)(GDALDriverH, const char *, int, int, int, GDALDataType, char **);
     void (*GDALClose)(GDALDatasetH);
     GDALDriverH (*GDALGetDriverByName)(const char *);
