@@ -13,8 +13,9 @@
 #    only the C library (readelf: no libgdal); `auditwheel show` must find it
 #    manylinux-eligible and `auditwheel repair` retags it manylinux_2_N.
 # 3. The repaired wheel with its extras ([test,xarray,progress]: pytest,
-#    xarray, rioxarray, tqdm) and mypy into the venv; `mypy --strict` over
-#    python/trn; python/tests run against it from outside the source tree
+#    xarray, rioxarray, tqdm), mypy and matplotlib (the README's example)
+#    into the venv; `mypy --strict` over python/trn; python/tests run
+#    against it from outside the source tree
 #    (the CLI-equality tests against build/host-release/trn; test_nogdal.py
 #    runs the array calls with libgdal made unavailable; the Dask tests skip:
 #    no distributed in this venv).
@@ -90,7 +91,9 @@ rwhl=$(ls "$W"/repaired/trn-*.whl)
 echo "47-python-venv: wheel $(basename "$whl") -> $(basename "$rwhl")"
 
 # 3. the repaired wheel with its extras, mypy --strict, the tests
-"$PY" -m pip install -q --force-reinstall "$rwhl[test,xarray,progress]" mypy || fail "installing the wheel's extras failed"
+# matplotlib: the README's planner example (python/tests/test_readme.py)
+"$PY" -m pip install -q --force-reinstall "$rwhl[test,xarray,progress]" mypy matplotlib ||
+  fail "installing the wheel's extras failed"
 "$PY" -m mypy --strict --no-incremental --cache-dir=/dev/null "$ROOT/python/trn" || fail "mypy --strict python/trn"
 cd "$W/tests"
 where=$("$PY" -c 'import trn; print(trn.__file__)')
