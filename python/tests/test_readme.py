@@ -7,6 +7,8 @@ import re
 import subprocess
 import sys
 
+import pytest
+
 from conftest import ROOT
 
 
@@ -18,8 +20,7 @@ def readme_block(marker):
     return m.group(1)
 
 
-def test_readme_planner(cli, tmp_path):
-    code = readme_block("python-planner")
+def run_planner(cli, tmp_path, code):
     cli("terrain", "--out", tmp_path / "global.tif", "--origin", "1000,2000", "--coverage", 0.15, "--seed", 3)
     (tmp_path / "planner.py").write_text(code)
     p = subprocess.run([sys.executable, "planner.py"], cwd=tmp_path, capture_output=True, text=True)
@@ -33,6 +34,20 @@ def test_readme_planner(cli, tmp_path):
                    "--heading-deg", 90, "--pan-deg", "-90,90")
     t = sel["target"]
     assert f"sense the target at {t['x_m']:.2f}, {t['y_m']:.2f} m" in p.stdout
+
+
+def test_readme_planner(cli, tmp_path):
+    code = readme_block("python-planner")
+    if "osgeo" in code:  # the README's version before it read the DTM with trn.read_raster
+        pytest.importorskip("osgeo")
+    run_planner(cli, tmp_path, code)
+
+
+def test_package_readme_planner(cli, tmp_path):
+    """python/README.md's planner: the README's example without osgeo."""
+    code = package_readme_block("planner")
+    assert "osgeo" not in code
+    run_planner(cli, tmp_path, code)
 
 
 def package_readme_block(marker):
