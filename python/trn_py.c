@@ -22,7 +22,17 @@
  * result), and otherwise the one-line reason in err (without the "trn <cmd>: "
  * prefix). The parsers print their messages on cli_message_stream(), set here
  * to a memory stream for the call; that setting is process-wide, so parses are
- * serialised by a mutex (runs are not). */
+ * serialised by a mutex (runs are not).
+ *
+ * Rasters without files (dem_io.h, in-memory rasters): trn_py_raster_put
+ * registers a numpy array's buffer (float32, row-major, by pointer: not
+ * copied until a run reads it) with its geotransform, no-data value and CRS
+ * text under a name "trn-mem:N" that the calls take wherever the command
+ * takes a path (--dem, --local); trn_py_raster_name gives a name for an
+ * output (--out, --evaluated-out, --out-map), and trn_py_raster_read returns
+ * what was written there. None of this needs GDAL: only files do (GDAL is
+ * loaded at run time, tools/trn/gdal_dl.c; trn_py_gdal says whether it
+ * loads, and why not). */
 #define _POSIX_C_SOURCE 200809L /* open_memstream, strdup */
 #include <pthread.h>
 #include <stdio.h>
@@ -31,6 +41,8 @@
 
 #include "cli.h"
 #include "cmd_run.h"
+#include "dem_io.h"
+#include "gdal_dl.h"
 #include "selmap.h"
 #include "trn/version.h"
 
@@ -53,6 +65,19 @@ int trn_py_select(trn_py_map_t *m, int argc, char **argv, const char *key, char 
 int trn_py_field(trn_py_map_t *m, int argc, char **argv, const char *key,
                  trn_field_progress_fn_t progress, void *progress_user, char **json, char *err,
                  size_t err_len);
+
+int trn_py_options(const char *cmd, char **json, char *err, size_t err_len);
+int trn_py_gdal(char *err, size_t err_len);
+int trn_py_raster_put(const float *data, int width, int height, const double *gt, int has_nodata,
+                      double nodata, const char *crs, const char *label, char *name,
+                      size_t name_len, char *err, size_t err_len);
+int trn_py_raster_name(char *name, size_t name_len);
+int trn_py_crs_wkt(const char *crs, char **wkt, char *err, size_t err_len);
+void trn_py_raster_drop(const char *name);
+int trn_py_raster_read(const char *path, int band, int raw, float **data, int *width, int *height,
+                       double *gt, char **crs, char *err, size_t err_len);
+int trn_py_raster_write(const char *path, const float *data, int width, int height,
+                        const double *gt, const char *crs, char *err, size_t err_len);
 
 enum { PY_LOCALIZE, PY_SELECT, PY_FIELD };
 
@@ -249,4 +274,125 @@ int trn_py_field(trn_py_map_t *m, int argc, char **argv, const char *key,
         fclose(f);
     }
     return rc == CLI_OK && *json == NULL ? CLI_BAD_INPUT : rc;
+}
+
+/* The option table of `trn <cmd> --help` as JSON (cli_help_json): what the
+ * Python docstrings list. Returns 0, or CLI_USAGE for an unknown command. */
+int trn_py_options(const char *cmd, char **json, char *err, size_t err_len)
+{
+    union {
+        cmd_localize_params_t l;
+        cmd_select_params_t s;
+        cmd_field_params_t f;
+    } p;
+    char *argv[2];
+    size_t n = 0;
+    FILE *f;
+    int rc;
+    *json = NULL;
+    if (cmd == NULL) {
+        snprintf(err, err_len, "no command named");
+        return CLI_USAGE;
+    }
+    argv[0] = (char *)(size_t)cmd; /* the parsers take char **; they do not write */
+    argv[1] = (char *)(size_t) "--help";
+    pthread_mutex_lock(&parse_lock);
+    f = open_memstream(json, &n);
+    if (f == NULL) {
+        pthread_mutex_unlock(&parse_lock);
+        snprintf(err, err_len, "cannot open a memory stream");
+        return CLI_BAD_INPUT;
+    }
+    cli_set_help_json_stream(f);
+    if (strcmp(cmd, "localize") == 0) {
+        cmd_localize_params_default(&p.l);
+        rc = cmd_localize_parse(2, argv, &p.l);
+    } else if (strcmp(cmd, "select") == 0) {
+        cmd_select_params_default(&p.s);
+        rc = cmd_select_parse(2, argv, &p.s);
+    } else if (strcmp(cmd, "field") == 0) {
+        cmd_field_params_default(&p.f);
+        rc = cmd_field_parse(2, argv, &p.f);
+    } else {
+        rc = CLI_USAGE;
+    }
+    cli_set_help_json_stream(NULL);
+    fclose(f);
+    pthread_mutex_unlock(&parse_lock);
+    if (rc != CLI_HELP || *json == NULL) {
+        free(*json);
+        *json = NULL;
+        snprintf(err, err_len, "no command '%s' (localize, select, field)", cmd);
+        return CLI_USAGE;
+    }
+    return CLI_OK;
+}
+
+/* 0 when GDAL's C library loads (files can be read and written), else 1
+ * with the reason, which names the fix. */
+int trn_py_gdal(char *err, size_t err_len) { return trn_gdal_load(err, err_len) == 0 ? 0 : 1; }
+
+int trn_py_raster_put(const float *data, int width, int height, const double *gt, int has_nodata,
+                      double nodata, const char *crs, const char *label, char *name,
+                      size_t name_len, char *err, size_t err_len)
+{
+    return dem_mem_put(data, width, height, gt, has_nodata, nodata, crs, label, name, name_len, err,
+                       err_len) == 0
+               ? CLI_OK
+               : CLI_BAD_INPUT;
+}
+
+int trn_py_raster_name(char *name, size_t name_len)
+{
+    return dem_mem_name(name, name_len) == 0 ? CLI_OK : CLI_BAD_INPUT;
+}
+
+void trn_py_raster_drop(const char *name) { dem_mem_drop(name); }
+
+/* Band `band` of a file or in-memory raster: raw 1 as stored (dem_read_raw:
+ * what a command wrote), raw 0 as the commands read a DEM (dem_read: metres,
+ * north-up, not seen as NaN). *data (width x height, row-major) and *crs
+ * (the CRS as WKT, or NULL) are malloc'd: trn_py_free them. */
+int trn_py_raster_read(const char *path, int band, int raw, float **data, int *width, int *height,
+                       double *gt, char **crs, char *err, size_t err_len)
+{
+    dem_t d;
+    int rc = raw ? dem_read_raw(path, band, &d, err, err_len)
+                 : dem_read(path, band, TRN_MAX_DIM, &d, err, err_len);
+    *data = NULL;
+    *crs = NULL;
+    if (rc != 0) {
+        return CLI_BAD_INPUT;
+    }
+    *data = d.data;
+    *crs = d.srs_wkt;
+    *width = d.width;
+    *height = d.height;
+    memcpy(gt, d.gt, 6 * sizeof *gt);
+    return CLI_OK;
+}
+
+int trn_py_raster_write(const char *path, const float *data, int width, int height,
+                        const double *gt, const char *crs, char *err, size_t err_len)
+{
+    if (path == NULL || data == NULL || gt == NULL || width < 1 || height < 1) {
+        snprintf(err, err_len,
+                 "write: want a path, data of at least 1 x 1 cells and a geotransform");
+        return CLI_BAD_INPUT;
+    }
+    return dem_write_gtiff(path, data, width, height, gt, crs, err, err_len) == 0 ? CLI_OK
+                                                                                  : CLI_BAD_INPUT;
+}
+
+/* A CRS text (EPSG:n, WKT, PROJ ...) as WKT, through GDAL (which must load).
+ * *wkt is malloc'd: trn_py_free it. */
+int trn_py_crs_wkt(const char *crs, char **wkt, char *err, size_t err_len)
+{
+    *wkt = NULL;
+    if (crs == NULL || *crs == '\0') {
+        snprintf(err, err_len, "no CRS given");
+        return CLI_BAD_INPUT;
+    }
+    *wkt = dem_srs_to_wkt(crs, err, err_len);
+    return *wkt != NULL ? CLI_OK : CLI_BAD_INPUT;
 }

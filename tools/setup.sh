@@ -62,9 +62,12 @@ declare -A PKG_GROUPS=(
   # bindings, pytest and matplotlib (the README's planner example); GDAL's C
   # API and CMake for the package's build by scikit-build-core (from PyPI,
   # pip-installed into .venv: Debian 12 has no package of it); Dask and
-  # dask.distributed for the tiled field over large DTMs (python/trn/dask_field.py).
+  # dask.distributed for the tiled field over large DTMs (python/trn/dask_field.py);
+  # tqdm and xarray for field(progress=True) and Map.from_xarray (the clean-venv
+  # stage, tools/test.d/47-python-venv.sh, takes its packages from PyPI instead).
   [python]="python3 python3-venv python3-numpy python3-gdal python3-pytest python3-matplotlib
-            python3-dask python3-distributed libgdal-dev gdal-bin cmake ninja-build gcc"
+            python3-dask python3-distributed python3-tqdm python3-xarray
+            libgdal-dev gdal-bin cmake ninja-build gcc"
   # Real-terrain benchmark (tools/real/): the OpenCV peer (cv2.matchTemplate),
   # numpy, GDAL (gdalwarp to UTM, GeoTIFF I/O) and the figures; python3-venv
   # for the project venv (.venv) used only by DEMs shipped on PyPI alone;

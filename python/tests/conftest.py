@@ -1,6 +1,9 @@
 # SPDX-License-Identifier: Apache-2.0
 """Fixtures of the Python package's tests: the `trn` command line (for the
-CLI-equality checks) and small DEMs it makes.
+CLI-equality checks) and small DEMs it makes. No test needs GDAL's Python
+bindings (osgeo): files are read and written by the package's C side
+(trn.read_raster, trn.write_raster, through libgdal), so the same tests run in
+a plain venv (tools/test.d/47-python-venv.sh).
 
 The command line: $TRN_CLI, else build/host-release/trn, else build/host/trn
 of the repository (tools/test.d/46-python.sh runs after the presets are built).
@@ -45,23 +48,22 @@ def dems(cli, tmp_path_factory):
     """global.tif: 64 x 64 cells of 0.1 m at (1000, 2000), EPSG:32611 (UTM
     11N, metres); local.tif: a 32 x 32 cut of it in the rover frame, the
     rover at map (1002.75, 2003.35) (the README's recipe, smaller)."""
-    from osgeo import gdal
+    import trn
 
-    gdal.UseExceptions()
     d = tmp_path_factory.mktemp("dems")
     g = str(d / "global.tif")
     loc = str(d / "local.tif")
     cli("terrain", "--out", g, "--size-cells", 64, "--origin", "1000,2000", "--coverage", 0.15, "--seed", 3,
         "--crs", "EPSG:32611")
     # columns 12..43, rows 14..45: map x 1001.2..1004.4, y 2001.8..2005.0; rover frame origin at (1002.8, 2003.4)
-    gdal.Translate(loc, g, srcWin=[12, 14, 32, 32], outputBounds=[-1.6, 1.6, 1.6, -1.6])
+    a, _, _ = trn.read_raster(g, raw=True)
+    trn.write_raster(loc, a[14:46, 12:44], (-1.6, 0.1, 0.0, 1.6, 0.0, -0.1))
     return {"dir": d, "global": g, "local": loc, "truth": (1002.8, 2003.4)}
 
 
 def read(path):
-    """(heights float32, geotransform, WKT) of a raster."""
-    from osgeo import gdal
+    """(heights float32 as stored, geotransform, WKT or "") of a raster."""
+    import trn
 
-    ds = gdal.Open(str(path))
-    a = ds.GetRasterBand(1).ReadAsArray()
-    return a, ds.GetGeoTransform(), ds.GetProjection()
+    a, gt, wkt = trn.read_raster(path, raw=True)
+    return a, gt, wkt or ""

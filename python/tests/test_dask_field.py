@@ -14,8 +14,12 @@ import numpy as np
 import pytest
 
 import trn
-from trn import dask_field
-from trn.dask_field import halo_cells, plan_tiles, tiled_field
+
+pytest.importorskip("distributed")  # trn[dask]; not in the clean venv of 47-python-venv.sh
+pytest.importorskip("osgeo")  # read() below checks the GeoTIFF's tiling with GDAL's bindings
+
+from trn import dask_field  # noqa: E402
+from trn.dask_field import halo_cells, plan_tiles, tiled_field  # noqa: E402
 
 # Debian's tornado 6.2 under distributed 2022.12 warns at every LocalCluster start
 pytestmark = pytest.mark.filterwarnings("ignore:make_current is deprecated:DeprecationWarning")
@@ -152,6 +156,15 @@ def test_missing_file(tmp_path):
     with pytest.raises(trn.TrnError) as e:
         dask_field.whole_map_outlier_density(tmp_path / "missing.tif")
     assert "no such file" in e.value.message
+
+
+def test_array_equals_file(client, t256):
+    """A DTM given as a numpy array (each task handed its window, no file
+    read): the same field, returned as an array when out is None."""
+    a, gt, wkt = trn.read_raster(t256)
+    r = tiled_field(a, None, transform=gt, crs=wkt, tile=64, client=client, **FAST)
+    assert r["file"] is None and r["tiles"] == 16
+    assert np.array_equal(bits(r["field"]), bits(whole(t256)["field"]))
 
 
 def test_scheduler_address(client, t256, tmp_path):

@@ -153,11 +153,79 @@ def test_bad_arrays():
     assert status_of(trn.Map, "x.tif", transform=gt)[0] == "bad_input"  # a file has its own
 
 
+GEO_WKT = ('GEOGCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,298.257223563]],'
+           'PRIMEM["Greenwich",0],UNIT["degree",0.0174532925199433]]')
+
+
 def test_geographic_crs(dems):
+    """Refused when the DEM is read: EPSG:4326 through GDAL's check; a WKT
+    naming a geographic CRS also without GDAL (tests/test_nogdal.py)."""
     a, gt, _ = read(dems["global"])
-    m = trn.Map(a, transform=(-110.0, 1e-6, 0, 35.0, 0, -1e-6), crs="EPSG:4326")
-    st, msg = status_of(m.select, rover=(-109.99997, 34.99997))
-    assert st == "bad_input" and "geographic" in msg
+    for crs in ("EPSG:4326", GEO_WKT):
+        m = trn.Map(a, transform=(-110.0, 1e-6, 0, 35.0, 0, -1e-6), crs=crs)
+        st, msg = status_of(m.select, rover=(-109.99997, 34.99997))
+        assert st == "bad_input" and "geographic" in msg and "map array" in msg
+
+
+def test_numpy_arrays_equal_cli(cli, tmp_path):
+    """Heights made in numpy (no file read): localize from the arrays gives
+    `trn localize --json`'s answer on the same heights written to GeoTIFF."""
+    rng = np.random.default_rng(7)
+    y, x = np.mgrid[0:80, 0:80] * 0.1
+    z = np.zeros((80, 80))
+    for _ in range(40):  # rocks: Gaussian bumps 0.1-0.4 m high, 0.15-0.5 m wide
+        cx, cy, h, s = rng.uniform(0, 8), rng.uniform(0, 8), rng.uniform(0.1, 0.4), rng.uniform(0.15, 0.5)
+        z += h * np.exp(-((x - cx) ** 2 + (y - cy) ** 2) / (2 * s * s))
+    z = z.astype(np.float32)
+    gt = (500.0, 0.1, 0.0, 4008.0, 0.0, -0.1)
+    local = np.ascontiguousarray(z[20:56, 30:66])  # rover at column 48, row 38: map (504.8, 4004.2)
+    lgt = (-1.8, 0.1, 0.0, 1.8, 0.0, -0.1)
+    trn.write_raster(tmp_path / "g.tif", z, gt, "EPSG:32633")
+    trn.write_raster(tmp_path / "l.tif", local, lgt)
+    want = cli.json("localize", "--dem", tmp_path / "g.tif", "--local", tmp_path / "l.tif",
+                    "--prior", "504.95,4004.05", "--window-m", 0.5)
+    got = trn.Map(z, transform=gt, crs="EPSG:32633").localize(local, prior=(504.95, 4004.05), window_m=0.5,
+                                                              transform=lgt)
+    same(got, want, skip=("time_ms",))
+    assert want["status"] == "ok"
+    assert abs(got["x_m"] - 504.8) < 0.05 and abs(got["y_m"] - 4004.2) < 0.05
+
+
+def test_array_by_pointer():
+    """A float32 C-order array is used in place (no copy), others are converted once."""
+    a = np.zeros((8, 8), np.float32)
+    m = trn.Map(a, transform=(0, 0.1, 0, 0.8, 0, -0.1))
+    assert np.shares_memory(m._keep.array, a)
+    m2 = trn.Map(np.zeros((8, 8)), transform=(0, 0.1, 0, 0.8, 0, -0.1))
+    assert m2._keep.array.dtype == np.float32
+
+
+def test_nodata_and_south_up(dems, gmap):
+    """nodata means not seen, as a file's; a south-up array (dy > 0) is flipped as a file is."""
+    a, gt, wkt = read(dems["global"])
+    want = gmap.select(rover=ROVER)
+    flipped = (gt[0], gt[1], 0.0, gt[3] + a.shape[0] * gt[5], 0.0, -gt[5])
+    assert trn.Map(np.ascontiguousarray(a[::-1]), transform=flipped, crs=wkt).select(rover=ROVER) == want
+    holes = a.copy()
+    holes[:, :5] = -9999.0
+    nan = a.copy()
+    nan[:, :5] = np.nan
+    assert (trn.Map(holes, transform=gt, crs=wkt, nodata=-9999.0).select(rover=ROVER)
+            == trn.Map(nan, transform=gt, crs=wkt).select(rover=ROVER))
+
+
+def test_read_write_raster(tmp_path):
+    a = np.arange(12, dtype=np.float32).reshape(3, 4)
+    a[1, 1] = np.inf
+    gt = (10.0, 0.5, 0.0, 20.0, 0.0, -0.5)
+    trn.write_raster(tmp_path / "r.tif", a, gt, 32611)
+    b, gt2, wkt = trn.read_raster(tmp_path / "r.tif", raw=True)
+    np.testing.assert_array_equal(a, b)
+    assert gt2 == gt and "32611" in wkt
+    c, _, _ = trn.read_raster(tmp_path / "r.tif")  # as a DEM: +inf is not seen
+    assert np.isnan(c[1, 1]) and c[0, 1] == 1.0
+    with pytest.raises(trn.TrnError):
+        trn.read_raster(tmp_path / "missing.tif")
 
 
 def test_missing_file(dems):

@@ -4,6 +4,7 @@
     from trn.dask_field import tiled_field
     r = tiled_field("dtm.tif", "field.tif", tile=512, workers=2,
                     min_range_m=0.5, max_range_m=1.0, patch_m=0.3)
+    r = tiled_field(heights, None, transform=gt, crs="EPSG:32611")  # an array: r["field"]
 
 or `python -m trn.dask_field DTM OUT --tile 512 --workers 2` (a LocalCluster)
 or `... --scheduler tcp://host:8786` (any dask.distributed scheduler whose
@@ -12,9 +13,13 @@ workers import trn and read DTM: a shared file system or a /vsicurl/ URL).
 Design (docs/scale.md):
 
 * Tiles: the DTM's rover cells cut into tile x tile cores; each task reads its
-  core plus a halo (halo_cells) from the DTM itself (a window read with GDAL,
-  so no worker holds the whole map), prepares the selection map of that window
-  and evaluates the field at every rover cell of its core.
+  core plus a halo (halo_cells) from the DTM itself (a window read with GDAL's
+  Python bindings, osgeo, so no worker holds the whole map), prepares the
+  selection map of that window and evaluates the field at every rover cell of
+  its core. A DTM given as a numpy array (with transform, crs, nodata) needs
+  no GDAL: each task is handed its window of the array. A file without osgeo
+  is read whole once by the C side (libgdal; at most 4096 cells a side) and
+  then tiled as an array.
 * Full evaluation: the tiled field is the field at every position
   (coarse_step_cells 1, the trn_field rule with nothing interpolated); the
   coarse-to-fine refinement takes its decisions from the area's own minimum
@@ -28,8 +33,12 @@ Design (docs/scale.md):
   whole DTM (a task; DTMs up to TRN_MAX_DIM = 4096 cells a side) or given.
 * Output: a tiled (256 x 256), DEFLATE-compressed float32 GeoTIFF with the
   DTM's geotransform and CRS, NaN (no-data) outside the area, written by the
-  client as tiles arrive.
+  client as tiles arrive (with osgeo; without it the field is assembled in
+  memory and written by trn.write_raster); out=None: no file, the field is
+  the result's "field" (a numpy float32 array on the DTM's grid).
 """
+from __future__ import annotations
+
 
 import argparse
 import json
@@ -37,8 +46,10 @@ import math
 import os
 import sys
 import time
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
+import numpy.typing as npt
 
 import trn
 
@@ -58,19 +69,20 @@ class Tile:
     """One task: core (rover cells c0..c1-1, r0..r1-1 of the whole DTM) and
     the read window (core plus halo, clipped to the DTM)."""
 
-    def __init__(self, core, read):
-        self.core = tuple(int(v) for v in core)
-        self.read = tuple(int(v) for v in read)
+    def __init__(self, core: Sequence[int], read: Sequence[int]) -> None:
+        self.core: Tuple[int, ...] = tuple(int(v) for v in core)
+        self.read: Tuple[int, ...] = tuple(int(v) for v in read)
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         return f"Tile(core={self.core}, read={self.read})"
 
 
-def _kernel_radius_max():
+def _kernel_radius_max() -> int:
     return int(math.ceil(3.0 * KERNEL_SIGMA0_CELLS * math.sqrt(2.0) ** (KERNEL_COUNT - 1)))
 
 
-def halo_cells(cell_m, max_range_m=None, patch_m=None, highpass_m=None):
+def halo_cells(cell_m: float, max_range_m: Optional[float] = None, patch_m: Optional[float] = None,
+               highpass_m: Optional[float] = None) -> int:
     """Cells of DTM a tile must read around its core so that every rover cell
     of the core sees the map it would see in the whole DTM:
 
@@ -96,7 +108,8 @@ def halo_cells(cell_m, max_range_m=None, patch_m=None, highpass_m=None):
     return reach + patch_cells // 2 + 1 + 2 * r9 + 2 * r9 + 1 + hp_cells
 
 
-def plan_tiles(width, height, tile, halo, area=None):
+def plan_tiles(width: int, height: int, tile: int, halo: int,
+               area: Optional[Tuple[int, int, int, int]] = None) -> List[Tile]:
     """Tiles over area (c0, r0, c1, r1 inclusive cells; None: the whole
     DTM): cores tile x tile (the last ones shorter), read windows the core
     plus halo clipped to the DTM."""
@@ -117,13 +130,48 @@ def plan_tiles(width, height, tile, halo, area=None):
     return tiles
 
 
-def _dtm_info(path, band):
-    from osgeo import gdal
+def _distributed() -> Any:
+    """dask.distributed (`pip install trn[dask]`)."""
+    import importlib
+    try:
+        return importlib.import_module("distributed")
+    except ImportError as e:
+        raise trn.TrnError("bad_input", "the tiled field runs on dask.distributed: pip install dask distributed "
+                                        "(or pip install trn[dask])") from e
+
+
+def _osgeo() -> Any:
+    """osgeo.gdal, or None when GDAL's Python bindings are not installed."""
+    try:
+        import importlib
+        return importlib.import_module("osgeo.gdal")
+    except ImportError:
+        return None
+
+
+def _dtm_info(path: Any, band: int, transform: Any = None, crs: Any = None,
+              nodata: Optional[float] = None) -> Dict[str, Any]:
+    """The DTM's grid: from a path (osgeo, or the C side's whole read) or an array."""
     if not isinstance(path, (str, os.PathLike)):
-        raise trn.TrnError("bad_input", f"dtm: want a path or GDAL URL, got {type(path).__name__}")
+        if path is None:
+            raise trn.TrnError("bad_input", "dtm: want a path, a GDAL URL or a 2-D array")
+        a = np.asarray(path)
+        if a.ndim != 2:
+            raise trn.TrnError("bad_input", f"dtm: want a 2-D array, got shape {a.shape}")
+        gt = trn._geotransform(transform)
+        if gt[2] != 0 or gt[4] != 0 or gt[1] <= 0 or gt[5] >= 0 or abs(abs(gt[5]) - gt[1]) > 1e-9 * gt[1]:
+            raise trn.TrnError("bad_input", f"dtm: want a north-up grid of square cells, geotransform {gt}")
+        return {"path": None, "array": a, "width": a.shape[1], "height": a.shape[0], "gt": gt,
+                "crs": trn._crs_text(crs) or "", "nodata": nodata}
+    if transform is not None or crs is not None:
+        raise trn.TrnError("bad_input", "dtm: transform and crs are for arrays; a file carries its own")
     path = os.fspath(path)
     if not path.startswith("/vsi") and not os.path.exists(path):
         raise trn.TrnError("bad_input", f"dtm {path}: no such file")
+    gdal = _osgeo()
+    if gdal is None:  # no window reads: the whole DTM through the C side, then tiled as an array
+        a, gt, wkt = trn.read_raster(path, band)
+        return _dtm_info(a, 1, gt, wkt, None)
     ds = gdal.Open(path)
     if ds is None:
         raise trn.TrnError("bad_input", f"dtm {path}: GDAL cannot open it")
@@ -132,18 +180,18 @@ def _dtm_info(path, band):
     gt = ds.GetGeoTransform()
     if gt[2] != 0 or gt[4] != 0 or gt[1] <= 0 or gt[5] >= 0 or abs(abs(gt[5]) - gt[1]) > 1e-9 * gt[1]:
         raise trn.TrnError("bad_input", f"dtm {path}: want a north-up grid of square cells, geotransform {gt}")
-    info = {"path": path, "width": ds.RasterXSize, "height": ds.RasterYSize, "gt": tuple(gt),
+    info = {"path": path, "array": None, "width": ds.RasterXSize, "height": ds.RasterYSize, "gt": tuple(gt),
             "crs": ds.GetProjection(), "nodata": ds.GetRasterBand(band).GetNoDataValue()}
     ds = None
     return info
 
 
-def _cell_to_map(gt, col, row):
+def _cell_to_map(gt: Sequence[float], col: float, row: float) -> Tuple[float, float]:
     """dem_io.c dem_cell_to_map, the same double operations."""
     return gt[0] + (col + 0.5) * gt[1], gt[3] + (row + 0.5) * gt[5]
 
 
-def _area_cells(info, area_m):
+def _area_cells(info: Dict[str, Any], area_m: Optional[Sequence[float]]) -> Tuple[int, int, int, int]:
     """cmd_field.c field_area: the cells whose centres lie in the box."""
     w, h, gt = info["width"], info["height"], info["gt"]
     if area_m is None:
@@ -161,22 +209,24 @@ def _area_cells(info, area_m):
     return (c0, r0, c1, r1)
 
 
-def _default_sensors(info):
+def _default_sensors(info: Dict[str, Any]) -> List[Tuple[float, float]]:
     """`trn field`'s default: the whole DTM's centre (selmap.c sensor_cells)."""
     return [_cell_to_map(info["gt"], 0.5 * (info["width"] - 1), 0.5 * (info["height"] - 1))]
 
 
-def whole_map_outlier_density(dtm, band=1, **options):
+def whole_map_outlier_density(dtm: Any, band: int = 1, transform: Any = None, crs: Any = None,
+                              nodata: Optional[float] = None, **options: Any) -> float:
     """K of ln p over the whole DTM's distance volume (what `trn field`
     reports as outlier_density_per_m): one preparation of the whole map, so
-    the DTM must fit one (at most 4096 cells a side)."""
-    info = _dtm_info(dtm, band)
+    the DTM (a path, or an array with transform, crs, nodata) must fit one
+    (at most 4096 cells a side)."""
+    info = _dtm_info(dtm, band, transform, crs, nodata)
     if max(info["width"], info["height"]) > MAX_DIM:
         raise trn.TrnError("bad_input", f"dtm {info['path']} is {info['width']} x {info['height']} cells: "
                                         f"its outlier density needs one preparation of at most {MAX_DIM} a "
                                         "side; pass outlier_density= (docs/scale.md)")
     opts = {k: v for k, v in options.items() if k not in ("sensors", "area", "coarse_step_cells")}
-    with trn.Map(info["path"], band=band) as m:  # the coarsest lattice: K is all it is for
+    with _info_map(info, band) as m:  # the coarsest lattice: K is all it is for
         try:
             r = m.field(coarse_step_cells=256, margin_rel=0, change_rel=100, **opts)
         except trn.TrnError as e:
@@ -184,17 +234,28 @@ def whole_map_outlier_density(dtm, band=1, **options):
                 raise
             raise trn.TrnError("no_result", "no informative position on the coarsest lattice, so no outlier "
                                             "density reported: pass outlier_density=") from e
-    return r["outlier_density_per_m"]
+    return float(r["outlier_density_per_m"])
 
 
-def _run_tile(info, band, tile, sensors, k, options):
-    """One task (on a worker): read the window, prepare it, evaluate the core."""
-    from osgeo import gdal
+def _info_map(info: Dict[str, Any], band: int) -> trn.Map:
+    if info["array"] is not None:
+        return trn.Map(info["array"], transform=info["gt"], crs=info["crs"] or None, nodata=info["nodata"])
+    return trn.Map(info["path"], band=band)
+
+
+def _run_tile(info: Dict[str, Any], band: int, tile: Tile, sensors: List[Tuple[float, float]], k: float,
+              options: Dict[str, Any], window: Optional[npt.NDArray[Any]] = None) -> Dict[str, Any]:
+    """One task (on a worker): read the window (or take the array's), prepare
+    it, evaluate the core."""
     t0 = time.perf_counter()
     c0, r0, w, h = tile.read[0], tile.read[1], tile.read[2] - tile.read[0], tile.read[3] - tile.read[1]
-    ds = gdal.Open(info["path"])
-    a = ds.GetRasterBand(band).ReadAsArray(c0, r0, w, h)
-    ds = None
+    if window is not None:
+        a = window
+    else:
+        gdal = _osgeo()
+        ds = gdal.Open(info["path"])
+        a = ds.GetRasterBand(band).ReadAsArray(c0, r0, w, h)
+        ds = None
     if a is None:
         raise trn.TrnError("bad_input", f"dtm {info['path']}: cannot read window {tile.read}")
     gt = info["gt"]
@@ -202,10 +263,11 @@ def _run_tile(info, band, tile, sensors, k, options):
     k0, l0, k1, l1 = tile.core
     xa, ya = _cell_to_map(tgt, k0 - c0, l1 - 1 - r0)
     xb, yb = _cell_to_map(tgt, k1 - 1 - c0, l0 - r0)
+    r: Dict[str, Any]
     with trn.Map(a, transform=tgt, crs=info["crs"] or None, nodata=info["nodata"]) as m:
         try:
-            r = m.field(area=(xa, ya, xb, yb), coarse_step_cells=1, sensors=sensors, outlier_density=k,
-                        **options)
+            r = dict(m.field(area=(xa, ya, xb, yb), coarse_step_cells=1, sensors=sensors, outlier_density=k,
+                             **options))
         except trn.TrnError as e:
             if e.status != "no_result":
                 raise
@@ -222,13 +284,13 @@ def _run_tile(info, band, tile, sensors, k, options):
             "workspace_bytes": r["workspace_bytes"], "maxrss_kib": _maxrss_kib()}
 
 
-def _maxrss_kib():
+def _maxrss_kib() -> int:
     import resource
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 
 
-def _create_out(path, info, block=256):
-    from osgeo import gdal
+def _create_out(path: str, info: Dict[str, Any], block: int = 256) -> Any:
+    gdal = _osgeo()
     drv = gdal.GetDriverByName("GTiff")
     opts = ["TILED=YES", f"BLOCKXSIZE={block}", f"BLOCKYSIZE={block}", "COMPRESS=DEFLATE", "PREDICTOR=3",
             "BIGTIFF=IF_SAFER"]
@@ -248,12 +310,18 @@ _FORBIDDEN = {"coarse_step_cells", "margin_rel", "change_rel", "reference", "out
               "area", "area_m", "outlier_density", "sensors", "map_config"}
 
 
-def tiled_field(dtm, out, tile=512, workers=2, scheduler=None, client=None, area=None, sensors=None,
-                halo=None, outlier_density=None, band=1, map_config="paper", threads_per_worker=1,
-                memory_limit="auto", progress=None, **options):
+def tiled_field(dtm: Any, out: Any, tile: int = 512, workers: int = 2, scheduler: Optional[str] = None,
+                client: Any = None, area: Optional[Sequence[float]] = None,
+                sensors: Optional[Sequence[Tuple[float, float]]] = None, halo: Optional[int] = None,
+                outlier_density: Optional[float] = None, band: int = 1, map_config: str = "paper",
+                threads_per_worker: int = 1, memory_limit: Any = "auto",
+                progress: Optional[Callable[[int, int], Any]] = None, transform: Any = None, crs: Any = None,
+                nodata: Optional[float] = None, **options: Any) -> Dict[str, Any]:
     """The field at every rover cell of area (x0, y0, x1, y1 map metres; None:
-    the whole DTM) of the DTM at path dtm, computed tile by tile on Dask and
-    written to out (tiled DEFLATE GeoTIFF, the DTM's grid, NaN outside area).
+    the whole DTM) of the DTM dtm (a path, or a 2-D numpy array with
+    transform, crs and nodata as trn.Map takes them), computed tile by tile on
+    Dask and written to out (tiled DEFLATE GeoTIFF, the DTM's grid, NaN
+    outside area), or returned as the result's "field" when out is None.
 
     client: a dask.distributed Client to use; else scheduler (an address)
     to connect to; else a LocalCluster of `workers` processes. sensors: the
@@ -272,21 +340,23 @@ def tiled_field(dtm, out, tile=512, workers=2, scheduler=None, client=None, area
         raise trn.TrnError("bad_input", "tiled_field: map_config 'auto' is made from the whole DTM's statistics; "
                                         "the tiled field takes 'paper' (with explicit zbin_m, nz, ...)")
     t_start = time.perf_counter()
-    info = _dtm_info(dtm, band)
-    out = os.fspath(out)
-    if not os.path.isdir(os.path.dirname(os.path.abspath(out))):
+    info = _dtm_info(dtm, band, transform, crs, nodata)
+    if out is not None:
+        out = os.fspath(out)
+    if out is not None and not os.path.isdir(os.path.dirname(os.path.abspath(out))):
         raise trn.TrnError("bad_input", f"out {out}: no such folder")
     area_c = _area_cells(info, area)
     if halo is None:
         halo = halo_cells(info["gt"][1], options.get("max_range_m"), options.get("patch_m"),
                           options.get("highpass_m"))
     tiles = plan_tiles(info["width"], info["height"], tile, halo, area_c)
-    sensors = [tuple(float(c) for c in s) for s in (sensors if sensors is not None else _default_sensors(info))]
+    sensors = [(float(s[0]), float(s[1])) for s in (sensors if sensors is not None else _default_sensors(info))]
     options = dict(options, map_config=map_config)
 
     own = None
     if client is None:
-        from distributed import Client, LocalCluster
+        dist: Any = _distributed()
+        Client, LocalCluster = dist.Client, dist.LocalCluster
         if scheduler is not None:
             client = own = Client(scheduler)
         else:
@@ -297,19 +367,34 @@ def tiled_field(dtm, out, tile=512, workers=2, scheduler=None, client=None, area
             client = own = Client(cluster)
     try:
         t_k = time.perf_counter()
+        arr = info["array"]
         if outlier_density is None:
-            outlier_density = client.submit(whole_map_outlier_density, info["path"], band, pure=False,
-                                            **options).result()
+            if arr is not None:
+                outlier_density = client.submit(whole_map_outlier_density, arr, 1, info["gt"], info["crs"] or None,
+                                                info["nodata"], pure=False, **options).result()
+            else:
+                outlier_density = client.submit(whole_map_outlier_density, info["path"], band, pure=False,
+                                                **options).result()
         t_k = time.perf_counter() - t_k
-        futs = [client.submit(_run_tile, info, band, t, sensors, outlier_density, options, pure=False)
+        # an array's tasks get their windows (copies: what a file's tasks would read)
+        lean = dict(info, array=None)
+        futs = [client.submit(_run_tile, lean, band, t, sensors, outlier_density, options,
+                              None if arr is None else np.array(arr[t.read[1]:t.read[3], t.read[0]:t.read[2]]),
+                              pure=False)
                 for t in tiles]
-        ds = _create_out(out, info)
-        from distributed import as_completed
+        gdal_out = out is not None and _osgeo() is not None
+        ds = _create_out(out, info) if gdal_out else None
+        whole = None if gdal_out else np.full((info["height"], info["width"]), np.nan, dtype=np.float32)
+        as_completed = _distributed().as_completed
         done, evals, stats = 0, 0, []
         for fut in as_completed(futs):
             r = fut.result()
             c0, r0, _, _ = r["core"]
-            ds.GetRasterBand(1).WriteArray(r["field"], c0, r0)
+            if ds is not None:
+                ds.GetRasterBand(1).WriteArray(r["field"], c0, r0)
+            else:
+                assert whole is not None
+                whole[r0:r0 + r["field"].shape[0], c0:c0 + r["field"].shape[1]] = r["field"]
             evals += r["evaluations"]
             stats.append({k: r[k] for k in ("core", "evaluations", "seconds", "field_seconds",
                                             "workspace_bytes", "maxrss_kib")})
@@ -317,8 +402,12 @@ def tiled_field(dtm, out, tile=512, workers=2, scheduler=None, client=None, area
             fut.release()
             if progress is not None:
                 progress(done, len(tiles))
-        ds.FlushCache()
-        ds = None
+        if ds is not None:
+            ds.FlushCache()
+            ds = None
+        elif out is not None:
+            assert whole is not None
+            trn.write_raster(out, whole, info["gt"], info["crs"] or None)
     finally:
         if own is not None:
             cluster = getattr(own, "cluster", None)
@@ -327,14 +416,17 @@ def tiled_field(dtm, out, tile=512, workers=2, scheduler=None, client=None, area
                 cluster.close()
     secs = time.perf_counter() - t_start
     cells = (area_c[2] - area_c[0] + 1) * (area_c[3] - area_c[1] + 1)
-    return {"file": out, "cells": cells, "evaluations": evals, "tiles": len(tiles), "tile": tile, "halo": halo,
+    res = {"file": out, "cells": cells, "evaluations": evals, "tiles": len(tiles), "tile": tile, "halo": halo,
             "sensors": sensors, "outlier_density_per_m": outlier_density, "seconds": secs, "seconds_k": t_k,
             "cells_per_second": cells / secs if secs > 0 else float("nan"), "area_cells": area_c,
             "tile_stats": sorted(stats, key=lambda s: (s["core"][1], s["core"][0])),
             "max_worker_rss_mib": max((s["maxrss_kib"] for s in stats), default=0) / 1024.0}
+    if out is None:
+        res["field"] = whole
+    return res
 
 
-def main(argv=None):
+def main(argv: Optional[List[str]] = None) -> int:
     p = argparse.ArgumentParser(prog="python -m trn.dask_field",
                                 description="The sensor uncertainty field of a large DTM, tile by tile on Dask "
                                             "(every position evaluated; docs/scale.md).")
@@ -351,12 +443,15 @@ def main(argv=None):
     p.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
                    help="a `trn field` option, e.g. max_range_m=1.5 (repeatable)")
     a = p.parse_args(argv)
-    opts = {}
+    opts: Dict[str, Any] = {}
     for kv in a.option:
         key, _, val = kv.partition("=")
         opts[key.replace("-", "_")] = val
     area = tuple(float(v) for v in a.area_m.split(",")) if a.area_m else None
-    sensors = ([tuple(float(c) for c in s.split(",")) for s in a.sensors.split(";")] if a.sensors else None)
+    sensors = None
+    if a.sensors:
+        pairs = [s.split(",") for s in a.sensors.split(";")]
+        sensors = [(float(xy[0]), float(xy[1])) for xy in pairs]
     try:
         r = tiled_field(a.dtm, a.out, tile=a.tile, workers=a.workers, scheduler=a.scheduler, area=area,
                         sensors=sensors, halo=a.halo, outlier_density=a.outlier_density, **opts)

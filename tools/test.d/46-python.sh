@@ -6,9 +6,11 @@
 # 1. tools/setup.sh python (Debian: python3-venv, numpy, GDAL's bindings,
 #    pytest, matplotlib, libgdal-dev, cmake, ninja);
 # 2. the project venv .venv (gitignored), made from Debian's /usr/bin/python3
-#    with --system-site-packages, so numpy and osgeo are Debian's (GDAL's
-#    bindings must share libgdal with the package's C library); made again
-#    when it cannot import them (another tool may have made it without);
+#    with --system-site-packages, so numpy, osgeo, xarray, tqdm and dask are
+#    Debian's (the package needs only numpy; osgeo is for the Dask tests'
+#    GeoTIFF layout checks); made again when it cannot import them (another
+#    tool may have made it without). The clean venv of a pip user is
+#    tools/test.d/47-python-venv.sh;
 # 3. scikit-build-core from PyPI into .venv when missing (the one package
 #    Debian 12 lacks), then `pip install --no-build-isolation --force-reinstall
 #    --no-deps ./python`: scikit-build-core builds libtrn_run.so through the

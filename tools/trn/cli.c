@@ -460,6 +460,66 @@ static int take_positional(cli_cmd_t *cmd, const char *a, int only_pos)
     return rc;
 }
 
+/* Where --help writes the table as JSON instead of the usage (a binding's
+ * docstrings), or NULL. */
+static FILE *cli_help_json_stream = NULL;
+
+void cli_set_help_json_stream(FILE *f) { cli_help_json_stream = f; }
+
+static const char *kind_name(cli_kind_t k)
+{
+    switch (k) {
+    case CLI_FLAG: return "flag";
+    case CLI_STRING: return "string";
+    case CLI_LONG: return "integer";
+    case CLI_U64: return "u64";
+    case CLI_DOUBLE: return "number";
+    case CLI_XY: return "xy";
+    }
+    return "?";
+}
+
+void cli_help_json(const cli_cmd_t *cmd, FILE *out)
+{
+    json_t j;
+    size_t i;
+    json_begin(&j, out);
+    json_str(&j, "command", cmd->name);
+    json_str(&j, "summary", cmd->summary);
+    json_arr(&j, "options");
+    for (i = 0; i < cmd->n_opts; ++i) {
+        const cli_opt_t *o = &cmd->opts[i];
+        char range[64], dflt[128];
+        size_t n;
+        range_text(o, range, sizeof range);
+        default_text(o, dflt, sizeof dflt);
+        json_obj(&j, NULL);
+        json_str(&j, "name", o->name);
+        json_str(&j, "kind", kind_name(o->kind));
+        json_str(&j, "metavar", o->metavar != NULL ? o->metavar : "");
+        json_str(&j, "help", o->help != NULL ? o->help : "");
+        /* the " (default V)" and " [lo..hi]" of the usage line, without their brackets */
+        n = strlen(dflt);
+        if (n > 11 && dflt[n - 1] == ')') {
+            dflt[n - 1] = '\0';
+            json_str(&j, "default", dflt + 10);
+        } else {
+            json_str(&j, "default", "");
+        }
+        n = strlen(range);
+        if (n > 3 && range[n - 1] == ']') {
+            range[n - 1] = '\0';
+            json_str(&j, "range", range + 2);
+        } else {
+            json_str(&j, "range", "");
+        }
+        json_bool(&j, "required", o->required != 0);
+        json_obj_end(&j);
+    }
+    json_arr_end(&j);
+    json_end(&j);
+}
+
 int cli_parse(cli_cmd_t *cmd, int argc, char **argv)
 {
     int i, has_pos = 0, only_pos = 0;
@@ -472,7 +532,11 @@ int cli_parse(cli_cmd_t *cmd, int argc, char **argv)
    * positional arguments): the usage with the defaults, before any value is set */
     for (i = 1; i < argc && !(has_pos && strcmp(argv[i], "--") == 0); ++i) {
         if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
-            cli_usage(cmd, stdout);
+            if (cli_help_json_stream != NULL) {
+                cli_help_json(cmd, cli_help_json_stream);
+            } else {
+                cli_usage(cmd, stdout);
+            }
             return CLI_HELP;
         }
         if (strcmp(argv[i], "--help-markdown") == 0) { /* the reference page, docs/cli/ */

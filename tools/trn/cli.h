@@ -101,6 +101,17 @@ void cli_exit_status_help(const char *cmd, FILE *out);
 void cli_set_message_stream(FILE *f);
 FILE *cli_message_stream(void);
 
+/* The option table of cmd as one JSON object: "command", "summary" and
+ * "options", each with "name", "kind" (flag, string, integer, u64, number,
+ * xy), "metavar", "help", "default" and "range" (the texts --help shows after
+ * the help, without brackets; "" when it shows none) and "required". */
+void cli_help_json(const cli_cmd_t *cmd, FILE *out);
+
+/* When set (not NULL), --help writes cli_help_json into f instead of the
+ * usage on stdout (cli_parse still returns CLI_HELP): how a binding reads a
+ * command's table for its docstrings. Process-wide, like the message stream. */
+void cli_set_help_json_stream(FILE *f);
+
 /* Print `trn <cmd>: <reason>` (one line) on cli_message_stream() (stderr);
  * returns CLI_BAD_INPUT. */
 int cli_fail(const char *cmd, const char *fmt, ...)

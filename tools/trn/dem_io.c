@@ -1,18 +1,18 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* tools/trn/dem_io.c - GDAL C API DEM reading and GeoTIFF writing. */
+/* tools/trn/dem_io.c - DEM reading and GeoTIFF writing through GDAL's C API
+ * (loaded at run time: gdal_dl.h), and the in-memory rasters that stand for
+ * files without GDAL (dem_mem_put). */
 #include "dem_io.h"
 
+#include <limits.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include <cpl_conv.h>
-#include <cpl_error.h>
-#include <cpl_string.h>
-#include <gdal.h>
-#include <ogr_srs_api.h>
+#include "gdal_dl.h"
 
 static void set_err(char *err, size_t n, const char *fmt, ...)
 #if defined(__GNUC__)
@@ -39,16 +39,9 @@ static void set_err(char *err, size_t n, const char *fmt, ...)
 }
 
 /* GDAL once per process, quiet: its messages reach the user through our
- * one-line reasons (CPLGetLastErrorMsg), not on their own. */
-static void gdal_init(void)
-{
-    static int done = 0;
-    if (!done) {
-        GDALAllRegister();
-        CPLSetErrorHandler(CPLQuietErrorHandler);
-        done = 1;
-    }
-}
+ * one-line reasons (CPLGetLastErrorMsg), not on their own (trn_gdal_load).
+ * 0, or -1 with the reason (libgdal missing, and how to install it). */
+static int gdal_ready(char *err, size_t err_len) { return trn_gdal_load(err, err_len); }
 
 static const char *last_gdal_msg(void)
 {
@@ -168,11 +161,10 @@ static int height_unit_to_m(const char *name, double *to_m)
  * geotransform scaled to metres; *out_srs is then a clone of the CRS with
  * metre units (the caller finishes it), else NULL. *vert_to_m is the
  * vertical CRS's unit in metres when the CRS is compound, else 0. */
-static int crs_to_metres(GDALDatasetH ds, const char *path, double gt[6],
+static int crs_to_metres(OGRSpatialReferenceH srs, const char *path, double gt[6],
                          OGRSpatialReferenceH *out_srs, double *vert_to_m, char *err,
                          size_t err_len)
 {
-    OGRSpatialReferenceH srs = GDALGetSpatialRef(ds);
     char *unit = NULL;
     double to_m;
 
@@ -276,37 +268,26 @@ static int band_height_scale(GDALRasterBandH b, int band, const char *path, doub
     return 0;
 }
 
-/* Open path as a raster and check band, size and geotransform (north-up up
- * to flips, nonzero finite pixel size). The dataset, or NULL with the reason. */
-static GDALDatasetH open_checked(const char *path, int band, int max_dim, int *w, int *h,
-                                 double gt[6], char *err, size_t err_len)
+/* Check band, size and geotransform (north-up up to flips, nonzero finite
+ * pixel size) of a raster named path with nbands bands of w x h cells; has_gt
+ * 0: it has no geotransform. 0, or -1 with the reason. */
+static int check_grid(const char *path, int band, int nbands, int w, int h, int max_dim, int has_gt,
+                      const double gt[6], char *err, size_t err_len)
 {
-    GDALDatasetH ds;
-    int nbands;
-
-    CPLErrorReset();
-    ds = GDALOpenEx(path, GDAL_OF_RASTER | GDAL_OF_READONLY, NULL, NULL, NULL);
-    if (ds == NULL) {
-        set_err(err, err_len, "cannot read '%s' as a raster: %s", path, last_gdal_msg());
-        return NULL;
-    }
-    nbands = GDALGetRasterCount(ds);
-    *w = GDALGetRasterXSize(ds);
-    *h = GDALGetRasterYSize(ds);
     if (band < 1 || band > nbands) {
         set_err(err, err_len, "'%s' has %d band%s, no band %d", path, nbands,
                 nbands == 1 ? "" : "s", band);
-    } else if (*w < 1 || *h < 1) {
-        set_err(err, err_len, "'%s' is %d x %d cells: it has no cells", path, *w, *h);
-    } else if (*w > max_dim || *h > max_dim) {
+    } else if (w < 1 || h < 1) {
+        set_err(err, err_len, "'%s' is %d x %d cells: it has no cells", path, w, h);
+    } else if (w > max_dim || h > max_dim) {
         set_err(err, err_len,
                 "'%s' is %d x %d cells; the maximum side is %d cells: cut the area you need with "
                 "gdal_translate "
                 "-srcwin XOFF YOFF XSIZE YSIZE IN.tif OUT.tif, or coarsen it with gdalwarp -tr "
                 "CELL CELL "
                 "-r bilinear IN.tif OUT.tif",
-                path, *w, *h, max_dim);
-    } else if (GDALGetGeoTransform(ds, gt) != CE_None) {
+                path, w, h, max_dim);
+    } else if (!has_gt) {
         set_err(err, err_len, "'%s' has no geotransform (cell size and position unknown)", path);
     } else if (gt[2] != 0.0 || gt[4] != 0.0) {
         set_err(err, err_len,
@@ -316,6 +297,30 @@ static GDALDatasetH open_checked(const char *path, int band, int max_dim, int *w
         set_err(err, err_len, "'%s' has a degenerate geotransform (pixel size %g x %g)", path,
                 gt[1], gt[5]);
     } else {
+        return 0;
+    }
+    return -1;
+}
+
+/* Open path as a raster and check it (check_grid). The dataset, or NULL with
+ * the reason. */
+static GDALDatasetH open_checked(const char *path, int band, int max_dim, int *w, int *h,
+                                 double gt[6], char *err, size_t err_len)
+{
+    GDALDatasetH ds;
+    int has_gt;
+
+    CPLErrorReset();
+    ds = GDALOpenEx(path, GDAL_OF_RASTER | GDAL_OF_READONLY, NULL, NULL, NULL);
+    if (ds == NULL) {
+        set_err(err, err_len, "cannot read '%s' as a raster: %s", path, last_gdal_msg());
+        return NULL;
+    }
+    *w = GDALGetRasterXSize(ds);
+    *h = GDALGetRasterYSize(ds);
+    has_gt = GDALGetGeoTransform(ds, gt) == CE_None;
+    if (check_grid(path, band, GDALGetRasterCount(ds), *w, *h, max_dim, has_gt, gt, err, err_len) ==
+        0) {
         return ds;
     }
     GDALClose(ds);
@@ -373,11 +378,9 @@ static float *read_band(GDALRasterBandH b, int band, const char *path, int w, in
  * way the heights are). A NaN no-data value needs no comparison. The tests
  * run on the stored values (a no-data value or an ISIS special pixel is a
  * stored value), then once more on the heights in metres. */
-static void heights_to_m(float *data, size_t n, GDALRasterBandH b, double zscale, double zoffset,
-                         double zunit)
+static void heights_to_m(float *data, size_t n, int has_nodata, double nodata, double zscale,
+                         double zoffset, double zunit)
 {
-    int has_nodata = 0;
-    double nodata = GDALGetRasterNoDataValue(b, &has_nodata);
     int use_nd = has_nodata && isfinite(nodata) && fabs(nodata) <= 3.4e38;
     float nd = use_nd ? (float)nodata : 0.0f;
     int convert = zscale != 1.0 || zoffset != 0.0 || zunit != 1.0;
@@ -427,12 +430,11 @@ static void north_up(float *data, int w, int h, double gt[6])
  * version msrs after a unit conversion (horizontal only when the heights were
  * converted too, so no vertical CRS claims a unit the heights no longer
  * have). Destroys msrs. */
-static char *handed_wkt(GDALDatasetH ds, OGRSpatialReferenceH msrs, double zunit, double vert_to_m)
+static char *handed_wkt(OGRSpatialReferenceH srs, const char *wkt, OGRSpatialReferenceH msrs,
+                        double zunit, double vert_to_m)
 {
     char *out = NULL;
-    const char *wkt;
     if (msrs == NULL && zunit != 1.0 && vert_to_m > 0.0) {
-        OGRSpatialReferenceH srs = GDALGetSpatialRef(ds);
         msrs = srs != NULL ? OSRClone(srs) : NULL;
         if (msrs != NULL && OSRStripVertical(msrs) != OGRERR_NONE) {
             OSRDestroySpatialReference(msrs);
@@ -447,7 +449,6 @@ static char *handed_wkt(GDALDatasetH ds, OGRSpatialReferenceH msrs, double zunit
         CPLFree(mwkt);
         OSRDestroySpatialReference(msrs);
     } else {
-        wkt = GDALGetProjectionRef(ds);
         if (wkt != NULL && *wkt != '\0') {
             out = dup_string(wkt);
         }
@@ -455,24 +456,408 @@ static char *handed_wkt(GDALDatasetH ds, OGRSpatialReferenceH msrs, double zunit
     return out;
 }
 
+/* ---- in-memory rasters ------------------------------------------------- */
+
+/* One raster held by name: an input (data borrowed from the caller, never
+ * written) or an output (owned: what dem_write_gtiff stored). */
+typedef struct mem_raster {
+    struct mem_raster *next;
+    unsigned long id;
+    const float *data; /* borrowed (input) */
+    float *owned;      /* owned (output), else NULL */
+    int width, height;
+    double gt[6];
+    int has_nodata;
+    double nodata;
+    char *crs;   /* the caller's CRS text (input) or WKT (output), or NULL */
+    char *label; /* what messages call it */
+} mem_raster_t;
+
+static pthread_mutex_t mem_lock = PTHREAD_MUTEX_INITIALIZER;
+static mem_raster_t *mem_list;
+static unsigned long mem_next_id = 1;
+
+int dem_is_mem(const char *path)
+{
+    return path != NULL && strncmp(path, DEM_MEM_PREFIX, sizeof DEM_MEM_PREFIX - 1) == 0;
+}
+
+/* The id of a name, or 0 when it is not one. */
+static unsigned long mem_id(const char *path)
+{
+    const char *s;
+    char *end;
+    unsigned long id;
+    if (!dem_is_mem(path)) {
+        return 0;
+    }
+    s = path + sizeof DEM_MEM_PREFIX - 1;
+    if (*s < '0' || *s > '9') {
+        return 0;
+    }
+    id = strtoul(s, &end, 10);
+    return *end == '\0' ? id : 0;
+}
+
+/* The entry of id (mem_lock held), or NULL. */
+static mem_raster_t *mem_find(unsigned long id)
+{
+    mem_raster_t *e;
+    for (e = mem_list; e != NULL; e = e->next) {
+        if (e->id == id) {
+            return e;
+        }
+    }
+    return NULL;
+}
+
+static void mem_free_entry(mem_raster_t *e)
+{
+    free(e->owned);
+    free(e->crs);
+    free(e->label);
+    free(e);
+}
+
+int dem_mem_name(char *name, size_t name_len)
+{
+    unsigned long id;
+    pthread_mutex_lock(&mem_lock);
+    id = mem_next_id++;
+    pthread_mutex_unlock(&mem_lock);
+    return snprintf(name, name_len, DEM_MEM_PREFIX "%lu", id) < (int)name_len ? 0 : -1;
+}
+
+/* A CRS text in WKT that names a geographic or geocentric CRS (its first
+ * keyword), the check made without GDAL. */
+static const char *wkt_kind(const char *crs)
+{
+    static const struct {
+        const char *kw;
+        const char *kind;
+    } kws[] = {{"GEOGCS[", "geographic"},
+               {"GEOGCRS[", "geographic"},
+               {"GEOGRAPHICCRS[", "geographic"},
+               {"GEOCCS[", "geocentric"},
+               {"GEODCRS[", "geographic or geocentric"},
+               {"GEODETICCRS[", "geographic or geocentric"}};
+    size_t i;
+    while (*crs == ' ' || *crs == '\t' || *crs == '\n' || *crs == '\r') {
+        ++crs;
+    }
+    for (i = 0; i < sizeof kws / sizeof kws[0]; ++i) {
+        if (strncmp(crs, kws[i].kw, strlen(kws[i].kw)) == 0) {
+            return kws[i].kind;
+        }
+    }
+    return NULL;
+}
+
+int dem_mem_put(const float *data, int width, int height, const double gt[6], int has_nodata,
+                double nodata, const char *crs, const char *label, char *name, size_t name_len,
+                char *err, size_t err_len)
+{
+    mem_raster_t *e;
+    int i;
+    if (label == NULL || *label == '\0') {
+        label = "array";
+    }
+    if (data == NULL || gt == NULL || name == NULL || name_len == 0) {
+        set_err(err, err_len, "'%s': no data, geotransform or name buffer", label);
+        return -1;
+    }
+    if (width < 1 || height < 1) {
+        set_err(err, err_len, "'%s' is %d x %d cells: it has no cells", label, width, height);
+        return -1;
+    }
+    for (i = 0; i < 6; ++i) {
+        if (!isfinite(gt[i])) {
+            set_err(err, err_len, "'%s': geotransform term %d is not finite", label, i);
+            return -1;
+        }
+    }
+    if (has_nodata && isnan(nodata)) {
+        has_nodata = 0; /* NaN is "not seen" anyway */
+    }
+    if (crs != NULL && *crs == '\0') {
+        crs = NULL;
+    }
+    /* With GDAL, a CRS it cannot read is refused now; its kind and unit are
+     * checked when the raster is read, as a file's are. */
+    if (crs != NULL && gdal_ready(NULL, 0) == 0) {
+        OGRSpatialReferenceH srs = OSRNewSpatialReference(NULL);
+        int bad;
+        CPLErrorReset();
+        bad = srs == NULL || OSRSetFromUserInput(srs, crs) != OGRERR_NONE;
+        if (srs != NULL) {
+            OSRDestroySpatialReference(srs);
+        }
+        if (bad) {
+            set_err(err, err_len,
+                    "'%s': crs '%s' is not a coordinate reference system GDAL knows: %s", label,
+                    crs, last_gdal_msg());
+            return -1;
+        }
+    }
+    e = calloc(1, sizeof *e);
+    if (e == NULL || (e->label = dup_string(label)) == NULL ||
+        (crs != NULL && (e->crs = dup_string(crs)) == NULL)) {
+        if (e != NULL) {
+            mem_free_entry(e);
+        }
+        set_err(err, err_len, "out of memory");
+        return -1;
+    }
+    e->data = data;
+    e->width = width;
+    e->height = height;
+    memcpy(e->gt, gt, sizeof e->gt);
+    e->has_nodata = has_nodata;
+    e->nodata = nodata;
+    pthread_mutex_lock(&mem_lock);
+    e->id = mem_next_id++;
+    e->next = mem_list;
+    mem_list = e;
+    pthread_mutex_unlock(&mem_lock);
+    if (snprintf(name, name_len, DEM_MEM_PREFIX "%lu", e->id) >= (int)name_len) {
+        dem_mem_drop(name);
+        set_err(err, err_len, "name buffer too short");
+        return -1;
+    }
+    return 0;
+}
+
+void dem_mem_drop(const char *name)
+{
+    unsigned long id = mem_id(name);
+    mem_raster_t **pp, *e = NULL;
+    if (id == 0) {
+        return;
+    }
+    pthread_mutex_lock(&mem_lock);
+    for (pp = &mem_list; *pp != NULL; pp = &(*pp)->next) {
+        if ((*pp)->id == id) {
+            e = *pp;
+            *pp = e->next;
+            break;
+        }
+    }
+    pthread_mutex_unlock(&mem_lock);
+    if (e != NULL) {
+        mem_free_entry(e);
+    }
+}
+
+/* A copy of the raster named path: its heights as stored (malloc'd), size,
+ * geotransform, no-data, CRS text (malloc'd or NULL) and label (malloc'd). */
+typedef struct {
+    float *data;
+    int width, height;
+    double gt[6];
+    int has_nodata;
+    double nodata;
+    char *crs;
+    char *label;
+} mem_copy_t;
+
+static void mem_copy_free(mem_copy_t *c)
+{
+    free(c->data);
+    free(c->crs);
+    free(c->label);
+    memset(c, 0, sizeof *c);
+}
+
+static int mem_copy(const char *path, mem_copy_t *c, char *err, size_t err_len)
+{
+    mem_raster_t *e;
+    size_t n;
+    memset(c, 0, sizeof *c);
+    pthread_mutex_lock(&mem_lock);
+    e = mem_find(mem_id(path));
+    if (e == NULL) {
+        pthread_mutex_unlock(&mem_lock);
+        set_err(err, err_len, "'%s' names no in-memory raster (freed, or never made)", path);
+        return -1;
+    }
+    n = (size_t)e->width * (size_t)e->height;
+    c->data = malloc(n * sizeof *c->data);
+    c->label = dup_string(e->label);
+    c->crs = e->crs != NULL ? dup_string(e->crs) : NULL;
+    if (c->data == NULL || c->label == NULL || (e->crs != NULL && c->crs == NULL)) {
+        pthread_mutex_unlock(&mem_lock);
+        set_err(err, err_len, "out of memory for a %d x %d raster", e->width, e->height);
+        mem_copy_free(c);
+        return -1;
+    }
+    memcpy(c->data, e->owned != NULL ? e->owned : e->data, n * sizeof *c->data);
+    c->width = e->width;
+    c->height = e->height;
+    memcpy(c->gt, e->gt, sizeof c->gt);
+    c->has_nodata = e->has_nodata;
+    c->nodata = e->nodata;
+    pthread_mutex_unlock(&mem_lock);
+    return 0;
+}
+
+/* dem_read of an in-memory raster: the checks and conversions of a file's
+ * (grid, CRS in metres, no-data, north-up), the heights taken as metres (or
+ * the compound CRS's vertical unit, as a file's band without a unit). The CRS
+ * is checked with GDAL when GDAL loads; without it only a WKT that names a
+ * geographic or geocentric CRS is refused, and the rest is the caller's word
+ * that the grid is in metres. */
+static int mem_read(const char *path, int band, int max_dim, dem_t *dem, char *err, size_t err_len)
+{
+    mem_copy_t c;
+    OGRSpatialReferenceH srs = NULL, msrs = NULL;
+    double vert_to_m = 0.0, zunit = 1.0, cell;
+    const char *kind;
+
+    if (mem_copy(path, &c, err, err_len) != 0) {
+        return -1;
+    }
+    if (check_grid(c.label, band, 1, c.width, c.height, max_dim, 1, c.gt, err, err_len) != 0) {
+        goto fail;
+    }
+    if (c.crs != NULL && gdal_ready(NULL, 0) == 0) {
+        srs = OSRNewSpatialReference(NULL);
+        CPLErrorReset();
+        if (srs == NULL || OSRSetFromUserInput(srs, c.crs) != OGRERR_NONE) {
+            set_err(err, err_len,
+                    "'%s': crs '%s' is not a coordinate reference system GDAL knows: %s", c.label,
+                    c.crs, last_gdal_msg());
+            goto fail;
+        }
+        if (crs_to_metres(srs, c.label, c.gt, &msrs, &vert_to_m, err, err_len) != 0) {
+            goto fail;
+        }
+        if (vert_to_m > 0.0) {
+            zunit = vert_to_m;
+        }
+    } else if (c.crs != NULL && (kind = wkt_kind(c.crs)) != NULL) {
+        set_err(err, err_len,
+                "'%s' is in a %s CRS (its WKT says so); reproject it to metres first, e.g. "
+                "gdalwarp -t_srs EPSG:326NN (the UTM zone of the site) -r bilinear IN.tif OUT.tif",
+                c.label, kind);
+        goto fail;
+    }
+    cell = fabs(c.gt[1]);
+    if (fabs(fabs(c.gt[5]) - cell) / cell > 1e-6) {
+        set_err(err, err_len,
+                "'%s' has non-square cells (%g x %g m); resample it to square cells first", c.label,
+                cell, fabs(c.gt[5]));
+        goto fail;
+    }
+    heights_to_m(c.data, (size_t)c.width * (size_t)c.height, c.has_nodata, c.nodata, 1.0, 0.0,
+                 zunit);
+    north_up(c.data, c.width, c.height, c.gt);
+    if (srs != NULL) {
+        char *wkt = NULL;
+        if (OSRExportToWkt(srs, &wkt) != OGRERR_NONE) {
+            wkt = NULL;
+        }
+        dem->srs_wkt = handed_wkt(srs, wkt, msrs, zunit, vert_to_m);
+        msrs = NULL; /* destroyed by handed_wkt */
+        CPLFree(wkt);
+        OSRDestroySpatialReference(srs);
+        srs = NULL;
+    } else if (c.crs != NULL) {
+        dem->srs_wkt = c.crs; /* unchecked without GDAL: handed on as given */
+        c.crs = NULL;
+    }
+    dem->data = c.data;
+    c.data = NULL;
+    dem->width = c.width;
+    dem->height = c.height;
+    memcpy(dem->gt, c.gt, sizeof dem->gt);
+    dem->cell_m = c.gt[1];
+    mem_copy_free(&c);
+    return 0;
+fail:
+    if (msrs != NULL) {
+        OSRDestroySpatialReference(msrs);
+    }
+    if (srs != NULL) {
+        OSRDestroySpatialReference(srs);
+    }
+    mem_copy_free(&c);
+    return -1;
+}
+
+/* dem_write_gtiff to an in-memory name: the raster kept (owned) under it,
+ * replacing what it held. */
+static int mem_write(const char *path, const float *data, int width, int height, const double gt[6],
+                     const char *srs_wkt, char *err, size_t err_len)
+{
+    unsigned long id = mem_id(path);
+    size_t n = (size_t)width * (size_t)height;
+    mem_raster_t *e, *old = NULL, **pp;
+    if (id == 0) {
+        set_err(err, err_len, "'%s' is not an in-memory raster name (" DEM_MEM_PREFIX "N)", path);
+        return -1;
+    }
+    e = calloc(1, sizeof *e);
+    if (e == NULL || (e->owned = malloc(n * sizeof *e->owned)) == NULL ||
+        (e->label = dup_string(path)) == NULL ||
+        (srs_wkt != NULL && *srs_wkt != '\0' && (e->crs = dup_string(srs_wkt)) == NULL)) {
+        if (e != NULL) {
+            mem_free_entry(e);
+        }
+        set_err(err, err_len, "out of memory for a %d x %d raster", width, height);
+        return -1;
+    }
+    memcpy(e->owned, data, n * sizeof *e->owned);
+    e->id = id;
+    e->width = width;
+    e->height = height;
+    memcpy(e->gt, gt, sizeof e->gt);
+    e->has_nodata = 0;
+    pthread_mutex_lock(&mem_lock);
+    for (pp = &mem_list; *pp != NULL; pp = &(*pp)->next) {
+        if ((*pp)->id == id) {
+            old = *pp;
+            *pp = old->next;
+            break;
+        }
+    }
+    e->next = mem_list;
+    mem_list = e;
+    pthread_mutex_unlock(&mem_lock);
+    if (old != NULL) {
+        mem_free_entry(old);
+    }
+    return 0;
+}
+
+/* ---- reading and writing ------------------------------------------------ */
+
 int dem_read(const char *path, int band, int max_dim, dem_t *dem, char *err, size_t err_len)
 {
     GDALDatasetH ds;
     GDALRasterBandH b;
     OGRSpatialReferenceH msrs = NULL;
     double gt[6];
-    int w, h;
-    double vert_to_m, zscale, zoffset, zunit;
+    int w, h, has_nodata = 0;
+    double vert_to_m, zscale, zoffset, zunit, nodata;
     float *data;
     double cell;
 
     memset(dem, 0, sizeof *dem);
-    gdal_init();
+    if (path == NULL) {
+        set_err(err, err_len, "no raster named");
+        return -1;
+    }
+    if (dem_is_mem(path)) {
+        return mem_read(path, band, max_dim, dem, err, err_len);
+    }
+    if (gdal_ready(err, err_len) != 0) {
+        return -1;
+    }
     ds = open_checked(path, band, max_dim, &w, &h, gt, err, err_len);
     if (ds == NULL) {
         return -1;
     }
-    if (crs_to_metres(ds, path, gt, &msrs, &vert_to_m, err, err_len) != 0) {
+    if (crs_to_metres(GDALGetSpatialRef(ds), path, gt, &msrs, &vert_to_m, err, err_len) != 0) {
         GDALClose(ds);
         return -1;
     }
@@ -494,11 +879,70 @@ int dem_read(const char *path, int band, int max_dim, dem_t *dem, char *err, siz
         GDALClose(ds);
         return -1;
     }
-    heights_to_m(data, (size_t)w * (size_t)h, b, zscale, zoffset, zunit);
+    nodata = GDALGetRasterNoDataValue(b, &has_nodata);
+    heights_to_m(data, (size_t)w * (size_t)h, has_nodata, nodata, zscale, zoffset, zunit);
     north_up(data, w, h, gt);
-    dem->srs_wkt = handed_wkt(ds, msrs, zunit, vert_to_m);
+    dem->srs_wkt = handed_wkt(GDALGetSpatialRef(ds), GDALGetProjectionRef(ds), msrs, zunit,
+                              vert_to_m);
     GDALClose(ds);
 
+    dem->data = data;
+    dem->width = w;
+    dem->height = h;
+    memcpy(dem->gt, gt, sizeof gt);
+    dem->cell_m = gt[1];
+    return 0;
+}
+
+int dem_read_raw(const char *path, int band, dem_t *dem, char *err, size_t err_len)
+{
+    GDALDatasetH ds;
+    const char *wkt;
+    int w, h;
+    double gt[6];
+    float *data;
+
+    memset(dem, 0, sizeof *dem);
+    if (path == NULL) {
+        set_err(err, err_len, "no raster named");
+        return -1;
+    }
+    if (dem_is_mem(path)) {
+        mem_copy_t c;
+        if (mem_copy(path, &c, err, err_len) != 0) {
+            return -1;
+        }
+        if (band != 1) {
+            set_err(err, err_len, "'%s' has 1 band, no band %d", c.label, band);
+            mem_copy_free(&c);
+            return -1;
+        }
+        dem->data = c.data;
+        dem->srs_wkt = c.crs;
+        dem->width = c.width;
+        dem->height = c.height;
+        memcpy(dem->gt, c.gt, sizeof dem->gt);
+        dem->cell_m = c.gt[1];
+        c.data = NULL;
+        c.crs = NULL;
+        mem_copy_free(&c);
+        return 0;
+    }
+    if (gdal_ready(err, err_len) != 0) {
+        return -1;
+    }
+    ds = open_checked(path, band, INT_MAX, &w, &h, gt, err, err_len);
+    if (ds == NULL) {
+        return -1;
+    }
+    data = read_band(GDALGetRasterBand(ds, band), band, path, w, h, err, err_len);
+    if (data == NULL) {
+        GDALClose(ds);
+        return -1;
+    }
+    wkt = GDALGetProjectionRef(ds);
+    dem->srs_wkt = wkt != NULL && *wkt != '\0' ? dup_string(wkt) : NULL;
+    GDALClose(ds);
     dem->data = data;
     dem->width = w;
     dem->height = h;
@@ -517,7 +961,12 @@ int dem_write_gtiff(const char *path, const float *data, int width, int height, 
     double gtc[6];
     CPLErr e;
 
-    gdal_init();
+    if (dem_is_mem(path)) {
+        return mem_write(path, data, width, height, gt, srs_wkt, err, err_len);
+    }
+    if (gdal_ready(err, err_len) != 0) {
+        return -1;
+    }
     CPLErrorReset();
     drv = GDALGetDriverByName("GTiff");
     if (drv == NULL) {
@@ -590,7 +1039,9 @@ char *dem_srs_to_wkt(const char *user, char *err, size_t err_len)
     OGRSpatialReferenceH srs;
     char *wkt = NULL;
     char *out;
-    gdal_init();
+    if (gdal_ready(err, err_len) != 0) {
+        return NULL;
+    }
     CPLErrorReset();
     srs = OSRNewSpatialReference(NULL);
     if (srs == NULL || OSRSetFromUserInput(srs, user) != OGRERR_NONE) {

@@ -14,7 +14,18 @@
  * after normalisation). A file stored south-up (gt[5] > 0) or east-to-west
  * (gt[1] < 0) is flipped on reading and its geotransform adjusted, so the
  * same map coordinates still name the same heights. Rotated geotransforms
- * and non-square cells are rejected. */
+ * and non-square cells are rejected.
+ *
+ * GDAL is loaded at run time (gdal_dl.h): reading or writing a file, or
+ * checking a CRS, loads it; when it cannot be loaded those calls fail with a
+ * reason that says how to install it.
+ *
+ * In-memory rasters: wherever a path is taken (dem_read, dem_read_raw,
+ * dem_write_gtiff, and so every command's --dem, --local, --out ...), a name
+ * DEM_MEM_PREFIX "N" made by dem_mem_put (an input: the caller's heights,
+ * by pointer) or dem_mem_name (an output slot that dem_write_gtiff fills)
+ * stands for a file. They need no GDAL. This is how the Python package hands
+ * numpy arrays to the command's run layer and gets its rasters back. */
 #ifndef TRN_DEM_IO_H
 #define TRN_DEM_IO_H
 
@@ -44,6 +55,13 @@ typedef struct {
  * into err. */
 int dem_read(const char *path, int band, int max_dim, dem_t *dem, char *err, size_t err_len);
 
+/* Read band `band` of a raster as stored, float32, without dem_read's
+ * conversions (no unit, no-data or flip; cells its mask marks invalid are
+ * NaN; +-inf kept): what a command wrote (dem_write_gtiff) read back. No size
+ * bound. dem->srs_wkt is the raster's CRS text or NULL; cell_m is gt[1].
+ * Returns 0, or -1 with a reason. */
+int dem_read_raw(const char *path, int band, dem_t *dem, char *err, size_t err_len);
+
 /* Write data (width x height, north-up as dem_t) as a one-band float32
  * GeoTIFF with geotransform gt, no-data NaN, and srs_wkt when not NULL/empty.
  * Returns 0 or -1 with a reason in err. */
@@ -65,5 +83,39 @@ int dem_cell_of(const dem_t *dem, double x_m, double y_m, int *col, int *row);
 /* Convert a user CRS text (EPSG:xxxx, WKT, PROJ string, IAU_2015:xxxx ...)
  * to WKT. Returns a malloc'd string or NULL with a reason in err. */
 char *dem_srs_to_wkt(const char *user, char *err, size_t err_len);
+
+/* ---- in-memory rasters ---------------------------------------------------- */
+
+#define DEM_MEM_PREFIX "trn-mem:"
+
+/* 1 when path is an in-memory raster name (DEM_MEM_PREFIX...), else 0. */
+int dem_is_mem(const char *path);
+
+/* Register width x height heights (row-major, row 0 at gt[3]) as an input
+ * raster and write its name into name. data is NOT copied: it must stay
+ * valid and unchanged until dem_mem_drop(name); each dem_read copies it. gt
+ * is the GDAL geotransform (finite; rotation and non-square cells are
+ * refused when read, as a file's); has_nodata/nodata a value that means
+ * "not seen" (NaN, +-inf and |v| >= 3e38 always do); crs the CRS as any text
+ * GDAL reads (EPSG:n, WKT, PROJ) or NULL/"" for none (metres, a rover-frame
+ * map); label what messages call the raster ("map array").
+ * The CRS: where GDAL loads, a text it cannot read is refused here, and a
+ * geographic or geocentric CRS, or one whose unit has no length in metres,
+ * when the raster is read; a foot CRS has its geotransform converted to
+ * metres (dem_read). Where GDAL does not load, only a WKT whose first keyword
+ * names a geographic or geocentric CRS is refused: the geotransform and the
+ * heights are then taken as metres, whatever the text says.
+ * Returns 0, or -1 with a reason. */
+int dem_mem_put(const float *data, int width, int height, const double gt[6], int has_nodata,
+                double nodata, const char *crs, const char *label, char *name, size_t name_len,
+                char *err, size_t err_len);
+
+/* A fresh in-memory name, for a command to write an output to. 0, or -1
+ * when name_len is too short. */
+int dem_mem_name(char *name, size_t name_len);
+
+/* Forget the raster named name (an input's data is the caller's again; an
+ * output's is freed). Unknown names are ignored. */
+void dem_mem_drop(const char *name);
 
 #endif /* TRN_DEM_IO_H */
