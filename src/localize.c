@@ -826,8 +826,9 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
         st = bounded_mass(hb, &ex, infl, &second, &err);
         out->stats.poses_scored = hb->evals;
         out->stats.blocks_bounded = hb->bounds;
-        /* ... and the sums' rounding (another order than the grid's) */
-        out->failure_prob_bound = err + 1e-12;
+        /* ... and the sums' rounding (another order than the grid's, of
+         * ln L values up to 1e4 and more: a few ulps of those) */
+        out->failure_prob_bound = err + 1e-9;
     } else {
         /* every pose was scored once: the competitor and the masses come
          * from the stored grid */

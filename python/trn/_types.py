@@ -125,11 +125,17 @@ class _LocalizeRequired(TypedDict):
 class LocalizeResult(_LocalizeRequired, total=False):
     """`trn localize --json`: the rover's position (map metres), its
     covariance and status. heading_deg, sigma_heading_deg and cov3 come with
-    a heading search; refinement when the answer was refined."""
+    a heading search; refinement when the answer was refined; search,
+    failure_prob_bound and blocks_bounded with the height matcher."""
     heading_deg: float
     sigma_heading_deg: float
     cov3: List[float]
     refinement: Refinement
+    # the height matcher's search (not with the voxel matcher): which ran,
+    # the failure probability's error bound, and the block bounds computed
+    search: str
+    failure_prob_bound: float
+    blocks_bounded: int
 
 
 class _SelectRequired(TypedDict):

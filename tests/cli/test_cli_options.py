@@ -284,6 +284,12 @@ CASES = {
         "--max-local-cells": refused("--max-local-cells", "16", rc=1, needle="16"),
         "--heading-deg": effect("--heading-deg", "3"),
         "--heading-window-deg": effect("--heading-window-deg", "2"),
+        # the same answer by design (tests/test_height_bound.c); the work
+        # fields (blocks_bounded, failure_prob_bound) show the other search
+        "--search": [effect("--search", "bounded"),
+                     refused("--search", "fast", rc=1, needle="--search")],
+        # a budget below one pass's poses: the named status, exit 1
+        "--node-budget": effect("--node-budget", "1", rc=1),
         **MAP_LOCALIZE,
         "--json": effect(drop=["--json"]),
     },
