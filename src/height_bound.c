@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* height_bound.c - the height matcher's bounded search over (x, y)
- * (height_bound.h; docs/method.md 9, "The bounded search").
+ * (height_bound.h; docs/method.md 9.3, "The bounded search").
  *
  * The bound. A pose's ln L is a sum over the seen local cells i of
  * ln(a N(r_i - dz; v_i + m2) + c), r_i = h_i - g_i(pose), with one offset dz
@@ -40,8 +40,8 @@
 #define HB_LEAF 2
 
 typedef struct {
-    size_t hb, dz, msd, done, ub[TRN_HB_MAX_LEVELS], mn[TRN_HB_MAX_LEVELS],
-        mx[TRN_HB_MAX_LEVELS], cls, vtab, gs, cl, ch, cnt, stack, rstack, df, ft, total;
+    size_t hb, dz, msd, done, ub[TRN_HB_MAX_LEVELS], mn[TRN_HB_MAX_LEVELS], mx[TRN_HB_MAX_LEVELS],
+        cls, vtab, gs, cl, ch, cnt, stack, rstack, df, ft, total;
     int32_t levels, rw, rh, ww, wh;
 } hb_layout_t;
 
@@ -297,7 +297,8 @@ static double node_bound(trn_hb_t *hb, int32_t l, int32_t bx, int32_t by, double
         return (double)nout * hb->lout + hb->tol;
     }
     for (q = 0; q < hb->nq; ++q) { /* cumulative counts over [bmin, bmax] */
-        uint32_t *cl = hb->cl + (size_t)q * TRN_HB_MAX_BINS, *ch = hb->ch + (size_t)q * TRN_HB_MAX_BINS;
+        uint32_t *cl = hb->cl + (size_t)q * TRN_HB_MAX_BINS,
+                 *ch = hb->ch + (size_t)q * TRN_HB_MAX_BINS;
         int32_t b;
         for (b = bmin + 1; b <= bmax; ++b) {
             cl[b] += cl[b - 1];
@@ -312,9 +313,8 @@ static double node_bound(trn_hb_t *hb, int32_t l, int32_t bx, int32_t by, double
     hb->rstack[sp++] = bmax;
     while (sp > 0) {
         const int32_t b1 = hb->rstack[--sp], b0 = hb->rstack[--sp];
-        const double v = b0 == bmin && b1 == bmax
-                             ? root
-                             : range_bound(hb, b0, b1, bmin, bmax, nq, nout);
+        const double v = b0 == bmin && b1 == bmax ? root
+                                                  : range_bound(hb, b0, b1, bmin, bmax, nq, nout);
         int32_t mid;
         if (v + hb->tol < t) {
             best = v > best ? v : best;

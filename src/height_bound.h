@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* height_bound.h - internal: the height matcher's bounded search over
- * (x, y) (src/height_bound.c; docs/method.md 9, "The bounded search").
+ * (x, y) (src/height_bound.c; docs/method.md 9.3, "The bounded search").
  *
  * The ln L grid of the window is filled lazily: a pose is scored exactly
  * (trn_refine_pose_ll_, the exhaustive search's value bit for bit) only
@@ -34,28 +34,28 @@ typedef struct {
     trn_window_t win;
     trn_refine_cfg_t cfg;
     double a, k, lout, tol;
-    int32_t ww, wh;         /* window size, poses */
-    int32_t levels;         /* tree levels 0..levels-1; 2^(levels-1) >= ww, wh */
-    int32_t rw, rh;         /* region of map anchors: 2^(levels-1) + local size */
-    double *ll;             /* ww x wh: exact ln L where done, -inf elsewhere */
-    double *dz, *msd;       /* ww x wh: the pose fit's offset and model sd where done */
-    uint8_t *done;          /* ww x wh: 1 scored */
-    double *ub[TRN_HB_MAX_LEVELS];  /* per level: block bounds, NaN = not computed */
-    float *mn[TRN_HB_MAX_LEVELS];   /* per level: the map's least height over the square */
-    float *mx[TRN_HB_MAX_LEVELS];   /* ... and its greatest (mn > mx: none finite) */
-    uint8_t *cls;           /* local cells: noise class, 255 unseen */
-    double *vtab;           /* local cells: noise variance (the scores read it) */
-    double *gs;             /* local cells: the scores' scratch */
-    uint32_t *cl, *ch;      /* TRN_HB_MAX_Q x bins: counts of low / high ends */
-    int32_t *cnt;           /* TRN_HB_MAX_Q x TRN_HB_MAX_J */
-    int32_t *stack;         /* the tree walk's nodes, 3 ints each */
-    int32_t *rstack;        /* the offset walk's ranges, 2 ints each */
-    double *df;             /* [q][c][j]: F(t_j) - F(t_j+1) */
-    double *ft;             /* [q][c]: F at the last step */
+    int32_t ww, wh;                /* window size, poses */
+    int32_t levels;                /* tree levels 0..levels-1; 2^(levels-1) >= ww, wh */
+    int32_t rw, rh;                /* region of map anchors: 2^(levels-1) + local size */
+    double *ll;                    /* ww x wh: exact ln L where done, -inf elsewhere */
+    double *dz, *msd;              /* ww x wh: the pose fit's offset and model sd where done */
+    uint8_t *done;                 /* ww x wh: 1 scored */
+    double *ub[TRN_HB_MAX_LEVELS]; /* per level: block bounds, NaN = not computed */
+    float *mn[TRN_HB_MAX_LEVELS];  /* per level: the map's least height over the square */
+    float *mx[TRN_HB_MAX_LEVELS];  /* ... and its greatest (mn > mx: none finite) */
+    uint8_t *cls;                  /* local cells: noise class, 255 unseen */
+    double *vtab;                  /* local cells: noise variance (the scores read it) */
+    double *gs;                    /* local cells: the scores' scratch */
+    uint32_t *cl, *ch;             /* TRN_HB_MAX_Q x bins: counts of low / high ends */
+    int32_t *cnt;                  /* TRN_HB_MAX_Q x TRN_HB_MAX_J */
+    int32_t *stack;                /* the tree walk's nodes, 3 ints each */
+    int32_t *rstack;               /* the offset walk's ranges, 2 ints each */
+    double *df;                    /* [q][c][j]: F(t_j) - F(t_j+1) */
+    double *ft;                    /* [q][c]: F at the last step */
     int32_t steps[TRN_HB_MAX_Q][TRN_HB_MAX_J + 1]; /* t_j in bins, rounded up */
     int32_t nq, nc, nj[TRN_HB_MAX_Q];
     int32_t npts[TRN_HB_MAX_Q];
-    double z0, w;           /* the offsets' bins: z0 + b w */
+    double z0, w; /* the offsets' bins: z0 + b w */
     int32_t nbins;
     uint64_t evals, bounds; /* this search's work */
     uint64_t *work;         /* the localization's work (node budget), shared */

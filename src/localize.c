@@ -470,7 +470,7 @@ static int loc_layout(const trn_map_t *map, int32_t w, int32_t h, size_t max_poi
         /* a refinement from a neighbouring start (refine_result) */
         lay->cand = trn_ws_offset(&ws, sizeof(trn_refine_t));
         lay->basins = trn_ws_offset(&ws, trn_loc_basins_bytes_()); /* far basins (refine_basins) */
-        if (map->cfg.search == TRN_SEARCH_BOUNDED) { /* the bounded search's state */
+        if (map->cfg.search == TRN_SEARCH_BOUNDED) {               /* the bounded search's state */
             const size_t hbb = trn_hb_bytes(win, w, h);
             if (hbb == 0u) {
                 return 0;
@@ -682,8 +682,8 @@ static trn_status_t search_window(const trn_map_t *map, const trn_grid_f32_t *lo
     trn_status_t st;
     int32_t k;
     if (map->cfg.search == TRN_SEARCH_EXHAUSTIVE) {
-        const uint64_t poses =
-            (uint64_t)(win->x1 - win->x0 + 1) * (uint64_t)(win->y1 - win->y0 + 1);
+        const uint64_t poses = (uint64_t)(win->x1 - win->x0 + 1) *
+                               (uint64_t)(win->y1 - win->y0 + 1);
         if (map->cfg.node_budget != 0u && *work + poses > (uint64_t)map->cfg.node_budget) {
             return TRN_E_BUDGET; /* before the pass: its cost is its poses */
         }
@@ -719,8 +719,8 @@ static trn_status_t bounded_basins(trn_hb_t *hb, const trn_window_t *win, int32_
     trn_status_t st;
     int32_t i;
     if ((st = trn_hb_eval_zone(hb, out->ix, out->iy, radius)) != TRN_OK ||
-        (st = trn_hb_basins(hb, -(double)INFINITY, out->ix, out->iy, radius,
-                            TRN_REFINE_BASINS)) != TRN_OK) {
+        (st = trn_hb_basins(hb, -(double)INFINITY, out->ix, out->iy, radius, TRN_REFINE_BASINS)) !=
+            TRN_OK) {
         return st;
     }
     trn_loc_find_basins_(ll_grid, win, radius, out, bs);
@@ -908,11 +908,10 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
     }
     out->noise_scale = 1.0;
     if (map->cfg.match == TRN_MATCH_HEIGHTS) {
-        st = localize_heights(map, local_dem, rover_x, rover_y, win,
-                              (double *)(void *)(b + lay.llgrid),
-                              (trn_refine_t *)(void *)(b + lay.cand),
-                              (trn_loc_basins_t *)(void *)(b + lay.basins),
-                              (void *)(b + lay.hb), out);
+        st = localize_heights(
+            map, local_dem, rover_x, rover_y, win, (double *)(void *)(b + lay.llgrid),
+            (trn_refine_t *)(void *)(b + lay.cand), (trn_loc_basins_t *)(void *)(b + lay.basins),
+            (void *)(b + lay.hb), out);
         return accept(map, st, out);
     }
     pts = (trn_point_t *)(void *)(b + lay.pts);

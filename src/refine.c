@@ -1078,9 +1078,10 @@ static double pose_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_t 
     if (gs != NULL) { /* the map under each seen local cell, read once */
         for (y = 0; y < l->height; ++y) {
             for (x = 0; x < l->width; ++x) {
-                gs[(size_t)y * (size_t)l->width + (size_t)x] =
-                    isfinite(TRN_GRID_AT(l, x, y)) ? global_at(g, px, py, x, y, rx, ry)
-                                                   : (double)NAN;
+                gs[(size_t)y * (size_t)l->width + (size_t)x] = isfinite(TRN_GRID_AT(l, x, y))
+                                                                   ? global_at(g, px, py, x, y, rx,
+                                                                               ry)
+                                                                   : (double)NAN;
             }
         }
     }
@@ -1200,8 +1201,8 @@ trn_status_t trn_height_search_ws_(const trn_grid_f32_t *global, const trn_grid_
         gs = scratch + cells;
         for (y = 0; y < local->height; ++y) {
             for (x = 0; x < local->width; ++x) {
-                vtab[(size_t)y * (size_t)local->width + (size_t)x] =
-                    noise_var(cfg, x, y, rover_x, rover_y);
+                vtab[(size_t)y * (size_t)local->width + (size_t)x] = noise_var(cfg, x, y, rover_x,
+                                                                               rover_y);
             }
         }
     }
@@ -1212,8 +1213,8 @@ trn_status_t trn_height_search_ws_(const trn_grid_f32_t *global, const trn_grid_
             double ll, dz, m, q;
             int inside = ex != NULL && abs(x - ex->cx) <= ex->radius &&
                          abs(y - ex->cy) <= ex->radius;
-            ll = pose_ll(global, local, rover_x, rover_y, x, y, cfg, vtab, gs, (double)inlier_prob, k, &dz,
-                         &m);
+            ll = pose_ll(global, local, rover_x, rover_y, x, y, cfg, vtab, gs, (double)inlier_prob,
+                         k, &dz, &m);
             if (ll_grid != NULL) {
                 ll_grid[(size_t)(y - win->y0) * (size_t)(win->x1 - win->x0 + 1) +
                         (size_t)(x - win->x0)] = ll;

@@ -22,9 +22,10 @@
 /* ------------------------------------------------------------------------ */
 
 static const trn_status_t k_all_status[] = {
-    TRN_OK,      TRN_E_NULL,    TRN_E_ARG,      TRN_E_SIZE,     TRN_E_WORKSPACE, TRN_E_NODATA,
-    TRN_E_RANGE, TRN_E_ILLCOND, TRN_E_CAPACITY, TRN_E_NOTARGET, TRN_E_TIMEOUT,   TRN_E_CRC,
-    TRN_E_SEQ,   TRN_E_BUS,     TRN_E_IO,       TRN_E_FORMAT,   TRN_E_CANCELLED, TRN_E_AMBIGUOUS};
+    TRN_OK,        TRN_E_NULL,      TRN_E_ARG,       TRN_E_SIZE,     TRN_E_WORKSPACE,
+    TRN_E_NODATA,  TRN_E_RANGE,     TRN_E_ILLCOND,   TRN_E_CAPACITY, TRN_E_NOTARGET,
+    TRN_E_TIMEOUT, TRN_E_CRC,       TRN_E_SEQ,       TRN_E_BUS,      TRN_E_IO,
+    TRN_E_FORMAT,  TRN_E_CANCELLED, TRN_E_AMBIGUOUS, TRN_E_BUDGET};
 #define N_STATUS (sizeof k_all_status / sizeof k_all_status[0])
 
 static void test_status_values_fixed(void **state)
@@ -49,6 +50,7 @@ static void test_status_values_fixed(void **state)
     assert_int_equal(TRN_E_FORMAT, -15);
     assert_int_equal(TRN_E_CANCELLED, -16);
     assert_int_equal(TRN_E_AMBIGUOUS, -17);
+    assert_int_equal(TRN_E_BUDGET, -18);
 }
 
 static void test_strerror_distinct(void **state)
@@ -69,7 +71,7 @@ static void test_strerror_distinct(void **state)
 
 static void test_strerror_unknown(void **state)
 {
-    static const int unknown[] = {1, 2, -18, -19, -100, 100, 0x7fffffff, -0x7fffffff};
+    static const int unknown[] = {1, 2, -19, -20, -100, 100, 0x7fffffff, -0x7fffffff};
     size_t i;
     (void)state;
     for (i = 0; i < sizeof unknown / sizeof unknown[0]; ++i) {

@@ -100,8 +100,7 @@ static double bilin(double x, double y)
 
 /* The local map seen from (tx, ty), with noise sd and an offset of 2 m;
  * tiny: a 3 x 3 patch only. */
-static void make_local(double tx, double ty, double sd, int tiny, trn_rng_t *r,
-                       trn_grid_f32_t *l)
+static void make_local(double tx, double ty, double sd, int tiny, trn_rng_t *r, trn_grid_f32_t *l)
 {
     int i, j;
     for (j = 0; j < LW; ++j) {
@@ -240,8 +239,9 @@ static void test_bounded_equals_exhaustive(void **state)
                 for (j = 0; j < LW; ++j) {
                     for (i = 0; i < LW; ++i) {
                         if (isfinite(l_data[j * LW + i])) {
-                            g_data[(26 + j - LR) * GW + 36 + i - LR] =
-                                l_data[j * LW + i] - 2.0f + ((i + j) % 2 ? 0.02f : -0.02f);
+                            g_data[(26 + j - LR) * GW + 36 + i - LR] = l_data[j * LW + i] - 2.0f +
+                                                                       ((i + j) % 2 ? 0.02f
+                                                                                    : -0.02f);
                         }
                     }
                 }
@@ -294,18 +294,16 @@ static void test_bound_holds(void **state)
         rc.noise_m = 0.01f;
         rc.noise_k_per_m = 0.0004f;
         rc.inlier_prob = 0.95f;
-        assert_int_equal(trn_height_search(&g, &l, LR, LR, &win, NULL, &rc, 0.95f, 1.0, grid,
-                                           &hbest),
-                         TRN_OK);
+        assert_int_equal(
+            trn_height_search(&g, &l, LR, LR, &win, NULL, &rc, 0.95f, 1.0, grid, &hbest), TRN_OK);
         for (i = 0; i < poses; ++i) {
             best = fmax(best, grid[i]);
         }
         for (drop = 0.0; drop <= 4000.0; drop = drop * 4.0 + 10.0) {
             double *lazy = malloc(poses * sizeof(double));
             assert_non_null(lazy);
-            assert_int_equal(trn_hb_init(&hb, ws, &g, &l, LR, LR, &win, &rc, 0.95f, lazy, &work,
-                                         0u),
-                             TRN_OK);
+            assert_int_equal(
+                trn_hb_init(&hb, ws, &g, &l, LR, LR, &win, &rc, 0.95f, lazy, &work, 0u), TRN_OK);
             assert_int_equal(trn_hb_resolve(hb, best - drop, NULL), TRN_OK);
             for (i = 0; i < poses; ++i) {
                 if (hb->done[i]) {
@@ -354,8 +352,8 @@ static void test_mass_within_bound(void **state)
     rc.noise_m = 0.01f;
     rc.noise_k_per_m = 0.0004f;
     rc.inlier_prob = 0.95f;
-    assert_int_equal(
-        trn_height_search(&g, &l, LR, LR, &win, NULL, &rc, 0.95f, 1.0, grid, &m), TRN_OK);
+    assert_int_equal(trn_height_search(&g, &l, LR, LR, &win, NULL, &rc, 0.95f, 1.0, grid, &m),
+                     TRN_OK);
     for (infl = 1.0; infl <= 64.0; infl *= 8.0) {
         trn_height_best_t e;
         assert_int_equal(trn_height_mass(grid, &win, &ex, infl, &e), TRN_OK);
@@ -392,9 +390,8 @@ static void test_node_budget(void **state)
     assert_int_equal(run(&w, TRN_SEARCH_BOUNDED, 10u, &l, LR, LR, &win, &b), TRN_E_BUDGET);
     /* enough: the same answer (the budget counts both passes of the noise
      * rescale, so give it room) */
-    assert_int_equal(run(&w, TRN_SEARCH_BOUNDED, (uint32_t)(4u * work + 100u), &l, LR, LR, &win,
-                         &b),
-                     TRN_OK);
+    assert_int_equal(
+        run(&w, TRN_SEARCH_BOUNDED, (uint32_t)(4u * work + 100u), &l, LR, LR, &win, &b), TRN_OK);
     assert_true(b.x == a.x && b.y == a.y && b.failure_probability == a.failure_probability);
     assert_string_equal(trn_strerror(TRN_E_BUDGET), "search node budget exhausted");
     free(w.buf);

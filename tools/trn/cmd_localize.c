@@ -256,8 +256,8 @@ void cmd_localize_report_json(FILE *out, const cmd_localize_ctx_t *c, const char
     json_bool(&j, "refined", o->res.refined != 0);
     json_num(&j, "noise_scale", o->res.noise_scale);
     if (c->cfg.match == TRN_MATCH_HEIGHTS) {
-        json_str(&j, "search", c->heading || o->res.search == TRN_SEARCH_EXHAUSTIVE ? "exhaustive"
-                                                                                    : "bounded");
+        json_str(&j, "search",
+                 c->heading || o->res.search == TRN_SEARCH_EXHAUSTIVE ? "exhaustive" : "bounded");
         json_num(&j, "failure_prob_bound", o->res.failure_prob_bound);
         json_int(&j, "blocks_bounded", (long long)o->res.stats.blocks_bounded);
     }
@@ -514,19 +514,20 @@ int cmd_localize_prepare(const cmd_localize_params_t *p, cmd_localize_ctx_t *c, 
         return CLI_BAD_INPUT;
     }
     if ((p->search != NULL || p->node_budget > 0) && c->cfg.match != TRN_MATCH_HEIGHTS) {
-        snprintf(err, err_len, "--search and --node-budget shape the height matcher's search "
-                               "(--match heights, the auto configuration), not the voxel matcher's");
+        snprintf(err, err_len,
+                 "--search and --node-budget shape the height matcher's search "
+                 "(--match heights, the auto configuration), not the voxel matcher's");
         return CLI_BAD_INPUT;
     }
     if (p->search != NULL && strcmp(p->search, "bounded") == 0 && c->heading &&
         c->heading_win_deg > 0.0) {
-        snprintf(err, err_len, "--search bounded: the search over heading "
-                               "(--heading-window-deg) is exhaustive only");
+        snprintf(err, err_len,
+                 "--search bounded: the search over heading "
+                 "(--heading-window-deg) is exhaustive only");
         return CLI_BAD_INPUT;
     }
-    c->cfg.search = p->search != NULL && strcmp(p->search, "bounded") == 0
-                        ? TRN_SEARCH_BOUNDED
-                        : TRN_SEARCH_EXHAUSTIVE;
+    c->cfg.search = p->search != NULL && strcmp(p->search, "bounded") == 0 ? TRN_SEARCH_BOUNDED
+                                                                           : TRN_SEARCH_EXHAUSTIVE;
     c->cfg.node_budget = (uint32_t)p->node_budget;
     if (c->heading && c->cfg.match == TRN_MATCH_VOXEL && c->cfg.refine != 0) {
         snprintf(err, err_len,

@@ -69,7 +69,7 @@ static const struct {
 
 static pthread_mutex_t load_lock = PTHREAD_MUTEX_INITIALIZER;
 static int load_state; /* 0 not tried, 1 ready, -1 unavailable */
-static char load_why[600];
+static char load_why[1024];
 static char load_from[256];
 
 /* Every function from handle h into trn_gdal_fn; 0, or -1 with the first
@@ -127,11 +127,12 @@ static int find_gdal(void)
         if (try_lib(env, tried, sizeof tried)) {
             return 0;
         }
-        snprintf(load_why, sizeof load_why,
-                 "reading or writing a raster file needs GDAL's C library (libgdal), and "
-                 "TRN_GDAL_LIBRARY=%s does not load (%s): point it at a libgdal.so, or unset it "
-                 "and " INSTALL_HINT "; numpy arrays need no GDAL",
-                 env, tried);
+        snprintf(
+            load_why, sizeof load_why,
+            "reading or writing a raster file needs GDAL's C library (libgdal), and "
+            "TRN_GDAL_LIBRARY=%.200s does not load (%.300s): point it at a libgdal.so, or unset it "
+            "and " INSTALL_HINT "; numpy arrays need no GDAL",
+            env, tried);
         return -1;
     }
     if (dlsym(RTLD_DEFAULT, "GDALOpenEx") != NULL && fill(RTLD_DEFAULT, &missing) == 0) {
@@ -162,7 +163,7 @@ static int find_gdal(void)
     }
     snprintf(load_why, sizeof load_why,
              "reading or writing a raster file needs GDAL's C library (libgdal), which is not "
-             "installed or not found (tried %s): " INSTALL_HINT
+             "installed or not found (tried %.400s): " INSTALL_HINT
              ", or set TRN_GDAL_LIBRARY to its path; numpy arrays need no GDAL",
              tried);
     return -1;
