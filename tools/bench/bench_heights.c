@@ -78,8 +78,8 @@ static int bh_time(bh_call_t *c, int reps, double budget_ms)
 {
     double s[BH_MAX_REPS], start;
     int n = 0;
-    c->wsb = trn_localize_dem_workspace_bytes(c->map, c->local->width, c->local->height,
-                                              c->max_pts, &c->win);
+    c->wsb = trn_localize_dem_workspace_bytes(c->map, c->local->width, c->local->height, c->max_pts,
+                                              &c->win);
     free(c->ws);
     c->ws = NULL;
     if (c->wsb == 0u || posix_memalign(&c->ws, 16u, c->wsb) != 0) {
@@ -97,8 +97,8 @@ static int bh_time(bh_call_t *c, int reps, double budget_ms)
     start = bh_now();
     while (n < reps && n < BH_MAX_REPS) {
         double t0 = bh_now();
-        c->st = trn_localize_dem(c->map, c->local, c->rx, c->ry, c->max_pts, &c->win, c->ws,
-                                 c->wsb, &c->res);
+        c->st = trn_localize_dem(c->map, c->local, c->rx, c->ry, c->max_pts, &c->win, c->ws, c->wsb,
+                                 &c->res);
         s[n++] = bh_now() - t0;
         if (budget_ms > 0.0 && bh_now() - start > budget_ms) {
             break;
@@ -117,8 +117,7 @@ static void bh_row(const char *name, const bh_call_t *c, const char *note)
     fflush(stdout);
 }
 
-static void bh_ratio(const char *what, const bh_call_t *num, const bh_call_t *den,
-                     const char *note)
+static void bh_ratio(const char *what, const bh_call_t *num, const bh_call_t *den, const char *note)
 {
     printf("      ratio %-56s %8.2fx (min/min %.2fx)%s%s\n", what, num->med_ms / den->med_ms,
            num->min_ms / den->min_ms, note[0] ? "  " : "", note);
@@ -144,7 +143,7 @@ static int bh_maps(const float *dem, int voxel, bh_maps_t *m)
         return 3;
     }
     trn_map_cfg_default(&vc);
-    vc.noise_m = 0.01f;               /* the tools' noise model (tools/trn/mapopt.c) */
+    vc.noise_m = 0.01f;                /* the tools' noise model (tools/trn/mapopt.c) */
     vc.noise_k_per_m = 0.0004f / 0.1f; /* 0.0004 / cell */
     hc = vc;
     ab = trn_map_cfg_auto_workspace_bytes(BH_N, BH_N);
@@ -176,8 +175,7 @@ static int bh_maps(const float *dem, int voxel, bh_maps_t *m)
             return 3;
         }
         if ((st = trn_map_build(&m->vmap, &vc, &g, m->vbuf, vb)) != TRN_OK) {
-            fprintf(stderr, "trn_bench: height rows: voxel trn_map_build: %s\n",
-                    trn_strerror(st));
+            fprintf(stderr, "trn_bench: height rows: voxel trn_map_build: %s\n", trn_strerror(st));
             return 3;
         }
     }
@@ -204,12 +202,15 @@ static void bh_note(char *note, size_t len, const bh_call_t *c, double tx, doubl
     }
     snprintf(note, len, "%s; error %.2f cells; %llu poses scored%s%s", trn_strerror(c->st),
              hypot(c->res.x - tx, c->res.y - ty), (unsigned long long)c->res.stats.poses_scored,
-             exh == NULL ? "" : "; = exhaustive pose, status: ", exh == NULL ? "" : same ? "yes" : "NO");
+             exh == NULL ? "" : "; = exhaustive pose, status: ",
+             exh == NULL ? ""
+             : same      ? "yes"
+                         : "NO");
 }
 
 /* The README case at window +-W: voxel, exhaustive, bounded; k its index. */
-static int bh_window(bh_maps_t *m, int32_t W, int k, int repeats,
-                     bh_call_t *vx, bh_call_t *ex, bh_call_t *bd, bench_heights_result_t *r)
+static int bh_window(bh_maps_t *m, int32_t W, int k, int repeats, bh_call_t *vx, bh_call_t *ex,
+                     bh_call_t *bd, bench_heights_result_t *r)
 {
     const double tx = 140.0, ty = 120.0;
     const double budget = 20000.0; /* ms of timed calls per row at most */
@@ -332,8 +333,8 @@ static void bh_crop(const float *dem, int32_t c0, int32_t r0, int32_t side, doub
     trn_rng_seed(&rng, seed);
     for (r = 0; r < side; ++r) {
         for (c = 0; c < side; ++c) {
-            out[r * side + c] =
-                (float)((double)dem[(r0 + r) * BH_N + (c0 + c)] + noise_m * trn_rng_gauss(&rng));
+            out[r * side + c] = (float)((double)dem[(r0 + r) * BH_N + (c0 + c)] +
+                                        noise_m * trn_rng_gauss(&rng));
         }
     }
 }
@@ -401,8 +402,7 @@ int bench_heights_run(int repeats, int quick, bench_heights_result_t *r)
     rc = bh_worst("flat map", flat, &lg, BH_L / 2, BH_L / 2, 147, 125, wq, repeats, r);
     if (rc == 0) {
         bh_crop(per, 108, 88, BH_L, 0.01, 4u, loc);
-        rc = bh_worst("periodic map (1 m)", per, &lg, BH_L / 2, BH_L / 2, 147, 125, wq, repeats,
-                      r);
+        rc = bh_worst("periodic map (1 m)", per, &lg, BH_L / 2, BH_L / 2, 147, 125, wq, repeats, r);
     }
     if (rc == 0) {
         rc = bh_worst("5x5-cell local map", dem, &sg, 2, 2, 147, 125, wq, repeats, r);

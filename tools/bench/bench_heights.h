@@ -8,12 +8,12 @@
 #include <stdint.h>
 
 typedef struct {
-    int32_t win[2];       /* half-widths of the README case's windows, cells */
-    double voxel_ms[2];   /* trn_localize_dem, the paper's voxel map, median */
-    double exh_ms[2];     /* the height matcher, TRN_SEARCH_EXHAUSTIVE, median */
-    double bnd_ms[2];     /* the height matcher, TRN_SEARCH_BOUNDED, median */
-    double worst_ratio;   /* largest bounded / exhaustive over the worst cases */
-    int wrong;            /* bounded and exhaustive differ in pose or status */
+    int32_t win[2];     /* half-widths of the README case's windows, cells */
+    double voxel_ms[2]; /* trn_localize_dem, the paper's voxel map, median */
+    double exh_ms[2];   /* the height matcher, TRN_SEARCH_EXHAUSTIVE, median */
+    double bnd_ms[2];   /* the height matcher, TRN_SEARCH_BOUNDED, median */
+    double worst_ratio; /* largest bounded / exhaustive over the worst cases */
+    int wrong;          /* bounded and exhaustive differ in pose or status */
 } bench_heights_result_t;
 
 /* The README localize example (trn terrain --coverage 0.15 --seed 3, 256 x

@@ -114,10 +114,9 @@ typedef enum {
 #define IS_H_PART(s) ((s) == ST_H_SEARCH || (s) == ST_H_REFINE || (s) == ST_H_FAILURE)
 
 static const char *const k_names[ST_COUNT] = {
-    "highpass_occupancy", "chamfer", "map_build", "prob_map", "select",
-    "local_occupancy",    "search",  "peak_fit",  "localize",
-    "height_map_build",   "height_search", "height_refine", "height_failure",
-    "height_rest",        "height_localize"};
+    "highpass_occupancy", "chamfer",       "map_build",      "prob_map",    "select",
+    "local_occupancy",    "search",        "peak_fit",       "localize",    "height_map_build",
+    "height_search",      "height_refine", "height_failure", "height_rest", "height_localize"};
 static const char *const k_what[ST_COUNT] = {
     "trn_highpass + trn_occupancy, global DEM",
     "trn_chamfer3d, global occupancy",
@@ -491,8 +490,8 @@ static int world_dem(world_t *w, char *err, size_t err_len)
     dem_free(&d);
     for (r = 0; r < w->nl; ++r) {
         for (c = 0; c < w->nl; ++c) {
-            w->loc[r * w->nl + c] =
-                bilinear(w->dem, w->n, w->truth_x + (double)(c - half), w->truth_y + (double)(r - half));
+            w->loc[r * w->nl + c] = bilinear(w->dem, w->n, w->truth_x + (double)(c - half),
+                                             w->truth_y + (double)(r - half));
         }
     }
     return 0;
@@ -696,8 +695,8 @@ static int world_local(world_t *w, char *err, size_t err_len)
         snprintf(err, err_len, "cannot size or allocate the search workspace");
         return 1;
     }
-    w->ll_grid = malloc((size_t)(w->win.x1 - w->win.x0 + 1) *
-                        (size_t)(w->win.y1 - w->win.y0 + 1) * sizeof(double));
+    w->ll_grid = malloc((size_t)(w->win.x1 - w->win.x0 + 1) * (size_t)(w->win.y1 - w->win.y0 + 1) *
+                        sizeof(double));
     w->hloc_ws_bytes = trn_localize_dem_workspace_bytes(&w->hmap, (int32_t)w->nl, (int32_t)w->nl,
                                                         w->max_pts, &w->win);
     w->hloc_ws = alloc16(w->hloc_ws_bytes);
@@ -727,8 +726,8 @@ static int world_init(world_t *w, char *err, size_t err_len)
             return 1;
         }
     }
-    if (world_map(w, err, err_len) != 0 ||
-        world_select(w, err, err_len) != 0 || world_local(w, err, err_len) != 0) {
+    if (world_map(w, err, err_len) != 0 || world_select(w, err, err_len) != 0 ||
+        world_local(w, err, err_len) != 0) {
         return 1;
     }
     return 0;
