@@ -168,7 +168,7 @@ ECHO = {
                    "sigma_h_m", "map_config", "heading.error_deg", "heading.window_deg",
                    "heading.selection_sigma_heading_rad", "heading.select_heading_search"],
     "profile": ["config.map_cells", "config.local_cells", "config.window_cells", "config.max_range_m",
-                "config.stride_cells", "config.runs", "config.seed", "budget.file"],
+                "config.stride_cells", "config.runs", "config.seed", "config.dem", "budget.file"],
     "can-decode": [],
 }
 # keys removed wherever they are (wall times)
@@ -361,6 +361,8 @@ CASES = {
         # only the number of timed runs: wall times, which the comparison drops
         "--runs": unseen("--runs", "0", rc=1, needle="--runs", why="timing only"),
         "--seed": effect("--seed", "2"),
+        # a DEM file instead of the synthetic terrain (96 x 96 cells of 0.1 m)
+        "--dem": effect("--dem", G),
         "--budget": effect("--budget", os.path.join(ROOT, "tools", "profile", "budget-example.txt")),
         # exit 3 only when a stage is over budget; without --budget it has nothing to check
         "--check": [refused("--check", rc=2, needle="--budget"),

@@ -9,11 +9,12 @@ Checks the JSON (every stage with wall_ms, wall_max_ms >= wall_ms,
 workspace_bytes >= scratch_bytes), the workspace figures against sizes
 computed here from the configuration, the table, the budget file parser
 (each error class names the file and line, exit 1, one stderr line), and
---check's exit status (0 within budget, 3 over, 2 without --budget).
+--check's exit status (0 within budget, 3 over, 2 without --budget), the
+height matcher's stages and --dem FILE (a DEM written by `trn terrain`).
 With --stack-build DIR (a build with GCC's .ci files): tools/profile/add_stack.py
 gives every stage a stack figure, localize's equal to trn_stack.py's for trn_localize_dem.
 With --instructions: two runs under callgrind give identical instruction
-counts for every stage; exit 77 (CTest: skipped) when valgrind is missing.
+counts for every stage (height_rest exactly height_localize minus its three parts); exit 77 (CTest: skipped) when valgrind is missing.
 Never asserts on wall time.
 """
 import json
@@ -29,7 +30,10 @@ WORK = os.path.abspath(sys.argv[2])
 INSTR = "--instructions" in sys.argv[3:]
 STACK_BUILD = sys.argv[sys.argv.index("--stack-build") + 1] if "--stack-build" in sys.argv[3:] else None
 STAGES = ["highpass_occupancy", "chamfer", "map_build", "prob_map", "select",
-          "local_occupancy", "search", "peak_fit", "localize"]
+          "local_occupancy", "search", "peak_fit", "localize",
+          "height_map_build", "height_search", "height_refine", "height_failure",
+          "height_rest", "height_localize"]
+H_PARTS = ["height_search", "height_refine", "height_failure"]
 BASE = ["--map-cells", "128", "--local-cells", "32", "--max-range-m", "4"]
 SMALL = BASE + ["--window-cells", "10", "--runs", "3"]
 H = clitest.Harness(TRN, sub=("profile",), timeout=600)
@@ -55,8 +59,12 @@ def instructions_test():
             return
         st = json.loads(out)["stages"]
         for s in STAGES:
-            check(isinstance(st[s].get("instructions"), int) and st[s]["instructions"] > 0,
+            check(isinstance(st[s].get("instructions"), int) and (st[s]["instructions"] > 0 or s == "height_rest"),
                   f"--instructions: stage {s} has no positive instruction count: {st[s]}")
+        # height_rest is the whole height localization minus its parts, exactly
+        c = {s: st[s].get("instructions") for s in STAGES}
+        check(c["height_rest"] == c["height_localize"] - sum(c[s] for s in H_PARTS),
+              f"--instructions: height_rest is not height_localize minus its parts: {c}")
         counts.append({s: st[s].get("instructions") for s in STAGES})
     check(counts[0] == counts[1], f"instruction counts differ between two runs: {counts}")
     # The whole localization contains a search and a local occupancy; a map build its parts.
@@ -65,6 +73,9 @@ def instructions_test():
           f"localize counts fewer instructions than its parts: {c}")
     check(c["map_build"] > c["highpass_occupancy"] + c["chamfer"],
           f"map_build counts fewer instructions than its parts: {c}")
+    # the whole height localization refines and scores every pose at least once
+    check(c["height_localize"] > c["height_refine"] + c["height_failure"],
+          f"height_localize counts fewer instructions than its refinement and failure parts: {c}")
     print("instructions:", json.dumps(c))
 
 
@@ -87,7 +98,8 @@ def main():
     check(list(j["stages"].keys()) == STAGES, f"stages {list(j['stages'])}, want {STAGES}")
     for s in STAGES:
         e = j["stages"][s]
-        check(e["wall_ms"] > 0 and e["wall_max_ms"] >= e["wall_ms"], f"{s}: wall times {e}")
+        check((e["wall_ms"] > 0 or s == "height_rest") and e["wall_max_ms"] >= e["wall_ms"],
+              f"{s}: wall times {e}")
         check(e["workspace_bytes"] >= e["scratch_bytes"] >= 0, f"{s}: bytes {e}")
         check("instructions" not in e, f"{s}: instructions without --instructions")
         check("budget_ms" not in e, f"{s}: budget without --budget")
@@ -100,6 +112,18 @@ def main():
     check(st["highpass_occupancy"]["workspace_bytes"] - st["highpass_occupancy"]["scratch_bytes"]
           == n * n * 4 + n * n * nz, f"highpass_occupancy bytes {st['highpass_occupancy']}")
     check(st["peak_fit"]["workspace_bytes"] == 0, "peak_fit needs no workspace")
+    # the height search's output is the ln L grid: one double per pose
+    check(st["height_search"]["workspace_bytes"] == 21 * 21 * 8 and st["height_search"]["scratch_bytes"] == 0,
+          f"height_search bytes {st['height_search']}")
+    check(st["height_localize"]["scratch_bytes"] > st["height_search"]["workspace_bytes"],
+          f"height_localize scratch {st['height_localize']}")
+    # height_rest: the whole's median minus the parts' medians
+    rest = st["height_localize"]["wall_ms"] - sum(st[s]["wall_ms"] for s in H_PARTS)
+    check(abs(st["height_rest"]["wall_ms"] - rest) <= 1e-6 * max(1.0, abs(rest)),
+          f"height_rest {st['height_rest']['wall_ms']} != whole - parts {rest}")
+    check(cfg["height_matcher_bins"] >= 16 and cfg["height_matcher_status"] == "ok"
+          and cfg["height_matcher_error_cells"] < 1.5,
+          f"the height matcher's localization: {cfg}")
     check(st["search"]["scratch_bytes"] > 0 and st["localize"]["scratch_bytes"] > st["search"]["scratch_bytes"],
           f"search / localize scratch: {st['search']} {st['localize']}")
     # A larger window needs a larger search workspace; the map does not change.
@@ -172,12 +196,36 @@ def main():
           and p.stdout == "", f"--instructions without valgrind: exit {p.returncode}: {p.stderr!r}")
     rc, out, err = run("--bogus")
     check(rc == 2, f"--bogus: exit {rc}")
+    dem_test()
     if STACK_BUILD:
         stack_test(out_json=os.path.join(WORK, "prof.json"))
     plot_test(jt)
     rc, out, err = run("--help")
     check(rc == 0 and "--budget" in out and "--instructions" in out, "--help")
     return finish()
+
+
+def dem_test():
+    """--dem FILE: a DEM file instead of the synthetic terrain, in its own cell."""
+    expect_error(1, "missing.tif", *SMALL, "--dem", os.path.join(WORK, "missing.tif"))
+    tif = os.path.join(WORK, "dem.tif")
+    p = subprocess.run([TRN, "terrain", "--out", tif, "--size-cells", "160", "--cell-m", "2",
+                        "--min-diameter-m", "1", "--max-diameter-m", "2", "--relief-m", "5", "--seed", "4"], capture_output=True, text=True, timeout=300)
+    if p.returncode != 0 and "GDAL" in p.stderr:
+        print("SKIP --dem: trn terrain cannot write a GeoTIFF here:", p.stderr.strip())
+        return
+    check(p.returncode == 0, f"trn terrain for --dem: {p.stderr.strip()}")
+    rc, out, err = run(*SMALL, "--dem", tif, "--json")
+    check(rc == 0, f"--dem: exit {rc}: {err.strip()}")
+    if rc != 0:
+        return
+    j = json.loads(out)
+    cfg = j["config"]
+    check(cfg["dem"] == tif and cfg["cell_m"] == 2 and cfg["map_cells"] == 128,
+          f"--dem config echo: {cfg}")
+    check(list(j["stages"].keys()) == STAGES, f"--dem stages {list(j['stages'])}")
+    check(j["stages"]["height_localize"]["wall_ms"] > 0, f"--dem height_localize: {j['stages']}")
+    expect_error(1, "smaller than --map-cells 256", "--map-cells", "256", "--dem", tif)
 
 
 def plot_test(prof):

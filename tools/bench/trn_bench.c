@@ -48,6 +48,7 @@
 #include "bench_floor.h"
 #include "bench_select.h"
 #include "bench_heading.h"
+#include "bench_heights.h"
 #include "ref_chamfer.h"
 #include "rng.h"
 #include "synth.h"
@@ -82,6 +83,7 @@ typedef struct {
     int repeats;
     unsigned long long seed;
     int quick;
+    int heights; /* the height matcher's rows (bench_heights.c) */
 } opts_t;
 
 static void usage(FILE *f)
@@ -92,7 +94,8 @@ static void usage(FILE *f)
             "  --repeats R    timed runs per measurement, median and min reported, 1..%d\n"
             "                 (default 7)\n"
             "  --seed S       terrain and pose seed (default 1)\n"
-            "  --quick        smoke run: --sizes 128 --repeats 1\n"
+            "  --quick        smoke run: --sizes 128 --repeats 1, height rows at +-10 only\n"
+            "  --no-heights   leave out the height matcher's rows (about 2 minutes)\n"
             "Exit status: 0 ok (speed targets never fail the run), 1 wrong answer,\n"
             "2 bad usage, 3 setup failure.\n",
             TRN_MAX_DIM, MAX_REPEATS);
@@ -161,6 +164,7 @@ static int parse(int argc, char **argv, opts_t *o)
     o->repeats = 7;
     o->seed = 1u;
     o->quick = 0;
+    o->heights = 1;
     for (i = 1; i < argc; ++i) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
@@ -168,6 +172,9 @@ static int parse(int argc, char **argv, opts_t *o)
             exit(0);
         } else if (strcmp(a, "--quick") == 0) {
             o->quick = 1;
+            continue;
+        } else if (strcmp(a, "--no-heights") == 0) {
+            o->heights = 0;
             continue;
         } else if (strcmp(a, "--sizes") == 0) {
             if (!parse_sizes(v, o)) {
@@ -1242,6 +1249,7 @@ int main(int argc, char **argv)
 {
     opts_t o;
     size_result_t res[MAX_SIZES];
+    bench_heights_result_t hres;
     double t0, worst_ch = 0.0, worst_bb = 1e300;
     int i, w, wrong = 0, rc;
     char buf[512];
@@ -1270,6 +1278,13 @@ int main(int argc, char **argv)
             return rc;
         }
         wrong |= res[i].wrong;
+    }
+
+    if (o.heights) {
+        if ((rc = bench_heights_run(o.repeats, o.quick, &hres)) != 0) {
+            return rc;
+        }
+        wrong |= hres.wrong;
     }
 
     printf("\n");
@@ -1330,8 +1345,25 @@ int main(int argc, char **argv)
                res[i].head.ratio <= 0.2 ? "PASS" : "MISS", (int)res[i].n, res[i].head.ratio,
                (int)res[i].head.steps);
     }
+    if (o.heights) {
+        for (w = 0; w < (o.quick ? 1 : 2); ++w) {
+            printf("target height matcher <= 3x the voxel matcher (README case, +-%d): %s "
+                   "(bounded %.1fx, exhaustive %.1fx)\n",
+                   (int)hres.win[w], hres.bnd_ms[w] <= 3.0 * hres.voxel_ms[w] ? "PASS" : "MISS",
+                   hres.bnd_ms[w] / hres.voxel_ms[w], hres.exh_ms[w] / hres.voxel_ms[w]);
+        }
+        if (!o.quick) {
+            printf("target height matcher +-50 <= 4x its +-25: %s (bounded %.2fx, exhaustive "
+                   "%.2fx)\n",
+                   hres.bnd_ms[1] <= 4.0 * hres.bnd_ms[0] ? "PASS" : "MISS",
+                   hres.bnd_ms[1] / hres.bnd_ms[0], hres.exh_ms[1] / hres.exh_ms[0]);
+        }
+        printf("target height matcher's worst case (flat, periodic, 5x5 local) bounded <= 1.2x "
+               "exhaustive: %s (%.2fx worst)\n",
+               hres.worst_ratio <= 1.2 ? "PASS" : "MISS", hres.worst_ratio);
+    }
     printf("same answer (branch-and-bound = exhaustive = localize, chamfer = Dijkstra, "
-           "selection = naive, trn_field_fast = trn_field): %s\n",
+           "selection = naive, trn_field_fast = trn_field, height bounded = exhaustive): %s\n",
            wrong ? "NO" : "yes");
     printf("total run time %.1f s\n", now_s() - t0);
     (void)g_sink;

@@ -22,6 +22,37 @@
  *   peak_fit            9 x trn_score_pose around it + trn_peak_fit (eq. 6)
  *   localize            trn_localize_dem: one whole localization
  *
+ * The default localizer (trn localize's: trn_map_cfg_auto through mapopt,
+ * TRN_MATCH_HEIGHTS, the exhaustive search) on the same DEM, local DEM and
+ * window, timed by the public functions its localization is made of
+ * (src/localize.c, localize_heights) and whole:
+ *   height_map_build    mapopt_config (trn_map_cfg_auto) + trn_map_build
+ *   height_search       trn_height_search: every pose of the window scored
+ *   height_refine       trn_refine_pose from the search's best pose
+ *   height_failure      trn_height_mass (the posterior mass outside the
+ *                       exclusion zone) + trn_prob_beyond (the refined
+ *                       covariance's tail beyond TRN_FAIL_RADIUS_CELLS)
+ *   height_rest         height_localize minus the three parts above: the
+ *                       second refinement starts, the noise rescale (a
+ *                       second search when the residuals reject the
+ *                       noise model), far basins, shoulders, valley and
+ *                       the input checks. Not run: time median = whole's
+ *                       median - the parts' medians, max = whole's max -
+ *                       the parts' medians; instructions = whole's - the
+ *                       parts' (exact). trn_localize_dem's own search keeps
+ *                       each pose's map heights in scratch, the public
+ *                       trn_height_search does not: the rest is the lower
+ *                       by that difference (it may even be negative).
+ *   height_localize     trn_localize_dem with that map: one whole localization
+ *
+ * --dem FILE: a real DEM (any raster GDAL reads in a projected CRS, e.g. one
+ * of bench_real's, build/real/ID.tif) instead of the synthetic terrain: the
+ * --map-cells square at its centre is the global map, the local DEM is that
+ * map sampled bilinearly at the same sub-cell rover position, and everything
+ * runs in the DEM's cell: the voxel stages with the paper's configuration
+ * scaled to the cell (mapopt "paper"), the selection with the synthetic
+ * case's geometry in cells (lengths x cell / 0.1 m).
+ *
  * Instructions: with --instructions the command runs itself once more under
  * `valgrind --tool=callgrind --collect-atstart=no`, with the environment
  * variable TRN_PROFILE_CALLGRIND_OUT naming the output file. That child runs
@@ -45,6 +76,8 @@
 
 #include "cli.h"
 #include "commands.h"
+#include "dem_io.h"
+#include "mapopt.h"
 #include "profile_budget.h"
 #include "synth.h"
 #include "trn/trn.h"
@@ -68,12 +101,22 @@ typedef enum {
     ST_SEARCH,
     ST_PEAK_FIT,
     ST_LOCALIZE,
+    ST_H_MAP,
+    ST_H_SEARCH,
+    ST_H_REFINE,
+    ST_H_FAILURE,
+    ST_H_REST,
+    ST_H_LOCALIZE,
     ST_COUNT
 } stage_t;
 
+/* The stages height_rest is the whole minus. */
+#define IS_H_PART(s) ((s) == ST_H_SEARCH || (s) == ST_H_REFINE || (s) == ST_H_FAILURE)
+
 static const char *const k_names[ST_COUNT] = {
-    "highpass_occupancy", "chamfer", "map_build", "prob_map", "select",
-    "local_occupancy",    "search",  "peak_fit",  "localize"};
+    "highpass_occupancy", "chamfer",       "map_build",      "prob_map",    "select",
+    "local_occupancy",    "search",        "peak_fit",       "localize",    "height_map_build",
+    "height_search",      "height_refine", "height_failure", "height_rest", "height_localize"};
 static const char *const k_what[ST_COUNT] = {
     "trn_highpass + trn_occupancy, global DEM",
     "trn_chamfer3d, global occupancy",
@@ -83,7 +126,13 @@ static const char *const k_what[ST_COUNT] = {
     "trn_highpass + trn_occupancy_points + order, local DEM",
     "trn_search_bb, best pose in the window",
     "9 x trn_score_pose + trn_peak_fit (eq. 6)",
-    "trn_localize_dem, one localization"};
+    "trn_localize_dem, one localization",
+    "trn_map_cfg_auto + trn_map_build, height matcher's map",
+    "trn_height_search, every pose of the window",
+    "trn_refine_pose from the best pose",
+    "trn_height_mass + trn_prob_beyond",
+    "height_localize minus the three stages above",
+    "trn_localize_dem, heights (the default localizer)"};
 
 /* The public functions each stage calls (for the stack figures of
  * tools/profile/add_stack.py). */
@@ -95,6 +144,12 @@ static const char *const k_funcs[ST_COUNT] = {"trn_highpass,trn_occupancy",
                                               "trn_highpass,trn_occupancy_points,trn_points_order",
                                               "trn_search_bb",
                                               "trn_score_pose,trn_peak_fit",
+                                              "trn_localize_dem",
+                                              "trn_map_cfg_auto,trn_map_build",
+                                              "trn_height_search",
+                                              "trn_refine_pose",
+                                              "trn_height_mass,trn_prob_beyond",
+                                              "trn_localize_dem",
                                               "trn_localize_dem"};
 
 /* Everything the stages work on; heap memory of the tool (the core never allocates). */
@@ -151,6 +206,23 @@ typedef struct {
     size_t loc_ws_bytes;
     trn_loc_result_t res;
     double truth_x, truth_y;
+    /* --dem: the file (NULL: the synthetic terrain) and its cell */
+    const char *dem_path;
+    double cell_m;
+    /* the height matcher (the default localizer) */
+    trn_map_cfg_t hcfg;
+    void *hmapbuf;
+    size_t hmap_bytes, hauto_bytes;
+    trn_map_t hmap;
+    trn_refine_cfg_t hrc;
+    double *ll_grid;
+    trn_height_best_t hbest, hsecond;
+    trn_refine_t href;
+    double hfail;
+    void *hloc_ws;
+    size_t hloc_ws_bytes;
+    trn_loc_result_t hres;
+    trn_status_t hres_st;
 } world_t;
 
 static void *alloc16(size_t n)
@@ -180,6 +252,49 @@ static void world_free(world_t *w)
     free(w->pts);
     free(w->bb_ws);
     free(w->loc_ws);
+    free(w->hmapbuf);
+    free(w->ll_grid);
+    free(w->hloc_ws);
+}
+
+/* The height matcher's map: the configuration trn localize chooses by
+ * default (mapopt: trn_map_cfg_auto with the tools' noise model), built. */
+static trn_status_t height_map(world_t *w)
+{
+    mapopt_t mo;
+    char why[256];
+    mapopt_init(&mo);
+    if (mapopt_config(&mo, w->dem, (int)w->n, (int)w->n, w->cell_m, &w->hcfg, NULL, why,
+                      sizeof why) != 0) {
+        return TRN_E_ARG;
+    }
+    return trn_map_build(&w->hmap, &w->hcfg, &w->g, w->hmapbuf, w->hmap_bytes);
+}
+
+/* The failure probability's public parts: the posterior mass outside the
+ * exclusion zone around the best pose (the stored ln L grid, divided by the
+ * refinement's ll_inflation) and the refined covariance's tail beyond
+ * TRN_FAIL_RADIUS_CELLS; the larger. */
+static trn_status_t height_failure(world_t *w)
+{
+    trn_exclusion_t ex;
+    trn_status_t st;
+    double infl = w->href.ll_inflation >= 1.0 ? w->href.ll_inflation : 1.0, tail = 0.0;
+    ex.cx = w->hbest.x;
+    ex.cy = w->hbest.y;
+    ex.radius = w->hcfg.min_exclusion_cells;
+    st = trn_height_mass(w->ll_grid, &w->win, &ex, infl, &w->hsecond);
+    if (st == TRN_E_NODATA) {
+        w->hfail = 0.0; /* no pose outside the zone: no competitor */
+        st = TRN_OK;
+    } else if (st == TRN_OK) {
+        w->hfail = exp(w->hsecond.lse_out - w->hsecond.lse_all);
+    }
+    if (st == TRN_OK && isfinite(w->href.cov_cells[0]) && isfinite(w->href.cov_cells[1])) {
+        st = trn_prob_beyond(w->href.cov_cells, TRN_FAIL_RADIUS_CELLS, &tail);
+        w->hfail = fmax(w->hfail, tail);
+    }
+    return st;
 }
 
 /* One run of a stage. Returns its status (TRN_OK or the stage's documented
@@ -201,6 +316,10 @@ static trn_status_t run_stage(world_t *w, stage_t s)
     case ST_PROB_MAP: {
         trn_sigma_model_t gm;
         trn_sigma_global_default(&gm);
+        if (w->dem_path != NULL) { /* the synthetic case's model in cells */
+            gm.sigma_min_m = (float)((double)gm.sigma_min_m * w->cell_m / 0.1);
+            gm.k_per_m = (float)((double)gm.k_per_m * 0.1 / w->cell_m);
+        }
         st = trn_prob_global_map(&w->k, &gm, &w->sensor, 1u, &w->map, &w->pg, w->pg_ws,
                                  w->pg_ws_bytes);
         break;
@@ -247,8 +366,30 @@ static trn_status_t run_stage(world_t *w, stage_t s)
     case ST_LOCALIZE:
         st = trn_localize_dem(&w->map, &w->lg, w->rx, w->ry, w->max_pts, &w->win, w->loc_ws,
                               w->loc_ws_bytes, &w->res);
+        if (st == TRN_E_ILLCOND || st == TRN_E_AMBIGUOUS) {
+            st = TRN_OK; /* an answer, not a fix: the work was done */
+        }
+        break;
+    case ST_H_MAP: st = height_map(w); break;
+    case ST_H_SEARCH:
+        st = trn_height_search(&w->hmap.heights, &w->lg, w->rx, w->ry, &w->win, NULL, &w->hrc,
+                               w->hcfg.inlier_prob, 1.0, w->ll_grid, &w->hbest);
+        break;
+    case ST_H_REFINE:
+        st = trn_refine_pose(&w->hmap.heights, &w->lg, w->rx, w->ry, w->hbest.x, w->hbest.y,
+                             &w->hrc, &w->href);
         if (st == TRN_E_ILLCOND) {
-            st = TRN_OK;
+            st = TRN_OK; /* the refinement ran; no finite covariance is an answer */
+        }
+        break;
+    case ST_H_FAILURE: st = height_failure(w); break;
+    case ST_H_REST: break; /* derived: height_localize minus the parts */
+    case ST_H_LOCALIZE:
+        st = trn_localize_dem(&w->hmap, &w->lg, w->rx, w->ry, w->max_pts, &w->win, w->hloc_ws,
+                              w->hloc_ws_bytes, &w->hres);
+        w->hres_st = st;
+        if (st == TRN_E_ILLCOND || st == TRN_E_AMBIGUOUS) {
+            st = TRN_OK; /* an answer, not a fix: the work was done */
         }
         break;
     default: st = TRN_E_ARG; break;
@@ -289,10 +430,71 @@ static void stage_bytes(const world_t *w, stage_t s, size_t *scratch, size_t *to
     case ST_SEARCH: sc = w->bb_ws_bytes; break;
     case ST_PEAK_FIT: break;
     case ST_LOCALIZE: sc = w->loc_ws_bytes; break;
+    case ST_H_MAP: sc = w->hmap_bytes + w->hauto_bytes; break;
+    case ST_H_SEARCH:
+        out = (size_t)(w->win.x1 - w->win.x0 + 1) * (size_t)(w->win.y1 - w->win.y0 + 1) *
+              sizeof(double); /* the ln L grid */
+        break;
+    case ST_H_LOCALIZE: sc = w->hloc_ws_bytes; break;
     default: break;
     }
     *scratch = sc;
     *total = sc + out;
+}
+
+/* Bilinear height of the map at fractional cell (x, y) (cell centres at
+ * integers); NaN off the map or where a corner is NaN. */
+static float bilinear(const float *z, long n, double x, double y)
+{
+    long x0 = (long)floor(x), y0 = (long)floor(y);
+    double fx = x - (double)x0, fy = y - (double)y0;
+    if (x0 < 0 || y0 < 0 || x0 + 1 >= n || y0 + 1 >= n) {
+        return NAN;
+    }
+    return (float)((1.0 - fy) * ((1.0 - fx) * z[y0 * n + x0] + fx * z[y0 * n + x0 + 1]) +
+                   fy * ((1.0 - fx) * z[(y0 + 1) * n + x0] + fx * z[(y0 + 1) * n + x0 + 1]));
+}
+
+/* --dem: the --map-cells square at the DEM's centre into w->dem, its cell
+ * into w->cell_m, the local DEM sampled from it at (truth_x, truth_y). */
+static int world_dem(world_t *w, char *err, size_t err_len)
+{
+    dem_t d;
+    long r, c, half = w->nl / 2, r0, c0;
+    char why[512];
+    memset(&d, 0, sizeof d);
+    if (dem_read(w->dem_path, 1, TRN_MAX_DIM, &d, why, sizeof why) != 0) {
+        snprintf(err, err_len, "--dem %s: %s", w->dem_path, why);
+        return 1;
+    }
+    if ((long)d.width < w->n || (long)d.height < w->n) {
+        snprintf(err, err_len, "--dem %s is %d x %d cells, smaller than --map-cells %ld",
+                 w->dem_path, d.width, d.height, w->n);
+        dem_free(&d);
+        return 1;
+    }
+    w->cell_m = d.cell_m;
+    r0 = ((long)d.height - w->n) / 2;
+    c0 = ((long)d.width - w->n) / 2;
+    w->dem = malloc(sizeof(float) * (size_t)w->n * (size_t)w->n);
+    w->loc = malloc(sizeof(float) * (size_t)w->nl * (size_t)w->nl);
+    if (w->dem == NULL || w->loc == NULL) {
+        dem_free(&d);
+        snprintf(err, err_len, "out of memory for the terrain");
+        return 1;
+    }
+    for (r = 0; r < w->n; ++r) {
+        memcpy(w->dem + r * w->n, d.data + (r0 + r) * (long)d.width + c0,
+               sizeof(float) * (size_t)w->n);
+    }
+    dem_free(&d);
+    for (r = 0; r < w->nl; ++r) {
+        for (c = 0; c < w->nl; ++c) {
+            w->loc[r * w->nl + c] = bilinear(w->dem, w->n, w->truth_x + (double)(c - half),
+                                             w->truth_y + (double)(r - half));
+        }
+    }
+    return 0;
 }
 
 /* The terrain, the rover's local map in its own grid, and the pose window. */
@@ -304,26 +506,33 @@ static int world_terrain(world_t *w, char *err, size_t err_len)
     size_t nrocks, cells = (size_t)w->n * (size_t)w->n;
     int32_t px, py, half, mid;
 
-    /* The main job's rock field (tools/trn_demo.c): 15 % cover, radii 5-30 cm. */
-    nrocks = (size_t)((double)w->n * (double)w->n * cell * cell * 0.15 / (PI * 0.15 * 0.15));
-    rocks = malloc(sizeof *rocks * (nrocks + 1));
-    w->dem = malloc(sizeof(float) * cells);
-    w->loc = malloc(sizeof(float) * (size_t)w->nl * (size_t)w->nl);
-    if (rocks == NULL || w->dem == NULL || w->loc == NULL) {
-        free(rocks);
-        snprintf(err, err_len, "out of memory for the terrain");
-        return 1;
-    }
-    synth_make(&t, rocks, nrocks, (double)w->n * cell, 0.05, 0.3, 0.5, 0.2, w->seed);
-    synth_render(&t, w->dem, (int)w->n, (int)w->n, 0.0, 0.0, cell);
     /* The rover a fraction of a cell off the map centre; its local map in its own grid. */
     half = (int32_t)(w->nl / 2);
     mid = (int32_t)(w->n / 2); /* the integer centre cell */
     w->truth_x = (double)mid + 0.3;
     w->truth_y = (double)mid - 0.2;
-    synth_render(&t, w->loc, (int)w->nl, (int)w->nl, (w->truth_x - half) * cell,
-                 (w->truth_y - half) * cell, cell);
-    free(rocks);
+    w->cell_m = cell;
+    if (w->dem_path != NULL) {
+        if (world_dem(w, err, err_len) != 0) {
+            return 1;
+        }
+    } else {
+        /* The main job's rock field (tools/trn_demo.c): 15 % cover, radii 5-30 cm. */
+        nrocks = (size_t)((double)w->n * (double)w->n * cell * cell * 0.15 / (PI * 0.15 * 0.15));
+        rocks = malloc(sizeof *rocks * (nrocks + 1));
+        w->dem = malloc(sizeof(float) * cells);
+        w->loc = malloc(sizeof(float) * (size_t)w->nl * (size_t)w->nl);
+        if (rocks == NULL || w->dem == NULL || w->loc == NULL) {
+            free(rocks);
+            snprintf(err, err_len, "out of memory for the terrain");
+            return 1;
+        }
+        synth_make(&t, rocks, nrocks, (double)w->n * cell, 0.05, 0.3, 0.5, 0.2, w->seed);
+        synth_render(&t, w->dem, (int)w->n, (int)w->n, 0.0, 0.0, cell);
+        synth_render(&t, w->loc, (int)w->nl, (int)w->nl, (w->truth_x - half) * cell,
+                     (w->truth_y - half) * cell, cell);
+        free(rocks);
+    }
     if (trn_grid_f32_init(&w->g, w->dem, cells, (int32_t)w->n, (int32_t)w->n) != TRN_OK ||
         trn_grid_f32_init(&w->lg, w->loc, (size_t)w->nl * (size_t)w->nl, (int32_t)w->nl,
                           (int32_t)w->nl) != TRN_OK) {
@@ -374,6 +583,33 @@ static int world_map(world_t *w, char *err, size_t err_len)
         snprintf(err, err_len, "map build failed: %s", trn_strerror(st));
         return 1;
     }
+    /* the height matcher's map (the default localizer's configuration) */
+    {
+        mapopt_t mo;
+        char why[256];
+        mapopt_init(&mo);
+        if (mapopt_config(&mo, w->dem, (int)w->n, (int)w->n, w->cell_m, &w->hcfg, NULL, why,
+                          sizeof why) != 0) {
+            snprintf(err, err_len, "height matcher's map configuration: %s", why);
+            return 1;
+        }
+    }
+    w->hauto_bytes = trn_map_cfg_auto_workspace_bytes((int32_t)w->n, (int32_t)w->n);
+    w->hmap_bytes = trn_map_bytes(&w->hcfg, (int32_t)w->n, (int32_t)w->n);
+    w->hmapbuf = alloc16(w->hmap_bytes);
+    if (w->hmap_bytes == 0 || w->hmapbuf == NULL) {
+        snprintf(err, err_len, "cannot allocate %zu bytes for the height matcher's map",
+                 w->hmap_bytes);
+        return 1;
+    }
+    if ((st = height_map(w)) != TRN_OK) {
+        snprintf(err, err_len, "height matcher's map build failed: %s", trn_strerror(st));
+        return 1;
+    }
+    w->hrc.cell_m = w->hcfg.terrain.cell_m;
+    w->hrc.noise_m = w->hcfg.noise_m;
+    w->hrc.noise_k_per_m = w->hcfg.noise_k_per_m;
+    w->hrc.inlier_prob = w->hcfg.inlier_prob;
     return 0;
 }
 
@@ -402,6 +638,17 @@ static int world_select(world_t *w, char *err, size_t err_len)
     w->pg.nz = w->cfg.terrain.nz;
     trn_select_cfg_default(&w->scfg);
     w->scfg.max_range_m = (float)w->max_range_m;
+    if (w->dem_path != NULL) {
+        /* the synthetic case's geometry in cells: every length x cell / 0.1 m */
+        const double k = w->cell_m / 0.1;
+        w->scfg.max_range_m = (float)(w->max_range_m * k);
+        w->scfg.min_range_m = (float)((double)w->scfg.min_range_m * k);
+        w->scfg.footprint_radius_m = (float)((double)w->scfg.footprint_radius_m * k);
+        w->scfg.patch_m = (float)((double)w->scfg.patch_m * k);
+        w->scfg.min_separation_m = (float)((double)w->scfg.min_separation_m * k);
+        w->scfg.local_sigma.sigma_min_m = (float)((double)w->scfg.local_sigma.sigma_min_m * k);
+        w->scfg.local_sigma.k_per_m = (float)((double)w->scfg.local_sigma.k_per_m / k);
+    }
     if (w->scfg.min_range_m > w->scfg.max_range_m) {
         w->scfg.min_range_m = w->scfg.max_range_m;
     }
@@ -448,14 +695,39 @@ static int world_local(world_t *w, char *err, size_t err_len)
         snprintf(err, err_len, "cannot size or allocate the search workspace");
         return 1;
     }
+    w->ll_grid = malloc((size_t)(w->win.x1 - w->win.x0 + 1) * (size_t)(w->win.y1 - w->win.y0 + 1) *
+                        sizeof(double));
+    w->hloc_ws_bytes = trn_localize_dem_workspace_bytes(&w->hmap, (int32_t)w->nl, (int32_t)w->nl,
+                                                        w->max_pts, &w->win);
+    w->hloc_ws = alloc16(w->hloc_ws_bytes);
+    if (w->ll_grid == NULL || w->hloc_ws_bytes == 0 || w->hloc_ws == NULL) {
+        snprintf(err, err_len, "cannot size or allocate the height matcher's workspace");
+        return 1;
+    }
     return 0;
 }
 
 static int world_init(world_t *w, char *err, size_t err_len)
 {
     trn_map_cfg_default(&w->cfg);
-    if (world_terrain(w, err, err_len) != 0 || world_map(w, err, err_len) != 0 ||
-        world_select(w, err, err_len) != 0 || world_local(w, err, err_len) != 0) {
+    if (world_terrain(w, err, err_len) != 0) {
+        return 1;
+    }
+    if (w->dem_path != NULL) {
+        /* the paper's configuration scaled to the DEM's cell, as trn localize
+         * --map-config paper */
+        mapopt_t mo;
+        char why[256];
+        mapopt_init(&mo);
+        mo.config = "paper";
+        if (mapopt_config(&mo, w->dem, (int)w->n, (int)w->n, w->cell_m, &w->cfg, NULL, why,
+                          sizeof why) != 0) {
+            snprintf(err, err_len, "voxel map configuration: %s", why);
+            return 1;
+        }
+    }
+    if (world_map(w, err, err_len) != 0 || world_select(w, err, err_len) != 0 ||
+        world_local(w, err, err_len) != 0) {
         return 1;
     }
     return 0;
@@ -502,6 +774,9 @@ static int callgrind_child(world_t *w)
     }
     for (s = 0; s < ST_COUNT; ++s) {
         trn_status_t st;
+        if (s == ST_H_REST) {
+            continue; /* derived from the others' counts */
+        }
         CALLGRIND_ZERO_STATS;
         CALLGRIND_TOGGLE_COLLECT;
         st = run_stage(w, (stage_t)s);
@@ -631,7 +906,7 @@ static int spawn_callgrind(const char *exe, int argc, char **argv, const char *o
 /* The dumps out.1, out.2, ... (the final one at exit is `out` itself, empty:
  * nothing collected) into ir[] and have[]; every file removed. Returns the
  * number of stages found. */
-static int collect_dumps(const char *out, unsigned long long *ir, int *have)
+static int collect_dumps(const char *out, long long *ir, int *have)
 {
     int i, found = 0;
     for (i = 1; i <= ST_COUNT + 4; ++i) {
@@ -642,7 +917,7 @@ static int collect_dumps(const char *out, unsigned long long *ir, int *have)
         if (read_dump(p, name, sizeof name, &v)) {
             for (s = 0; s < ST_COUNT; ++s) {
                 if (strcmp(name, k_names[s]) == 0 && !have[s]) {
-                    ir[s] = v;
+                    ir[s] = (long long)v;
                     have[s] = 1;
                     ++found;
                 }
@@ -655,7 +930,7 @@ static int collect_dumps(const char *out, unsigned long long *ir, int *have)
 }
 
 /* Run ourselves under callgrind and fill ir[] per stage. */
-static int count_instructions(int argc, char **argv, unsigned long long *ir, int *have, char *err,
+static int count_instructions(int argc, char **argv, long long *ir, int *have, char *err,
                               size_t err_len)
 {
     char dir[] = "/tmp/trn-profile-cg.XXXXXX";
@@ -686,11 +961,19 @@ static int count_instructions(int argc, char **argv, unsigned long long *ir, int
     found = collect_dumps(out, ir, have);
     unlink(logp);
     rmdir(dir);
-    if (found != ST_COUNT) {
+    if (found != ST_COUNT - 1) {
         snprintf(err, err_len, "--instructions: found %d of %d stage dumps in the callgrind output",
-                 found, (int)ST_COUNT);
+                 found, (int)ST_COUNT - 1);
         return 1;
     }
+    /* height_rest: the whole localization's count minus its parts' (exact) */
+    ir[ST_H_REST] = ir[ST_H_LOCALIZE];
+    for (i = 0; i < ST_COUNT; ++i) {
+        if (IS_H_PART(i)) {
+            ir[ST_H_REST] -= ir[i];
+        }
+    }
+    have[ST_H_REST] = 1;
     return 0;
 }
 
@@ -702,6 +985,7 @@ typedef struct {
     double max_range_m;
     uint64_t seed;
     const char *budget_path; /* budget file, or NULL */
+    const char *dem_path;    /* --dem: a real DEM instead of the synthetic terrain, or NULL */
     int json, check, instructions;
     int argc; /* --instructions: the command line re-run under callgrind */
     char **argv;
@@ -712,7 +996,7 @@ typedef struct {
     world_t w;
     pb_budget_t budget;
     double med[ST_COUNT], mx[ST_COUNT];
-    unsigned long long ir[ST_COUNT];
+    long long ir[ST_COUNT]; /* height_rest's may be negative (see the file comment) */
     int have_ir[ST_COUNT];
     int over; /* stages over budget */
 } profile_result_t;
@@ -744,6 +1028,10 @@ static int profile_parse(int argc, char **argv, profile_params_t *p)
         {"--runs", CLI_LONG, &p->runs, 1, MAX_RUNS, 0, "N",
          "timed runs per stage after one warm-up", 0},
         {"--seed", CLI_U64, &p->seed, 0, 0, 0, "S", "terrain seed", 0},
+        {"--dem", CLI_STRING, &p->dem_path, 0, 0, 0, "FILE",
+         "a real DEM (projected, e.g. bench_real's build/real/ID.tif) instead of the synthetic "
+         "terrain: its central --map-cells square, in its own cell (default: none)",
+         0},
         {"--budget", CLI_STRING, &p->budget_path, 0, 0, 0, "FILE",
          "target budget per stage and host-to-target scale (docs/benchmarks.md) (default: none)",
          0},
@@ -759,8 +1047,13 @@ static int profile_parse(int argc, char **argv, profile_params_t *p)
                      "budget share per stage.",
                      "Stages: highpass_occupancy, chamfer, map_build, prob_map, select, "
                      "local_occupancy, search,\n"
-                     "peak_fit, localize (docs/modules/cli.md). Wall time: CLOCK_MONOTONIC, one "
-                     "warm-up, then --runs\n"
+                     "peak_fit, localize (the voxel matcher); height_map_build, height_search, "
+                     "height_refine,\n"
+                     "height_failure, height_rest, height_localize (the default localizer, "
+                     "TRN_MATCH_HEIGHTS;\n"
+                     "height_rest = height_localize minus the three before it) "
+                     "(docs/modules/cli.md).\n"
+                     "Wall time: CLOCK_MONOTONIC, one warm-up, then --runs\n"
                      "timed runs; median and max. workspace_bytes: the library's sizing function "
                      "plus the outputs\n"
                      "the stage writes. With --budget, target_ms = host ms x scale and share = "
@@ -805,6 +1098,7 @@ static int profile_world(const profile_params_t *p, world_t *w, char *err, size_
     w->max_range_m = p->max_range_m;
     w->stride = p->stride;
     w->seed = p->seed;
+    w->dem_path = p->dem_path;
     if (world_init(w, err, err_len) != 0 || world_prime(w, err, err_len) != 0) {
         return CLI_BAD_INPUT;
     }
@@ -823,7 +1117,11 @@ static int profile_time(const profile_params_t *p, profile_result_t *r, char *er
     }
     for (s = 0; s < ST_COUNT; ++s) {
         long k;
-        trn_status_t st = run_stage(&r->w, (stage_t)s); /* warm-up */
+        trn_status_t st;
+        if (s == ST_H_REST) {
+            continue; /* derived below */
+        }
+        st = run_stage(&r->w, (stage_t)s); /* warm-up */
         for (k = 0; k < runs && st == TRN_OK; ++k) {
             double t0 = now_ms();
             st = run_stage(&r->w, (stage_t)s);
@@ -839,6 +1137,15 @@ static int profile_time(const profile_params_t *p, profile_result_t *r, char *er
         r->mx[s] = t[runs - 1];
     }
     free(t);
+    /* height_rest: the whole localization minus the parts' medians */
+    r->med[ST_H_REST] = r->med[ST_H_LOCALIZE];
+    r->mx[ST_H_REST] = r->mx[ST_H_LOCALIZE];
+    for (s = 0; s < ST_COUNT; ++s) {
+        if (IS_H_PART(s)) {
+            r->med[ST_H_REST] -= r->med[s];
+            r->mx[ST_H_REST] -= r->med[s];
+        }
+    }
     return CLI_OK;
 }
 
@@ -931,8 +1238,19 @@ static void profile_report_json(const profile_params_t *p, const profile_result_
     json_int(&j, "local_points", (long long)r->w.n_pts);
     json_int(&j, "runs", p->runs);
     json_int(&j, "seed", (long long)p->seed);
-    json_num(&j, "cell_m", 0.1);
+    json_num(&j, "cell_m", r->w.cell_m);
+    if (p->dem_path != NULL) {
+        json_str(&j, "dem", p->dem_path);
+    }
     json_int(&j, "height_bins", r->w.cfg.terrain.nz);
+    json_int(&j, "height_matcher_bins", r->w.hcfg.terrain.nz);
+    json_int(&j, "height_matcher_poses_scored", (long long)r->w.hres.stats.poses_scored);
+    json_str(&j, "height_matcher_status", trn_strerror(r->w.hres_st));
+    json_num(&j, "height_matcher_error_cells",
+             hypot(r->w.hres.x - r->w.truth_x, r->w.hres.y - r->w.truth_y));
+    json_num(&j, "height_matcher_failure_probability", r->w.hres.failure_probability);
+    json_num(&j, "height_matcher_noise_scale", r->w.hres.noise_scale);
+    json_num(&j, "height_failure_stage_probability", r->w.hfail);
     json_int(&j, "stack_limit_bytes", TRN_STACK_LIMIT_BYTES);
     json_obj_end(&j);
     if (p->budget_path != NULL) {
@@ -954,12 +1272,19 @@ static void profile_report_text(const profile_params_t *p, const profile_result_
 {
     const pb_budget_t *b = &r->budget;
     int s;
-    printf("profile   map %ld x %ld cells of 0.1 m, %d bins; local %ld x %ld (%zu points); window "
+    printf("profile   map %ld x %ld cells of %g m, %d bins; local %ld x %ld (%zu points); window "
            "+-%ld cells "
-           "(%ld poses); %zu candidates (range <= %g m, stride %ld); seed %llu; %ld runs\n",
-           p->n, p->n, (int)r->w.cfg.terrain.nz, p->nl, p->nl, r->w.n_pts, p->win_cells,
-           (2 * p->win_cells + 1) * (2 * p->win_cells + 1), r->w.sel.n_candidates, p->max_range_m,
-           p->stride, (unsigned long long)p->seed, p->runs);
+           "(%ld poses); %zu candidates (range <= %g m, stride %ld); %s%s%s%llu; %ld runs\n",
+           p->n, p->n, r->w.cell_m, (int)r->w.cfg.terrain.nz, p->nl, p->nl, r->w.n_pts,
+           p->win_cells, (2 * p->win_cells + 1) * (2 * p->win_cells + 1), r->w.sel.n_candidates,
+           p->max_range_m * r->w.cell_m / 0.1, p->stride, p->dem_path != NULL ? "dem " : "",
+           p->dem_path != NULL ? p->dem_path : "", p->dem_path != NULL ? ", seed " : "seed ",
+           (unsigned long long)p->seed, p->runs);
+    printf("heights   the default localizer (trn_map_cfg_auto, %d bins): %s, error %.2f cells, "
+           "failure probability %.3g, noise scale %.3g (not 1: searched twice)\n",
+           (int)r->w.hcfg.terrain.nz, trn_strerror(r->w.hres_st),
+           hypot(r->w.hres.x - r->w.truth_x, r->w.hres.y - r->w.truth_y),
+           r->w.hres.failure_probability, r->w.hres.noise_scale);
     if (p->budget_path != NULL) {
         printf(
             "budget    %s, scale %g (target ms = host ms x scale; share = worst target / budget)\n",
@@ -976,7 +1301,7 @@ static void profile_report_text(const profile_params_t *p, const profile_result_
         char irs[32] = "-";
         stage_bytes(&r->w, (stage_t)s, &sc, &tot);
         if (r->have_ir[s]) {
-            snprintf(irs, sizeof irs, "%llu", r->ir[s]);
+            snprintf(irs, sizeof irs, "%lld", r->ir[s]);
         }
         printf("%-19s %10.3f %10.3f %13zu %15s", k_names[s], r->med[s], r->mx[s], tot, irs);
         if (p->budget_path != NULL) {
