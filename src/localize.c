@@ -492,9 +492,8 @@ size_t trn_localize_dem_workspace_bytes(const trn_map_t *map, int32_t width, int
  * the reference pose (cx, cy); its filtered height is its height minus the
  * global low-pass there minus the mean of that difference over the seen
  * cells. A cell with no global low-pass under it is left unseen. */
-trn_status_t trn_loc_highpass_by_map_(const trn_map_t *map, const trn_grid_f32_t *local,
-                                      int32_t rx, int32_t ry, int32_t cx, int32_t cy,
-                                      trn_grid_f32_t *out)
+trn_status_t trn_loc_highpass_by_map_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
+                                      int32_t ry, int32_t cx, int32_t cy, trn_grid_f32_t *out)
 {
     int32_t x, y;
     double sum = 0.0, ref = 0.0;
@@ -861,7 +860,7 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
     }
     if (map->cfg.local_highpass == TRN_LOCAL_HP_MAP) {
         st = trn_loc_highpass_by_map_(map, local_dem, rover_x, rover_y, (win->x0 + win->x1) / 2,
-                             (win->y0 + win->y1) / 2, &hp);
+                                      (win->y0 + win->y1) / 2, &hp);
     } else {
         st = trn_highpass(local_dem, &map->cfg.terrain, &hp, b + lay.hpws, lay.pts - lay.hpws);
     }
@@ -878,8 +877,8 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
         (out->ix != (win->x0 + win->x1) / 2 || out->iy != (win->y0 + win->y1) / 2)) {
         /* Second pass: the local filter referred to the pose just found
          * (the low-pass's curvature times the prior's error is gone there). */
-        if ((st = trn_loc_highpass_by_map_(map, local_dem, rover_x, rover_y, out->ix, out->iy, &hp)) !=
-                TRN_OK ||
+        if ((st = trn_loc_highpass_by_map_(map, local_dem, rover_x, rover_y, out->ix, out->iy,
+                                           &hp)) != TRN_OK ||
             (st = trn_occupancy_points(&hp, &map->cfg.terrain, rover_x, rover_y, pts, max_points,
                                        &n)) != TRN_OK ||
             (st = trn_points_order(pts, n, map->cfg.terrain.nz)) != TRN_OK) {

@@ -43,8 +43,8 @@ size_t trn_localize_dem_heading_workspace_bytes(const trn_map_t *map, int32_t wi
                                                 size_t max_points, const trn_window_t *win)
 {
     head_layout_t lay;
-    if (map == NULL || win == NULL || !trn_loc_map_ok_(map) || map->cfg.match == TRN_MATCH_HEIGHTS ||
-        !trn_loc_window_ok_(map, win) || max_points == 0u ||
+    if (map == NULL || win == NULL || !trn_loc_map_ok_(map) ||
+        map->cfg.match == TRN_MATCH_HEIGHTS || !trn_loc_window_ok_(map, win) || max_points == 0u ||
         max_points > (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM) {
         return 0u;
     }
@@ -79,7 +79,7 @@ trn_status_t trn_localize_dem_heading_prep_(const trn_map_t *map, const trn_grid
     }
     if (map->cfg.local_highpass == TRN_LOCAL_HP_MAP) {
         st = trn_loc_highpass_by_map_(map, local_dem, rover_x, rover_y, (win->x0 + win->x1) / 2,
-                             (win->y0 + win->y1) / 2, &hp);
+                                      (win->y0 + win->y1) / 2, &hp);
     } else {
         st = trn_highpass(local_dem, &map->cfg.terrain, &hp, b + lay.hpws, lay.pts - lay.hpws);
     }

@@ -60,9 +60,8 @@ int trn_loc_map_ok_(const trn_map_t *map);
 
 /* Local high-pass against the global low-pass (TRN_LOCAL_HP_MAP) at the
  * reference pose (cx, cy) (src/localize.c; see there). */
-trn_status_t trn_loc_highpass_by_map_(const trn_map_t *map, const trn_grid_f32_t *local,
-                                      int32_t rx, int32_t ry, int32_t cx, int32_t cy,
-                                      trn_grid_f32_t *out);
+trn_status_t trn_loc_highpass_by_map_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
+                                      int32_t ry, int32_t cx, int32_t cy, trn_grid_f32_t *out);
 
 /* The workspace bytes of trn_localize_dem_heading for a TRN_MATCH_HEIGHTS map
  * (trn_localize_dem_heading_workspace_bytes_cfg's part in
