@@ -6,6 +6,7 @@
 #include <stdlib.h>
 
 #include "likelihood_int.h"
+#include "localize_int.h"
 #include "ws.h"
 
 /* Largest |x|, |y| of a point turned: sqrt(2) x 16383 < 32767. */
@@ -163,9 +164,6 @@ size_t trn_localize_heading_workspace_bytes(const trn_map_t *map, size_t n, cons
     return heading_carve(map, n, win, NULL, &buf, &fit, &hs, &search, &sb);
 }
 
-/* k of the i-th heading searched: 0, -1, 1, -2, 2, ... */
-static int32_t step_of(int32_t i) { return (i % 2 == 1) ? -(i + 1) / 2 : i / 2; }
-
 /* The points turned to heading step k, ordered for the search. Neither
  * call can fail: trn_localize_points_heading checked every point's offsets
  * and bins first, and n is below UINT32_MAX. */
@@ -251,7 +249,7 @@ static trn_status_t search_all(hsearch_t *h, int32_t seed, int64_t floor, trn_be
     int found = 0;
     search_one(h, seed, floor, &found, best, best_k, stats);
     for (i = 0; i <= 2 * h->kk; ++i) {
-        const int32_t k = step_of(i);
+        const int32_t k = trn_heading_step_of_(i);
         int64_t p = 0; /* ordering proxy; all equal when the seed found nothing */
         if (k == seed) {
             continue;
@@ -296,7 +294,7 @@ static void keep_all(hsearch_t *h, trn_bb_keep_t *kp, trn_search_stats_t *stats)
     int32_t i, m = 0;
     keep_one(h, 0, kp, stats);
     for (i = 1; i <= 2 * h->kk; ++i) {
-        const int32_t k = step_of(i);
+        const int32_t k = trn_heading_step_of_(i);
         int64_t p = 0;
         turn(h->pts, h->n, h->cfg, h->step, k, h->map->dist.nz, h->buf);
         (void)trn_score_pose(&h->map->dist, &h->map->lnp, h->buf, h->n, kp->best.x, kp->best.y, &p);

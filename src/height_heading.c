@@ -21,15 +21,6 @@ typedef struct {
     int32_t x, y;
 } toff_t;
 
-/* Height noise variance of local cell (x, y) (as refine.c). */
-static double noise_var(const trn_refine_cfg_t *cfg, int32_t x, int32_t y, int32_t rx, int32_t ry)
-{
-    double px = (double)(x - rx), py = (double)(y - ry);
-    double r_m = (double)cfg->cell_m * sqrt(px * px + py * py);
-    double sd = (double)cfg->noise_m + (double)cfg->noise_k_per_m * r_m * r_m;
-    return sd * sd;
-}
-
 static int rcfg_ok(const trn_refine_cfg_t *cfg)
 {
     return cfg->cell_m > 0.0f && cfg->cell_m <= 1000.0f && cfg->noise_m > 0.0f &&
@@ -201,9 +192,6 @@ static double pose_ll(const score_t *s, int32_t px, int32_t py, double a, double
     return ll;
 }
 
-/* k of the i-th heading in the tie order 0, -1, +1, -2, +2, ... */
-static int32_t step_of(int32_t i) { return (i % 2 == 1) ? -(i + 1) / 2 : i / 2; }
-
 /* The offsets turned by angle (trn_points_rotate's rounding). */
 static void turn_offsets(const obs_t *obs, size_t n, double angle, toff_t *t)
 {
@@ -230,7 +218,7 @@ static size_t gather(const trn_grid_f32_t *local, int32_t rx, int32_t ry,
                 continue;
             }
             obs[n].h = h;
-            obs[n].v = noise_var(cfg, x, y, rx, ry);
+            obs[n].v = trn_refine_noise_var_(cfg, x, y, rx, ry);
             obs[n].ox = x - rx;
             obs[n].oy = y - ry;
             ++n;
@@ -316,7 +304,7 @@ trn_status_t trn_height_search_heading(const trn_grid_f32_t *global, const trn_g
     best->step_rad = step;
     best->half_steps = kk;
     for (i = 0; i < 2 * kk + 1; ++i) {
-        const int32_t k = step_of(i);
+        const int32_t k = trn_heading_step_of_(i);
         turn_offsets(obs, sc.n, hcfg->center_rad + (double)k * step, tab);
         search_heading(&sc, win, k, (double)inlier_prob, kd,
                        ll_grid != NULL ? ll_grid + (size_t)(k + kk) * poses : NULL, &found, best);
@@ -367,27 +355,14 @@ static int is_2d(const trn_heading_cfg_t *cfg)
     return cfg->window_rad == 0.0 && cfg->center_rad == 0.0;
 }
 
-size_t trn_localize_dem_heading_workspace_bytes_cfg(const trn_map_t *map,
-                                                    const trn_grid_f32_t *local_dem,
-                                                    int32_t rover_x, int32_t rover_y,
-                                                    size_t max_points, const trn_window_t *win,
-                                                    const trn_heading_cfg_t *cfg)
+size_t trn_localize_heights3_bytes_(const trn_map_t *map, const trn_grid_f32_t *local_dem,
+                                    int32_t rover_x, int32_t rover_y, const trn_window_t *win,
+                                    const trn_heading_cfg_t *cfg, size_t dem)
 {
     hh_layout_t lay;
     double step;
     int32_t kk;
-    size_t dem;
-    if (map == NULL || local_dem == NULL || win == NULL || cfg == NULL ||
-        trn_grid_f32_check(local_dem) != TRN_OK) {
-        return 0u;
-    }
-    if (map->cfg.match != TRN_MATCH_HEIGHTS) {
-        return trn_localize_dem_heading_workspace_bytes(map, local_dem->width, local_dem->height,
-                                                        max_points, win);
-    }
-    dem = trn_localize_dem_workspace_bytes(map, local_dem->width, local_dem->height, max_points,
-                                           win);
-    if (dem == 0u || map->heights.data == NULL || !window_in(map, win) ||
+    if (map->heights.data == NULL || !window_in(map, win) ||
         trn_height_heading_steps(local_dem, rover_x, rover_y, cfg, &step, &kk) != TRN_OK) {
         return 0u;
     }
@@ -396,34 +371,6 @@ size_t trn_localize_dem_heading_workspace_bytes_cfg(const trn_map_t *map,
     }
     hh_layout(local_dem, win, kk, &lay);
     return lay.total;
-}
-
-trn_status_t trn_localize_heights2d_(const trn_map_t *map, const trn_grid_f32_t *local,
-                                     int32_t rover_x, int32_t rover_y, size_t max_points,
-                                     const trn_window_t *win, const trn_heading_cfg_t *cfg,
-                                     void *ws, size_t ws_bytes, trn_heading_result_t *out)
-{
-    trn_status_t st;
-    int32_t p;
-    if (out == NULL) { /* trn_localize_dem checks the rest */
-        return TRN_E_NULL;
-    }
-    if (!(cfg->step_rad >= 0.0 && cfg->step_rad <= TRN_HEADING_MAX_WINDOW_RAD)) {
-        return TRN_E_ARG; /* centre and window are 0 here */
-    }
-    st = trn_localize_dem(map, local, rover_x, rover_y, max_points, win, ws, ws_bytes, &out->loc);
-    for (p = 0; p < 9; ++p) {
-        out->cov3[p] = 0.0;
-    }
-    out->cov3[0] = out->loc.cov_m2[0];
-    out->cov3[4] = out->loc.cov_m2[1];
-    out->cov3[1] = out->cov3[3] = out->loc.cov_m2[2];
-    out->heading_rad = 0.0;
-    out->sigma_heading_rad = 0.0;
-    out->step_rad = 0.0; /* no heading searched */
-    out->half_steps = 0;
-    out->best_step = 0;
-    return st;
 }
 
 /* The search's answer into out, before the refinement. */

@@ -317,7 +317,7 @@ trn_status_t trn_map_cfg_auto(trn_map_cfg_t *cfg, const trn_grid_f32_t *dem, flo
     return TRN_OK;
 }
 
-static int map_ok(const trn_map_t *map)
+int trn_loc_map_ok_(const trn_map_t *map)
 {
     return trn_map_cfg_check(&map->cfg) == TRN_OK && trn_vol_u8_check(&map->dist) == TRN_OK &&
            map->pyr.nlevels == map->cfg.levels && map->lnp.cap == map->cfg.cap &&
@@ -330,17 +330,10 @@ static int map_ok(const trn_map_t *map)
 
 size_t trn_localize_workspace_bytes(const trn_map_t *map, const trn_window_t *win)
 {
-    if (map == NULL || win == NULL || !map_ok(map)) {
+    if (map == NULL || win == NULL || !trn_loc_map_ok_(map)) {
         return 0u;
     }
     return trn_search_bb_workspace_bytes(&map->pyr, win);
-}
-
-/* The window must be non-empty and inside the map (checked before any work). */
-static int window_ok(const trn_map_t *map, const trn_window_t *win)
-{
-    return win->x0 <= win->x1 && win->y0 <= win->y1 && win->x0 >= 0 && win->y0 >= 0 &&
-           win->x1 < map->dist.nx && win->y1 < map->dist.ny;
 }
 
 static double nats(int64_t score) { return (double)score / (double)TRN_LNP_SCALE; }
@@ -370,10 +363,10 @@ trn_status_t trn_localize_points(const trn_map_t *map, const trn_point_t *pts, s
     if (map == NULL || pts == NULL || win == NULL || ws == NULL || out == NULL) {
         return TRN_E_NULL;
     }
-    if (!map_ok(map)) {
+    if (!trn_loc_map_ok_(map)) {
         return TRN_E_ARG;
     }
-    if (!window_ok(map, win)) {
+    if (!trn_loc_window_ok_(map, win)) {
         return TRN_E_RANGE;
     }
     if ((st = trn_ws_check(ws, ws_bytes, trn_localize_workspace_bytes(map, win))) != TRN_OK) {
@@ -499,8 +492,8 @@ size_t trn_localize_dem_workspace_bytes(const trn_map_t *map, int32_t width, int
  * the reference pose (cx, cy); its filtered height is its height minus the
  * global low-pass there minus the mean of that difference over the seen
  * cells. A cell with no global low-pass under it is left unseen. */
-static trn_status_t highpass_by_map(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
-                                    int32_t ry, int32_t cx, int32_t cy, trn_grid_f32_t *out)
+trn_status_t trn_loc_highpass_by_map_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
+                                      int32_t ry, int32_t cx, int32_t cy, trn_grid_f32_t *out)
 {
     int32_t x, y;
     double sum = 0.0, ref = 0.0;
@@ -544,35 +537,6 @@ static trn_status_t highpass_by_map(const trn_map_t *map, const trn_grid_f32_t *
         }
     }
     return TRN_OK;
-}
-
-/* The refinement in out->refinement becomes the answer: pose, covariance,
- * sigmas and the misfit flag. */
-void trn_loc_take_refinement_(const trn_map_t *map, trn_loc_result_t *out)
-{
-    double cell = (double)map->cfg.terrain.cell_m;
-    /* the configured noise, not the rescaled one: a rescale must not make
-     * the flag more lenient */
-    double lim = map->roughness_m > (double)map->cfg.noise_m ? map->roughness_m
-                                                             : (double)map->cfg.noise_m;
-    out->refined = 1;
-    out->misfit = out->refinement.model_m > TRN_MISFIT_ROUGHNESS * lim ? 1 : 0;
-    out->x = out->refinement.x;
-    out->y = out->refinement.y;
-    out->cov_m2[0] = out->refinement.cov_cells[0] * cell * cell;
-    out->cov_m2[1] = out->refinement.cov_cells[1] * cell * cell;
-    out->cov_m2[2] = out->refinement.cov_cells[2] * cell * cell;
-    out->sigma_x_m = sqrt(out->cov_m2[0]);
-    out->sigma_y_m = sqrt(out->cov_m2[1]);
-    out->rho = out->cov_m2[2] / (out->sigma_x_m * out->sigma_y_m);
-}
-
-void trn_loc_refine_cfg_(const trn_map_t *map, const trn_loc_result_t *out, trn_refine_cfg_t *rc)
-{
-    rc->cell_m = map->cfg.terrain.cell_m;
-    rc->noise_m = (float)((double)map->cfg.noise_m * out->noise_scale);
-    rc->noise_k_per_m = (float)((double)map->cfg.noise_k_per_m * out->noise_scale);
-    rc->inlier_prob = map->cfg.inlier_prob;
 }
 
 /* 1 if the integer pose (sx, sy) is a start for the refinement beside the
@@ -620,33 +584,6 @@ static void refine_result(const trn_map_t *map, const trn_grid_f32_t *local, int
         return;
     }
     trn_loc_take_refinement_(map, out);
-}
-
-
-int trn_loc_noise_rejected_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
-                            int32_t ry, const trn_refine_t *at, double heading_rad,
-                            const trn_refine_cfg_t *rc, double *scale)
-{
-    double k2, sd;
-    if (trn_refine_noise_scale(&map->heights, local, rx, ry, at, heading_rad, rc, &k2, &sd) !=
-        TRN_OK) {
-        return 0;
-    }
-    if (k2 > 1.0) {
-        /* a rescale up: only as far as the neighbours' differences support */
-        int32_t pairs = 0;
-        const double kd = trn_refine_noise_scale_diff_(&map->heights, local, rx, ry, at,
-                                                       heading_rad, rc, k2,
-                                                       at->model_m * at->model_m, &pairs);
-        if (pairs >= 8 && kd < k2) {
-            k2 = kd > 1.0 ? kd : 1.0;
-        }
-    }
-    if (!(fabs(k2 - 1.0) > TRN_NOISE_SCALE_Z * sd)) {
-        return 0;
-    }
-    *scale = sqrt(k2);
-    return 1;
 }
 
 /* 1 (out->noise_scale set) if the residuals at the answer reject the noise
@@ -758,7 +695,8 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
                                      trn_loc_result_t *out)
 {
     trn_status_t st;
-    trn_height_best_t best, second;
+    trn_height_best_t best; /* the search's best, then the competitor (one frame slot:
+                               the stack limit of docs/architecture.md) */
     trn_refine_cfg_t rc;
     trn_exclusion_t ex;
     trn_hb_t *hb = NULL;
@@ -823,7 +761,7 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
     out->exclusion_cells = radius;
     if (hb != NULL) {
         /* the bounded search: the competitor exactly, the masses within err */
-        st = bounded_mass(hb, &ex, infl, &second, &err);
+        st = bounded_mass(hb, &ex, infl, &best, &err);
         out->stats.poses_scored = hb->evals;
         out->stats.blocks_bounded = hb->bounds;
         /* ... and the sums' rounding (another order than the grid's, of
@@ -832,7 +770,7 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
     } else {
         /* every pose was scored once: the competitor and the masses come
          * from the stored grid */
-        st = trn_height_mass(ll_grid, win, &ex, infl, &second);
+        st = trn_height_mass(ll_grid, win, &ex, infl, &best);
     }
     if (st == TRN_OK) {
         /* The posterior mass outside the zone around the peak (uniform prior
@@ -841,7 +779,7 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
          * (ll_inflation, ungated): correlated residuals make ln L differences
          * too large by about that factor (a composite likelihood's
          * adjustment). */
-        double pf = fmax(exp(second.lse_out - second.lse_all),
+        double pf = fmax(exp(best.lse_out - best.lse_all),
                          out->refined ? trn_loc_basins_failure_(bs, infl, out) : 0.0);
         if (out->refined) {
             /* ... and the answer's own peak's: mass along its major axis
@@ -850,9 +788,9 @@ static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t 
             pf = fmax(pf, trn_loc_peak_failure_(map, local, rx, ry, win, infl, out));
         }
         out->has_second = 1;
-        out->second_x = second.x;
-        out->second_y = second.y;
-        out->ll_second = second.ll;
+        out->second_x = best.x;
+        out->second_y = best.y;
+        out->ll_second = best.ll;
         out->failure_probability = pf < 0.0 ? 0.0 : pf > 1.0 ? 1.0 : pf;
     } else if (st == TRN_E_NODATA) {
         no_competitor(out);
@@ -893,13 +831,13 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
     if ((st = trn_grid_f32_check(local_dem)) != TRN_OK) {
         return st;
     }
-    if (!map_ok(map)) {
+    if (!trn_loc_map_ok_(map)) {
         return TRN_E_ARG;
     }
     if (max_points == 0u || max_points > (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM) {
         return TRN_E_ARG;
     }
-    if (!window_ok(map, win) ||
+    if (!trn_loc_window_ok_(map, win) ||
         !loc_layout(map, local_dem->width, local_dem->height, max_points, win, &lay)) {
         return TRN_E_RANGE;
     }
@@ -921,8 +859,8 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
         return st;
     }
     if (map->cfg.local_highpass == TRN_LOCAL_HP_MAP) {
-        st = highpass_by_map(map, local_dem, rover_x, rover_y, (win->x0 + win->x1) / 2,
-                             (win->y0 + win->y1) / 2, &hp);
+        st = trn_loc_highpass_by_map_(map, local_dem, rover_x, rover_y, (win->x0 + win->x1) / 2,
+                                      (win->y0 + win->y1) / 2, &hp);
     } else {
         st = trn_highpass(local_dem, &map->cfg.terrain, &hp, b + lay.hpws, lay.pts - lay.hpws);
     }
@@ -939,8 +877,8 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
         (out->ix != (win->x0 + win->x1) / 2 || out->iy != (win->y0 + win->y1) / 2)) {
         /* Second pass: the local filter referred to the pose just found
          * (the low-pass's curvature times the prior's error is gone there). */
-        if ((st = highpass_by_map(map, local_dem, rover_x, rover_y, out->ix, out->iy, &hp)) !=
-                TRN_OK ||
+        if ((st = trn_loc_highpass_by_map_(map, local_dem, rover_x, rover_y, out->ix, out->iy,
+                                           &hp)) != TRN_OK ||
             (st = trn_occupancy_points(&hp, &map->cfg.terrain, rover_x, rover_y, pts, max_points,
                                        &n)) != TRN_OK ||
             (st = trn_points_order(pts, n, map->cfg.terrain.nz)) != TRN_OK) {
@@ -955,147 +893,4 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
         st = out->refined && !out->misfit ? TRN_OK : TRN_E_ILLCOND;
     }
     return accept(map, st, out);
-}
-
-/* Layout of trn_localize_dem_heading's workspace: [hp grid | highpass ws |
- * points | trn_localize_points_heading's workspace]. */
-typedef struct {
-    size_t hp, hpws, pts, heading, total;
-} head_layout_t;
-
-static int head_layout(const trn_map_t *map, int32_t w, int32_t h, size_t max_points,
-                       const trn_window_t *win, head_layout_t *lay)
-{
-    size_t hpws = trn_highpass_workspace_bytes(w, h);
-    size_t hw = trn_localize_heading_workspace_bytes(map, max_points, win);
-    trn_ws_t ws;
-    if (hpws == 0u || hw == 0u) {
-        return 0;
-    }
-    trn_ws_begin(&ws, NULL);
-    lay->hp = trn_ws_offset(&ws, (size_t)w * (size_t)h * sizeof(float));
-    lay->hpws = trn_ws_offset(&ws, hpws);
-    lay->pts = trn_ws_offset(&ws, max_points * sizeof(trn_point_t));
-    lay->heading = trn_ws_offset(&ws, hw);
-    lay->total = ws.total;
-    return 1;
-}
-
-size_t trn_localize_dem_heading_workspace_bytes(const trn_map_t *map, int32_t width, int32_t height,
-                                                size_t max_points, const trn_window_t *win)
-{
-    head_layout_t lay;
-    if (map == NULL || win == NULL || !map_ok(map) || map->cfg.match == TRN_MATCH_HEIGHTS ||
-        !window_ok(map, win) || max_points == 0u ||
-        max_points > (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM) {
-        return 0u;
-    }
-    return head_layout(map, width, height, max_points, win, &lay) ? lay.total : 0u;
-}
-
-/* trn_localize_dem_heading's voxel path up to the search: window, layout,
- * workspace, the local high-pass and occupancy; the points' count and the
- * offsets of the points and of the search's workspace. Out of line: the
- * search's stack does not carry this frame. */
-trn_status_t trn_localize_dem_heading_prep_(const trn_map_t *map, const trn_grid_f32_t *local_dem,
-                                            int32_t rover_x, int32_t rover_y, size_t max_points,
-                                            const trn_window_t *win, void *ws, size_t ws_bytes,
-                                            size_t *n, size_t at[2])
-{
-    trn_status_t st;
-    head_layout_t lay;
-    uint8_t *b = (uint8_t *)ws;
-    trn_grid_f32_t hp;
-
-    if (!window_ok(map, win) ||
-        !head_layout(map, local_dem->width, local_dem->height, max_points, win, &lay)) {
-        return TRN_E_RANGE;
-    }
-    if ((st = trn_ws_check(ws, ws_bytes, lay.total)) != TRN_OK) {
-        return st;
-    }
-    if ((st = trn_grid_f32_init(&hp, (float *)(void *)(b + lay.hp),
-                                (size_t)local_dem->width * (size_t)local_dem->height,
-                                local_dem->width, local_dem->height)) != TRN_OK) {
-        return st;
-    }
-    if (map->cfg.local_highpass == TRN_LOCAL_HP_MAP) {
-        st = highpass_by_map(map, local_dem, rover_x, rover_y, (win->x0 + win->x1) / 2,
-                             (win->y0 + win->y1) / 2, &hp);
-    } else {
-        st = trn_highpass(local_dem, &map->cfg.terrain, &hp, b + lay.hpws, lay.pts - lay.hpws);
-    }
-    at[0] = lay.pts;
-    at[1] = lay.heading;
-    return st != TRN_OK ? st
-                        : trn_occupancy_points(&hp, &map->cfg.terrain, rover_x, rover_y,
-                                               (trn_point_t *)(void *)(b + lay.pts), max_points, n);
-}
-
-/* trn_localize_dem_heading with a voxel map, after its argument checks (out
- * of line: the height map's W = 0 path, trn_localize_dem, does not carry
- * this frame). */
-trn_status_t trn_localize_dem_heading_voxel_(const trn_map_t *map, const trn_grid_f32_t *local_dem,
-                                             int32_t rover_x, int32_t rover_y, size_t max_points,
-                                             const trn_window_t *win, const trn_heading_cfg_t *cfg,
-                                             void *ws, size_t ws_bytes, trn_heading_result_t *out)
-{
-    trn_status_t st;
-    uint8_t *b = (uint8_t *)ws;
-    size_t n = 0, at[2];
-
-    if ((st = trn_localize_dem_heading_prep_(map, local_dem, rover_x, rover_y, max_points, win, ws,
-                                             ws_bytes, &n, at)) != TRN_OK) {
-        return st;
-    }
-    return trn_localize_points_heading(map, (const trn_point_t *)(void *)(b + at[0]), n, win, cfg,
-                                       b + at[1], ws_bytes - at[1], out);
-}
-
-/* trn_localize_dem_heading but W = 0 at centre 0 with a height map (out of
- * line: that path, trn_localize_dem, does not carry this frame). */
-trn_status_t trn_localize_dem_heading_checked_(const trn_map_t *map,
-                                               const trn_grid_f32_t *local_dem, int32_t rover_x,
-                                               int32_t rover_y, size_t max_points,
-                                               const trn_window_t *win,
-                                               const trn_heading_cfg_t *cfg, void *ws,
-                                               size_t ws_bytes, trn_heading_result_t *out)
-{
-    trn_status_t st;
-
-    if (map == NULL || local_dem == NULL || win == NULL || cfg == NULL || ws == NULL ||
-        out == NULL) {
-        return TRN_E_NULL;
-    }
-    if ((st = trn_grid_f32_check(local_dem)) != TRN_OK) {
-        return st;
-    }
-    if (!map_ok(map) || (map->cfg.match == TRN_MATCH_VOXEL && map->cfg.refine != 0) ||
-        max_points == 0u || max_points > (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM) {
-        return TRN_E_ARG;
-    }
-    out->loc.noise_scale = 1.0;                /* the voxel path keeps the configured model */
-    if (map->cfg.match == TRN_MATCH_HEIGHTS) { /* src/height_heading.c */
-        return trn_localize_heights3_(map, local_dem, rover_x, rover_y, win, cfg, ws, ws_bytes,
-                                      out);
-    }
-    return trn_localize_dem_heading_voxel_(map, local_dem, rover_x, rover_y, max_points, win, cfg,
-                                           ws, ws_bytes, out);
-}
-
-trn_status_t trn_localize_dem_heading(const trn_map_t *map, const trn_grid_f32_t *local_dem,
-                                      int32_t rover_x, int32_t rover_y, size_t max_points,
-                                      const trn_window_t *win, const trn_heading_cfg_t *cfg,
-                                      void *ws, size_t ws_bytes, trn_heading_result_t *out)
-{
-    /* Two paths, each a tail call so that neither's stack carries the
-     * other's frame: a height map with W = 0 at centre 0 is trn_localize_dem
-     * itself (src/height_heading.c); everything else is checked here. */
-    if (map != NULL && cfg != NULL && map->cfg.match == TRN_MATCH_HEIGHTS &&
-        cfg->window_rad == 0.0 && cfg->center_rad == 0.0) {
-        return trn_localize_heights2d_(map, local_dem, rover_x, rover_y, max_points, win, cfg, ws,
-                                       ws_bytes, out);
-    }
-    return trn_localize_dem_heading_checked_(map, local_dem, rover_x, rover_y, max_points, win, cfg,
-                                             ws, ws_bytes, out);
 }

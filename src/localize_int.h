@@ -1,8 +1,11 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* localize_int.h - internal: the height matcher's far basins
- * (src/localize_basins.c), shared with src/localize.c. A separate file so
- * that its frames do not add to trn_localize_dem's (no inlining across
- * files; the stack limit of docs/architecture.md). */
+/* localize_int.h - internal to the localization stack (docs/architecture.md,
+ * "The localization stack"): the height matcher's far basins
+ * (src/localize_basins.c), its shared helpers (src/localize_common.c) and
+ * the parts of src/localize.c that the entry over heading
+ * (src/localize_heading.c) uses. Separate files so that their frames do not
+ * add to trn_localize_dem's (no inlining across files; the stack limit of
+ * docs/architecture.md) and so that calls go one way. */
 #ifndef TRN_LOCALIZE_INT_H
 #define TRN_LOCALIZE_INT_H
 
@@ -28,6 +31,13 @@ typedef struct {
                                   edge (trn_loc_basin_wins_ 2) */
 } trn_loc_basins_t;
 
+/* The signed heading step of the i-th heading searched: 0, -1, 1, -2, 2, ...
+ * (the searches over heading, src/heading.c and src/height_heading.c). */
+static inline int32_t trn_heading_step_of_(int32_t i)
+{
+    return (i % 2 == 1) ? -(i + 1) / 2 : i / 2;
+}
+
 /* 1 if pose (x, y) lies on the border of window win (the likelihood may
  * rise beyond it: the height matchers' on_window_edge), else 0. */
 static inline int32_t trn_loc_on_edge_(const trn_window_t *win, int32_t x, int32_t y)
@@ -35,11 +45,39 @@ static inline int32_t trn_loc_on_edge_(const trn_window_t *win, int32_t x, int32
     return (x == win->x0 || x == win->x1 || y == win->y0 || y == win->y1) ? 1 : 0;
 }
 
+/* The window is non-empty and inside the map (checked before any work;
+ * src/localize.c and src/localize_heading.c). */
+static inline int trn_loc_window_ok_(const trn_map_t *map, const trn_window_t *win)
+{
+    return win->x0 <= win->x1 && win->y0 <= win->y1 && win->x0 >= 0 && win->y0 >= 0 &&
+           win->x1 < map->dist.nx && win->y1 < map->dist.ny;
+}
+
+/* 1 if the prepared map is consistent: its configuration passes
+ * trn_map_cfg_check and its parts have that configuration's shapes
+ * (src/localize.c). */
+int trn_loc_map_ok_(const trn_map_t *map);
+
+/* Local high-pass against the global low-pass (TRN_LOCAL_HP_MAP) at the
+ * reference pose (cx, cy) (src/localize.c; see there). */
+trn_status_t trn_loc_highpass_by_map_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
+                                      int32_t ry, int32_t cx, int32_t cy, trn_grid_f32_t *out);
+
+/* The workspace bytes of trn_localize_dem_heading for a TRN_MATCH_HEIGHTS map
+ * (trn_localize_dem_heading_workspace_bytes_cfg's part in
+ * src/height_heading.c): dem (trn_localize_dem's bytes, not 0) when the
+ * heading window is 0 at centre 0, the search over heading's layout
+ * otherwise; 0 when the map has no heights, the window is not inside it or
+ * the heading configuration is refused. */
+size_t trn_localize_heights3_bytes_(const trn_map_t *map, const trn_grid_f32_t *local_dem,
+                                    int32_t rover_x, int32_t rover_y, const trn_window_t *win,
+                                    const trn_heading_cfg_t *cfg, size_t dem);
+
 /* Bytes of a trn_loc_basins_t (the workspace's share). */
 size_t trn_loc_basins_bytes_(void);
 
 /* The refinement in out->refinement becomes the answer: pose, covariance,
- * sigmas and the misfit flag (src/localize.c). */
+ * sigmas and the misfit flag (src/localize_common.c). */
 void trn_loc_take_refinement_(const trn_map_t *map, trn_loc_result_t *out);
 /* 1 if the residuals at `at` (the local map turned by heading_rad) reject
  * the noise model rc by more than TRN_NOISE_SCALE_Z sds of
@@ -48,11 +86,12 @@ void trn_loc_take_refinement_(const trn_map_t *map, trn_loc_result_t *out);
  * neighbouring residuals' differences support (trn_refine_noise_scale_diff_,
  * at least 1): a smooth misfit (a wrong pose or heading) raises the
  * residuals' level but cancels in their differences; sensor noise does not.
- * 0, *scale untouched, otherwise (src/localize.c). */
+ * 0, *scale untouched, otherwise (src/localize_common.c). */
 int trn_loc_noise_rejected_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
                             int32_t ry, const trn_refine_t *at, double heading_rad,
                             const trn_refine_cfg_t *rc, double *scale);
-/* The refinement's noise model: the map's, its sd times out->noise_scale. */
+/* The refinement's noise model: the map's, its sd times out->noise_scale
+ * (src/localize_common.c). */
 void trn_loc_refine_cfg_(const trn_map_t *map, const trn_loc_result_t *out, trn_refine_cfg_t *rc);
 
 /* The refined answer's covariance's mass beyond TRN_FAIL_RADIUS_CELLS

@@ -7,6 +7,29 @@
 
 #include "refine_int.h"
 
+/* cos and sin of an angle (finite), by the Taylor series after reduction to
+ * about [-pi, pi] (a - 2 pi round(a / 2 pi): exact for a = 0, within
+ * 1e-15 rad for |a| <= 4 pi, the headings here; a turn of many revolutions
+ * loses the bits of its multiple of 2 pi). libm's cos and sin reduce any
+ * argument exactly (Payne-Hanek), which costs them 1 KiB of stack
+ * (tools/stack/external.txt); this needs none. Error of the series below
+ * 1e-14: its terms are at most pi^6 / 6! = 1.3 in size. */
+void trn_heading_trig_(double a, double *c, double *s)
+{
+    const double two_pi = 6.283185307179586;
+    double x = a - two_pi * floor(a / two_pi + 0.5), term_c = 1.0, term_s, sc = 0.0, ss = 0.0;
+    int32_t n;
+    term_s = x;
+    for (n = 0; n < 30; ++n) {
+        sc += term_c;
+        ss += term_s;
+        term_c *= -x * x / (double)((2 * n + 1) * (2 * n + 2));
+        term_s *= -x * x / (double)((2 * n + 2) * (2 * n + 3));
+    }
+    *c = sc;
+    *s = ss;
+}
+
 /* Bilinear height at fractional cell (x, y) (centres at integers) and its
  * exact gradient (per cell) inside the containing cell; 0 when a corner is
  * off the grid or missing. */
@@ -195,15 +218,6 @@ static int sample_mix(const trn_grid_f32_t *g, double x, double y, double lam, d
     return 1;
 }
 
-/* Height noise of the local cell (x, y), variance. */
-static double noise_var(const trn_refine_cfg_t *cfg, int32_t x, int32_t y, int32_t rx, int32_t ry)
-{
-    double px = (double)(x - rx), py = (double)(y - ry);
-    double r_m = (double)cfg->cell_m * sqrt(px * px + py * py);
-    double sd = (double)cfg->noise_m + (double)cfg->noise_k_per_m * r_m * r_m;
-    return sd * sd;
-}
-
 /* One pass over the seen local points of local cells [i0, i1) x [j0, j1) at
  * pose (x, y) and offset dz: normal equations of the points within clip (in
  * normalized residual units). */
@@ -234,7 +248,7 @@ static void accumulate_rect(const trn_grid_f32_t *global, const trn_grid_f32_t *
                 continue;
             }
             acc->n_all += 1;
-            w = noise_var(cfg, i, j, rx, ry);
+            w = trn_refine_noise_var_(cfg, i, j, rx, ry);
             sd = sqrt(w + model2);
             res = h - dz - s3[0];
             u = res / sd;
@@ -332,7 +346,7 @@ static void model_pass(const trn_grid_f32_t *global, const trn_grid_f32_t *local
                 !sample_bilinear(global, bx + px, by + py, b3)) {
                 continue;
             }
-            v = noise_var(cfg, i, j, rx, ry) + model2;
+            v = trn_refine_noise_var_(cfg, i, j, rx, ry) + model2;
             w = trn_refine_weight_(global, x + px, y + py, h - dz - s3[0], sqrt(v),
                                    TRN_REFINE_CLIP_RELIEF) /
                 v;
@@ -547,7 +561,7 @@ static double refined_ll(const trn_grid_f32_t *global, const trn_grid_f32_t *loc
                 ll += lout;
                 continue;
             }
-            v = noise_var(cfg, i, j, rx, ry) + model2;
+            v = trn_refine_noise_var_(cfg, i, j, rx, ry) + model2;
             u = h - dz - s3[0];
             ll += log(a * exp(-0.5 * u * u / v) / sqrt(two_pi * v) + (1.0 - a) * k);
         }
@@ -757,7 +771,7 @@ static int32_t noise_pass(const trn_grid_f32_t *global, const trn_grid_f32_t *lo
                             at->y - ox * cs_sn[1] + oy * cs_sn[0], at->interp_mix, s3, &dcb)) {
                 continue;
             }
-            s2 = noise_var(cfg, i, j, rx, ry);
+            s2 = trn_refine_noise_var_(cfg, i, j, rx, ry);
             v = k2 * s2 + m2;
             r2 = h - at->dz_m - s3[0];
             r2 *= r2;
@@ -797,7 +811,7 @@ static double resid_in_clip(const trn_grid_f32_t *global, const trn_grid_f32_t *
         return (double)NAN;
     }
     r = h - at->dz_m - s3[0];
-    *s2 = noise_var(cfg, i, j, rx, ry);
+    *s2 = trn_refine_noise_var_(cfg, i, j, rx, ry);
     return r * r > TRN_REFINE_CLIP * TRN_REFINE_CLIP * (k2 * *s2 + m2) ? (double)NAN : r;
 }
 
@@ -1057,7 +1071,7 @@ static int32_t pose_fit(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_
                 continue;
             }
             r = h - gv;
-            v = vtab != NULL ? vtab[at] : noise_var(cfg, x, y, rx, ry);
+            v = vtab != NULL ? vtab[at] : trn_refine_noise_var_(cfg, x, y, rx, ry);
             if (clip >= 0.0 && fabs(r - *dz) > clip * sqrt(v + *m2)) {
                 continue;
             }
@@ -1118,7 +1132,7 @@ static double pose_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_t 
                 ll += lout;
                 continue;
             }
-            v = (vtab != NULL ? vtab[at] : noise_var(cfg, x, y, rx, ry)) + m2;
+            v = (vtab != NULL ? vtab[at] : trn_refine_noise_var_(cfg, x, y, rx, ry)) + m2;
             u = h - dz - gv;
             ll += log(a * exp(-0.5 * u * u / v) / sqrt(two_pi * v) + (1.0 - a) * k);
         }
@@ -1134,13 +1148,6 @@ double trn_refine_pose_ll_(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int
                            double *gs, double a, double k, double *dz_out, double *m_out)
 {
     return pose_ll(g, l, rx, ry, px, py, cfg, vtab, gs, a, k, dz_out, m_out);
-}
-
-/* The noise variance of local cell (x, y) (refine_int.h): noise_var. */
-double trn_refine_noise_var_(const trn_refine_cfg_t *cfg, int32_t x, int32_t y, int32_t rx,
-                             int32_t ry)
-{
-    return noise_var(cfg, x, y, rx, ry);
 }
 
 /* ln(exp(a) + exp(b)) without overflow; a may be -inf. */
@@ -1201,8 +1208,8 @@ trn_status_t trn_height_search_ws_(const trn_grid_f32_t *global, const trn_grid_
         gs = scratch + cells;
         for (y = 0; y < local->height; ++y) {
             for (x = 0; x < local->width; ++x) {
-                vtab[(size_t)y * (size_t)local->width + (size_t)x] = noise_var(cfg, x, y, rover_x,
-                                                                               rover_y);
+                vtab[(size_t)y * (size_t)local->width + (size_t)x] = trn_refine_noise_var_(
+                    cfg, x, y, rover_x, rover_y);
             }
         }
     }

@@ -28,38 +28,6 @@ typedef struct {
     int fit_h; /* 1: the heading is a parameter */
 } rctx_t;
 
-/* cos and sin of an angle (finite), by the Taylor series after reduction to
- * about [-pi, pi] (a - 2 pi round(a / 2 pi): exact for a = 0, within
- * 1e-15 rad for |a| <= 4 pi, the headings here; a turn of many revolutions
- * loses the bits of its multiple of 2 pi). libm's cos and sin reduce any
- * argument exactly (Payne-Hanek), which costs them 1 KiB of stack
- * (tools/stack/external.txt); this needs none. Error of the series below
- * 1e-14: its terms are at most pi^6 / 6! = 1.3 in size. */
-void trn_heading_trig_(double a, double *c, double *s)
-{
-    const double two_pi = 6.283185307179586;
-    double x = a - two_pi * floor(a / two_pi + 0.5), term_c = 1.0, term_s, sc = 0.0, ss = 0.0;
-    int32_t n;
-    term_s = x;
-    for (n = 0; n < 30; ++n) {
-        sc += term_c;
-        ss += term_s;
-        term_c *= -x * x / (double)((2 * n + 1) * (2 * n + 2));
-        term_s *= -x * x / (double)((2 * n + 2) * (2 * n + 3));
-    }
-    *c = sc;
-    *s = ss;
-}
-
-/* Height noise variance of local cell (x, y) (as refine.c). */
-static double noise_var(const trn_refine_cfg_t *cfg, int32_t x, int32_t y, int32_t rx, int32_t ry)
-{
-    double px = (double)(x - rx), py = (double)(y - ry);
-    double r_m = (double)cfg->cell_m * sqrt(px * px + py * py);
-    double sd = (double)cfg->noise_m + (double)cfg->noise_k_per_m * r_m * r_m;
-    return sd * sd;
-}
-
 static void acc_clear(acc4_t *acc)
 {
     int32_t p;
@@ -145,7 +113,7 @@ static void accumulate(const rctx_t *c, const double pose[5], double clip, doubl
                 continue;
             }
             acc->n_all += 1;
-            v = noise_var(c->cfg, i, j, c->rx, c->ry);
+            v = trn_refine_noise_var_(c->cfg, i, j, c->rx, c->ry);
             sd = sqrt(v + model2);
             res = h - pose[3] - s3[0];
             u = res / sd;
@@ -300,7 +268,7 @@ static double model_pass(const rctx_t *c, const double p[5], const double bp[4],
                 !trn_refine_sample_bilinear_(c->g, bp[0] + btx, bp[1] + bty, b3)) {
                 continue;
             }
-            v = noise_var(c->cfg, i, j, c->rx, c->ry) + model2;
+            v = trn_refine_noise_var_(c->cfg, i, j, c->rx, c->ry) + model2;
             w = trn_refine_weight_(c->g, gx, gy, h - p[3] - s3[0], sqrt(v),
                                    TRN_REFINE_CLIP_RELIEF) /
                 v;
@@ -436,7 +404,7 @@ static double refined_ll(const rctx_t *c, const double p[5], double model2)
                 ll += lout;
                 continue;
             }
-            v = noise_var(c->cfg, i, j, c->rx, c->ry) + model2;
+            v = trn_refine_noise_var_(c->cfg, i, j, c->rx, c->ry) + model2;
             u = h - p[3] - s3[0];
             ll += log(a * exp(-0.5 * u * u / v) / sqrt(two_pi * v) + (1.0 - a) * k);
         }

@@ -4,6 +4,8 @@
 #ifndef TRN_REFINE_INT_H
 #define TRN_REFINE_INT_H
 
+#include <math.h>
+
 #include "trn/grid.h"
 #include "trn/height_heading.h"
 
@@ -49,9 +51,19 @@ trn_status_t trn_height_search_ws_(const trn_grid_f32_t *global, const trn_grid_
                                    const trn_exclusion_t *ex, const trn_refine_cfg_t *cfg,
                                    float inlier_prob, double ll_scale, double *ll_grid,
                                    double *scratch, trn_height_best_t *best);
-/* The noise model's variance of local cell (x, y), rover cell (rx, ry). */
-double trn_refine_noise_var_(const trn_refine_cfg_t *cfg, int32_t x, int32_t y, int32_t rx,
-                             int32_t ry);
+/* The noise model's variance of local cell (x, y), rover cell (rx, ry): the
+ * sd noise_m + noise_k_per_m r^2 at r metres from the rover, squared. The
+ * one copy for refine.c, refine_heading.c, height_heading.c and
+ * height_bound.c (inline: the searches and refinements call it for every
+ * cell of every pass). */
+static inline double trn_refine_noise_var_(const trn_refine_cfg_t *cfg, int32_t x, int32_t y,
+                                           int32_t rx, int32_t ry)
+{
+    double px = (double)(x - rx), py = (double)(y - ry);
+    double r_m = (double)cfg->cell_m * sqrt(px * px + py * py);
+    double sd = (double)cfg->noise_m + (double)cfg->noise_k_per_m * r_m * r_m;
+    return sd * sd;
+}
 
 /* The argument checks of trn_refine_pose and trn_refine_pose_heading (the
  * latter adds its heading's): TRN_E_NULL (global, local, cfg, out), the
@@ -135,16 +147,16 @@ double trn_refine_block_var_(const double *a, const double *al, double all, cons
                              const double *u, int32_t n);
 
 /* cos and sin of a finite angle without libm's exact argument reduction
- * and its stack (src/refine_heading.c; within 1e-14 for |a| <= 4 pi). */
+ * and its stack (src/refine.c; within 1e-14 for |a| <= 4 pi). */
 void trn_heading_trig_(double a, double *c, double *s);
 
 /* trn_localize_dem_heading's parts, after its argument checks (up to the
  * map and max_points), each out of line so that no path's stack carries
- * another's frame: the voxel path (src/localize.c: its preparation, then
- * the search); the height matcher
+ * another's frame: the voxel path (src/localize_heading.c: its
+ * preparation, then the search of src/heading.c); the height matcher
  * over heading with a window or an off-zero centre (src/height_heading.c);
- * the rest of the checks (src/localize.c); W = 0 at centre 0 with a height
- * map, trn_localize_dem (src/height_heading.c). */
+ * the rest of the checks (src/localize_heading.c); W = 0 at centre 0 with a
+ * height map, trn_localize_dem (src/localize_heading.c). */
 trn_status_t trn_localize_dem_heading_prep_(const trn_map_t *map, const trn_grid_f32_t *local_dem,
                                             int32_t rover_x, int32_t rover_y, size_t max_points,
                                             const trn_window_t *win, void *ws, size_t ws_bytes,
