@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* localize_common.c - the height matcher's helpers shared by its (x, y) path
+/* localize_common.c - the height matcher's functions shared by its (x, y) path
  * (src/localize.c), its (x, y, heading) path (src/height_heading.c) and the
  * far basins (src/localize_basins.c): the refinement's noise model, the
  * refinement taken as the answer, the test of the noise model at the

@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* localize_int.h - internal to the localization stack (docs/architecture.md,
  * "The localization stack"): the height matcher's far basins
- * (src/localize_basins.c), its shared helpers (src/localize_common.c) and
+ * (src/localize_basins.c), its shared functions (src/localize_common.c) and
  * the parts of src/localize.c that the entry over heading
  * (src/localize_heading.c) uses. Separate files so that their frames do not
  * add to trn_localize_dem's (no inlining across files; the stack limit of

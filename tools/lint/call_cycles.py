@@ -136,7 +136,7 @@ def file_graph(units):
                         keep.append(c)
                 cands = keep
             if not cands:
-                continue  # libc, libm, the compiler's helpers: outside the sources
+                continue  # libc, libm, the compiler's runtime: outside the sources
             if len(cands) > 1:
                 problems.append("%s: %s calls %s, defined in %s: cannot tell which" %
                                 (u.src, a, b, ", ".join(sorted(c.src for c in cands))))
