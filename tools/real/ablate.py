@@ -1,0 +1,172 @@
+#!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
+"""tools/real/ablate.py - the height matcher's parts, each removed alone, on bench_real.
+
+    /usr/bin/python3 tools/real/ablate.py [--dem ID ...] [--cases N] [--seed S]
+        [--variant NAME ...] [--out DIR] [--jobs J]
+
+Each variant is the tree at HEAD (git archive, under OUT/src) with one part of the height matcher
+removed by a textual patch listed in VARIANTS below (each patch must match the source exactly
+once, so a patch that no longer fits fails loudly instead of measuring nothing); `--noise-auto 0`
+is a run-time option. Each variant's `trn` is built (Release) with its patch in, copied to
+OUT/trn-NAME, the patch taken back, and run through tools/real/bench_real.py on the same seeded
+cases. The shipped source is not changed.
+
+Prints, per variant and over the DEMs: the right rate (within 1.5 cells), the median error
+(cells), the 1/2/3-sigma coverage of the right answers (target 39.3 / 86.5 / 98.9 %), the
+confidently wrong count (off by more than 1.5 cells, status ok, failure probability below 0.5),
+the fixes (status ok) and the median time per localization; writes OUT/ablation.json and
+OUT/ablation.md (a Markdown table, one row per variant and DEM, then the totals).
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tarfile
+import io
+import shutil
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+
+# name: (what it removes, [(file, old, new)], extra trn arguments)
+VARIANTS = {
+    "all": ("nothing: the height matcher as shipped", [], []),
+    "no_second_starts": (
+        "the refinement from the best pose's neighbours within 30 nats",
+        [("src/localize.c", "for (k = 0; k < 9 && cand != NULL; ++k) {",
+          "for (k = 0; k < 0 && cand != NULL; ++k) {")], []),
+    "no_far_basins": (
+        "the far basins (refinement from the 4 highest other local maxima, their moves and share)",
+        [("src/localize.c", "        } else {\n            trn_loc_find_basins_(ll_grid, win, radius, out, bs);",
+          "        } else {\n            bs->n = 0;\n            bs->moved = 0;")], []),
+    "no_zone_mass": (
+        "the move to a far basin whose zone holds more posterior mass (within 3 nats)",
+        [("src/localize_basins.c", "               ? 2\n", "               ? 0\n")], []),
+    "no_basin_share": (
+        "the refined far basins' share of the failure probability",
+        [("src/localize.c", "out->refined ? trn_loc_basins_failure_(bs, infl, out) : 0.0);",
+          "out->refined ? 0.0 * trn_loc_basins_failure_(bs, infl, out) : 0.0);")], []),
+    "no_valley": (
+        "the valley's share of the failure probability (ln L along the major axis)",
+        [("src/localize_basins.c", "        trn_refine_valley_fail_(&map->heights",
+          "        0.0 * trn_refine_valley_fail_(&map->heights")], []),
+    "no_tail": (
+        "the ellipse's tail beyond 1.5 cells as a floor of the failure probability",
+        [("src/localize_basins.c", "        trn_loc_tail_failure_(out->refinement.cov_cells),",
+          "        0.0 * trn_loc_tail_failure_(out->refinement.cov_cells),")], []),
+    "no_shoulders": (
+        "the ellipse widened where ln L's fall at 2 sds is flatter than at half an sd",
+        [("src/localize.c", "        trn_loc_shoulders_(map, local, rx, ry, out);",
+          "        (void)rx;")], []),
+    "no_sys_term": (
+        "the systematic term (the interpolants' disagreement in the covariance)",
+        [("src/refine.c", "    return TRN_REFINE_SYS * m2s / (m2s + noise2 / q);",
+          "    return 0.0 * m2s / (m2s + noise2 / q);")], []),
+    "no_clip_again": (
+        "the search's repeated clip (one clipped pass only)",
+        [("src/refine.c", "        for (again = 0; again <= TRN_CLIP_AGAIN; ++again) {\n            n = pose_fit(",
+          "        for (again = 0; again <= 0; ++again) {\n            n = pose_fit(")], []),
+    "no_noise_rescale": (
+        "the noise model rescaled from the residuals (--noise-auto 0)", [], ["--noise-auto", "0"]),
+}
+
+
+def run(cmd, **kw):
+    r = subprocess.run(cmd, capture_output=True, text=True, **kw)
+    if r.returncode != 0:
+        raise SystemExit(f"ablate: {' '.join(cmd[:4])} ... failed: {(r.stderr or r.stdout).strip()[-400:]}")
+    return r.stdout
+
+
+def tree(out):
+    """The source at HEAD under OUT/src (made once), configured for Release under OUT/src/build-abl."""
+    src = os.path.join(out, "src")
+    if not os.path.isdir(src):
+        data = subprocess.run(["git", "-C", ROOT, "archive", "HEAD"], capture_output=True, check=True).stdout
+        with tarfile.open(fileobj=io.BytesIO(data)) as t:
+            t.extractall(src)
+        run(["cmake", "-S", src, "-B", os.path.join(src, "build-abl"), "-G", "Ninja",
+             "-DCMAKE_BUILD_TYPE=Release"])
+    return src
+
+
+def variant_trn(src, name, patches, out, jobs):
+    """trn of one variant: its patches applied, trn rebuilt (one file changes), copied to
+    OUT/trn-NAME, the patches taken back."""
+    kept = {}
+    try:
+        for f, old, new in patches:
+            p = os.path.join(src, f)
+            s = open(p).read()
+            if s.count(old) != 1:
+                raise SystemExit(f"ablate: variant {name}: the patch of {f} matches {s.count(old)} times, not once")
+            kept[p] = s
+            with open(p, "w") as fh:
+                fh.write(s.replace(old, new))
+        run(["cmake", "--build", os.path.join(src, "build-abl"), "--target", "trn", "-j", str(jobs)])
+        dst = os.path.join(out, f"trn-{name}")
+        shutil.copy2(os.path.join(src, "build-abl", "trn"), dst)
+        return dst
+    finally:
+        for p, s in kept.items():
+            with open(p, "w") as fh:
+                fh.write(s)
+
+
+def main(argv):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--dem", action="append", help="DEM id (repeat; default: six of bench_real's)")
+    ap.add_argument("--cases", type=int, default=200)
+    ap.add_argument("--seed", type=int, default=11)
+    ap.add_argument("--variant", action="append", choices=sorted(VARIANTS))
+    ap.add_argument("--out", default=os.path.join(ROOT, "build", "ablate"))
+    ap.add_argument("--jobs", type=int, default=2)
+    a = ap.parse_args(argv)
+    if a.cases < 1:
+        print("ablate: --cases must be positive", file=sys.stderr)
+        return 1
+    dem_ids = a.dem or ["rockfield", "rhine", "kossou", "merewether", "tian_shan", "carrizo"]
+    names = a.variant or list(VARIANTS)
+    os.makedirs(a.out, exist_ok=True)
+    res = {}
+    for name in names:
+        what, patches, extra = VARIANTS[name]
+        trn = variant_trn(tree(a.out), name, patches, a.out, a.jobs)
+        bo = os.path.join(a.out, f"bench-{name}")
+        cmd = ["/usr/bin/python3", os.path.join(HERE, "bench_real.py"), "--cases", str(a.cases),
+               "--seed", str(a.seed), "--trn", trn, "--out", bo, "--no-plot"]
+        for d in dem_ids:
+            cmd += ["--dem", d]
+        for x in extra:
+            cmd += ["--trn-arg", x]
+        run(cmd)
+        dems = json.load(open(os.path.join(bo, "bench.json")))["dems"]
+        res[name] = {"what": what, "dems": {}}
+        for d in dem_ids:
+            m = dems[d]["metrics"]["trn"]
+            res[name]["dems"][d] = {
+                "right_pct": 100.0 * m["rate"], "median_err_cells": m["median_err_cells"],
+                "cover_pct": m["calibration"]["inside_pct"], "conf_wrong": m["confidently_wrong"],
+                "fixes": m["status"].get("ok", 0), "median_ms": m["median_time_ms"], "n": m["n"]}
+        print(f"ablate: {name} done", file=sys.stderr, flush=True)
+    lines = ["| variant | DEM | right % | median err (cells) | 1/2/3-sigma % | conf. wrong | fixes | ms |",
+             "|---|---|---|---|---|---|---|---|"]
+    for name in names:
+        for d, v in res[name]["dems"].items():
+            c = v["cover_pct"]
+            lines.append(f"| {name} | {d} | {v['right_pct']:.1f} | {v['median_err_cells']:.3f} | "
+                         f"{c[0]:.1f} / {c[1]:.1f} / {c[2]:.1f} | {v['conf_wrong']} | {v['fixes']} | "
+                         f"{v['median_ms']:.1f} |")
+    md = "\n".join(lines) + "\n"
+    with open(os.path.join(a.out, "ablation.md"), "w") as f:
+        f.write(md)
+    with open(os.path.join(a.out, "ablation.json"), "w") as f:
+        json.dump(res, f, indent=1)
+    print(md)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
