@@ -1245,6 +1245,52 @@ static void append(char *buf, size_t cap, size_t *len, const char *fmt, double a
     }
 }
 
+/* The selection rows' target lines. */
+static void print_select_targets(const opts_t *o, const size_result_t *res)
+{
+    int i;
+    for (i = 0; i < o->nsizes; ++i) {
+        const bench_select_result_t *b = &res[i].sel;
+        if (b->pmap_cv_ms > 0.0) {
+            printf("target probability map (eq. 8) no slower than cv::sepFilter2D%s: %s "
+                   "(%d: %.2fx = sepFilter2D / trn_prob_global_map)\n",
+                   res[i].n >= 512 ? "" : " (info below 512)",
+                   b->pmap_cv_ms >= b->pmap_ms ? "PASS" : "MISS", (int)res[i].n,
+                   b->pmap_cv_ms / b->pmap_ms);
+        }
+        printf("target all candidates of one rover position < 20 ms%s: %s (%d: %.2f ms)\n",
+               res[i].n >= 512 ? "" : " (info below 512)", b->select_ms < 20.0 ? "PASS" : "MISS",
+               (int)res[i].n, b->select_ms);
+        printf("target trn_field_fast >= 10x trn_field (paper defaults, %dx%d area, same "
+               "field)%s: %s (%d: %.2fx; small reach, whole map: %.2fx)\n",
+               (int)b->fpaper_side, (int)b->fpaper_side,
+               b->fpaper_side == res[i].n ? "" : " (info: the target is the whole 256 map)",
+               b->fpaper_ms >= 10.0 * b->fpaper_fast_ms ? "PASS" : "MISS", (int)res[i].n,
+               b->fpaper_ms / b->fpaper_fast_ms, b->field_ms / b->field_fast_ms);
+    }
+}
+
+/* The height matcher's target lines (tools/bench/bench_heights.c). */
+static void print_height_targets(const opts_t *o, const bench_heights_result_t *hres)
+{
+    int w;
+    for (w = 0; w < (o->quick ? 1 : 2); ++w) {
+        printf("target height matcher <= 3x the voxel matcher (README case, +-%d): %s "
+               "(bounded %.1fx, exhaustive %.1fx)\n",
+               (int)hres->win[w], hres->bnd_ms[w] <= 3.0 * hres->voxel_ms[w] ? "PASS" : "MISS",
+               hres->bnd_ms[w] / hres->voxel_ms[w], hres->exh_ms[w] / hres->voxel_ms[w]);
+    }
+    if (!o->quick) {
+        printf("target height matcher +-50 <= 4x its +-25: %s (bounded %.2fx, exhaustive "
+               "%.2fx)\n",
+               hres->bnd_ms[1] <= 4.0 * hres->bnd_ms[0] ? "PASS" : "MISS",
+               hres->bnd_ms[1] / hres->bnd_ms[0], hres->exh_ms[1] / hres->exh_ms[0]);
+    }
+    printf("target height matcher's worst case (flat, periodic, 5x5 local) bounded <= 1.2x "
+           "exhaustive: %s (%.2fx worst)\n",
+           hres->worst_ratio <= 1.2 ? "PASS" : "MISS", hres->worst_ratio);
+}
+
 int main(int argc, char **argv)
 {
     opts_t o;
@@ -1320,25 +1366,7 @@ int main(int argc, char **argv)
     }
     printf("target fast search >= 10x exhaustive: %s (%.1fx worst; %s)\n",
            worst_bb >= 10.0 ? "PASS" : "MISS", worst_bb, buf);
-    for (i = 0; i < o.nsizes; ++i) {
-        const bench_select_result_t *b = &res[i].sel;
-        if (b->pmap_cv_ms > 0.0) {
-            printf("target probability map (eq. 8) no slower than cv::sepFilter2D%s: %s "
-                   "(%d: %.2fx = sepFilter2D / trn_prob_global_map)\n",
-                   res[i].n >= 512 ? "" : " (info below 512)",
-                   b->pmap_cv_ms >= b->pmap_ms ? "PASS" : "MISS", (int)res[i].n,
-                   b->pmap_cv_ms / b->pmap_ms);
-        }
-        printf("target all candidates of one rover position < 20 ms%s: %s (%d: %.2f ms)\n",
-               res[i].n >= 512 ? "" : " (info below 512)", b->select_ms < 20.0 ? "PASS" : "MISS",
-               (int)res[i].n, b->select_ms);
-        printf("target trn_field_fast >= 10x trn_field (paper defaults, %dx%d area, same "
-               "field)%s: %s (%d: %.2fx; small reach, whole map: %.2fx)\n",
-               (int)b->fpaper_side, (int)b->fpaper_side,
-               b->fpaper_side == res[i].n ? "" : " (info: the target is the whole 256 map)",
-               b->fpaper_ms >= 10.0 * b->fpaper_fast_ms ? "PASS" : "MISS", (int)res[i].n,
-               b->fpaper_ms / b->fpaper_fast_ms, b->field_ms / b->field_fast_ms);
-    }
+    print_select_targets(&o, res);
     for (i = 0; i < o.nsizes; ++i) {
         printf("target (x, y, heading) search <= 0.2 of the 2-DOF search x headings: %s (%d: %.3f, "
                "%d headings)\n",
@@ -1346,21 +1374,7 @@ int main(int argc, char **argv)
                (int)res[i].head.steps);
     }
     if (o.heights) {
-        for (w = 0; w < (o.quick ? 1 : 2); ++w) {
-            printf("target height matcher <= 3x the voxel matcher (README case, +-%d): %s "
-                   "(bounded %.1fx, exhaustive %.1fx)\n",
-                   (int)hres.win[w], hres.bnd_ms[w] <= 3.0 * hres.voxel_ms[w] ? "PASS" : "MISS",
-                   hres.bnd_ms[w] / hres.voxel_ms[w], hres.exh_ms[w] / hres.voxel_ms[w]);
-        }
-        if (!o.quick) {
-            printf("target height matcher +-50 <= 4x its +-25: %s (bounded %.2fx, exhaustive "
-                   "%.2fx)\n",
-                   hres.bnd_ms[1] <= 4.0 * hres.bnd_ms[0] ? "PASS" : "MISS",
-                   hres.bnd_ms[1] / hres.bnd_ms[0], hres.exh_ms[1] / hres.exh_ms[0]);
-        }
-        printf("target height matcher's worst case (flat, periodic, 5x5 local) bounded <= 1.2x "
-               "exhaustive: %s (%.2fx worst)\n",
-               hres.worst_ratio <= 1.2 ? "PASS" : "MISS", hres.worst_ratio);
+        print_height_targets(&o, &hres);
     }
     printf("same answer (branch-and-bound = exhaustive = localize, chamfer = Dijkstra, "
            "selection = naive, trn_field_fast = trn_field, height bounded = exhaustive): %s\n",

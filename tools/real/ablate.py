@@ -140,7 +140,7 @@ def main(argv):
         for d in dem_ids:
             cmd += ["--dem", d]
         for x in extra:
-            cmd += ["--trn-arg", x]
+            cmd.append(f"--trn-arg={x}")
         run(cmd)
         dems = json.load(open(os.path.join(bo, "bench.json")))["dems"]
         res[name] = {"what": what, "dems": {}}
