@@ -12,11 +12,12 @@ is a run-time option. Each variant's `trn` is built (Release) with its patch in,
 OUT/trn-NAME, the patch taken back, and run through tools/real/bench_real.py on the same seeded
 cases. The shipped source is not changed.
 
-Prints, per variant and over the DEMs: the right rate (within 1.5 cells), the median error
-(cells), the 1/2/3-sigma coverage of the right answers (target 39.3 / 86.5 / 98.9 %), the
-confidently wrong count (off by more than 1.5 cells, status ok, failure probability below 0.5),
-the fixes (status ok) and the median time per localization; writes OUT/ablation.json and
-OUT/ablation.md (a Markdown table, one row per variant and DEM, then the totals).
+Prints, per variant over the DEMs: the right rate (within 1.5 cells), the confidently wrong count
+(off by more than 1.5 cells, status ok, failure probability below 0.5), the fixes (status ok), the
+Brier score of the failure probability, and the range over the DEMs of the 1/2/3-sigma coverage
+of the right answers (target 39.3 / 86.5 / 98.9 %); then per variant and DEM with the median
+error and time. Writes OUT/ablation.json and OUT/ablation.md. --bench-arg passes a construction
+to bench_real (e.g. --bench-arg=--outliers=0.2); --reuse takes results already in OUT.
 """
 import argparse
 import json
@@ -123,6 +124,10 @@ def main(argv):
     ap.add_argument("--variant", action="append", choices=sorted(VARIANTS))
     ap.add_argument("--out", default=os.path.join(ROOT, "build", "ablate"))
     ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--bench-arg", action="append", default=[],
+                    help="a bench_real option for every variant, as --bench-arg=--outliers=0.2 (repeat)")
+    ap.add_argument("--reuse", action="store_true",
+                    help="take a variant's OUT/bench-NAME/bench.json when it exists (no rebuild, no rerun)")
     a = ap.parse_args(argv)
     if a.cases < 1:
         print("ablate: --cases must be positive", file=sys.stderr)
@@ -133,15 +138,16 @@ def main(argv):
     res = {}
     for name in names:
         what, patches, extra = VARIANTS[name]
-        trn = variant_trn(tree(a.out), name, patches, a.out, a.jobs)
         bo = os.path.join(a.out, f"bench-{name}")
-        cmd = ["/usr/bin/python3", os.path.join(HERE, "bench_real.py"), "--cases", str(a.cases),
-               "--seed", str(a.seed), "--trn", trn, "--out", bo, "--no-plot"]
-        for d in dem_ids:
-            cmd += ["--dem", d]
-        for x in extra:
-            cmd.append(f"--trn-arg={x}")
-        run(cmd)
+        if not (a.reuse and os.path.exists(os.path.join(bo, "bench.json"))):
+            trn = variant_trn(tree(a.out), name, patches, a.out, a.jobs)
+            cmd = ["/usr/bin/python3", os.path.join(HERE, "bench_real.py"), "--cases", str(a.cases),
+                   "--seed", str(a.seed), "--trn", trn, "--out", bo, "--no-plot"] + a.bench_arg
+            for d in dem_ids:
+                cmd += ["--dem", d]
+            for x in extra:
+                cmd.append(f"--trn-arg={x}")
+            run(cmd)
         dems = json.load(open(os.path.join(bo, "bench.json")))["dems"]
         res[name] = {"what": what, "dems": {}}
         for d in dem_ids:
@@ -149,10 +155,21 @@ def main(argv):
             res[name]["dems"][d] = {
                 "right_pct": 100.0 * m["rate"], "median_err_cells": m["median_err_cells"],
                 "cover_pct": m["calibration"]["inside_pct"], "conf_wrong": m["confidently_wrong"],
-                "fixes": m["status"].get("ok", 0), "median_ms": m["median_time_ms"], "n": m["n"]}
+                "fixes": m["status"].get("ok", 0), "median_ms": m["median_time_ms"], "n": m["n"],
+                "right": m["success"], "brier": m["brier"]}
         print(f"ablate: {name} done", file=sys.stderr, flush=True)
-    lines = ["| variant | DEM | right % | median err (cells) | 1/2/3-sigma % | conf. wrong | fixes | ms |",
+    lines = ["| removed | right % | conf. wrong | fixes | Brier | 1-sigma % | 2-sigma % | 3-sigma % |",
              "|---|---|---|---|---|---|---|---|"]
+    for name in names:
+        v = list(res[name]["dems"].values())
+        n = sum(x["n"] for x in v)
+        c = [[x["cover_pct"][k] for x in v] for k in range(3)]
+        lines.append(f"| {name}: {res[name]['what']} | {100.0 * sum(x['right'] for x in v) / n:.2f} | "
+                     f"{sum(x['conf_wrong'] for x in v)} | {sum(x['fixes'] for x in v)} | "
+                     f"{sum(x['brier'] * x['n'] for x in v) / n:.4f} | "
+                     + " | ".join(f"{min(ck):.1f}-{max(ck):.1f}" for ck in c) + " |")
+    lines += ["", "| variant | DEM | right % | median err (cells) | 1/2/3-sigma % | conf. wrong | fixes | ms |",
+              "|---|---|---|---|---|---|---|---|"]
     for name in names:
         for d, v in res[name]["dems"].items():
             c = v["cover_pct"]
