@@ -24,6 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "localize_int.h"
 #include "refine_int.h"
 #include "ws.h"
 
@@ -552,25 +553,6 @@ trn_status_t trn_hb_best(trn_hb_t *hb, const trn_exclusion_t *ex, trn_height_bes
     return TRN_OK;
 }
 
-/* 1 if scored pose (x, y) of ln L v is a local maximum of the grid as
- * trn_loc_find_basins_ reads it (unscored neighbours at -inf). */
-static int grid_peak(const trn_hb_t *hb, int32_t x, int32_t y, double v)
-{
-    int32_t k;
-    for (k = 0; k < 9; ++k) {
-        const int32_t nx = x + k % 3 - 1, ny = y + k / 3 - 1;
-        double w;
-        if (k == 4 || nx < hb->win.x0 || nx > hb->win.x1 || ny < hb->win.y0 || ny > hb->win.y1) {
-            continue;
-        }
-        w = hb->ll[pidx(hb, nx, ny)];
-        if (w > v || (w == v && k < 4)) {
-            return 0;
-        }
-    }
-    return 1;
-}
-
 trn_status_t trn_hb_basins(trn_hb_t *hb, double t, int32_t bx, int32_t by, int32_t radius,
                            int32_t nbasins)
 {
@@ -589,7 +571,7 @@ trn_status_t trn_hb_basins(trn_hb_t *hb, double t, int32_t bx, int32_t by, int32
             for (x = hb->win.x0; x <= hb->win.x1; ++x) {
                 const double v = hb->ll[pidx(hb, x, y)];
                 if (hb->done[pidx(hb, x, y)] == 0u || in_zone(&ex, x, y) || v < t ||
-                    !grid_peak(hb, x, y, v)) {
+                    !trn_loc_grid_peak_(hb->ll, &hb->win, x, y, v)) {
                     continue;
                 }
                 if (n < nbasins) {

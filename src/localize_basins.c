@@ -15,9 +15,7 @@ static double grid_at(const double *g, const trn_window_t *win, int32_t x, int32
     return g[(size_t)(y - win->y0) * (size_t)(win->x1 - win->x0 + 1) + (size_t)(x - win->x0)];
 }
 
-/* 1 if no neighbour of (x, y) in the window is higher, and none equal comes
- * before it in scan order (one pose per plateau). */
-static int grid_peak(const double *g, const trn_window_t *win, int32_t x, int32_t y, double v)
+int trn_loc_grid_peak_(const double *g, const trn_window_t *win, int32_t x, int32_t y, double v)
 {
     int32_t k;
     for (k = 0; k < 9; ++k) {
@@ -46,7 +44,7 @@ static void far_basins(const double *g, const trn_window_t *win, int32_t bx, int
             int32_t k, pos = 0, last;
             if (!isfinite(v) || (abs(x - bx) <= radius && abs(y - by) <= radius) ||
                 (b->n == TRN_REFINE_BASINS && v <= b->ll[TRN_REFINE_BASINS - 1]) ||
-                !grid_peak(g, win, x, y, v)) {
+                !trn_loc_grid_peak_(g, win, x, y, v)) {
                 continue;
             }
             /* keep them highest first: v goes after every one at least as high */

@@ -73,6 +73,12 @@ size_t trn_localize_heights3_bytes_(const trn_map_t *map, const trn_grid_f32_t *
                                     int32_t rover_x, int32_t rover_y, const trn_window_t *win,
                                     const trn_heading_cfg_t *cfg, size_t dem);
 
+/* 1 if pose (x, y), ln L v, of the ln L grid g over win is a local maximum:
+ * no neighbour in the window higher, and none equal before it in scan order
+ * (one pose per plateau). The far basins' rule, here and in the bounded
+ * search (src/height_bound.c, whose unscored poses hold -inf). */
+int trn_loc_grid_peak_(const double *g, const trn_window_t *win, int32_t x, int32_t y, double v);
+
 /* Bytes of a trn_loc_basins_t (the workspace's share). */
 size_t trn_loc_basins_bytes_(void);
 
