@@ -40,6 +40,11 @@
 /* Nodes of this level or finer are scored pose by pose, not bounded. */
 #define HB_LEAF 2
 
+/* 2^l for the tree's levels (multiplications and divisions, not shifts of
+ * signed values). */
+static const int32_t k_pow2[TRN_HB_MAX_LEVELS] = {1,   2,   4,    8,    16,   32,   64,   128,
+                                                  256, 512, 1024, 2048, 4096, 8192, 16384};
+
 typedef struct {
     size_t hb, dz, msd, done, ub[TRN_HB_MAX_LEVELS], mn[TRN_HB_MAX_LEVELS], mx[TRN_HB_MAX_LEVELS],
         cls, vtab, gs, cl, ch, cnt, stack, rstack, df, ft, total;
@@ -73,8 +78,8 @@ static int hb_layout(const trn_window_t *win, int32_t lw, int32_t lh, hb_layout_
         lay->msd = trn_ws_offset(&ws, poses * sizeof(double));
         lay->done = trn_ws_offset(&ws, poses);
         for (l = 0; l < lay->levels; ++l) {
-            const size_t nx = (size_t)((lay->ww + (1 << l) - 1) >> l);
-            const size_t ny = (size_t)((lay->wh + (1 << l) - 1) >> l);
+            const size_t nx = (size_t)((lay->ww + k_pow2[l] - 1) / k_pow2[l]);
+            const size_t ny = (size_t)((lay->wh + k_pow2[l] - 1) / k_pow2[l]);
             lay->ub[l] = trn_ws_offset(&ws, nx * ny * sizeof(double));
             lay->mn[l] = trn_ws_offset(&ws, region * sizeof(float));
             lay->mx[l] = trn_ws_offset(&ws, region * sizeof(float));
@@ -123,14 +128,14 @@ static void build_region(trn_hb_t *hb)
         }
     }
     for (l = 1; l < hb->levels; ++l) {
-        const int32_t h = 1 << (l - 1);
+        const int32_t h = k_pow2[l - 1];
         for (j = 0; j < hb->rh; ++j) {
             for (i = 0; i < hb->rw; ++i) {
                 const size_t at = (size_t)j * (size_t)hb->rw + (size_t)i;
                 float a = hb->mn[l - 1][at], b = hb->mx[l - 1][at];
                 int32_t k;
                 for (k = 1; k < 4; ++k) {
-                    const int32_t ii = i + (k & 1) * h, jj = j + (k >> 1) * h;
+                    const int32_t ii = i + (k % 2) * h, jj = j + (k / 2) * h;
                     if (ii < hb->rw && jj < hb->rh) {
                         const size_t o = (size_t)jj * (size_t)hb->rw + (size_t)ii;
                         a = hb->mn[l - 1][o] < a ? hb->mn[l - 1][o] : a;
@@ -161,6 +166,13 @@ static double f_step(const trn_hb_t *hb, double d, double s, double s_hi, double
     return log(hb->a * exp(-0.5 * d * d / v) / sqrt(two_pi * v) + (1.0 - hb->a) * hb->k);
 }
 
+/* Step j of the staircase, in noise sds: half an sd apart up to 4 sds, then
+ * growing by HB_STEP_RATIO. */
+static double step_sd(int32_t j)
+{
+    return j <= 8 ? 0.5 * (double)j : 4.0 * pow(HB_STEP_RATIO, (double)(j - 8));
+}
+
 /* Noise classes, offset bins, steps and the staircase tables. */
 static void build_tables(trn_hb_t *hb, const double *sq_lo, const double *sq_hi, double z1)
 {
@@ -170,36 +182,37 @@ static void build_tables(trn_hb_t *hb, const double *sq_lo, const double *sq_hi,
     /* m2 classes: [mb_c, mb_c+1]; m2 is at most the offsets' range squared */
     {
         const double top = (width + 2.0 * hb->w) * (width + 2.0 * hb->w);
-        double m = HB_M2_FIRST * sq_lo[0] * sq_lo[0];
         mb[0] = 0.0;
         hb->nc = 0;
-        while (hb->nc < TRN_HB_MAX_C - 1 && m < top) {
-            mb[++hb->nc] = m;
-            m *= HB_M2_RATIO;
+        for (c = 1; c < TRN_HB_MAX_C; ++c) {
+            const double m = HB_M2_FIRST * sq_lo[0] * sq_lo[0] * pow(HB_M2_RATIO, (double)(c - 1));
+            if (!(m < top)) {
+                break;
+            }
+            mb[c] = m;
+            hb->nc = c;
         }
         hb->nc += 1;
         mb[hb->nc] = top > mb[hb->nc - 1] ? top : mb[hb->nc - 1];
     }
     for (q = 0; q < hb->nq; ++q) {
-        double t = 0.0;
         const double s = sq_lo[q];
         npts += hb->npts[q];
         hb->steps[q][0] = 0;
-        j = 0;
-        while (j < TRN_HB_MAX_J && t * s < width + 2.0 * hb->w) {
-            t = t < 4.0 ? t + 0.5 : t * HB_STEP_RATIO;
-            ++j;
-            hb->steps[q][j] = (int32_t)fmin(ceil(t * s / hb->w), (double)TRN_HB_MAX_BINS);
+        hb->nj[q] = 0;
+        for (j = 1; j <= TRN_HB_MAX_J; ++j) { /* until a step reaches every offset */
+            if (step_sd(j - 1) * s >= width + 2.0 * hb->w) {
+                break;
+            }
+            hb->steps[q][j] = (int32_t)fmin(ceil(step_sd(j) * s / hb->w), (double)TRN_HB_MAX_BINS);
+            hb->nj[q] = j;
         }
-        hb->nj[q] = j;
         for (c = 0; c < hb->nc; ++c) {
-            double tj = 0.0, fprev = f_step(hb, 0.0, s, sq_hi[q], mb[c], mb[c + 1]);
+            double fprev = f_step(hb, 0.0, s, sq_hi[q], mb[c], mb[c + 1]);
             double *df = hb->df + ((size_t)q * TRN_HB_MAX_C + (size_t)c) * TRN_HB_MAX_J;
             fmaxabs = fmax(fmaxabs, fabs(fprev));
             for (j = 0; j < hb->nj[q]; ++j) {
-                double fn;
-                tj = tj < 4.0 ? tj + 0.5 : tj * HB_STEP_RATIO;
-                fn = f_step(hb, tj * s, s, sq_hi[q], mb[c], mb[c + 1]);
+                const double fn = f_step(hb, step_sd(j + 1) * s, s, sq_hi[q], mb[c], mb[c + 1]);
                 df[j] = fprev - fn;
                 fprev = fn;
             }
@@ -259,7 +272,7 @@ static double range_bound(trn_hb_t *hb, int32_t b0, int32_t b1, int32_t bmin, in
  * pruned, and the bound of all its offsets is returned). */
 static double node_bound(trn_hb_t *hb, int32_t l, int32_t bx, int32_t by, double t)
 {
-    const int32_t ox = bx << l, oy = by << l;
+    const int32_t ox = bx * k_pow2[l], oy = by * k_pow2[l];
     const float *mn = hb->mn[l], *mx = hb->mx[l];
     int32_t nq[TRN_HB_MAX_Q], nout = 0, bmin = hb->nbins, bmax = -1, x, y, q, sp = 0;
     double best = -(double)INFINITY, root;
@@ -342,7 +355,7 @@ static double node_bound(trn_hb_t *hb, int32_t l, int32_t bx, int32_t by, double
 
 static size_t node_at(const trn_hb_t *hb, int32_t l, int32_t bx, int32_t by)
 {
-    const int32_t nx = (hb->ww + (1 << l) - 1) >> l;
+    const int32_t nx = (hb->ww + k_pow2[l] - 1) / k_pow2[l];
     return (size_t)by * (size_t)nx + (size_t)bx;
 }
 
@@ -353,7 +366,7 @@ static double node_ub(trn_hb_t *hb, int32_t l, int32_t bx, int32_t by, double t)
     if (isnan(*u)) {
         double v = node_bound(hb, l, bx, by, t);
         if (l + 1 < hb->levels) {
-            const double p = hb->ub[l + 1][node_at(hb, l + 1, bx >> 1, by >> 1)];
+            const double p = hb->ub[l + 1][node_at(hb, l + 1, bx / 2, by / 2)];
             v = !isnan(p) && p < v ? p : v;
         }
         *u = v;
@@ -367,7 +380,7 @@ static double pose_ub(const trn_hb_t *hb, int32_t x, int32_t y)
     const int32_t px = x - hb->win.x0, py = y - hb->win.y0;
     int32_t l;
     for (l = 0; l < hb->levels; ++l) {
-        const double u = hb->ub[l][node_at(hb, l, px >> l, py >> l)];
+        const double u = hb->ub[l][node_at(hb, l, px / k_pow2[l], py / k_pow2[l])];
         if (!isnan(u)) {
             return u;
         }
@@ -441,8 +454,8 @@ static int scored_best(const trn_hb_t *hb, const trn_exclusion_t *ex, int32_t *b
 static int node_in_zone(const trn_hb_t *hb, const trn_exclusion_t *ex, int32_t l, int32_t bx,
                         int32_t by)
 {
-    const int32_t x0 = hb->win.x0 + (bx << l), y0 = hb->win.y0 + (by << l);
-    int32_t x1 = x0 + (1 << l) - 1, y1 = y0 + (1 << l) - 1;
+    const int32_t x0 = hb->win.x0 + bx * k_pow2[l], y0 = hb->win.y0 + by * k_pow2[l];
+    int32_t x1 = x0 + k_pow2[l] - 1, y1 = y0 + k_pow2[l] - 1;
     x1 = x1 > hb->win.x1 ? hb->win.x1 : x1;
     y1 = y1 > hb->win.y1 ? hb->win.y1 : y1;
     return ex != NULL && x0 >= ex->cx - ex->radius && x1 <= ex->cx + ex->radius &&
@@ -474,10 +487,10 @@ static trn_status_t walk(trn_hb_t *hb, double t, const trn_exclusion_t *ex, int 
             continue;
         }
         if (l <= HB_LEAF) {
-            const int32_t x0 = hb->win.x0 + (bx << l), y0 = hb->win.y0 + (by << l);
+            const int32_t x0 = hb->win.x0 + bx * k_pow2[l], y0 = hb->win.y0 + by * k_pow2[l];
             int32_t x, y;
-            for (y = y0; y < y0 + (1 << l) && y <= hb->win.y1; ++y) {
-                for (x = x0; x < x0 + (1 << l) && x <= hb->win.x1; ++x) {
+            for (y = y0; y < y0 + k_pow2[l] && y <= hb->win.y1; ++y) {
+                for (x = x0; x < x0 + k_pow2[l] && x <= hb->win.x1; ++x) {
                     if (in_zone(ex, x, y)) {
                         continue;
                     }
@@ -492,8 +505,8 @@ static trn_status_t walk(trn_hb_t *hb, double t, const trn_exclusion_t *ex, int 
             continue;
         }
         for (i = 0; i < 4; ++i) { /* the children inside the window, bounded */
-            const int32_t x = 2 * bx + (i & 1), y = 2 * by + (i >> 1);
-            if ((x << (l - 1)) >= hb->ww || (y << (l - 1)) >= hb->wh) {
+            const int32_t x = 2 * bx + i % 2, y = 2 * by + i / 2;
+            if (x * k_pow2[l - 1] >= hb->ww || y * k_pow2[l - 1] >= hb->wh) {
                 continue;
             }
             if (isnan(hb->ub[l - 1][node_at(hb, l - 1, x, y)])) {
@@ -559,14 +572,19 @@ trn_status_t trn_hb_basins(trn_hb_t *hb, double t, int32_t bx, int32_t by, int32
     trn_exclusion_t ex;
     trn_status_t st;
     uint64_t before;
+    /* at most the slots of trn_loc_basins_t */
+    const int32_t nb = nbasins < 0 ? 0 : nbasins > TRN_REFINE_BASINS ? TRN_REFINE_BASINS : nbasins;
     ex.cx = bx;
     ex.cy = by;
     ex.radius = radius;
     do {
         double top[TRN_REFINE_BASINS], thr = t;
         int32_t n = 0, x, y, i;
+        for (i = 0; i < TRN_REFINE_BASINS; ++i) {
+            top[i] = -(double)INFINITY;
+        }
         before = hb->evals;
-        /* the nbasins-th highest local maximum outside the zone, so far */
+        /* the nb-th highest local maximum outside the zone, so far */
         for (y = hb->win.y0; y <= hb->win.y1; ++y) {
             for (x = hb->win.x0; x <= hb->win.x1; ++x) {
                 const double v = hb->ll[pidx(hb, x, y)];
@@ -574,7 +592,7 @@ trn_status_t trn_hb_basins(trn_hb_t *hb, double t, int32_t bx, int32_t by, int32
                     !trn_loc_grid_peak_(hb->ll, &hb->win, x, y, v)) {
                     continue;
                 }
-                if (n < nbasins) {
+                if (n < nb) {
                     top[n++] = v;
                 } else {
                     int32_t lo = 0;
@@ -585,7 +603,7 @@ trn_status_t trn_hb_basins(trn_hb_t *hb, double t, int32_t bx, int32_t by, int32
                 }
             }
         }
-        if (n == nbasins && n > 0) {
+        if (n == nb && n > 0) {
             double lo = top[0];
             for (i = 1; i < n; ++i) {
                 lo = top[i] < lo ? top[i] : lo;
@@ -671,16 +689,16 @@ trn_status_t trn_hb_mass(trn_hb_t *hb, const trn_exclusion_t *ex, double infl, d
         const int32_t by = hb->stack[--sp], bx = hb->stack[--sp], l = hb->stack[--sp];
         int32_t i, split = l > 0, x, y, left = 0;
         for (i = 0; i < 4 && split; ++i) {
-            const int32_t cx = 2 * bx + (i & 1), cy = 2 * by + (i >> 1);
-            if ((cx << (l - 1)) < hb->ww && (cy << (l - 1)) < hb->wh &&
+            const int32_t cx = 2 * bx + i % 2, cy = 2 * by + i / 2;
+            if (cx * k_pow2[l - 1] < hb->ww && cy * k_pow2[l - 1] < hb->wh &&
                 isnan(hb->ub[l - 1][node_at(hb, l - 1, cx, cy)])) {
                 split = 0;
             }
         }
         if (split) {
             for (i = 0; i < 4; ++i) {
-                const int32_t cx = 2 * bx + (i & 1), cy = 2 * by + (i >> 1);
-                if ((cx << (l - 1)) < hb->ww && (cy << (l - 1)) < hb->wh) {
+                const int32_t cx = 2 * bx + i % 2, cy = 2 * by + i / 2;
+                if (cx * k_pow2[l - 1] < hb->ww && cy * k_pow2[l - 1] < hb->wh) {
                     hb->stack[sp++] = l - 1;
                     hb->stack[sp++] = cx;
                     hb->stack[sp++] = cy;
@@ -688,8 +706,8 @@ trn_status_t trn_hb_mass(trn_hb_t *hb, const trn_exclusion_t *ex, double infl, d
             }
             continue;
         }
-        for (y = by << l; y < ((by + 1) << l) && y < hb->wh; ++y) {
-            for (x = bx << l; x < ((bx + 1) << l) && x < hb->ww; ++x) {
+        for (y = by * k_pow2[l]; y < (by + 1) * k_pow2[l] && y < hb->wh; ++y) {
+            for (x = bx * k_pow2[l]; x < (bx + 1) * k_pow2[l] && x < hb->ww; ++x) {
                 left += hb->done[(size_t)y * (size_t)hb->ww + (size_t)x] == 0u;
             }
         }
@@ -737,8 +755,8 @@ trn_status_t trn_hb_init(trn_hb_t **out, void *ws, const trn_grid_f32_t *global,
     hb->msd = (double *)(void *)(b + lay.msd);
     hb->done = b + lay.done;
     for (l = 0; l < lay.levels; ++l) {
-        const size_t nx = (size_t)((lay.ww + (1 << l) - 1) >> l);
-        const size_t ny = (size_t)((lay.wh + (1 << l) - 1) >> l);
+        const size_t nx = (size_t)((lay.ww + k_pow2[l] - 1) / k_pow2[l]);
+        const size_t ny = (size_t)((lay.wh + k_pow2[l] - 1) / k_pow2[l]);
         hb->ub[l] = (double *)(void *)(b + lay.ub[l]);
         hb->mn[l] = (float *)(void *)(b + lay.mn[l]);
         hb->mx[l] = (float *)(void *)(b + lay.mx[l]);

@@ -355,6 +355,8 @@ int bench_heights_run(int repeats, int quick, bench_heights_result_t *r)
     memset(r, 0, sizeof *r);
     memset(&m, 0, sizeof m);
     memset(&vx, 0, sizeof vx);
+    memset(&ex, 0, sizeof ex);
+    memset(&bd, 0, sizeof bd);
     if (dem == NULL || loc == NULL || flat == NULL || per == NULL) {
         fprintf(stderr, "trn_bench: height rows: out of memory\n");
         rc = 3;
