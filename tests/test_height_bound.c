@@ -375,6 +375,90 @@ static void test_mass_within_bound(void **state)
     free(ws);
 }
 
+/* The internal entry points' edges: bad sizes, too few seen cells, a local
+ * map off the map at every pose, the budget, an empty mass, the basins'
+ * slot count clamped. */
+static void test_hb_edges(void **state)
+{
+    static const trn_window_t bad[] = {
+        {5, 0, 4, 3}, {0, 5, 3, 4}, {0, 0, TRN_MAX_DIM, 3}, {0, 0, 3, TRN_MAX_DIM}};
+    const trn_window_t win = {26, 26, 36, 34};
+    const size_t poses = 11u * 9u;
+    trn_rng_t r;
+    trn_grid_f32_t g, l, few;
+    trn_refine_cfg_t rc;
+    trn_height_best_t hb_best, ex_best;
+    trn_hb_t *hb = NULL;
+    float few_data[LW * LW];
+    double *grid = malloc(poses * sizeof(double)), *lazy = malloc(poses * sizeof(double));
+    double la, lo, err;
+    const size_t hbb = trn_hb_bytes(&win, LW, LW);
+    void *ws = malloc(hbb);
+    uint64_t work = 0u;
+    size_t i;
+    (void)state;
+    assert_non_null(grid);
+    assert_non_null(lazy);
+    assert_non_null(ws);
+    /* sizes refused */
+    assert_true(trn_hb_bytes(NULL, LW, LW) == 0u);
+    for (i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        assert_true(trn_hb_bytes(&bad[i], LW, LW) == 0u);
+    }
+    assert_true(trn_hb_bytes(&win, 0, LW) == 0u);
+    assert_true(trn_hb_bytes(&win, LW, 0) == 0u);
+    assert_true(trn_hb_bytes(&win, TRN_MAX_DIM + 1, LW) == 0u);
+    assert_true(trn_hb_bytes(&win, LW, TRN_MAX_DIM + 1) == 0u);
+    trn_rng_seed(&r, 77u);
+    make_map(K_ROUGH, 31u);
+    make_local(31.3, 30.2, 0.01, 0, &r, &l);
+    assert_int_equal(trn_grid_f32_init(&g, g_data, GW * GW, GW, GW), TRN_OK);
+    rc.cell_m = 1.0f;
+    rc.noise_m = 0.01f;
+    rc.noise_k_per_m = 0.0004f;
+    rc.inlier_prob = 0.95f;
+    assert_int_equal(trn_hb_init(&hb, ws, &g, &l, LR, LR, &bad[0], &rc, 0.95f, lazy, &work, 0u),
+                     TRN_E_RANGE);
+    /* fewer than 8 seen cells: the exhaustive search's NODATA */
+    for (i = 0; i < (size_t)LW * (size_t)LW; ++i) {
+        few_data[i] = i < 5u ? 1.0f : NAN;
+    }
+    assert_int_equal(trn_grid_f32_init(&few, few_data, LW * LW, LW, LW), TRN_OK);
+    assert_int_equal(trn_hb_init(&hb, ws, &g, &few, LR, LR, &win, &rc, 0.95f, lazy, &work, 0u),
+                     TRN_E_NODATA);
+    /* nothing scored yet: no mass */
+    assert_int_equal(trn_hb_init(&hb, ws, &g, &l, LR, LR, &win, &rc, 0.95f, lazy, &work, 0u),
+                     TRN_OK);
+    assert_int_equal(trn_hb_mass(hb, NULL, 1.0, 1e-4, &la, &lo, &err), TRN_E_NODATA);
+    /* the basins with their slot count clamped, both ways */
+    assert_int_equal(trn_hb_best(hb, NULL, &hb_best), TRN_OK);
+    assert_int_equal(trn_hb_basins(hb, -INFINITY, hb_best.x, hb_best.y, 1, -1), TRN_OK);
+    assert_int_equal(trn_hb_basins(hb, -INFINITY, hb_best.x, hb_best.y, 1, 99), TRN_OK);
+    /* a budget of 2: the third score is refused, by name */
+    work = 0u;
+    assert_int_equal(trn_hb_init(&hb, ws, &g, &l, LR, LR, &win, &rc, 0.95f, lazy, &work, 2u),
+                     TRN_OK);
+    assert_int_equal(trn_hb_eval(hb, 30, 30), TRN_OK);
+    assert_int_equal(trn_hb_eval(hb, 31, 30), TRN_OK);
+    assert_int_equal(trn_hb_eval(hb, 30, 30), TRN_OK); /* scored already: no work */
+    assert_int_equal(trn_hb_eval(hb, 32, 30), TRN_E_BUDGET);
+    assert_int_equal(trn_hb_best(hb, NULL, &hb_best), TRN_E_BUDGET);
+    /* the local map off the map at every pose (the rover cell far east of
+     * it): the same best as the exhaustive search, every cell an outlier */
+    work = 0u;
+    assert_int_equal(
+        trn_height_search(&g, &l, 1000, LR, &win, NULL, &rc, 0.95f, 1.0, grid, &ex_best), TRN_OK);
+    assert_int_equal(trn_hb_init(&hb, ws, &g, &l, 1000, LR, &win, &rc, 0.95f, lazy, &work, 0u),
+                     TRN_OK);
+    assert_int_equal(trn_hb_best(hb, NULL, &hb_best), TRN_OK);
+    assert_int_equal(hb_best.x, ex_best.x);
+    assert_int_equal(hb_best.y, ex_best.y);
+    assert_true(hb_best.ll == ex_best.ll);
+    free(grid);
+    free(lazy);
+    free(ws);
+}
+
 static void test_node_budget(void **state)
 {
     trn_rng_t r;
@@ -445,6 +529,7 @@ int main(void)
         cmocka_unit_test(test_bound_holds),
         cmocka_unit_test(test_mass_within_bound),
         cmocka_unit_test(test_bounded_equals_exhaustive),
+        cmocka_unit_test(test_hb_edges),
         cmocka_unit_test(test_node_budget),
         cmocka_unit_test(test_bad_search),
     };
