@@ -373,11 +373,14 @@ static size_t field_fast_carve(const trn_select_cfg_t *scfg, const trn_map_t *ma
     return w.total;
 }
 
-/* The heading-searched prediction (select.h) has no ground path yet:
- * trn_field_fast runs trn_field's for it, in trn_field's workspace. */
-static int field_fast_delegates(const trn_select_cfg_t *scfg)
+/* The heading-searched prediction and the height prediction (select.h)
+ * have no ground path: trn_field_fast runs trn_field's for them, in
+ * trn_field's workspace (the height prediction's tables are already O(1)
+ * per candidate, and so the two give the same bits). */
+static int field_fast_delegates(const trn_select_cfg_t *scfg, const trn_map_t *map)
 {
-    return scfg != NULL && scfg->heading_search == 1 && scfg->sigma_heading_rad > 0.0f;
+    return (scfg != NULL && scfg->heading_search == 1 && scfg->sigma_heading_rad > 0.0f) ||
+           (map != NULL && map->cfg.match == (int32_t)TRN_MATCH_HEIGHTS);
 }
 
 size_t trn_field_fast_workspace_bytes(const trn_select_cfg_t *scfg, const trn_map_t *map,
@@ -386,7 +389,10 @@ size_t trn_field_fast_workspace_bytes(const trn_select_cfg_t *scfg, const trn_ma
     trn_selpre_t *pre;
     void *t;
     size_t tb;
-    if (field_fast_delegates(scfg) && pg != NULL && trn_selpre_bytes(scfg, map, k, pg) != 0u) {
+    if (field_fast_delegates(scfg, map) && map->cfg.match == (int32_t)TRN_MATCH_HEIGHTS) {
+        return trn_field_workspace_bytes(scfg, map, k);
+    }
+    if (field_fast_delegates(scfg, map) && pg != NULL && trn_selpre_bytes(scfg, map, k, pg) != 0u) {
         return trn_field_workspace_bytes(scfg, map, k);
     }
     return field_fast_carve(scfg, map, k, pg, NULL, &pre, &t, &tb);
@@ -409,7 +415,7 @@ trn_status_t trn_field_fast(const trn_map_t *map, const trn_kernels_t *k, const 
                          stats, ws)) != TRN_OK) {
         return s;
     }
-    if (field_fast_delegates(scfg)) { /* trn_field's path, inline (one frame less deep) */
+    if (field_fast_delegates(scfg, map)) { /* trn_field's path, inline (one frame less deep) */
         need = trn_field_workspace_bytes(scfg, map, k);
         if ((s = trn_ws_check(ws, ws_bytes, need)) != TRN_OK) {
             return s;

@@ -2,6 +2,7 @@
 /* select.c - candidate targets, expected log-likelihood by summed-area
  * tables, eq. 6 fit, ranking (see trn/select.h). */
 #include "trn/select.h"
+#include "select_heights.h"
 #include "select_pre.h"
 #include "ws.h"
 
@@ -29,6 +30,7 @@ void trn_select_cfg_default(trn_select_cfg_t *cfg)
     trn_sigma_local_default(&cfg->local_sigma);
     cfg->sigma_heading_rad = 0.0f;
     cfg->heading_search = 0;
+    cfg->map_sigma_m = 0.02f;
 }
 
 /* patch_m in whole cells (nearest, so 2.0 m / 0.1f m is 20, not 19), then
@@ -65,7 +67,8 @@ trn_status_t trn_select_cfg_check(const trn_select_cfg_t *cfg, float cell_m)
         !(cfg->sigma_heading_rad >= 0.0f &&
           cfg->sigma_heading_rad <= TRN_SELECT_MAX_SIGMA_HEADING_RAD) ||
         cfg->stride_cells < 1 || cfg->stride_cells > 64 ||
-        (cfg->heading_search != 0 && cfg->heading_search != 1)) {
+        (cfg->heading_search != 0 && cfg->heading_search != 1) ||
+        !(cfg->map_sigma_m >= 0.0f && cfg->map_sigma_m <= 1000.0f)) {
         return TRN_E_ARG;
     }
     if ((double)cfg->patch_m / (double)cell_m > (double)TRN_MAX_DIM ||
@@ -130,6 +133,12 @@ static size_t select_carve(int32_t w, int32_t h, int32_t nz, size_t lw, size_t n
     return c.total;
 }
 
+/* The map matches heights: trn_select predicts that matcher (select.h). */
+static int sel_heights(const trn_map_t *map)
+{
+    return map->cfg.match == (int32_t)TRN_MATCH_HEIGHTS;
+}
+
 size_t trn_select_workspace_bytes(const trn_select_cfg_t *cfg, const trn_map_t *map,
                                   const trn_kernels_t *k)
 {
@@ -137,6 +146,15 @@ size_t trn_select_workspace_bytes(const trn_select_cfg_t *cfg, const trn_map_t *
     int32_t w, h;
     trn_window_t r;
     size_t lw;
+    if (cfg != NULL && map != NULL && sel_heights(map)) {
+        if (trn_select_cfg_check(cfg, map->cfg.terrain.cell_m) != TRN_OK ||
+            trn_grid_f32_check(&map->heights) != TRN_OK) {
+            return 0u;
+        }
+        w = roi_side(cfg, map->cfg.terrain.cell_m, map->heights.width);
+        h = roi_side(cfg, map->cfg.terrain.cell_m, map->heights.height);
+        return trn_selh_bytes_(w, h, sel_moments(cfg));
+    }
     if (cfg == NULL || map == NULL || k == NULL || map->dist.nz < 1 ||
         trn_select_cfg_check(cfg, map->cfg.terrain.cell_m) != TRN_OK) {
         return 0u;
@@ -371,31 +389,249 @@ static double sel_heading_cov(const trn_peak_t *pk, double cell, double sh2c2, d
     return sqrt(cov[0] + cov[1]);
 }
 
-trn_status_t trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_vol_f32_t *pg,
-                        const trn_select_cfg_t *cfg, const trn_rover_t *rover,
-                        trn_candidate_t *cands, size_t capacity, size_t *ranked, size_t ranked_cap,
-                        trn_select_result_t *res, void *ws, size_t ws_bytes)
+/* Candidate c's covariance from its fit pk (cells^2), with the heading's
+ * term when it is uncertain (q7: the heading-searched sums, or NULL). */
+static void sel_finish(trn_candidate_t *c, const trn_peak_t *pk, const geom_t *g,
+                       const trn_select_cfg_t *cfg, double sh2c2, const double *q7)
+{
+    c->informative = 1;
+    if (q7 != NULL) {
+        c->uncertainty_m = trn_sel_search_cov_(
+            pk, c->ll, q7, g->cell, (double)cfg->sigma_heading_rad, (double)c->x - g->rxf,
+            (double)c->y - g->ryf, c->cov_m2, &c->heading_m);
+        c->sigma_x_m = sqrt(c->cov_m2[0]);
+        c->sigma_y_m = sqrt(c->cov_m2[1]);
+        c->rho = c->cov_m2[2] / (c->sigma_x_m * c->sigma_y_m);
+    } else if (sh2c2 > 0.0) {
+        c->uncertainty_m = sel_heading_cov(pk, g->cell, sh2c2, (double)c->x - g->rxf,
+                                           (double)c->y - g->ryf, c->cov_m2);
+        c->sigma_x_m = sqrt(c->cov_m2[0]);
+        c->sigma_y_m = sqrt(c->cov_m2[1]);
+        c->rho = c->cov_m2[2] / (c->sigma_x_m * c->sigma_y_m);
+        c->heading_m = (double)cfg->sigma_heading_rad * (double)c->range_m;
+    } else { /* the paper's prediction, bit for bit */
+        c->sigma_x_m = pk->sigma_x * g->cell;
+        c->sigma_y_m = pk->sigma_y * g->cell;
+        c->rho = pk->rho;
+        c->cov_m2[0] = pk->var_x * g->cell * g->cell;
+        c->cov_m2[1] = pk->var_y * g->cell * g->cell;
+        c->cov_m2[2] = pk->cov_xy * g->cell * g->cell;
+        c->uncertainty_m = sqrt(c->sigma_x_m * c->sigma_x_m + c->sigma_y_m * c->sigma_y_m);
+    }
+}
+
+static void sel_uninformative(trn_candidate_t *c)
+{
+    c->informative = 0;
+    c->sigma_x_m = HUGE_VAL;
+    c->sigma_y_m = HUGE_VAL;
+    c->rho = 0.0;
+    c->cov_m2[0] = HUGE_VAL;
+    c->cov_m2[1] = HUGE_VAL;
+    c->cov_m2[2] = 0.0;
+    c->uncertainty_m = HUGE_VAL;
+}
+
+/* The voxel prediction of the nc candidates (select.h): eq. 9 over the
+ * region, one summed-area table per pose offset, eq. 6 per candidate. */
+static trn_status_t sel_voxel(const trn_map_t *map, const trn_kernels_t *k, const trn_vol_f32_t *pg,
+                              const trn_select_cfg_t *cfg, const trn_rover_t *rover,
+                              const geom_t *g, const trn_window_t *roi, trn_candidate_t *cands,
+                              size_t nc, void *ws)
 {
     trn_status_t st;
-    geom_t g;
-    trn_window_t roi, pw;
+    trn_window_t pw;
     trn_vol_f32_t p;
-    int64_t *sat, *crow;
     sel_layout_t lay;
-    size_t need, nc = 0u, i, ninf = 0u, nr = 0u, lw, w1;
-    int32_t i_x, i_y, d, side_w, side_h, lmax = 0;
-    double scale, sep2_cells, sh2c2;
+    size_t i, lw, w1;
+    int32_t d, lmax = 0;
+    const int32_t side_w = roi->x1 - roi->x0 + 1, side_h = roi->y1 - roi->y0 + 1;
+    double scale, sh2c2;
 
-    if (map == NULL || k == NULL || pg == NULL || cfg == NULL || rover == NULL || cands == NULL ||
-        ranked == NULL || res == NULL || ws == NULL || pg->data == NULL || map->dist.data == NULL) {
-        return TRN_E_NULL;
+    /* exact int64 sums: |q lnp| summed over the region must fit */
+    for (d = 0; d <= (int32_t)map->lnp.cap; ++d) {
+        const int32_t a = map->lnp.lnp[d] < 0 ? -map->lnp.lnp[d] : map->lnp.lnp[d];
+        lmax = a > lmax ? a : lmax;
     }
-    if ((st = trn_select_cfg_check(cfg, map->cfg.terrain.cell_m)) != TRN_OK) {
+    if ((double)side_w * (double)side_h * (double)pg->nz * (double)SEL_QMAX * (double)lmax >
+        9.0e18) {
+        return TRN_E_SIZE;
+    }
+
+    /* eq. 9 over the region (this region's carve: within the largest one's) */
+    lw = trn_prob_local_workspace_bytes(k, roi);
+    (void)select_carve(
+        side_w, side_h, pg->nz, lw,
+        sel_moments(cfg) ? trn_select_max_candidates(cfg, map->cfg.terrain.cell_m) : 0u, ws, &lay);
+    p.data = lay.p;
+    p.nx = side_w;
+    p.ny = side_h;
+    p.nz = pg->nz;
+    st = trn_prob_local(k, &cfg->local_sigma, map->cfg.terrain.cell_m, rover->pos, pg, roi, &p,
+                        lay.lws, lw);
+    if (st != TRN_OK) {
         return st;
     }
-    if (!isfinite(rover->pos.x_cells) || !isfinite(rover->pos.y_cells) ||
-        !isfinite(rover->heading_rad)) {
-        return TRN_E_ARG;
+    w1 = (size_t)side_w + 1u;
+
+    /* one summed-area table per pose offset, every window read from it */
+    scale = 1.0 / ((double)TRN_SELECT_PROB_SCALE * (double)TRN_LNP_SCALE);
+    if (lay.q7 != NULL) {
+        memset(lay.q7, 0, nc * 7u * sizeof(double));
+    }
+    for (d = 0; d < 9; ++d) {
+        build_sat(map, &p, roi, d % 3 - 1, d / 3 - 1, lay.sat, lay.crow, lay.rp1, lay.rp2);
+        for (i = 0; i < nc; ++i) {
+            patch_window(g, cands[i].x, cands[i].y, &pw);
+            cands[i].ll[d] = (double)window_sum(lay.sat, w1, roi, &pw) * scale;
+            if (lay.q7 != NULL) {
+                trn_sel_moment_sums_(lay.sat, lay.rp1, lay.rp2, roi, &pw, d, scale,
+                                     lay.q7 + 7u * i);
+            }
+        }
+    }
+
+    /* eq. 6 per candidate, plus the heading's lever arm when it is uncertain */
+    sh2c2 = (double)cfg->sigma_heading_rad * (double)cfg->sigma_heading_rad * g->cell * g->cell;
+    for (i = 0; i < nc; ++i) {
+        trn_peak_t pk;
+        if (trn_peak_fit(cands[i].ll, &pk) == TRN_OK) {
+            sel_finish(&cands[i], &pk, g, cfg, sh2c2, lay.q7 != NULL ? lay.q7 + 7u * i : NULL);
+        } else {
+            sel_uninformative(&cands[i]);
+        }
+    }
+    return TRN_OK;
+}
+
+/* The heading-searched marginal of the height prediction (select.h): cov
+ * (m^2) = (I^-1 + g g^T / (s_h^-2 + I_h)) c^2, g = I^-1 b. */
+static void selh_search_cov(trn_candidate_t *c, const trn_peak_t *pk, const trn_selh_sums_t *s,
+                            double var, double sh, double cell)
+{
+    const double bx = s->bx / var, by = s->by / var, cc = s->cc / var;
+    const double gx = pk->var_x * bx + pk->cov_xy * by, gy = pk->cov_xy * bx + pk->var_y * by;
+    double info = cc - (bx * gx + by * gy), den;
+    info = info > 0.0 ? info : 0.0;
+    den = 1.0 / (sh * sh) + info;
+    c->informative = 1;
+    c->cov_m2[0] = (pk->var_x + gx * gx / den) * cell * cell;
+    c->cov_m2[1] = (pk->var_y + gy * gy / den) * cell * cell;
+    c->cov_m2[2] = (pk->cov_xy + gx * gy / den) * cell * cell;
+    c->heading_m = sqrt((gx * gx + gy * gy) / den) * cell;
+    c->uncertainty_m = sqrt(c->cov_m2[0] + c->cov_m2[1]);
+    c->sigma_x_m = sqrt(c->cov_m2[0]);
+    c->sigma_y_m = sqrt(c->cov_m2[1]);
+    c->rho = c->cov_m2[2] / (c->sigma_x_m * c->sigma_y_m);
+}
+
+/* The height prediction of one candidate from its patch's sums (select.h). */
+static void selh_candidate(const trn_map_t *map, const trn_select_cfg_t *cfg, const geom_t *g,
+                           const trn_selh_sums_t *s, trn_candidate_t *c)
+{
+    const double r = (double)c->range_m;
+    const double sn = (double)map->cfg.noise_m + (double)map->cfg.noise_k_per_m * r * r;
+    const double ms = (double)cfg->map_sigma_m;
+    const double var = sn * sn + ms * ms + 0.25 * s->e2;
+    const double det = s->axx * s->ayy - s->axy * s->axy;
+    const double sh = (double)cfg->sigma_heading_rad;
+    trn_peak_t pk;
+    int32_t d;
+    if (!(s->n >= 3.0) || !(s->axx > 0.0) || !(s->ayy > 0.0) || !(det > 1e-12 * s->raw * s->raw) ||
+        !(var > 0.0)) {
+        sel_uninformative(c);
+        return;
+    }
+    for (d = 0; d < 9; ++d) { /* the expected ln L at the nine offsets, about the centre */
+        const double lx = (double)(d % 3 - 1), ly = (double)(d / 3 - 1);
+        c->ll[d] = -0.5 * (lx * lx * s->axx + 2.0 * lx * ly * s->axy + ly * ly * s->ayy) / var;
+    }
+    memset(&pk, 0, sizeof pk);
+    pk.var_x = var * s->ayy / det;
+    pk.var_y = var * s->axx / det;
+    pk.cov_xy = -var * s->axy / det;
+    pk.sigma_x = sqrt(pk.var_x);
+    pk.sigma_y = sqrt(pk.var_y);
+    pk.rho = pk.cov_xy / (pk.sigma_x * pk.sigma_y);
+    if (sel_moments(cfg)) {
+        selh_search_cov(c, &pk, s, var, sh, g->cell);
+    } else {
+        sel_finish(c, &pk, g, cfg, sh * sh * g->cell * g->cell, NULL);
+    }
+}
+
+/* The height prediction of the nc candidates: the tables over the region,
+ * each candidate's sums from them. */
+static trn_status_t sel_heights_all(const trn_map_t *map, const trn_select_cfg_t *cfg,
+                                    const geom_t *g, const trn_window_t *roi,
+                                    trn_candidate_t *cands, size_t nc, void *ws)
+{
+    const int heading = sel_moments(cfg);
+    trn_status_t st = trn_selh_build_(&map->heights, roi, heading, g->rxf, g->ryf, ws);
+    size_t i;
+    if (st != TRN_OK) {
+        return st;
+    }
+    for (i = 0; i < nc; ++i) {
+        trn_window_t pw;
+        trn_selh_sums_t s;
+        patch_window(g, cands[i].x, cands[i].y, &pw);
+        trn_selh_sums_(ws, roi, &pw, heading, &s);
+        selh_candidate(map, cfg, g, &s, &cands[i]);
+    }
+    return TRN_OK;
+}
+
+/* Ranking: repeatedly the lowest uncertainty at least min_separation from
+ * every target already ranked (ties: earlier in lattice order). Returns the
+ * number ranked. */
+static size_t sel_rank(const trn_candidate_t *cands, size_t nc, double sep_cells, size_t *ranked,
+                       size_t ranked_cap)
+{
+    const double sep2_cells = sep_cells * sep_cells;
+    size_t nr, i;
+    for (nr = 0u; nr < ranked_cap; ++nr) {
+        size_t best = nc, j;
+        for (i = 0; i < nc; ++i) {
+            int ok = cands[i].informative;
+            for (j = 0; ok && j < nr; ++j) {
+                const double ex = (double)(cands[i].x - cands[ranked[j]].x);
+                const double ey = (double)(cands[i].y - cands[ranked[j]].y);
+                if (i == ranked[j] || ex * ex + ey * ey < sep2_cells) {
+                    ok = 0;
+                }
+            }
+            if (ok && (best == nc || cands[i].uncertainty_m < cands[best].uncertainty_m)) {
+                best = i;
+            }
+        }
+        if (best == nc) {
+            break;
+        }
+        ranked[nr] = best;
+    }
+    return nr;
+}
+
+/* The arguments of trn_select that depend on the prediction: the voxel's
+ * kernels, P_G and distances, or the heights. */
+static trn_status_t sel_check_map(const trn_map_t *map, const trn_kernels_t *k,
+                                  const trn_vol_f32_t *pg, int32_t *nx, int32_t *ny)
+{
+    trn_status_t st;
+    if (sel_heights(map)) {
+        if (map->heights.data == NULL) {
+            return TRN_E_NULL;
+        }
+        if ((st = trn_grid_f32_check(&map->heights)) != TRN_OK) {
+            return st;
+        }
+        *nx = map->heights.width;
+        *ny = map->heights.height;
+        return TRN_OK;
+    }
+    if (k == NULL || pg == NULL || pg->data == NULL || map->dist.data == NULL) {
+        return TRN_E_NULL;
     }
     if ((st = trn_vol_u8_check(&map->dist)) != TRN_OK) {
         return st;
@@ -404,9 +640,38 @@ trn_status_t trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_
         map->lnp.cap < 1u || map->lnp.cap > TRN_CHAMFER_CAP_MAX) {
         return TRN_E_SIZE;
     }
+    *nx = map->dist.nx;
+    *ny = map->dist.ny;
+    return TRN_OK;
+}
+
+trn_status_t trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_vol_f32_t *pg,
+                        const trn_select_cfg_t *cfg, const trn_rover_t *rover,
+                        trn_candidate_t *cands, size_t capacity, size_t *ranked, size_t ranked_cap,
+                        trn_select_result_t *res, void *ws, size_t ws_bytes)
+{
+    trn_status_t st;
+    geom_t g;
+    trn_window_t roi, pw;
+    size_t need, nc = 0u, i, ninf = 0u;
+    int32_t i_x, i_y, nx = 0, ny = 0;
+
+    if (map == NULL || cfg == NULL || rover == NULL || cands == NULL || ranked == NULL ||
+        res == NULL || ws == NULL) {
+        return TRN_E_NULL;
+    }
+    if ((st = sel_check_map(map, k, pg, &nx, &ny)) != TRN_OK) {
+        return st;
+    }
+    if ((st = trn_select_cfg_check(cfg, map->cfg.terrain.cell_m)) != TRN_OK) {
+        return st;
+    }
+    if (!isfinite(rover->pos.x_cells) || !isfinite(rover->pos.y_cells) ||
+        !isfinite(rover->heading_rad)) {
+        return TRN_E_ARG;
+    }
     if (rover->pos.x_cells < -0.5f || rover->pos.y_cells < -0.5f ||
-        rover->pos.x_cells > (float)map->dist.nx - 0.5f ||
-        rover->pos.y_cells > (float)map->dist.ny - 0.5f) {
+        rover->pos.x_cells > (float)nx - 0.5f || rover->pos.y_cells > (float)ny - 0.5f) {
         return TRN_E_RANGE;
     }
     if (capacity == 0u || ranked_cap == 0u) {
@@ -417,8 +682,8 @@ trn_status_t trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_
         return st;
     }
 
-    g.nx = map->dist.nx;
-    g.ny = map->dist.ny;
+    g.nx = nx;
+    g.ny = ny;
     g.half = patch_cells(cfg, map->cfg.terrain.cell_m) / 2;
     g.rxf = (double)rover->pos.x_cells;
     g.ryf = (double)rover->pos.y_cells;
@@ -463,125 +728,23 @@ trn_status_t trn_select(const trn_map_t *map, const trn_kernels_t *k, const trn_
     }
     res->roi = roi;
     res->n_candidates = nc;
-    side_w = roi.x1 - roi.x0 + 1;
-    side_h = roi.y1 - roi.y0 + 1;
 
-    /* exact int64 sums: |q lnp| summed over the region must fit */
-    for (d = 0; d <= (int32_t)map->lnp.cap; ++d) {
-        const int32_t a = map->lnp.lnp[d] < 0 ? -map->lnp.lnp[d] : map->lnp.lnp[d];
-        lmax = a > lmax ? a : lmax;
-    }
-    if ((double)side_w * (double)side_h * (double)pg->nz * (double)SEL_QMAX * (double)lmax >
-        9.0e18) {
-        return TRN_E_SIZE;
-    }
-
-    /* 2. eq. 9 over the region (this region's carve: within the largest one's) */
-    lw = trn_prob_local_workspace_bytes(k, &roi);
-    (void)select_carve(
-        side_w, side_h, pg->nz, lw,
-        sel_moments(cfg) ? trn_select_max_candidates(cfg, map->cfg.terrain.cell_m) : 0u, ws, &lay);
-    p.data = lay.p;
-    p.nx = side_w;
-    p.ny = side_h;
-    p.nz = pg->nz;
-    st = trn_prob_local(k, &cfg->local_sigma, map->cfg.terrain.cell_m, rover->pos, pg, &roi, &p,
-                        lay.lws, lw);
+    /* 2. each candidate's prediction: the map's matcher */
+    st = sel_heights(map) ? sel_heights_all(map, cfg, &g, &roi, cands, nc, ws)
+                          : sel_voxel(map, k, pg, cfg, rover, &g, &roi, cands, nc, ws);
     if (st != TRN_OK) {
         return st;
     }
-    sat = lay.sat;
-    w1 = (size_t)side_w + 1u;
-    crow = lay.crow;
-
-    /* 3. one summed-area table per pose offset, every window read from it */
-    scale = 1.0 / ((double)TRN_SELECT_PROB_SCALE * (double)TRN_LNP_SCALE);
-    if (lay.q7 != NULL) {
-        memset(lay.q7, 0, nc * 7u * sizeof(double));
-    }
-    for (d = 0; d < 9; ++d) {
-        build_sat(map, &p, &roi, d % 3 - 1, d / 3 - 1, sat, crow, lay.rp1, lay.rp2);
-        for (i = 0; i < nc; ++i) {
-            patch_window(&g, cands[i].x, cands[i].y, &pw);
-            cands[i].ll[d] = (double)window_sum(sat, w1, &roi, &pw) * scale;
-            if (lay.q7 != NULL) {
-                trn_sel_moment_sums_(sat, lay.rp1, lay.rp2, &roi, &pw, d, scale, lay.q7 + 7u * i);
-            }
-        }
-    }
-
-    /* 4. eq. 6 per candidate, plus the heading's lever arm when it is uncertain */
-    sh2c2 = (double)cfg->sigma_heading_rad * (double)cfg->sigma_heading_rad * g.cell * g.cell;
     for (i = 0; i < nc; ++i) {
-        trn_peak_t pk;
-        trn_candidate_t *c = &cands[i];
-        if (trn_peak_fit(c->ll, &pk) == TRN_OK) {
-            c->informative = 1;
-            if (lay.q7 != NULL) {
-                c->uncertainty_m = trn_sel_search_cov_(
-                    &pk, c->ll, lay.q7 + 7u * i, g.cell, (double)cfg->sigma_heading_rad,
-                    (double)c->x - g.rxf, (double)c->y - g.ryf, c->cov_m2, &c->heading_m);
-                c->sigma_x_m = sqrt(c->cov_m2[0]);
-                c->sigma_y_m = sqrt(c->cov_m2[1]);
-                c->rho = c->cov_m2[2] / (c->sigma_x_m * c->sigma_y_m);
-            } else if (sh2c2 > 0.0) {
-                c->uncertainty_m = sel_heading_cov(&pk, g.cell, sh2c2, (double)c->x - g.rxf,
-                                                   (double)c->y - g.ryf, c->cov_m2);
-                c->sigma_x_m = sqrt(c->cov_m2[0]);
-                c->sigma_y_m = sqrt(c->cov_m2[1]);
-                c->rho = c->cov_m2[2] / (c->sigma_x_m * c->sigma_y_m);
-                c->heading_m = (double)cfg->sigma_heading_rad * (double)c->range_m;
-            } else { /* the paper's prediction, bit for bit */
-                c->sigma_x_m = pk.sigma_x * g.cell;
-                c->sigma_y_m = pk.sigma_y * g.cell;
-                c->rho = pk.rho;
-                c->cov_m2[0] = pk.var_x * g.cell * g.cell;
-                c->cov_m2[1] = pk.var_y * g.cell * g.cell;
-                c->cov_m2[2] = pk.cov_xy * g.cell * g.cell;
-                c->uncertainty_m = sqrt(c->sigma_x_m * c->sigma_x_m + c->sigma_y_m * c->sigma_y_m);
-            }
-            ++ninf;
-        } else {
-            c->informative = 0;
-            c->sigma_x_m = HUGE_VAL;
-            c->sigma_y_m = HUGE_VAL;
-            c->rho = 0.0;
-            c->cov_m2[0] = HUGE_VAL;
-            c->cov_m2[1] = HUGE_VAL;
-            c->cov_m2[2] = 0.0;
-            c->uncertainty_m = HUGE_VAL;
-        }
+        ninf += cands[i].informative != 0 ? 1u : 0u;
     }
     res->n_informative = ninf;
     if (ninf == 0u) {
         return TRN_E_NOTARGET;
     }
 
-    /* 5. ranking: repeatedly the lowest uncertainty at least min_separation
-     * from every target already ranked (ties: earlier in lattice order) */
-    sep2_cells = (double)cfg->min_separation_m / g.cell;
-    sep2_cells *= sep2_cells;
-    for (nr = 0u; nr < ranked_cap; ++nr) {
-        size_t best = nc, j;
-        for (i = 0; i < nc; ++i) {
-            int ok = cands[i].informative;
-            for (j = 0; ok && j < nr; ++j) {
-                const double ex = (double)(cands[i].x - cands[ranked[j]].x);
-                const double ey = (double)(cands[i].y - cands[ranked[j]].y);
-                if (i == ranked[j] || ex * ex + ey * ey < sep2_cells) {
-                    ok = 0;
-                }
-            }
-            if (ok && (best == nc || cands[i].uncertainty_m < cands[best].uncertainty_m)) {
-                best = i;
-            }
-        }
-        if (best == nc) {
-            break;
-        }
-        ranked[nr] = best;
-    }
-    res->n_ranked = nr;
+    /* 3. ranking */
+    res->n_ranked = sel_rank(cands, nc, (double)cfg->min_separation_m / g.cell, ranked, ranked_cap);
     res->best = ranked[0];
     return TRN_OK;
 }

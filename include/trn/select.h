@@ -57,6 +57,30 @@
  * prefix sums in double beside the exact int64 tables. heading_m is then
  * |g| c / sqrt(s_h^-2 + I). Structure concentrated at the patch centre gives
  * g = J (dx, dy) and I = 0: the lever arm above exactly.
+ *
+ * The height matcher's prediction (method.md 4, "The height matcher's
+ * prediction"): when the map matches heights (map->cfg.match ==
+ * TRN_MATCH_HEIGHTS, its heights stored), the prediction is that matcher's
+ * own model instead, and k and pg are not read (they may be NULL). The
+ * local heights l = h(p + u) + dz + noise of a patch's cells give the
+ * information of the pose p (per cell^2)
+ *   I = sum (g - mean g)(g - mean g)^T / s^2
+ * over the patch's cells whose four neighbours are known, g the map's
+ * central-difference gradient (m per cell; the offset dz profiled out,
+ * hence the centred gradients), and one variance per patch
+ *   s^2 = (noise_m + noise_k_per_m r^2)^2 + map_sigma_m^2 + mean(e^2) / 4,
+ * r the target's range, the first term the matcher's own noise model
+ * (map->cfg), e = h - the mean of its four neighbours (the map's
+ * representation error: a bilinear interpolant's is at most half of it).
+ * The covariance is I^-1 (cells^2, times cell_m^2), ll[d] the expected
+ * -d^T I d / 2; a patch with fewer than 3 such cells, or whose I is singular
+ * to 1e-12 of its uncentred sums (flat ground, a plane: a shift along a
+ * plane is a height offset) is uninformative. Exact int64 summed-area
+ * tables give every candidate's sums in O(1). The heading's lever arm
+ * applies as above; heading searched, the marginal above with the
+ * heights' b = sum (g - mean g)(t - mean t) / s^2, c = sum (t - mean t)^2 /
+ * s^2, t = g . J u the heading's column (u the cell's offset from the rover,
+ * cells).
  */
 #ifndef TRN_SELECT_H
 #define TRN_SELECT_H
@@ -94,6 +118,11 @@ typedef struct {
                                    marginal of the (x, y, heading) fit with that prior: patches
                                    whose structure spreads across them pin the heading and lose
                                    less (method.md 4); with sigma_heading_rad = 0 no effect */
+    float map_sigma_m;             /**< the height prediction only (a map that matches heights):
+                                   the global DEM's height error, standard deviation, metres,
+                                   [0, 1000] (default 0.02, eq. 8's S0 of
+                                   trn_sigma_global_default); the voxel prediction takes the
+                                   map's error from P_G (eq. 8) instead */
 } trn_select_cfg_t;
 
 /** Largest sigma_heading_rad (0.5 rad, 28.6 deg): the heading's term is the
@@ -137,7 +166,8 @@ typedef struct {
 
 /** @brief Defaults (method.md 4): range 1-10 m, full pan (+-pi), footprint
  * 0.5 m, 2 m patch (21 cells at 0.1 m), stride 2 cells, separation 1 m (half
- * a patch), local error trn_sigma_local_default, heading known (sigma 0).
+ * a patch), local error trn_sigma_local_default, heading known (sigma 0),
+ * the DEM's height error 0.02 m (the height prediction).
  * @param[out] cfg the defaults; NULL is ignored. */
 void trn_select_cfg_default(trn_select_cfg_t *cfg);
 
@@ -158,9 +188,11 @@ size_t trn_select_workspace_bytes(const trn_select_cfg_t *cfg, const trn_map_t *
 
 /**
  * @brief Score every candidate target of one rover position and rank them.
- * @param[in]  map      prepared global map (distances, ln p table, cell size).
- * @param[in]  k        kernel table.
- * @param[in]  pg       eq. 8 probability map of this map (same nx, ny, nz).
+ * @param[in]  map      prepared global map (distances, ln p table, cell size;
+ *                      a map matching heights: its heights, the height prediction).
+ * @param[in]  k        kernel table (not read by the height prediction; may be NULL).
+ * @param[in]  pg       eq. 8 probability map of this map (same nx, ny, nz; not
+ *                      read by the height prediction; may be NULL).
  * @param[in]  cfg      candidate rules.
  * @param[in]  rover    rover position (on the map) and heading (finite).
  * @param[out] cands    capacity entries; n_candidates written (row-major lattice order).
@@ -173,7 +205,8 @@ size_t trn_select_workspace_bytes(const trn_select_cfg_t *cfg, const trn_map_t *
  * @retval TRN_E_NOTARGET candidates exist but none is informative (cands,
  *         res filled; n_ranked = 0) or no candidate lies within reach
  * @retval TRN_E_NULL, TRN_E_ARG (cfg, rover not finite), TRN_E_SIZE (pg does
- *         not match the map, or the region is too large for exact int64 sums),
+ *         not match the map, or the region is too large for exact int64 sums,
+ *         with heights: for its gradients),
  *         TRN_E_RANGE (rover off the map), TRN_E_CAPACITY (more candidates
  *         than capacity, ranked_cap 0), TRN_E_WORKSPACE
  */

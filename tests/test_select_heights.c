@@ -1,0 +1,517 @@
+/* SPDX-License-Identifier: Apache-2.0 */
+/* test_select_heights.c - the height matcher's prediction in trn_select
+ * (select.h, docs/method.md 4, "The height matcher's prediction").
+ *
+ * Oracles: (1) slow code written out here that forms each candidate's
+ * information from the map's heights cell by cell in double, with the
+ * gradients unquantized (the core quantizes them to 2^-16 m per cell, hence
+ * the relative tolerance); (2) the analytic covariance of a paraboloid,
+ * whose central differences and representation residual are exact;
+ * (3) flat ground and a plane, which no shift can be told from a height
+ * offset on; (4) trn_field against trn_field_fast, bit for bit. Then the
+ * statuses of bad input. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "selworld.h"
+#include "trn/trn.h"
+
+#define N 72
+#define CELL 0.1f
+
+typedef struct {
+    float dem[N * N];
+    trn_grid_f32_t g;
+    trn_map_cfg_t cfg;
+    trn_map_t map;
+    void *buf;
+} hmap_t;
+
+/* A heights map of dem (N x N). */
+static void hmap_init(hmap_t *h, const float *dem)
+{
+    size_t mb;
+    memcpy(h->dem, dem, sizeof h->dem);
+    assert_int_equal(trn_grid_f32_init(&h->g, h->dem, (size_t)N * N, N, N), TRN_OK);
+    trn_map_cfg_default(&h->cfg);
+    h->cfg.terrain.cell_m = CELL;
+    h->cfg.match = TRN_MATCH_HEIGHTS;
+    h->cfg.noise_m = 0.01f;
+    h->cfg.noise_k_per_m = 0.002f;
+    mb = trn_map_bytes(&h->cfg, N, N);
+    assert_true(mb > 0u);
+    h->buf = selworld_alloc(mb);
+    assert_non_null(h->buf);
+    assert_int_equal(trn_map_build(&h->map, &h->cfg, &h->g, h->buf, mb), TRN_OK);
+}
+
+static uint64_t g_rng;
+static double urand(void)
+{
+    g_rng = g_rng * 6364136223846793005ull + 1442695040888963407ull;
+    return (double)(g_rng >> 11) / 9007199254740992.0;
+}
+
+/* Rough ground: bumps of random size on a gentle wave; holes (NaN) when asked. */
+static void rough_dem(float *dem, uint64_t seed, int holes)
+{
+    double bx[40], by[40], ba[40], bs[40];
+    int i, x, y;
+    g_rng = seed;
+    for (i = 0; i < 40; ++i) {
+        bx[i] = urand() * N;
+        by[i] = urand() * N;
+        ba[i] = 0.05 + 0.3 * urand();
+        bs[i] = 1.5 + 4.0 * urand();
+    }
+    for (y = 0; y < N; ++y) {
+        for (x = 0; x < N; ++x) {
+            double v = 0.2 * sin(0.11 * x) * cos(0.07 * y);
+            for (i = 0; i < 40; ++i) {
+                const double dx = x - bx[i], dy = y - by[i];
+                v += ba[i] * exp(-(dx * dx + dy * dy) / (2.0 * bs[i] * bs[i]));
+            }
+            dem[y * N + x] = (float)v;
+        }
+    }
+    for (i = 0; holes && i < 25; ++i) {
+        x = (int)(urand() * N);
+        y = (int)(urand() * N);
+        dem[y * N + x] = NAN;
+    }
+}
+
+static void small_cfg(trn_select_cfg_t *c)
+{
+    trn_select_cfg_default(c);
+    c->min_range_m = 0.5f;
+    c->max_range_m = 2.5f;
+    c->footprint_radius_m = 0.3f;
+    c->patch_m = 0.9f;
+    c->stride_cells = 1;
+    c->min_separation_m = 0.45f;
+}
+
+typedef struct {
+    trn_candidate_t *cands;
+    size_t cap, ranked[8];
+    trn_select_result_t res;
+    void *ws;
+} run_t;
+
+static trn_status_t run_select(const hmap_t *h, const trn_select_cfg_t *c, float rx, float ry,
+                               float heading, run_t *r)
+{
+    const size_t wb = trn_select_workspace_bytes(c, &h->map, NULL);
+    trn_rover_t rv;
+    assert_true(wb > 0u);
+    r->cap = trn_select_max_candidates(c, CELL);
+    r->cands = calloc(r->cap, sizeof *r->cands);
+    r->ws = selworld_alloc(wb);
+    assert_non_null(r->cands);
+    assert_non_null(r->ws);
+    rv.pos.x_cells = rx;
+    rv.pos.y_cells = ry;
+    rv.heading_rad = heading;
+    return trn_select(&h->map, NULL, NULL, c, &rv, r->cands, r->cap, r->ranked, 8u, &r->res, r->ws,
+                      wb);
+}
+
+static void run_free(run_t *r)
+{
+    free(r->cands);
+    free(r->ws);
+}
+
+/* The slow prediction of candidate c: the 2 x 2 (or, heading searched, 3 x 3)
+ * profiled information summed cell by cell, its covariance in m^2. Returns
+ * 0 when uninformative. */
+static int slow_cov(const hmap_t *h, const trn_select_cfg_t *sc, const trn_candidate_t *c,
+                    double rx, double ry, double cov[3])
+{
+    const int half = (int)floor(sc->patch_m / CELL + 0.5) / 2;
+    double s[3] = {0, 0, 0}, ss[3][3], n = 0, e2 = 0, var, a, b, d, det, sn, sh;
+    double inv[3];
+    int x, y, i, j;
+    memset(ss, 0, sizeof ss);
+    for (y = c->y - half; y <= c->y + half; ++y) {
+        for (x = c->x - half; x <= c->x + half; ++x) {
+            const double v = h->dem[y * N + x], l = h->dem[y * N + x - 1],
+                         r = h->dem[y * N + x + 1], dn = h->dem[(y - 1) * N + x],
+                         up = h->dem[(y + 1) * N + x];
+            double j3[3];
+            if (!(isfinite(v) && isfinite(l) && isfinite(r) && isfinite(dn) && isfinite(up))) {
+                continue;
+            }
+            j3[0] = 0.5 * (r - l);
+            j3[1] = 0.5 * (up - dn);
+            j3[2] = j3[1] * (x - rx) - j3[0] * (y - ry);
+            for (i = 0; i < 3; ++i) {
+                s[i] += j3[i];
+                for (j = 0; j < 3; ++j) {
+                    ss[i][j] += j3[i] * j3[j];
+                }
+            }
+            e2 += (v - 0.25 * (l + r + dn + up)) * (v - 0.25 * (l + r + dn + up));
+            n += 1.0;
+        }
+    }
+    if (n < 3) {
+        return 0;
+    }
+    for (i = 0; i < 3; ++i) {
+        for (j = 0; j < 3; ++j) {
+            ss[i][j] -= s[i] * s[j] / n;
+        }
+    }
+    sn = h->cfg.noise_m + h->cfg.noise_k_per_m * (double)c->range_m * (double)c->range_m;
+    var = sn * sn + (double)sc->map_sigma_m * (double)sc->map_sigma_m + 0.25 * e2 / n;
+    a = ss[0][0] / var;
+    b = ss[0][1] / var;
+    d = ss[1][1] / var;
+    det = a * d - b * b;
+    if (!(det > 1e-12 * ((ss[0][0] + ss[1][1] + s[0] * s[0] / n + s[1] * s[1] / n) / var) *
+                    ((ss[0][0] + ss[1][1] + s[0] * s[0] / n + s[1] * s[1] / n) / var))) {
+        return 0;
+    }
+    inv[0] = d / det;
+    inv[1] = a / det;
+    inv[2] = -b / det;
+    sh = sc->sigma_heading_rad;
+    if (sc->heading_search == 1 && sh > 0.0) {
+        const double bx = ss[0][2] / var, by = ss[1][2] / var, cc = ss[2][2] / var;
+        const double gx = inv[0] * bx + inv[2] * by, gy = inv[2] * bx + inv[1] * by;
+        double info = cc - (bx * gx + by * gy), den;
+        info = info > 0 ? info : 0;
+        den = 1.0 / (sh * sh) + info;
+        inv[0] += gx * gx / den;
+        inv[1] += gy * gy / den;
+        inv[2] += gx * gy / den;
+    } else if (sh > 0.0) {
+        const double dx = c->x - rx, dy = c->y - ry;
+        inv[0] += sh * sh * dy * dy;
+        inv[1] += sh * sh * dx * dx;
+        inv[2] -= sh * sh * dx * dy;
+    }
+    for (i = 0; i < 3; ++i) {
+        cov[i] = inv[i] * (double)CELL * (double)CELL;
+    }
+    return 1;
+}
+
+/* Every candidate against the slow prediction; returns the worst relative
+ * difference of the covariance (to its trace). */
+static double against_slow(const hmap_t *h, const trn_select_cfg_t *sc, float rx, float ry)
+{
+    run_t r;
+    size_t i, ninf = 0;
+    double worst = 0.0;
+    trn_status_t st = run_select(h, sc, rx, ry, 0.3f, &r);
+    assert_int_equal(st, TRN_OK);
+    assert_true(r.res.n_candidates > 100u);
+    for (i = 0; i < r.res.n_candidates; ++i) {
+        const trn_candidate_t *c = &r.cands[i];
+        double cov[3];
+        int inf = slow_cov(h, sc, c, rx, ry, cov);
+        assert_int_equal(inf, c->informative);
+        if (inf) {
+            const double tr = cov[0] + cov[1];
+            int k;
+            for (k = 0; k < 3; ++k) {
+                const double rel = fabs(cov[k] - c->cov_m2[k]) / tr;
+                worst = rel > worst ? rel : worst;
+            }
+            assert_true(fabs(c->uncertainty_m - sqrt(tr)) <= 1e-4 * sqrt(tr));
+            ++ninf;
+        }
+    }
+    assert_true(ninf > 100u);
+    /* ranked[0] is the smallest uncertainty */
+    for (i = 0; i < r.res.n_candidates; ++i) {
+        if (r.cands[i].informative) {
+            assert_true(r.cands[r.res.best].uncertainty_m <= r.cands[i].uncertainty_m);
+        }
+    }
+    run_free(&r);
+    return worst;
+}
+
+static void test_against_slow(void **state)
+{
+    hmap_t *h = malloc(sizeof *h);
+    trn_select_cfg_t sc;
+    double w;
+    (void)state;
+    rough_dem(h->dem, 7u, 1);
+    hmap_init(h, h->dem);
+    small_cfg(&sc);
+    w = against_slow(h, &sc, 35.0f, 33.4f);
+    print_message("worst relative difference, x-y: %.3g\n", w);
+    assert_true(w < 1e-4);
+    sc.map_sigma_m = 0.05f;
+    sc.sigma_heading_rad = 0.03f;
+    w = against_slow(h, &sc, 30.3f, 40.0f);
+    assert_true(w < 1e-4);
+    sc.heading_search = 1;
+    w = against_slow(h, &sc, 30.3f, 40.0f);
+    print_message("worst relative difference, heading searched: %.3g\n", w);
+    assert_true(w < 1e-4);
+    free(h->buf);
+    free(h);
+}
+
+/* The expected ln L at the nine offsets is the quadratic whose eq. 6 fit
+ * gives the covariance back. */
+static void test_ll_is_the_quadratic(void **state)
+{
+    hmap_t *h = malloc(sizeof *h);
+    trn_select_cfg_t sc;
+    run_t r;
+    size_t i, checked = 0;
+    (void)state;
+    rough_dem(h->dem, 11u, 0);
+    hmap_init(h, h->dem);
+    small_cfg(&sc);
+    assert_int_equal(run_select(h, &sc, 36.0f, 36.0f, 0.0f, &r), TRN_OK);
+    for (i = 0; i < r.res.n_candidates; ++i) {
+        trn_peak_t pk;
+        const trn_candidate_t *c = &r.cands[i];
+        if (!c->informative) {
+            continue;
+        }
+        assert_true(c->ll[4] == 0.0);
+        if (trn_peak_fit(c->ll, &pk) == TRN_OK) {
+            const double s = c->cov_m2[0] + c->cov_m2[1];
+            assert_true(fabs(pk.var_x * CELL * CELL - c->cov_m2[0]) <= 1e-9 * s);
+            assert_true(fabs(pk.cov_xy * CELL * CELL - c->cov_m2[2]) <= 1e-9 * s);
+            ++checked;
+        }
+    }
+    assert_true(checked > 100u);
+    run_free(&r);
+    free(h->buf);
+    free(h);
+}
+
+/* h = c ((x - x0)^2 + (y - y0)^2): gx = 2 c (x - x0) exactly, e = -c, so the
+ * profiled information of a P x P patch (P = 2 m + 1) is 4 c^2 P m (m + 1)
+ * (2 m + 1) / 3 on each axis, none across, and s^2 = s(r)^2 + S0^2 + c^2 / 4. */
+static void test_paraboloid(void **state)
+{
+    hmap_t *h = malloc(sizeof *h);
+    float *dem = malloc(sizeof(float) * N * N);
+    const double cc = 0.001;
+    trn_select_cfg_t sc;
+    run_t r;
+    size_t i;
+    int x, y, m;
+    double info;
+    (void)state;
+    for (y = 0; y < N; ++y) {
+        for (x = 0; x < N; ++x) {
+            dem[y * N + x] = (float)(cc * ((x - 30) * (x - 30) + (y - 41) * (y - 41)));
+        }
+    }
+    hmap_init(h, dem);
+    small_cfg(&sc);
+    sc.map_sigma_m = 0.03f;
+    assert_int_equal(run_select(h, &sc, 36.0f, 36.0f, 0.0f, &r), TRN_OK);
+    m = r.res.patch_cells / 2;
+    info = 4.0 * cc * cc * (2 * m + 1) * m * (m + 1) * (2 * m + 1) / 3.0;
+    assert_int_equal(r.res.n_informative, r.res.n_candidates);
+    for (i = 0; i < r.res.n_candidates; ++i) {
+        const trn_candidate_t *c = &r.cands[i];
+        const double rr = c->range_m;
+        const double sn = 0.01 + 0.002 * rr * rr;
+        const double var = sn * sn + 0.03 * 0.03 + 0.25 * cc * cc;
+        const double want = var / info * (double)CELL * (double)CELL;
+        assert_true(fabs(c->cov_m2[0] - want) <= 1e-4 * want);
+        assert_true(fabs(c->cov_m2[1] - want) <= 1e-4 * want);
+        assert_true(fabs(c->cov_m2[2]) <= 1e-4 * want);
+    }
+    /* the noise grows with the range, so the nearest candidate wins */
+    for (i = 0; i < r.res.n_candidates; ++i) {
+        assert_true(r.cands[r.res.best].range_m <= r.cands[i].range_m);
+    }
+    run_free(&r);
+    free(dem);
+    free(h->buf);
+    free(h);
+}
+
+/* Flat ground and a plane: a shift is a height offset, nothing localizes. */
+static void test_flat_and_plane(void **state)
+{
+    hmap_t *h = malloc(sizeof *h);
+    float *dem = malloc(sizeof(float) * N * N);
+    trn_select_cfg_t sc;
+    run_t r;
+    int x, y, k;
+    (void)state;
+    small_cfg(&sc);
+    for (k = 0; k < 2; ++k) {
+        for (y = 0; y < N; ++y) {
+            for (x = 0; x < N; ++x) {
+                dem[y * N + x] = k == 0 ? 1.5f : (float)(0.25 * x + 0.125 * y);
+            }
+        }
+        hmap_init(h, dem);
+        assert_int_equal(run_select(h, &sc, 36.0f, 36.0f, 0.0f, &r), TRN_E_NOTARGET);
+        assert_true(r.res.n_candidates > 100u);
+        assert_int_equal(r.res.n_informative, 0u);
+        assert_true(isinf(r.cands[0].uncertainty_m));
+        run_free(&r);
+        free(h->buf);
+    }
+    /* one bump on the plane: only the patches that hold it localize */
+    dem[36 * N + 48] += 0.5f;
+    hmap_init(h, dem);
+    assert_int_equal(run_select(h, &sc, 36.0f, 36.0f, 0.0f, &r), TRN_OK);
+    assert_true(r.res.n_informative > 0u && r.res.n_informative < r.res.n_candidates / 4u);
+    assert_true(abs(r.cands[r.res.best].x - 48) <= r.res.patch_cells / 2 &&
+                abs(r.cands[r.res.best].y - 36) <= r.res.patch_cells / 2);
+    run_free(&r);
+    free(h->buf);
+    free(dem);
+    free(h);
+}
+
+/* trn_field and trn_field_fast on a heights map: the same bits. */
+static void test_field_same_bits(void **state)
+{
+    selworld_t w;
+    float *dem = malloc(sizeof(float) * N * N);
+    trn_sigma_model_t gm;
+    trn_xy_t s = {N / 2.0f, N / 2.0f};
+    trn_select_cfg_t sc;
+    trn_field_cfg_t fc;
+    trn_window_t area = {10, 12, 60, 58};
+    const size_t n = (size_t)51 * 47;
+    float *o1 = malloc(n * sizeof(float)), *o2 = malloc(n * sizeof(float));
+    uint8_t *e1 = malloc(n), *e2 = malloc(n);
+    trn_grid_f32_t g1, g2;
+    trn_field_stats_t s1, s2;
+    size_t b1, b2, mb;
+    void *ws1, *ws2;
+    (void)state;
+    rough_dem(dem, 5u, 0);
+    trn_sigma_global_default(&gm);
+    assert_int_equal(selworld_init(&w, N, dem, &gm, &s, 1), TRN_OK);
+    /* the same terrain as a map that matches heights */
+    w.cfg.match = TRN_MATCH_HEIGHTS;
+    free(w.mapbuf);
+    mb = trn_map_bytes(&w.cfg, N, N);
+    w.mapbuf = selworld_alloc(mb);
+    assert_int_equal(trn_map_build(&w.map, &w.cfg, &w.g, w.mapbuf, mb), TRN_OK);
+    small_cfg(&sc);
+    sc.stride_cells = 2;
+    trn_field_cfg_default(&fc);
+    fc.coarse_step_cells = 8;
+    b1 = trn_field_workspace_bytes(&sc, &w.map, &w.k);
+    b2 = trn_field_fast_workspace_bytes(&sc, &w.map, &w.k, &w.pg);
+    assert_true(b1 > 0u && b2 > 0u);
+    ws1 = selworld_alloc(b1);
+    ws2 = selworld_alloc(b2);
+    assert_int_equal(trn_grid_f32_init(&g1, o1, n, 51, 47), TRN_OK);
+    assert_int_equal(trn_grid_f32_init(&g2, o2, n, 51, 47), TRN_OK);
+    assert_int_equal(
+        trn_field(&w.map, &w.k, &w.pg, &sc, &fc, 0.2f, &area, &g1, e1, n, &s1, ws1, b1), TRN_OK);
+    assert_int_equal(
+        trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.2f, &area, &g2, e2, n, &s2, ws2, b2),
+        TRN_OK);
+    assert_memory_equal(o1, o2, n * sizeof(float));
+    assert_memory_equal(e1, e2, n);
+    assert_int_equal(s1.evaluations, s2.evaluations);
+    assert_true(s1.best_m == s2.best_m && isfinite(s1.best_m));
+    free(ws1);
+    free(ws2);
+    free(o1);
+    free(o2);
+    free(e1);
+    free(e2);
+    free(dem);
+    selworld_free(&w);
+}
+
+/* Bad input, each class: the named status, nothing written past it. */
+static void test_errors(void **state)
+{
+    hmap_t *h = malloc(sizeof *h);
+    trn_select_cfg_t sc;
+    run_t r;
+    trn_rover_t rv = {{36.0f, 36.0f}, 0.0f};
+    trn_map_t m;
+    size_t wb, ranked[2];
+    trn_select_result_t res;
+    float *dem = malloc(sizeof(float) * N * N);
+    int x, y;
+    (void)state;
+    rough_dem(h->dem, 3u, 0);
+    hmap_init(h, h->dem);
+    small_cfg(&sc);
+    wb = trn_select_workspace_bytes(&sc, &h->map, NULL);
+    r.cap = trn_select_max_candidates(&sc, CELL);
+    r.cands = calloc(r.cap, sizeof *r.cands);
+    r.ws = selworld_alloc(wb);
+    /* the map's sigma NaN or negative */
+    sc.map_sigma_m = NAN;
+    assert_int_equal(trn_select_cfg_check(&sc, CELL), TRN_E_ARG);
+    assert_int_equal(trn_select_workspace_bytes(&sc, &h->map, NULL), 0u);
+    sc.map_sigma_m = -0.01f;
+    assert_int_equal(
+        trn_select(&h->map, NULL, NULL, &sc, &rv, r.cands, r.cap, ranked, 2u, &res, r.ws, wb),
+        TRN_E_ARG);
+    small_cfg(&sc);
+    /* a heights map without its heights */
+    m = h->map;
+    m.heights.data = NULL;
+    assert_int_equal(
+        trn_select(&m, NULL, NULL, &sc, &rv, r.cands, r.cap, ranked, 2u, &res, r.ws, wb),
+        TRN_E_NULL);
+    /* the workspace one byte short, or misaligned */
+    assert_int_equal(
+        trn_select(&h->map, NULL, NULL, &sc, &rv, r.cands, r.cap, ranked, 2u, &res, r.ws, wb - 1u),
+        TRN_E_WORKSPACE);
+    assert_int_equal(trn_select(&h->map, NULL, NULL, &sc, &rv, r.cands, r.cap, ranked, 2u, &res,
+                                (uint8_t *)r.ws + 1, wb - 1u),
+                     TRN_E_WORKSPACE);
+    /* the rover off the map */
+    rv.pos.x_cells = (float)N + 1.0f;
+    assert_int_equal(
+        trn_select(&h->map, NULL, NULL, &sc, &rv, r.cands, r.cap, ranked, 2u, &res, r.ws, wb),
+        TRN_E_RANGE);
+    rv.pos.x_cells = 36.0f;
+    /* gradients too large for exact int64 sums over the region */
+    for (y = 0; y < N; ++y) {
+        for (x = 0; x < N; ++x) {
+            dem[y * N + x] = (float)(((x + y) % 2) != 0 ? 3.0e7 : -3.0e7);
+        }
+    }
+    free(h->buf);
+    hmap_init(h, dem);
+    assert_int_equal(
+        trn_select(&h->map, NULL, NULL, &sc, &rv, r.cands, r.cap, ranked, 2u, &res, r.ws, wb),
+        TRN_E_SIZE);
+    free(r.cands);
+    free(r.ws);
+    free(dem);
+    free(h->buf);
+    free(h);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_against_slow),    cmocka_unit_test(test_ll_is_the_quadratic),
+        cmocka_unit_test(test_paraboloid),      cmocka_unit_test(test_flat_and_plane),
+        cmocka_unit_test(test_field_same_bits), cmocka_unit_test(test_errors),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
