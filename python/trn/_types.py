@@ -161,6 +161,7 @@ class _SelectRequired(TypedDict):
     heading_search: int
     global_error: GlobalError
     map_config_name: str
+    predicts: str
     sigma_h_m: Optional[float]
     map_config: MapConfig
 
@@ -199,6 +200,7 @@ class _FieldRequired(TypedDict):
     outlier_density_per_m: float
     global_error: GlobalError
     map_config_name: str
+    predicts: str
     sigma_h_m: Optional[float]
     map_config: MapConfig
     field: Raster

@@ -154,7 +154,7 @@ SEL_SMALL = ["--max-range-m", "2", "--min-range-m", "0.5", "--patch-m", "1", "--
 # JSON keys (dotted paths) that only repeat an option's value, removed before
 # comparing, and keys that change from run to run (times).
 ECHO_SELMAP = ["rover", "min_range_m", "max_range_m", "stride_cells", "heading_sigma_deg",
-               "heading_search", "sensors", "out_map", "global_error", "map_config_name", "sigma_h_m",
+               "heading_search", "sensors", "out_map", "global_error", "map_config_name", "predicts", "sigma_h_m",
                "map_config", "patch_m", "cell_m"]
 ECHO = {
     "terrain": ["file", "origin", "cell_m", "coverage_k", "height_ratio", "d_min_m", "d_max_m",
@@ -216,7 +216,7 @@ MAP_LOCALIZE = {
     # 'ambiguous' under the auto configuration's limit, a fix under 1
     "--max-failure-prob": effect("--max-failure-prob", "1", ctx=PERIODIC),
 }
-# `trn select`, `trn field`, `trn experiment`: the voxel map alone
+# `trn experiment`: the voxel map alone
 MAP_VOXEL = {
     "--map-config": effect("--map-config", "auto"),
     "--zbin-m": effect("--zbin-m", "0.05"),
@@ -229,6 +229,30 @@ MAP_VOXEL = {
                   refused("--noise-m", "0.05", rc=2, needle="--map-config auto")],
     "--noise-k": [effect("--noise-k", "0.5", ctx=["--map-config", "auto"]),
                   refused("--noise-k", "0.5", rc=2, needle="--map-config auto")],
+}
+# `trn select`, `trn field`: the prediction of the configuration's matcher,
+# the height matcher by default (auto), the voxel matcher with paper
+VOXEL_SEL = ["--map-config", "paper"]
+
+
+def voxel_pred(opt, val, needle="--match voxel"):
+    """An option of the voxel prediction: seen with paper, refused with the height prediction."""
+    return [effect(opt, val, ctx=VOXEL_SEL), refused(opt, val, rc=2, needle=needle)]
+
+
+MAP_PREDICT = {
+    "--map-config": effect("--map-config", "paper"),
+    "--match": effect("--match", "voxel"),
+    "--zbin-m": voxel_pred("--zbin-m", "0.05"),
+    "--nz": voxel_pred("--nz", "8"),
+    "--highpass-m": voxel_pred("--highpass-m", "0.5"),
+    "--sigma-m": voxel_pred("--sigma-m", "0.3"),
+    "--inlier-prob": voxel_pred("--inlier-prob", "0.5", needle="voxel prediction"),
+    # the height prediction's noise model; with paper the voxel prediction does not read it
+    "--noise-m": [effect("--noise-m", "0.05"),
+                  refused("--noise-m", "0.05", rc=2, needle="--map-config auto", ctx=VOXEL_SEL)],
+    "--noise-k": [effect("--noise-k", "0.5"),
+                  refused("--noise-k", "0.5", rc=2, needle="--map-config auto", ctx=VOXEL_SEL)],
 }
 SELMAP = {
     "--band": unseen("--band", "2", rc=1, needle="--dem", why="the DEM has one band"),
@@ -245,12 +269,12 @@ SELMAP = {
     "--patch-m": effect("--patch-m", "0.6"),
     "--stride-cells": effect("--stride-cells", "3"),
     "--separation-m": effect("--separation-m", "1.0"),
-    "--sensors": effect("--sensors", "1,1"),
-    "--outlier-density": effect("--outlier-density", "5"),
-    "--global-sigma-m": effect("--global-sigma-m", "0.2"),
-    "--global-sigma-k": effect("--global-sigma-k", "0.05"),
-    "--global-error": effect("--global-error", p("gerr.tif")),
-    **MAP_VOXEL,
+    "--sensors": voxel_pred("--sensors", "1,1", needle="voxel prediction"),
+    "--outlier-density": voxel_pred("--outlier-density", "5", needle="voxel prediction"),
+    "--global-sigma-m": [effect("--global-sigma-m", "0.2"), effect("--global-sigma-m", "0.2", ctx=VOXEL_SEL)],
+    "--global-sigma-k": voxel_pred("--global-sigma-k", "0.05", needle="voxel prediction"),
+    "--global-error": voxel_pred("--global-error", p("gerr.tif"), needle="voxel prediction"),
+    **MAP_PREDICT,
     "--json": effect(drop=["--json"]),
 }
 EXP_DEM = ["--dem", G2]  # with drop=["--size-cells"]: the experiment on a given DEM
@@ -308,9 +332,10 @@ CASES = {
         "--margin-rel": effect("--margin-rel", "0"),
         "--change-rel": effect("--change-rel", "50"),
         "--evaluated-out": effect("--evaluated-out", "ev.tif"),
-        # the same raster bit for bit by design (docs/modules/field.md): the
-        # onboard algorithm's smaller workspace is what changes
-        "--reference": effect("--reference"),
+        # trn_field instead of trn_field_fast: the same raster bit for bit by
+        # design (docs/modules/field.md), the voxel prediction's smaller
+        # workspace is what changes; the height prediction has one path
+        "--reference": effect("--reference", ctx=VOXEL_SEL),
         **{k: v for k, v in SELMAP.items() if k != "--separation-m"},  # field ranks no next-best targets
     },
     "experiment": {

@@ -54,8 +54,11 @@ os.makedirs(WORK)
 N, CELL = 96, 0.1
 X0, Y0 = 1000.0, 2000.0  # south-west corner: a georeferenced map not at 0,0
 GT = (X0, CELL, 0.0, Y0 + N * CELL, 0.0, -CELL)
-SMALL = ["--max-range-m", "3", "--patch-m", "1", "--separation-m", "0.5"]  # short reach: quick under ASan
-FSMALL = SMALL[:4]  # field ranks no next-best targets: it takes no --separation-m
+# short reach: quick under ASan; the default configuration predicts the height matcher (SMALL_H), most
+# checks below are of the voxel prediction (--map-config paper)
+SMALL_H = ["--max-range-m", "3", "--patch-m", "1", "--separation-m", "0.5"]
+SMALL = [*SMALL_H, "--map-config", "paper"]
+FSMALL = [*SMALL_H[:4], "--map-config", "paper"]  # field ranks no next-best targets: it takes no --separation-m
 
 for cmd in ("select", "field"):
     rc, out, err = run(cmd, "--help")
@@ -232,7 +235,7 @@ expect_error(3, "no candidate lies within reach", "select", "--dem", g_tif, "--r
              "--min-range-m", "20", "--max-range-m", "30")
 
 # ---- select: bad input ----------------------------------------------------------
-R = ["--rover", f"{rover[0]},{rover[1]}"]
+R = ["--rover", f"{rover[0]},{rover[1]}", "--map-config", "paper"]
 expect_error(1, "--dem: cannot read", "select", "--dem", p("missing.tif"), *R)
 with open(p("notes.txt"), "w") as f:
     f.write("not a raster\n")
@@ -360,14 +363,34 @@ expect_error(2, "missing required option '--out'", "field", "--dem", g_tif)
 
 
 # ---- the map configuration and the global map's error (issue 12, items 2 and 6) --------
-R2 = ["--rover", f"{rover[0]},{rover[1]}", *SMALL, "--json"]
+R2 = ["--rover", f"{rover[0]},{rover[1]}", *SMALL_H, "--json"]
+dflt = run_json("select", "--dem", g_tif, *R2)
+check(dflt.get("map_config_name") == "auto" and dflt.get("predicts") == "heights" and dflt.get("uncertainty_m", 0) > 0,
+      f"select defaults to --map-config auto, as localize, and predicts the height matcher: {dflt.get('predicts')}")
+# the height prediction reads the DEM's error as one sd: --global-sigma-m changes it, eq. 8's other inputs are refused
+hs = run_json("select", "--dem", g_tif, *R2, "--global-sigma-m", "0.3")
+check(hs.get("uncertainty_m", 0) > dflt.get("uncertainty_m", 1),
+      f"heights: --global-sigma-m 0.3 raises the prediction ({hs.get('uncertainty_m')} > {dflt.get('uncertainty_m')})")
+for opt, val in (("--global-sigma-k", "0.01"), ("--sensors", f"{rover[0]},{rover[1]}"), ("--outlier-density", "2"),
+                 ("--inlier-prob", "0.9"), ("--zbin-m", "0.05")):
+    expect_error(2, f"{opt} applies to the voxel", "select", "--dem", g_tif, *R2, opt, val)
+# --match voxel on the auto configuration predicts the voxel matcher
+mv = run_json("select", "--dem", g_tif, *R2, "--match", "voxel")
+check(mv.get("predicts") == "voxel" and mv.get("uncertainty_m") != dflt.get("uncertainty_m"),
+      f"--match voxel predicts the voxel matcher: {mv.get('predicts')}")
+# a patch of few cells is warned about on stderr
+rc, out, err = run("select", "--dem", g_tif, "--rover", f"{rover[0]},{rover[1]}", "--max-range-m", "3",
+                   "--patch-m", f"{5 * CELL}")
+check(rc == 0 and "warning: the" in err and "--patch-m" in err, f"a 5-cell patch draws a warning: {err!r}")
+R2 = [*R2, "--map-config", "paper"]
 base = run_json("select", "--dem", g_tif, *R2)
-check(base.get("map_config_name") == "paper" and abs(base.get("map_config", {}).get("zbin_m", 0) - CELL) < 1e-6
-      and base["map_config"].get("nz") == 16, f"select defaults to the paper's map configuration: {base.get('map_config')}")
+check(base.get("map_config_name") == "paper" and base.get("predicts") == "voxel" and
+      abs(base.get("map_config", {}).get("zbin_m", 0) - CELL) < 1e-6
+      and base["map_config"].get("nz") == 16, f"--map-config paper: the paper's map configuration: {base.get('map_config')}")
 ge = base.get("global_error", {})
 check(abs(ge.get("sigma_m", 0) - 0.02) < 1e-7 and abs(ge.get("k_per_m", 0) - 0.001) < 1e-7 and ge.get("raster", 1) is None,
       f"select: the default global error model 0.02 m + 0.001/m r^2, no raster: {ge}")
-au = run_json("select", "--dem", g_tif, *R2, "--map-config", "auto")
+au = run_json("select", "--dem", g_tif, *R2[:-2], "--match", "voxel")
 check(au.get("map_config_name") == "auto" and au.get("map_config", {}).get("zbin_m", 1) < CELL and
       au.get("sigma_h_m") is not None and au.get("uncertainty_m", 0) > 0, f"--map-config auto: {au.get('map_config')}")
 zb = run_json("select", "--dem", g_tif, *R2, "--zbin-m", "0.05", "--nz", "24")
@@ -395,8 +418,8 @@ half[:, : N // 2] = 0.3
 write_raster(p("err_half.tif"), half, GT)
 r = run_json("select", "--dem", g_tif, *R2, "--global-error", p("err_half.tif"))
 check(r.get("uncertainty_m") is not None, "--global-error partly no-data runs")
-rc, out, err = run("select", "--dem", g_tif, "--rover", f"{rover[0]},{rover[1]}", *SMALL, "--map-config", "auto",
-                   "--global-sigma-m", "0.05")
+rc, out, err = run("select", "--dem", g_tif, "--rover", f"{rover[0]},{rover[1]}", *SMALL_H, "--map-config", "auto",
+                   "--match", "voxel", "--global-sigma-m", "0.05")
 check(rc == 0 and "map          auto: bin" in out and "global error 0.05 m + 0.001/m r^2" in out,
       f"the summary names the map configuration and the global error: {out!r}")
 write_raster(p("err_small.tif"), np.full((N - 1, N), 0.1), GT)
@@ -407,7 +430,7 @@ write_raster(p("err_neg.tif"), neg, GT)
 huge = np.full((N, N), 0.1)
 huge[4, 2] = 2e6  # (non-finite cells are no-data to dem_read: the model)
 write_raster(p("err_huge.tif"), huge, GT)
-R = ["--rover", f"{rover[0]},{rover[1]}"]
+R = ["--rover", f"{rover[0]},{rover[1]}", "--map-config", "paper"]
 expect_error(1, "--global-error: cannot read", "select", "--dem", g_tif, *R, "--global-error", p("missing.tif"))
 expect_error(1, "must be on the DEM's grid", "select", "--dem", g_tif, *R, "--global-error", p("err_small.tif"))
 expect_error(1, "geotransform differs", "select", "--dem", g_tif, *R, "--global-error", p("err_shift.tif"))
@@ -415,17 +438,20 @@ expect_error(1, "cell (column 7, row 3) is -0.5 m", "select", "--dem", g_tif, *R
 expect_error(1, "cell (column 2, row 4) is 2e+06 m", "select", "--dem", g_tif, *R, "--global-error", p("err_huge.tif"))
 expect_error(1, "--global-sigma-m: -1 is out of range", "select", "--dem", g_tif, *R, "--global-sigma-m", "-1")
 expect_error(1, "--global-sigma-k: 'x' is not a finite number", "select", "--dem", g_tif, *R, "--global-sigma-k", "x")
-expect_error(1, "--map-config must be auto or paper, not 'best'", "select", "--dem", g_tif, *R, "--map-config", "best")
+expect_error(1, "--map-config must be auto or paper, not 'best'", "select", "--dem", g_tif, *R[:2], "--map-config",
+             "best")
 expect_error(1, "--nz: 0 is out of range", "select", "--dem", g_tif, *R, "--nz", "0")
 expect_error(1, "--map-config must be auto or paper", "field", "--dem", g_tif, "--out", p("x.tif"), "--map-config", "x")
-expect_error(1, "must be on the DEM's grid", "field", "--dem", g_tif, "--out", p("x.tif"), "--global-error",
-             p("err_small.tif"))
-FA = ["--area-m", f"{X0 + 4.0},{Y0 + 4.0},{X0 + 5.0},{Y0 + 5.0}", *FSMALL, "--coarse-step-cells", "4", "--json"]
-f1 = run_json("field", "--dem", g_tif, "--out", p("fa.tif"), *FA)
-f2 = run_json("field", "--dem", g_tif, "--out", p("fb.tif"), *FA, "--global-error", p("err_nan.tif"))
-f3 = run_json("field", "--dem", g_tif, "--out", p("fc.tif"), *FA, "--map-config", "auto", "--global-sigma-m", "0.1")
-check(f1.get("map_config_name") == "paper" and f1.get("best") == f2.get("best") and
-      f3.get("map_config_name") == "auto" and abs(f3.get("global_error", {}).get("sigma_m", 0) - 0.1) < 1e-7,
+expect_error(1, "must be on the DEM's grid", "field", "--dem", g_tif, "--out", p("x.tif"), "--map-config", "paper",
+             "--global-error", p("err_small.tif"))
+FA = ["--area-m", f"{X0 + 4.0},{Y0 + 4.0},{X0 + 5.0},{Y0 + 5.0}", *SMALL_H[:4], "--coarse-step-cells", "4", "--json"]
+f1 = run_json("field", "--dem", g_tif, "--out", p("fa.tif"), *FA, "--map-config", "paper")
+f2 = run_json("field", "--dem", g_tif, "--out", p("fb.tif"), *FA, "--map-config", "paper", "--global-error",
+              p("err_nan.tif"))
+f3 = run_json("field", "--dem", g_tif, "--out", p("fc.tif"), *FA, "--global-sigma-m", "0.1")
+check(f1.get("map_config_name") == "paper" and f1.get("best") == f2.get("best") and f1.get("predicts") == "voxel" and
+      f3.get("map_config_name") == "auto" and f3.get("predicts") == "heights" and
+      abs(f3.get("global_error", {}).get("sigma_m", 0) - 0.1) < 1e-7,
       f"field: map configuration and global error options ({f1.get('best')}, {f2.get('best')}, {f3.get('map_config')})")
 
 # ---- figures (tools/plot/trn_plot.py) ----------------------------------------------------

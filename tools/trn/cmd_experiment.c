@@ -101,6 +101,7 @@ void cmd_experiment_params_default(cmd_experiment_params_t *p)
     memset(p, 0, sizeof *p);
     exp_params_default(&e);
     selmap_opts_default(&p->so, 2);
+    p->so.mo.config = SELMAP_EXPERIMENT_MAP_CONFIG;
     p->band = 1;
     p->foot = -1.0;
     p->sensor = "prob";
@@ -288,7 +289,7 @@ static int experiment_parse(int argc, char **argv, cmd_experiment_params_t *p)
         "(cell/0.1)); on the generated terrain the factor is 1. On a --dem the global map's error\n"
         "has no r^2 term unless --global-sigma-k gives one (an overhead DEM is sensed from no\n"
         "point on it). Map configuration: --map-config\n"
-        "" SELMAP_MAP_CONFIG_DEFAULT " on the generated terrain, auto with --dem.",
+        "" SELMAP_EXPERIMENT_MAP_CONFIG " on the generated terrain, auto with --dem.",
         opts, 0};
     int rc;
 

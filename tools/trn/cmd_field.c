@@ -202,7 +202,7 @@ int cmd_field_parse(int argc, char **argv, cmd_field_params_t *p)
     /* the localizer's options (--match, --refine ...) and the ranking of distinct
      * next-best targets (--separation-m): the field keeps each position's best only */
     cmd.n_opts = cli_remove(opts, sizeof opts / sizeof opts[0],
-                            mapopt_not_taken(MAPOPT_USE_VOXEL_MAP));
+                            mapopt_not_taken(MAPOPT_USE_PREDICT));
     cmd.n_opts = cli_remove(opts, cmd.n_opts, k_not_field);
     rc = cli_parse(&cmd, argc, argv);
     return rc != CLI_OK ? rc : selmap_check_use("field", &p->so);

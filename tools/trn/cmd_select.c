@@ -103,7 +103,7 @@ int cmd_select_parse(int argc, char **argv, cmd_select_params_t *p)
         0};
     /* the localizer's options (--match, --refine ...): no selection reads them */
     cmd.n_opts = cli_remove(opts, sizeof opts / sizeof opts[0],
-                            mapopt_not_taken(MAPOPT_USE_VOXEL_MAP));
+                            mapopt_not_taken(MAPOPT_USE_PREDICT));
     rc = cli_parse(&cmd, argc, argv);
     return rc != CLI_OK ? rc : selmap_check_use("select", &p->so);
 }

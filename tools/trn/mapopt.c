@@ -84,10 +84,13 @@ const char *const *mapopt_not_taken(mapopt_use_t use)
     /* read only by trn_localize_dem and the height matcher */
     static const char *const k_search[] = {"--local-highpass", "--refine", "--noise-auto",
                                            "--max-failure-prob", NULL};
-    static const char *const k_map[] = {"--local-highpass",   "--refine", "--noise-auto",
-                                        "--max-failure-prob", "--match",  NULL};
     static const char *const k_none[] = {NULL};
-    return use == MAPOPT_USE_VOXEL_MAP ? k_map : use == MAPOPT_USE_VOXEL_SEARCH ? k_search : k_none;
+    return use == MAPOPT_USE_LOCALIZE ? k_none : k_search;
+}
+
+int mapopt_heights(const mapopt_t *m)
+{
+    return m->match != NULL ? strcmp(m->match, "heights") == 0 : strcmp(m->config, "auto") == 0;
 }
 
 int mapopt_check_use(const mapopt_t *m, mapopt_use_t use, char *err, size_t err_len)
@@ -105,7 +108,7 @@ int mapopt_check_use(const mapopt_t *m, mapopt_use_t use, char *err, size_t err_
     refine = m->refine >= 0 ? m->refine != 0 : auto_cfg;
     /* the auto configuration's height bin and bin count come from the noise model */
     auto_bins = auto_cfg && !(m->zbin_m > 0.0 && m->nz > 0);
-    if (use != MAPOPT_USE_LOCALIZE) {
+    if (use == MAPOPT_USE_VOXEL_SEARCH || (use == MAPOPT_USE_PREDICT && !heights)) {
         if (use == MAPOPT_USE_VOXEL_SEARCH && heights && m->match != NULL) {
             snprintf(err, err_len,
                      "--match heights: the experiment localizes with the voxel search only (the "
@@ -132,8 +135,9 @@ int mapopt_check_use(const mapopt_t *m, mapopt_use_t use, char *err, size_t err_
         if (voxel_only != NULL) {
             snprintf(err, err_len,
                      "%s applies to the voxel matcher (--match voxel, or --map-config paper); the "
-                     "height matcher matches the DEM's heights and always refines",
-                     voxel_only);
+                     "height matcher %s the DEM's heights%s",
+                     voxel_only, use == MAPOPT_USE_PREDICT ? "is predicted from" : "matches",
+                     use == MAPOPT_USE_PREDICT ? "" : " and always refines");
             return -1;
         }
         return 0;

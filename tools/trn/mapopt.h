@@ -55,9 +55,14 @@ int mapopt_config(const mapopt_t *m, const float *data, int width, int height, d
  *                            (every option, each where that matcher reads it);
  *   MAPOPT_USE_VOXEL_SEARCH  trn experiment: sampled points, the voxel search
  *                            alone (no local DEM, no refinement, no acceptance);
- *   MAPOPT_USE_VOXEL_MAP     trn select, trn field: the voxel map alone, no
- *                            localization. */
-typedef enum { MAPOPT_USE_LOCALIZE, MAPOPT_USE_VOXEL_SEARCH, MAPOPT_USE_VOXEL_MAP } mapopt_use_t;
+ *   MAPOPT_USE_PREDICT       trn select, trn field: the prediction of the
+ *                            matcher the configuration resolves to (--match:
+ *                            heights or voxel), no localization. */
+typedef enum { MAPOPT_USE_LOCALIZE, MAPOPT_USE_VOXEL_SEARCH, MAPOPT_USE_PREDICT } mapopt_use_t;
+
+/* 1 if the configuration resolves to the height matcher (--match, else
+ * --map-config auto). */
+int mapopt_heights(const mapopt_t *m);
 
 /* The options a command of this use never reads (NULL-terminated names):
  * they are left out of its table (cli_remove), so its --help does not offer

@@ -56,11 +56,12 @@ void selmap_opts_default(selmap_opts_t *o, long stride_cells)
 void selmap_gerr_opts(selmap_opts_t *o, cli_opt_t *d)
 {
     /* the model's default is the core's (trn_sigma_global_default), printed from it */
-    static char h_m[112], h_k[128];
+    static char h_m[192], h_k[128];
     trn_sigma_model_t gm;
     trn_sigma_global_default(&gm);
     snprintf(h_m, sizeof h_m,
-             "global map's error at its sensing position, m (eq. 8: S0 + K r^2; default %g)",
+             "global map's error at its sensing position, m (eq. 8: S0 + K r^2; the height "
+             "prediction: the DEM's height error, one sd; default %g)",
              (double)gm.sigma_min_m);
     snprintf(h_k, sizeof h_k,
              "global map's error growth with squared range from the nearest sensing position, 1/m "
@@ -194,6 +195,7 @@ void selmap_json_config(json_t *j, const selmap_opts_t *o, const trn_map_cfg_t *
     }
     json_obj_end(j);
     json_str(j, "map_config_name", o->mo.config);
+    json_str(j, "predicts", cfg->match == (int32_t)TRN_MATCH_HEIGHTS ? "heights" : "voxel");
     json_num(j, "sigma_h_m", sigma_h);
     mapopt_json(j, cfg);
 }
@@ -241,9 +243,9 @@ void selmap_opts(selmap_opts_t *o, cli_opt_t *d)
     mapopt_cli(&o->mo, d + SELMAP_N_SEL_OPTS + SELMAP_N_GERR_OPTS);
     for (i = SELMAP_N_SEL_OPTS + SELMAP_N_GERR_OPTS; i < SELMAP_N_OPTS; ++i) {
         if (strcmp(d[i].name, "--map-config") == 0) {
-            d[i].help = "map configuration: paper (as in the paper, scaled to the cell; default) "
-                        "or auto (from the DEM, "
-                        "docs/method.md 9)";
+            d[i].help = "map configuration: auto (from the DEM, docs/method.md 9; default, as "
+                        "`trn localize`): the height matcher's prediction; or paper (as in the "
+                        "paper, scaled to the cell): the voxel prediction (eqs. 8-9)";
         }
     }
 }
@@ -251,8 +253,25 @@ void selmap_opts(selmap_opts_t *o, cli_opt_t *d)
 int selmap_check_use(const char *cmd, const selmap_opts_t *o)
 {
     char err[512];
-    if (mapopt_check_use(&o->mo, MAPOPT_USE_VOXEL_MAP, err, sizeof err) != 0) {
+    const char *voxel_only;
+    if (mapopt_check_use(&o->mo, MAPOPT_USE_PREDICT, err, sizeof err) != 0) {
         fprintf(cli_message_stream(), "trn %s: %s\n", cmd, err);
+        return CLI_USAGE;
+    }
+    /* P_G (eq. 8) is the voxel prediction's: the height prediction reads the
+     * DEM's error as one sd (--global-sigma-m) */
+    voxel_only = o->sensors != NULL        ? "--sensors"
+                 : o->gsig_k >= 0.0        ? "--global-sigma-k"
+                 : o->gerr != NULL         ? "--global-error"
+                 : o->outlier_k > 0.0      ? "--outlier-density"
+                 : o->mo.inlier_prob > 0.0 ? "--inlier-prob"
+                                           : NULL;
+    if (mapopt_heights(&o->mo) && voxel_only != NULL) {
+        fprintf(cli_message_stream(),
+                "trn %s: %s applies to the voxel prediction (--match voxel, or --map-config "
+                "paper); the height prediction reads the DEM's heights and its error as one sd, "
+                "--global-sigma-m\n",
+                cmd, voxel_only);
         return CLI_USAGE;
     }
     if (o->heading_search == 1 && !(o->heading_sigma_deg > 0.0)) {
@@ -344,6 +363,9 @@ static int select_rules(selmap_t *w, const selmap_opts_t *o, double cell, char *
     c->min_separation_m = (float)o->separation_m;
     c->sigma_heading_rad = (float)(o->heading_sigma_deg * PI / 180.0);
     c->heading_search = (int32_t)o->heading_search;
+    if (o->gsig_m >= 0.0) { /* the height prediction's DEM error (select.h) */
+        c->map_sigma_m = (float)o->gsig_m;
+    }
     if ((st = trn_select_cfg_check(c, (float)cell)) != TRN_OK) {
         if (o->patch_m / cell < 2.5) {
             snprintf(err, err_len,
@@ -433,6 +455,22 @@ static int sensor_cells(selmap_t *w, char *err, size_t err_len)
     return 0;
 }
 
+/* A patch of few cells at the DEM's resolution (the paper's 2 m patch is
+ * 21 x 21 cells at 0.1 m, 3 x 3 at 1 m) carries little to match: said on
+ * stderr, the geometry kept as given. */
+static void warn_small_patch(const selmap_opts_t *o, double cell)
+{
+    long n = (long)floor(o->patch_m / cell + 0.5);
+    n = n % 2 == 0 ? n + 1 : n;
+    if (n < SELMAP_PATCH_FEW_CELLS) {
+        fprintf(stderr,
+                "trn: warning: the %g m patch is %ld x %ld cells of %g m, few to match (the "
+                "paper's is 21 x 21); --patch-m %g gives %d x %d\n",
+                o->patch_m, n, n, cell, cell * SELMAP_PATCH_FEW_CELLS, SELMAP_PATCH_FEW_CELLS,
+                SELMAP_PATCH_FEW_CELLS);
+    }
+}
+
 int selmap_prepare(selmap_t *w, const char *dem_path, const selmap_opts_t *o, char *err,
                    size_t err_len)
 {
@@ -455,6 +493,7 @@ int selmap_prepare(selmap_t *w, const char *dem_path, const selmap_opts_t *o, ch
         build_map(w, o, err, err_len) != 0 || sensor_cells(w, err, err_len) != 0) {
         goto fail;
     }
+    warn_small_patch(o, w->dem.cell_m);
     /* Eq. 8: the model, or the error raster with the model where it has no data. */
     if (selmap_prob_global(o, &w->dem, &w->k, w->sensors, w->n_sensors, &w->map, &w->pg, &w->pgraw,
                            err, err_len) != 0) {
@@ -474,6 +513,13 @@ void selmap_print_config(const selmap_opts_t *o, const trn_map_cfg_t *cfg)
     printf("map          %s: bin %.4g m x %d, high-pass %.4g m, s %.4g m\n", o->mo.config,
            (double)cfg->terrain.zbin_m, (int)cfg->terrain.nz, (double)cfg->terrain.highpass_half_m,
            (double)cfg->sigma_m);
+    if (cfg->match == (int32_t)TRN_MATCH_HEIGHTS) {
+        printf(
+            "predicts     the height matcher: noise %.4g m + %.4g/m r^2, the DEM's error %.4g m\n",
+            (double)cfg->noise_m, (double)cfg->noise_k_per_m, (double)gm.sigma_min_m);
+        return;
+    }
+    printf("predicts     the voxel matcher (eqs. 8-9, 6)\n");
     printf("global error %.4g m + %.4g/m r^2%s%s\n", (double)gm.sigma_min_m, (double)gm.k_per_m,
            o->gerr != NULL ? ", per-cell raster " : "", o->gerr != NULL ? o->gerr : "");
 }

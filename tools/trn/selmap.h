@@ -20,12 +20,17 @@
 #include "mapopt.h"
 #include "trn/trn.h"
 
-/* The map configuration (--map-config) of `trn select`, `trn field` and `trn
- * experiment` on its generated terrain, until the lead decides (issue 12):
- * "paper" keeps docs/method.md sections 4-8 as measured; "auto" is
- * trn_map_cfg_auto (the default of `trn localize` and of `trn experiment
- * --dem`). Flip it here; nothing else names it. */
-#define SELMAP_MAP_CONFIG_DEFAULT "paper"
+/* The map configuration (--map-config) of `trn select` and `trn field`: the
+ * default of `trn localize` too (trn_map_cfg_auto), so every command
+ * predicts and localizes with the same matcher on the same DEM. */
+#define SELMAP_MAP_CONFIG_DEFAULT "auto"
+
+/* `trn experiment`'s on its generated terrain: the paper's experiment
+ * (docs/method.md 8); with --dem it takes "auto". */
+#define SELMAP_EXPERIMENT_MAP_CONFIG "paper"
+
+/* A sensed patch narrower than this many cells draws a warning on stderr. */
+#define SELMAP_PATCH_FEW_CELLS 7
 
 /* Options common to select and field; the option table entries are made by
  * selmap_opts (SELMAP_N_OPTS of them). */
