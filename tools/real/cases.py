@@ -197,7 +197,8 @@ class CaseParams:
     full_view: bool = False  # tests: every cell within R seen
     resample: str = "bilinear"
     min_valid: float = 0.95
-    local_mean: bool = False  # with `fine`: each local cell the mean of the fine surface over it
+    local: str = "point"  # with `fine`: "point" | "mean" | "binned" (see make_local)
+    mast_m: float = 0.0  # > 0: a mast that high sees the cells (mast_visible); 0: every cell in the wedge
     outlier_frac: float = 0.0  # share of seen cells that are stereo blunders (see make_local)
 
     @property
@@ -240,39 +241,102 @@ def visibility(radius, c, azimuth_deg, p):
     return seen
 
 
+def cell_positions(fr, fc, R, scale, turn_deg, du=0.0, dv=0.0):
+    """Fractional (rows, cols) in the source grid of each local cell's point offset
+    (du east, dv south) local cells from its centre; the rover at source (fr, fc),
+    `scale` source cells per local cell, the terrain turned turn_deg counterclockwise."""
+    k = np.arange(-R, R + 1, dtype=np.float64)
+    x, y = k[None, :] + du + 0 * k[:, None], k[:, None] + dv + 0 * k[None, :]
+    if turn_deg == 0.0:
+        return fr + y * scale, fc + x * scale
+    ct, st = math.cos(math.radians(turn_deg)), math.sin(math.radians(turn_deg))
+    # column offset x (east), row offset y (south): (x c + y s, -x s + y c)
+    return fr + (-x * st + y * ct) * scale, fc + (x * ct + y * st) * scale
+
+
+def binned_points(src, fr, fc, R, scale, turn_deg, p, cell_m):
+    """The issue's rover: its stereo points are the true ground at the source grid's
+    nodes (one point per source cell centre, no interpolation), binned into the local
+    cells around the rover at its sub-cell position. Returns per local cell the points'
+    mean height (NaN where none), their count, and the sd of the mean of their noises
+    (each point's sd the noise model at its own range: sqrt(sum sd_i^2) / n)."""
+    reach = (R + 1) * scale * (math.sqrt(2.0) if turn_deg else 1.0)
+    i0, i1 = max(0, int(math.floor(fr - reach))), min(src.z.shape[0], int(math.ceil(fr + reach)) + 1)
+    j0, j1 = max(0, int(math.floor(fc - reach))), min(src.z.shape[1], int(math.ceil(fc + reach)) + 1)
+    a = (np.arange(i0, i1, dtype=np.float64)[:, None] - fr) / scale + 0 * np.arange(j0, j1)[None, :]
+    b = (np.arange(j0, j1, dtype=np.float64)[None, :] - fc) / scale + 0 * a
+    ct, st = math.cos(math.radians(turn_deg)), math.sin(math.radians(turn_deg))
+    x, y = b * ct - a * st, b * st + a * ct  # local east / south, local cells (cell_positions inverted)
+    ix, iy = np.floor(x + 0.5).astype(int) + R, np.floor(y + 0.5).astype(int) + R
+    z = src.z[i0:i1, j0:j1]
+    use = (ix >= 0) & (ix <= 2 * R) & (iy >= 0) & (iy <= 2 * R) & np.isfinite(z)
+    cell = (iy * (2 * R + 1) + ix)[use]
+    sd = p.noise0_m + p.noise_k * (x[use] ** 2 + y[use] ** 2) * cell_m
+    n = np.bincount(cell, minlength=(2 * R + 1) ** 2).reshape(2 * R + 1, 2 * R + 1)
+    hs = np.bincount(cell, z[use], minlength=n.size).reshape(n.shape)
+    vs = np.bincount(cell, sd * sd, minlength=n.size).reshape(n.shape)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(n > 0, hs / n, np.nan), n, np.sqrt(vs) / np.maximum(n, 1)
+
+
+def mast_visible(z, r0, c0, rows, cols, mast_m):
+    """Which ground points (rows, cols) (fractional indices into heights z, bilinear) a
+    mast head mast_m above the ground at (r0, c0) sees: the straight line from the head
+    to the point's ground passes above the surface at every sample along it, samples
+    at most half a grid cell apart (the end points excluded). A sample on no-data does
+    not block. Vectorized over the points: every ray gets the longest ray's sample
+    count, each at its own spacing."""
+    rows, cols = np.asarray(rows, dtype=np.float64), np.asarray(cols, dtype=np.float64)
+    head = sample(z, np.array([r0]), np.array([c0]))[0] + mast_m
+    end = sample(z, rows, cols)
+    n = np.maximum(2, np.ceil(2.0 * np.hypot(rows - r0, cols - c0))).ravel()
+    k = np.arange(1, int(n.max()))
+    t = np.minimum(k[None, :] / n[:, None], 1.0)  # past a ray's own end: its end (never blocks)
+    inner = k[None, :] < n[:, None]
+    rr = r0 + t * (rows.ravel()[:, None] - r0)
+    cc = c0 + t * (cols.ravel()[:, None] - c0)
+    line = head + t * (end.ravel()[:, None] - head)
+    ground = sample(z, rr, cc)
+    blocked = inner & (ground >= line)  # NaN ground compares False: no block
+    return ~blocked.any(axis=1).reshape(rows.shape)
+
+
 def make_local(dem, truth, p, rng=None, azimuth_deg=0.0, offset_m=0.0, fine=None, turn_deg=0.0):
     """The local DEM (heights + offset + noise, NaN unseen) of a rover at truth: cells
     of dem's cell size, heights sampled from `fine` (the true surface) if given, else
     from dem itself. turn_deg: the rover's believed heading is off by this much, so
     local cell offset (east e, north n) shows the terrain at (e, n) turned turn_deg
     counterclockwise about the rover (trn localize --heading-window-deg then finds
-    +turn_deg as the correction)."""
+    +turn_deg as the correction). p.local: "point" (each cell the surface at its
+    centre), "mean" (with `fine`: the mean of fine-spaced sub-samples over the cell),
+    "binned" (with `fine`: binned_points). p.mast_m > 0: only cells whose ground a mast
+    that high above the rover's ground sees through the true surface (mast_visible)."""
     R = p.radius
     src = dem if fine is None else fine
     scale = 1.0 if fine is None else dem.c / fine.c  # source cells per local cell
     fr, fc = src.frac_index(*truth)
-    k = np.arange(-R, R + 1, dtype=np.float64)
-    ct, st = math.cos(math.radians(turn_deg)), math.sin(math.radians(turn_deg))
-    # sub-samples per local cell axis: one (its centre), or with local_mean and `fine`
-    # the fine cells' count across it, spread evenly (a rover gridding dense stereo
-    # into the map's cells by averaging)
-    ns = max(1, int(round(scale))) if (fine is not None and p.local_mean) else 1
-    subs = (np.arange(ns) + 0.5) / ns - 0.5
-    h = np.zeros((2 * R + 1, 2 * R + 1))
-    for du in subs:  # du along the local columns (east), dv along its rows (south)
-        for dv in subs:
-            x, y = k[None, :] + du, k[:, None] + dv
-            if turn_deg == 0.0:
-                rows, cols = fr + y * scale + 0 * x, fc + x * scale + 0 * y
-            else:  # column offset x (east), row offset y (south): (x c + y s, -x s + y c)
-                rows = fr + (-x * st + y * ct) * scale
-                cols = fc + (x * ct + y * st) * scale
-            h += sample(src.z, rows, cols, p.resample)
-    h = h / (ns * ns) + offset_m
+    e, n = rover_frame_offsets(R, dem.c)
+    sigma = p.noise0_m + p.noise_k * (e**2 + n**2) / dem.c
+    if p.local == "binned" and fine is not None:
+        h, _, sigma = binned_points(src, fr, fc, R, scale, turn_deg, p, dem.c)
+    else:
+        # sub-samples per local cell axis: one (its centre), or with "mean" and `fine`
+        # the fine cells' count across it, spread evenly (a rover gridding dense stereo
+        # into the map's cells by averaging)
+        ns = max(1, int(round(scale))) if (fine is not None and p.local == "mean") else 1
+        subs = (np.arange(ns) + 0.5) / ns - 0.5
+        h = np.zeros((2 * R + 1, 2 * R + 1))
+        for du in subs:  # du along the local columns (east), dv along its rows (south)
+            for dv in subs:
+                h += sample(src.z, *cell_positions(fr, fc, R, scale, turn_deg, du, dv), p.resample)
+        h = h / (ns * ns)
+    h = h + offset_m
     seen = visibility(R, dem.c, azimuth_deg, p)
+    if p.mast_m > 0.0:
+        seen &= mast_visible(src.z, fr, fc, *cell_positions(fr, fc, R, scale, turn_deg), p.mast_m)
     if p.noise and rng is not None:
-        e, n = rover_frame_offsets(R, dem.c)
-        sigma = p.noise0_m + p.noise_k * (e**2 + n**2) / dem.c
+        # one normal per cell in every construction (the cases stay paired); for "binned"
+        # the mean of the points' independent noises has exactly this law
         h = h + rng.standard_normal(h.shape) * sigma
     seen &= np.isfinite(h)
     if p.outlier_frac > 0.0 and rng is not None and seen.any():

@@ -31,6 +31,13 @@ On small synthetic DEMs with analytic surfaces (no download, ~10 s):
 * bench_real.py exits 1 with one line on bad input;
 * --fine-local mean: on a plane the cell means equal the centre samples; a pattern
   alternating +-1 along the fine columns averages to exactly 0 in every local cell;
+* --fine-local binned: on a plane each cell holds K^2 nodes and equals the plane at their
+  centroid; a +-1 fine-column pattern bins to 0 (K = 2); the noise is the mean of the
+  points' (standardized residuals of sd 1, about 1/K of the model's sd);
+* --mast-view: the ray cast (cases.mast_visible) sees every cell on flat and tilted ground;
+  behind a wall of height W at distance d a mast of height H loses the cells up to
+  d H / (H - W) (similar triangles); in a pit of depth D behind a rim at distance d, the
+  floor up to d (H + D) / H; the cases' heights unchanged where seen;
 * --dem-file (a user's DEM): a missing or geographic file exits 1 with one line; a
   projected synthetic DEM runs end to end under its file name (when trn is built);
 * if build/host-release/trn exists: trn localize recovers the noiseless integer case
@@ -414,7 +421,9 @@ def test_cli():
                        (["--trn", "/nonexistent/trn"], "missing trn"), (["--bogus"], "unknown option"),
                       (["--truth-fine", "1"], "--truth-fine 1"), (["--noise-scale", "-1"], "--noise-scale -1"),
                       (["--noise-scale", "nan"], "--noise-scale nan"), (["--fine-local", "median"], "--fine-local median"),
-                      (["--outliers", "1"], "--outliers 1"), (["--outliers", "-0.1"], "--outliers -0.1")):
+                      (["--outliers", "1"], "--outliers 1"), (["--outliers", "-0.1"], "--outliers -0.1"),
+                      (["--mast-view", "0"], "--mast-view 0"), (["--mast-view", "inf"], "--mast-view inf"),
+                      (["--fine-local", "binned"], "--fine-local binned without --truth-fine")):
         r = subprocess.run([sys.executable, b] + args, capture_output=True, text=True)
         check(r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1 and r.stdout == "",
               f"bench_real {what}: exit 1, one line ({r.stderr.strip()})")
@@ -429,7 +438,7 @@ def test_local_mean():
     fine = synth_dem(plane, n=240, c=cf)
     g = cm.block_average(fine, K)
     R = 6
-    pm = cm.CaseParams(radius=R, noise=False, full_view=True, min_range_cells=0, local_mean=True)
+    pm = cm.CaseParams(radius=R, noise=False, full_view=True, min_range_cells=0, local="mean")
     pp = cm.CaseParams(radius=R, noise=False, full_view=True, min_range_cells=0)
     truth = (fine.x0 + 120 * cf + 3.7, fine.y0 - 120 * cf - 6.1)
     lm, _ = cm.make_local(g, truth, pm, None, 0.0, 0.0, fine)
@@ -450,6 +459,110 @@ def test_local_mean():
         spread = max(spread, float(np.nanmax(np.abs(lp))))
     check(worst < 1e-9 and spread > 0.5, f"local mean of a +-1 fine-column pattern (K = 2): every cell 0 "
                                          f"(max {worst:.1e}); the centre samples reach {spread:.2f}")
+
+
+def test_binned():
+    """--fine-local binned: each local cell the mean of the fine nodes that fall in it."""
+    cf, R = 10.0, 6
+    fine = synth_dem(plane, n=240, c=cf)
+    pb = cm.CaseParams(radius=R, noise=False, full_view=True, min_range_cells=0, local="binned")
+    for K in (2, 3):
+        g = cm.block_average(fine, K)
+        truth = (fine.x0 + 120 * cf + 3.7, fine.y0 - 120 * cf - 6.1)
+        fr, fc = fine.frac_index(*truth)
+        h, n, sd = cm.binned_points(fine, fr, fc, R, K, 0.0, pb, g.c)
+        k = np.arange(-R, R + 1)
+        a_c = np.ceil(fc + K * (k - 0.5))  # first fine column in each local column's bin
+        a_r = np.ceil(fr + K * (k - 0.5))
+        X, Y = fine.xy(a_r[:, None] + (K - 1) / 2.0, a_c[None, :] + (K - 1) / 2.0)
+        d = np.abs(h - plane(X, Y)).max()
+        check((n == K * K).all() and d < 1e-9,
+              f"binned, K = {K}, a plane: {K * K} points in every cell, each cell the plane at its "
+              f"points' centroid (max diff {d:.1e} m)")
+        _, nt, _ = cm.binned_points(fine, fr, fc, R, K, 30.0, pb, g.c)
+        check(abs(nt.mean() - K * K) < 0.05 * K * K and nt.min() < K * K < nt.max(),
+              f"binned, K = {K}, turned 30 deg: {nt.min()}-{nt.max()} points a cell, mean {nt.mean():.2f}")
+    alt = synth_dem(plane, n=240, c=cf)
+    alt.z = np.tile(np.where(np.arange(240) % 2 == 0, 1.0, -1.0), (240, 1))
+    g = cm.block_average(alt, 2)
+    worst = max(float(np.nanmax(np.abs(cm.make_local(g, (alt.x0 + 1200 + tx, alt.y0 - 1200 - ty), pb,
+                                                     None, 0.0, 0.0, alt)[0])))
+                for tx, ty in ((3.7, 6.1), (0.0, 0.0), (12.5, 2.2)))
+    check(worst < 1e-9, f"binned, a +-1 fine-column pattern (K = 2): every cell 0 (max {worst:.1e})")
+    # the noise: that of the mean of the points' noises
+    g = cm.block_average(fine, 2)
+    pn = cm.CaseParams(radius=10, full_view=True, min_range_cells=0, local="binned")
+    truth = (fine.x0 + 1203.3, fine.y0 - 1187.9)
+    ref, _ = cm.make_local(g, truth, cm.CaseParams(radius=10, noise=False, full_view=True,
+                                                   min_range_cells=0, local="binned"), None, 0.0, 0.0, fine)
+    fr, fc = fine.frac_index(*truth)
+    _, _, sd = cm.binned_points(fine, fr, fc, 10, 2, 0.0, pn, g.c)
+    e, nn = cm.rover_frame_offsets(10, g.c)
+    model = pn.noise0_m + pn.noise_k * (e ** 2 + nn ** 2) / g.c
+    rng = np.random.default_rng(4)
+    z = np.array([(cm.make_local(g, truth, pn, rng, 0.0, 0.0, fine)[0] - ref) / sd for _ in range(100)])
+    ratio = float(np.median(sd / model))
+    z = z[np.isfinite(z)]  # the corners beyond R are unseen
+    check(z.size > 25000 and abs(z.std() - 1.0) < 0.02 and 0.45 < ratio < 0.55,
+          f"binned noise: standardized residuals sd {z.std():.3f} (1); sd / the model's {ratio:.3f} "
+          f"(about 1/K = 0.5)")
+
+
+def mast_row(z, r0, c0, cols, H):
+    rows = np.full(len(cols), float(r0))
+    return cm.mast_visible(z, float(r0), float(c0), rows, np.asarray(cols, dtype=np.float64), H)
+
+
+def test_mast_view():
+    """cases.mast_visible against similar triangles; the grid's cells 1 index unit (the
+    ray cast never uses the horizontal metres)."""
+    n, r0, c0, H = 80, 40, 10, 2.0
+    yy, xx = np.mgrid[0:n, 0:n].astype(np.float64)
+    rr, cc = np.broadcast_arrays(yy[25:56, 11:60], xx[25:56, 11:60])
+    for name, z in (("flat", np.full((n, n), 7.0)), ("tilted", 0.3 * xx - 0.2 * yy)):
+        v = cm.mast_visible(z, r0, c0, rr, cc, H)
+        check(v.all(), f"mast view, {name} ground: every one of {v.size} cells seen")
+    W, xb = 0.6, 12  # a wall W high, its top from 1 to 2 cells before xb, xb cells from the mast
+    z = np.zeros((n, n))
+    z[:, c0 + xb - 1:c0 + xb + 1] = W
+    end = xb * H / (H - W)  # similar triangles: the shadow reaches d H / (H - W) = 17.14
+    dx = np.arange(1, 40)
+    v = mast_row(z, r0, c0, c0 + dx, H)
+    want = ~((dx > xb) & (dx <= end))
+    check(np.array_equal(v, want), f"mast {H:g} m, wall {W:g} m at {xb} cells: along the ray the hidden "
+                                   f"cells are {dx[~v].min()}-{dx[~v].max()} (similar triangles: "
+                                   f"{xb + 1}-{int(end)}, shadow {end - xb:.2f} cells)")
+    v = cm.mast_visible(z, r0, c0, rr, cc, H)
+    x = cc - c0
+    sure_hidden = (x > xb) & (x <= (xb - 0.5) * H / (H - W))  # a sample within half a cell of the top's edge
+    sure_seen = (x <= xb) | (x >= end + 1)
+    check(not v[sure_hidden].any() and v[sure_seen].all(),
+          f"wall, {v.size} cells off the ray too: hidden behind it, seen before it and beyond "
+          f"{end:.2f} + 1 cells")
+    D, xa, xf = 0.9, 10, 22  # a pit D deep, its floor from xa + 1 to xf
+    z = np.zeros((n, n))
+    z[:, c0 + xa + 1:c0 + xf + 1] = -D
+    floor = xa * (H + D) / H  # the floor is seen beyond d (H + D) / H = 14.5
+    v = mast_row(z, r0, c0, c0 + dx, H)
+    want = ~((dx > xa) & (dx < floor))
+    check(np.array_equal(v, want), f"pit {D:g} m deep, rim at {xa} cells: hidden floor cells "
+                                   f"{dx[~v].min()}-{dx[~v].max()} (similar triangles: to {floor:.2f}), "
+                                   f"the far floor, wall and ground seen")
+    v = cm.mast_visible(z, r0, c0, rr, cc, H)
+    x = cc - c0
+    sure_hidden = (x > xa) & (x <= (xa - 0.5) * (H + D) / H)
+    sure_seen = (x <= xa) | (x >= floor + 0.5)
+    check(not v[sure_hidden].any() and v[sure_seen].all(), f"pit, {v.size} cells off the ray too")
+    # through make_local: a wall in a fine DEM; seen cells keep their heights, the paired noise too
+    dem = synth_dem(hills, n=200, c=10.0)
+    truth = (dem.x0 + 1003.3, dem.y0 - 987.1)
+    p0 = cm.CaseParams(radius=15)
+    pm = cm.CaseParams(radius=15, mast_m=1.8)
+    a0, s0 = cm.make_local(dem, truth, p0, np.random.default_rng(9), 40.0, 3.0)
+    a1, s1 = cm.make_local(dem, truth, pm, np.random.default_rng(9), 40.0, 3.0)
+    check(s1.sum() < s0.sum() and not (s1 & ~s0).any() and np.array_equal(a0[s1], a1[s1]),
+          f"make_local with a 1.8 m mast on hills: {s1.sum()} of {s0.sum()} wedge cells seen, the "
+          f"same heights")
 
 
 def test_outliers():
@@ -546,6 +659,8 @@ def main():
     test_cli()
     test_local_mean()
     test_outliers()
+    test_binned()
+    test_mast_view()
     test_dem_file()
     if FAILS:
         print(f"test_real: {len(FAILS)} check(s) failed", file=sys.stderr)
