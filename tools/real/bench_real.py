@@ -35,12 +35,11 @@ centres, so that what it cannot resolve is aliased, not smoothed. With --fine-lo
 mean each local cell is the mean of the original over the cell instead of its value
 at the cell's centre (K x K bilinear sub-samples at even spacing about the cell's centre,
 each cell the model's noise). With --fine-local binned (issue 36's rover) the rover's stereo
-points are the original DEM's nodes (one point per fine cell, the true ground, not
-interpolated), binned into the local cells around the rover at its sub-cell position; a
-cell is the mean of its points (about K^2 of them; a bin's points' centroid is up to half
-a fine cell off its centre) and its noise that of the mean of the points' noises, each
-point's sd the noise model at its own range (so about 1/K of the model's sd; trn is told
-the model). Radius, prior, window, noise and errors are then in coarse cells
+points lie on the original DEM's surface (bilinear) at uniformly random positions, on
+average one per fine cell, and are binned into the local cells around the rover at its
+sub-cell position; a cell is the mean of its points (K^2 on average, the count varying;
+none: unseen), each point with the noise model's sd at its own range, so a cell's noise is
+that of the mean of its points' (about 1/K of the model's sd; trn is told the model). Radius, prior, window, noise and errors are then in coarse cells
 (tools/real/cases.py).
 
 --mast-view H: the rover sees from a mast H metres above the ground at its position; a
@@ -120,8 +119,9 @@ def parse_args(argv):
     ap.add_argument("--fine-local", default="point", choices=("point", "mean", "binned"),
                     help="with --truth-fine: each local cell samples the DEM at its centre (default), is "
                          "the mean of K x K bilinear sub-samples over the cell with the model's noise "
-                         "(mean), or is the mean of the DEM's nodes that fall in it, binned at the "
-                         "rover's sub-cell position, with the noise of the mean of their noises (binned)")
+                         "(mean), or is the mean of the scattered stereo points of the DEM's surface that "
+                         "fall in it, binned at the rover's sub-cell position, each point with the model's "
+                         "noise (binned)")
     ap.add_argument("--mast-view", type=float, default=None, metavar="H",
                     help="only the local cells whose ground a mast H metres above the rover's ground "
                          "sees past the true surface's rises (default: every cell of the wedge)")
@@ -322,7 +322,7 @@ def print_table(dem_id, meta, ms):
     how = "point samples (every K-th cell) of" if meta.get("fine_map") == "point" else "block mean of"
     kk = meta.get("truth_fine")
     lhow = {"mean": "each local cell its mean over the cell",
-            "binned": "each local cell the mean of the DEM's nodes in it, its noise their mean's"}.get(
+            "binned": "each local cell the mean of the stereo points binned in it"}.get(
         meta.get("fine_local"), "each local cell its value at the cell's centre")
     fine = (f", map = {kk} x {kk} {how} the {meta['fine_cell_m']:g} m "
             f"DEM the local maps are sampled from ({lhow})") if kk else ""

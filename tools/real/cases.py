@@ -254,29 +254,51 @@ def cell_positions(fr, fc, R, scale, turn_deg, du=0.0, dv=0.0):
     return fr + (-x * st + y * ct) * scale, fc + (x * ct + y * st) * scale
 
 
-def binned_points(src, fr, fc, R, scale, turn_deg, p, cell_m):
-    """The issue's rover: its stereo points are the true ground at the source grid's
-    nodes (one point per source cell centre, no interpolation), binned into the local
-    cells around the rover at its sub-cell position. Returns per local cell the points'
-    mean height (NaN where none), their count, and the sd of the mean of their noises
-    (each point's sd the noise model at its own range: sqrt(sum sd_i^2) / n)."""
-    reach = (R + 1) * scale * (math.sqrt(2.0) if turn_deg else 1.0)
-    i0, i1 = max(0, int(math.floor(fr - reach))), min(src.z.shape[0], int(math.ceil(fr + reach)) + 1)
-    j0, j1 = max(0, int(math.floor(fc - reach))), min(src.z.shape[1], int(math.ceil(fc + reach)) + 1)
-    a = (np.arange(i0, i1, dtype=np.float64)[:, None] - fr) / scale + 0 * np.arange(j0, j1)[None, :]
-    b = (np.arange(j0, j1, dtype=np.float64)[None, :] - fc) / scale + 0 * a
+@dataclass
+class Bins:
+    h: np.ndarray  # per local cell: the mean of its points' heights, noise included (NaN: no point)
+    h0: np.ndarray  # the same without the noise
+    n: np.ndarray  # points per cell
+    sd: np.ndarray  # sd of the mean of the cell's points' noises, sqrt(sum sd_i^2) / n
+    cx: np.ndarray  # the points' centroid, local cells east of the cell's centre
+    cy: np.ndarray  # and south of it
+
+
+def binned_points(src, fr, fc, R, scale, turn_deg, p, cell_m, gen, noisy=True):
+    """The issue's rover: stereo points of the true ground (the source surface, bilinear)
+    scattered uniformly at random (generator gen) over the local map's square, on
+    average one per source cell (scale^2 per local cell, so a cell's count varies), binned
+    into the local cells around the rover at its sub-cell position (fr, fc). Each point's
+    noise sd is the model's at its own range; a cell is the mean of its points."""
+    m = 2 * R + 1
+    npts = int(round(m * m * scale * scale))
+    x = gen.uniform(-R - 0.5, R + 0.5, npts)  # local east, local cells from the rover
+    y = gen.uniform(-R - 0.5, R + 0.5, npts)  # local south
     ct, st = math.cos(math.radians(turn_deg)), math.sin(math.radians(turn_deg))
-    x, y = b * ct - a * st, b * st + a * ct  # local east / south, local cells (cell_positions inverted)
-    ix, iy = np.floor(x + 0.5).astype(int) + R, np.floor(y + 0.5).astype(int) + R
-    z = src.z[i0:i1, j0:j1]
-    use = (ix >= 0) & (ix <= 2 * R) & (iy >= 0) & (iy <= 2 * R) & np.isfinite(z)
-    cell = (iy * (2 * R + 1) + ix)[use]
-    sd = p.noise0_m + p.noise_k * (x[use] ** 2 + y[use] ** 2) * cell_m
-    n = np.bincount(cell, minlength=(2 * R + 1) ** 2).reshape(2 * R + 1, 2 * R + 1)
-    hs = np.bincount(cell, z[use], minlength=n.size).reshape(n.shape)
-    vs = np.bincount(cell, sd * sd, minlength=n.size).reshape(n.shape)
+    z = sample(src.z, fr + (-x * st + y * ct) * scale, fc + (x * ct + y * st) * scale)
+    sd = p.noise0_m + p.noise_k * (x * x + y * y) * cell_m
+    zn = z + gen.standard_normal(npts) * sd if noisy else z
+    use = np.isfinite(z)
+    ix = np.clip(np.floor(x + 0.5).astype(int) + R, 0, m - 1)
+    iy = np.clip(np.floor(y + 0.5).astype(int) + R, 0, m - 1)
+    cell = (iy * m + ix)[use]
+
+    def per_cell(w):
+        return np.bincount(cell, w[use], minlength=m * m).reshape(m, m)
+    n = np.bincount(cell, minlength=m * m).reshape(m, m)
     with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(n > 0, hs / n, np.nan), n, np.sqrt(vs) / np.maximum(n, 1)
+        k = np.arange(-R, R + 1, dtype=np.float64)
+        return Bins(per_cell(zn) / n, per_cell(z) / n, n, np.sqrt(per_cell(sd * sd)) / n,
+                    per_cell(x) / n - k[None, :], per_cell(y) / n - k[:, None])
+
+
+def points_generator(rng, p, shape):
+    """The points' own generator: seeded from one normal per local cell drawn from the
+    case's generator (what the other constructions draw for their noise), so that the
+    cases (truth, wedge, offset, prior) stay those of the other constructions."""
+    if rng is None or not p.noise:
+        return np.random.default_rng(0)
+    return np.random.default_rng(np.frombuffer(rng.standard_normal(shape).tobytes(), dtype=np.uint32))
 
 
 def mast_visible(z, r0, c0, rows, cols, mast_m):
@@ -309,7 +331,7 @@ def make_local(dem, truth, p, rng=None, azimuth_deg=0.0, offset_m=0.0, fine=None
     counterclockwise about the rover (trn localize --heading-window-deg then finds
     +turn_deg as the correction). p.local: "point" (each cell the surface at its
     centre), "mean" (with `fine`: the mean of fine-spaced sub-samples over the cell),
-    "binned" (with `fine`: binned_points). p.mast_m > 0: only cells whose ground a mast
+    "binned" (with `fine`: binned_points, its own noise). p.mast_m > 0: only cells whose ground a mast
     that high above the rover's ground sees through the true surface (mast_visible)."""
     R = p.radius
     src = dem if fine is None else fine
@@ -317,8 +339,10 @@ def make_local(dem, truth, p, rng=None, azimuth_deg=0.0, offset_m=0.0, fine=None
     fr, fc = src.frac_index(*truth)
     e, n = rover_frame_offsets(R, dem.c)
     sigma = p.noise0_m + p.noise_k * (e**2 + n**2) / dem.c
-    if p.local == "binned" and fine is not None:
-        h, _, sigma = binned_points(src, fr, fc, R, scale, turn_deg, p, dem.c)
+    binned = p.local == "binned" and fine is not None
+    if binned:
+        gen = points_generator(rng, p, sigma.shape)
+        h = binned_points(src, fr, fc, R, scale, turn_deg, p, dem.c, gen, p.noise and rng is not None).h
     else:
         # sub-samples per local cell axis: one (its centre), or with "mean" and `fine`
         # the fine cells' count across it, spread evenly (a rover gridding dense stereo
@@ -334,9 +358,7 @@ def make_local(dem, truth, p, rng=None, azimuth_deg=0.0, offset_m=0.0, fine=None
     seen = visibility(R, dem.c, azimuth_deg, p)
     if p.mast_m > 0.0:
         seen &= mast_visible(src.z, fr, fc, *cell_positions(fr, fc, R, scale, turn_deg), p.mast_m)
-    if p.noise and rng is not None:
-        # one normal per cell in every construction (the cases stay paired); for "binned"
-        # the mean of the points' independent noises has exactly this law
+    if p.noise and rng is not None and not binned:
         h = h + rng.standard_normal(h.shape) * sigma
     seen &= np.isfinite(h)
     if p.outlier_frac > 0.0 and rng is not None and seen.any():

@@ -31,9 +31,9 @@ On small synthetic DEMs with analytic surfaces (no download, ~10 s):
 * bench_real.py exits 1 with one line on bad input;
 * --fine-local mean: on a plane the cell means equal the centre samples; a pattern
   alternating +-1 along the fine columns averages to exactly 0 in every local cell;
-* --fine-local binned: on a plane each cell holds K^2 nodes and equals the plane at their
-  centroid; a +-1 fine-column pattern bins to 0 (K = 2); the noise is the mean of the
-  points' (standardized residuals of sd 1, about 1/K of the model's sd);
+* --fine-local binned: K^2 points a cell on average, their counts varying; on a plane each
+  cell equals the plane at its points' centroid, which lies in the cell; the noise is the
+  mean of the points' (residuals over sqrt(sum sd_i^2) / n of sd 1); the cases' draws kept;
 * --mast-view: the ray cast (cases.mast_visible) sees every cell on flat and tilted ground;
   behind a wall of height W at distance d a mast of height H loses the cells up to
   d H / (H - W) (similar triangles); in a pit of depth D behind a rim at distance d, the
@@ -462,50 +462,46 @@ def test_local_mean():
 
 
 def test_binned():
-    """--fine-local binned: each local cell the mean of the fine nodes that fall in it."""
+    """--fine-local binned: each local cell the mean of the scattered points that fall in it."""
     cf, R = 10.0, 6
     fine = synth_dem(plane, n=240, c=cf)
-    pb = cm.CaseParams(radius=R, noise=False, full_view=True, min_range_cells=0, local="binned")
-    for K in (2, 3):
+    pb = cm.CaseParams(radius=R, full_view=True, min_range_cells=0, local="binned")
+    truth = (fine.x0 + 120 * cf + 3.7, fine.y0 - 120 * cf - 6.1)
+    fr, fc = fine.frac_index(*truth)
+    for K, turn in ((2, 0.0), (3, 30.0)):
         g = cm.block_average(fine, K)
-        truth = (fine.x0 + 120 * cf + 3.7, fine.y0 - 120 * cf - 6.1)
-        fr, fc = fine.frac_index(*truth)
-        h, n, sd = cm.binned_points(fine, fr, fc, R, K, 0.0, pb, g.c)
+        b = cm.binned_points(fine, fr, fc, R, K, turn, pb, g.c, np.random.default_rng(K), False)
         k = np.arange(-R, R + 1)
-        a_c = np.ceil(fc + K * (k - 0.5))  # first fine column in each local column's bin
-        a_r = np.ceil(fr + K * (k - 0.5))
-        X, Y = fine.xy(a_r[:, None] + (K - 1) / 2.0, a_c[None, :] + (K - 1) / 2.0)
-        d = np.abs(h - plane(X, Y)).max()
-        check((n == K * K).all() and d < 1e-9,
-              f"binned, K = {K}, a plane: {K * K} points in every cell, each cell the plane at its "
-              f"points' centroid (max diff {d:.1e} m)")
-        _, nt, _ = cm.binned_points(fine, fr, fc, R, K, 30.0, pb, g.c)
-        check(abs(nt.mean() - K * K) < 0.05 * K * K and nt.min() < K * K < nt.max(),
-              f"binned, K = {K}, turned 30 deg: {nt.min()}-{nt.max()} points a cell, mean {nt.mean():.2f}")
-    alt = synth_dem(plane, n=240, c=cf)
-    alt.z = np.tile(np.where(np.arange(240) % 2 == 0, 1.0, -1.0), (240, 1))
-    g = cm.block_average(alt, 2)
-    worst = max(float(np.nanmax(np.abs(cm.make_local(g, (alt.x0 + 1200 + tx, alt.y0 - 1200 - ty), pb,
-                                                     None, 0.0, 0.0, alt)[0])))
-                for tx, ty in ((3.7, 6.1), (0.0, 0.0), (12.5, 2.2)))
-    check(worst < 1e-9, f"binned, a +-1 fine-column pattern (K = 2): every cell 0 (max {worst:.1e})")
-    # the noise: that of the mean of the points' noises
+        e, nn = k[None, :] + b.cx, -(k[:, None] + b.cy)  # the centroid, local cells east / north
+        ct, st = math.cos(math.radians(turn)), math.sin(math.radians(turn))
+        X, Y = truth[0] + (e * ct - nn * st) * g.c, truth[1] + (e * st + nn * ct) * g.c
+        d = np.nanmax(np.abs(b.h - plane(X, Y)))
+        inside = np.nanmax(np.abs(np.stack([b.cx, b.cy])))
+        check(d < 1e-6 and inside <= 0.5 and b.n.sum() == (2 * R + 1) ** 2 * K * K
+              and abs(b.n.mean() - K * K) < 1e-9 and b.n.min() < K * K < b.n.max(),
+              f"binned, K = {K}, turned {turn:g} deg, a plane: {b.n.sum()} points, {b.n.min()}-{b.n.max()} "
+              f"a cell; each cell the plane at its points' centroid (max diff {d:.1e} m), the centroid "
+              f"inside the cell")
+    # the noise: that of the mean of the cell's points' noises
     g = cm.block_average(fine, 2)
     pn = cm.CaseParams(radius=10, full_view=True, min_range_cells=0, local="binned")
-    truth = (fine.x0 + 1203.3, fine.y0 - 1187.9)
-    ref, _ = cm.make_local(g, truth, cm.CaseParams(radius=10, noise=False, full_view=True,
-                                                   min_range_cells=0, local="binned"), None, 0.0, 0.0, fine)
-    fr, fc = fine.frac_index(*truth)
-    _, _, sd = cm.binned_points(fine, fr, fc, 10, 2, 0.0, pn, g.c)
     e, nn = cm.rover_frame_offsets(10, g.c)
     model = pn.noise0_m + pn.noise_k * (e ** 2 + nn ** 2) / g.c
-    rng = np.random.default_rng(4)
-    z = np.array([(cm.make_local(g, truth, pn, rng, 0.0, 0.0, fine)[0] - ref) / sd for _ in range(100)])
-    ratio = float(np.median(sd / model))
-    z = z[np.isfinite(z)]  # the corners beyond R are unseen
-    check(z.size > 25000 and abs(z.std() - 1.0) < 0.02 and 0.45 < ratio < 0.55,
-          f"binned noise: standardized residuals sd {z.std():.3f} (1); sd / the model's {ratio:.3f} "
-          f"(about 1/K = 0.5)")
+    z, ratio = [], []
+    for s in range(100):
+        b = cm.binned_points(fine, fr, fc, 10, 2, 0.0, pn, g.c, np.random.default_rng(s))
+        ok = b.n > 0
+        z.append(((b.h - b.h0) / b.sd)[ok])
+        ratio.append((b.sd * np.sqrt(b.n) / model)[ok])
+    z, ratio = np.concatenate(z), float(np.median(np.concatenate(ratio)))
+    check(z.size > 30000 and abs(z.std() - 1.0) < 0.02 and 0.9 < ratio < 1.1,
+          f"binned noise: residuals over the mean's sd have sd {z.std():.3f} (1); sd x sqrt(n) / the "
+          f"model's {ratio:.3f} (about 1)")
+    # make_local: the cases stay paired with the other constructions (the same draws follow)
+    r1, r2 = np.random.default_rng(8), np.random.default_rng(8)
+    cm.make_local(g, truth, pn, r1, 0.0, 0.0, fine)
+    cm.make_local(g, truth, cm.CaseParams(radius=10, full_view=True, min_range_cells=0), r2, 0.0, 0.0, fine)
+    check(r1.uniform() == r2.uniform(), "binned: the case generator's next draw as with --fine-local point")
 
 
 def mast_row(z, r0, c0, cols, H):
