@@ -38,6 +38,8 @@ On small synthetic DEMs with analytic surfaces (no download, ~10 s):
   behind a wall of height W at distance d a mast of height H loses the cells up to
   d H / (H - W) (similar triangles); in a pit of depth D behind a rim at distance d, the
   floor up to d (H + D) / H; the cases' heights unchanged where seen;
+* tools/real/rover_map_error.py on a plane: no interpolation error, the binning error the
+  plane's rise to each cell's points' centroid;
 * --dem-file (a user's DEM): a missing or geographic file exits 1 with one line; a
   projected synthetic DEM runs end to end under its file name (when trn is built);
 * if build/host-release/trn exists: trn localize recovers the noiseless integer case
@@ -504,6 +506,25 @@ def test_binned():
     check(r1.uniform() == r2.uniform(), "binned: the case generator's next draw as with --fine-local point")
 
 
+def test_rover_map_error():
+    """tools/real/rover_map_error.py on a plane: the map's interpolants are exact (the block
+    mean of a plane is the plane at the coarse centres), so the interpolation error is 0;
+    the binning error is the plane's rise from the cell's centre to its points' centroid."""
+    import rover_map_error as rme
+    fine = synth_dem(plane, n=240, c=10.0)
+    g = cm.block_average(fine, 2)
+    p = cm.CaseParams(radius=8, local="binned")
+    cs = cm.generate(g, 3, 5, p, None, fine)
+    x = np.concatenate([rme.case_errors(g, fine, c, 2, p, np.random.default_rng(1)) for c in cs], axis=1)
+    b = cm.binned_points(fine, *fine.frac_index(*cs[-1].truth), 8, 2, 0.0, p, g.c, np.random.default_rng(1), False)
+    rise = (0.3 * b.cx + 0.7 * b.cy) * g.c  # plane(): 0.3 per metre east, -0.7 per metre north
+    want = rise[cs[-1].seen & np.isfinite(b.h0)]
+    got = x[2, -want.size:]
+    check(np.abs(x[0:2]).max() < 1e-6 and np.abs(got - want).max() < 1e-6 and np.abs(want).max() > 1.0,
+          f"rover_map_error on a plane: interpolation error 0 (max {np.abs(x[0:2]).max():.1e} m), the "
+          f"binning error the rise to the points' centroid (up to {np.abs(want).max():.1f} m)")
+
+
 def mast_row(z, r0, c0, cols, H):
     rows = np.full(len(cols), float(r0))
     return cm.mast_visible(z, float(r0), float(c0), rows, np.asarray(cols, dtype=np.float64), H)
@@ -657,6 +678,7 @@ def main():
     test_outliers()
     test_binned()
     test_mast_view()
+    test_rover_map_error()
     test_dem_file()
     if FAILS:
         print(f"test_real: {len(FAILS)} check(s) failed", file=sys.stderr)
