@@ -4,7 +4,7 @@
 
     /usr/bin/python3 tools/real/bench_real.py [--dem ID ...] [--dem-file PATH ...] [--cases N] [--seed S]
         [--radius R] [--resample bilinear|cubic] [--truth-fine K] [--fine-map mean|point]
-        [--fine-local point|mean] [--noise-scale F] [--outliers P]
+        [--fine-local point|mean|binned] [--noise-scale F] [--outliers P] [--mast-view H]
         [--subcell axis|quad2d]
         [--trn PATH] [--trn-mode auto|batch|single]
         [--out DIR] [--keep-cases] [--no-plot] [-- TRN_ARGS...]
@@ -33,8 +33,20 @@ smoothed coarser product. With --fine-map point the map is the DEM's point sampl
 every K cells instead (OUT/ID_pointK.tif): a map that samples the terrain at its cell
 centres, so that what it cannot resolve is aliased, not smoothed. With --fine-local
 mean each local cell is the mean of the original over the cell instead of its value
-at the cell's centre (a rover averaging the stereo points that fall in a cell). Radius, prior,
-window, noise and errors are then in coarse cells (tools/real/cases.py).
+at the cell's centre (K x K bilinear sub-samples at even spacing about the cell's centre,
+each cell the model's noise). With --fine-local binned (issue 36's rover) the rover's stereo
+points lie on the original DEM's surface (bilinear) at uniformly random positions, on
+average one per fine cell, and are binned into the local cells around the rover at its
+sub-cell position; a cell is the mean of its points (K^2 on average, the count varying;
+none: unseen), each point with the noise model's sd at its own range, so a cell's noise is
+that of the mean of its points' (about 1/K of the model's sd; trn is told the model). Radius, prior, window, noise and errors are then in coarse cells
+(tools/real/cases.py).
+
+--mast-view H: the rover sees from a mast H metres above the ground at its position; a
+local cell whose ground is hidden behind a rise of the true surface (the original DEM
+with --truth-fine) is unseen (NaN): the line from the mast head to the cell centre's
+ground must pass above the surface (bilinear) at every sample, samples at most half a
+grid cell apart (cases.mast_visible). Default: every cell of the wedge seen.
 
 Metrics per DEM and method: success (radial error <= 1.5 cells) rate, median error
 (cells) over all cases and over the successes, median time per localization (ms);
@@ -104,9 +116,15 @@ def parse_args(argv):
     ap.add_argument("--fine-map", default="mean", choices=("mean", "point"),
                     help="with --truth-fine: the map is the K x K block mean (default) or the point "
                          "samples every K cells")
-    ap.add_argument("--fine-local", default="point", choices=("point", "mean"),
-                    help="with --truth-fine: each local cell samples the DEM at its centre (default) or "
-                         "is its mean over the cell (a rover averaging its stereo points per cell)")
+    ap.add_argument("--fine-local", default="point", choices=("point", "mean", "binned"),
+                    help="with --truth-fine: each local cell samples the DEM at its centre (default), is "
+                         "the mean of K x K bilinear sub-samples over the cell with the model's noise "
+                         "(mean), or is the mean of the scattered stereo points of the DEM's surface that "
+                         "fall in it, binned at the rover's sub-cell position, each point with the model's "
+                         "noise (binned)")
+    ap.add_argument("--mast-view", type=float, default=None, metavar="H",
+                    help="only the local cells whose ground a mast H metres above the rover's ground "
+                         "sees past the true surface's rises (default: every cell of the wedge)")
     ap.add_argument("--noise-scale", type=float, default=1.0, metavar="F",
                     help="the local maps' height noise is F times the issue's model (default 1); trn is "
                          "not told (its own --noise-m / --noise-k stay as given after --)")
@@ -146,6 +164,11 @@ def parse_args(argv):
         raise Fail(f"--noise-scale {a.noise_scale}: must be a finite number >= 0")
     if not 0.0 <= a.outliers < 1.0:
         raise Fail(f"--outliers {a.outliers}: must be in [0, 1)")
+    if a.mast_view is not None and not (a.mast_view > 0.0 and math.isfinite(a.mast_view)):
+        raise Fail(f"--mast-view {a.mast_view}: must be a finite height > 0 metres")
+    if a.fine_local != "point" and a.truth_fine is None:
+        raise Fail(f"--fine-local {a.fine_local}: needs --truth-fine K")
+    a.mast_view = a.mast_view or 0.0
     if a.truth_fine is not None and a.truth_fine < 2:
         raise Fail(f"--truth-fine {a.truth_fine}: must be >= 2")
     if not 2 <= a.radius <= 500:
@@ -298,14 +321,17 @@ def fmt(v, spec):
 def print_table(dem_id, meta, ms):
     how = "point samples (every K-th cell) of" if meta.get("fine_map") == "point" else "block mean of"
     kk = meta.get("truth_fine")
-    lhow = "each local cell its mean over the cell" if meta.get("fine_local") == "mean" else \
-        "each local cell its value at the cell's centre"
+    lhow = {"mean": "each local cell its mean over the cell",
+            "binned": "each local cell the mean of the stereo points binned in it"}.get(
+        meta.get("fine_local"), "each local cell its value at the cell's centre")
     fine = (f", map = {kk} x {kk} {how} the {meta['fine_cell_m']:g} m "
             f"DEM the local maps are sampled from ({lhow})") if kk else ""
     ns = meta.get("noise_scale", 1.0)
     noise = f", local noise {ns:g} x the issue's (trn not told)" if ns != 1.0 else ""
     if meta.get("outliers"):
         noise += f", {100 * meta['outliers']:g} % of the seen cells blunders (trn not told)"
+    if meta.get("mast_view"):
+        noise += f", seen from a {meta['mast_view']:g} m mast (hidden cells unseen)"
     print(f"\n{dem_id} ({meta['character']}, held_out={meta['held_out']}): {meta['cols']} x {meta['rows']} "
           f"cells of {meta['cell_m']:g} m, {ms['trn']['n']} cases, R = {meta['radius']} cells, "
           f"{meta['resample']}, trn {meta['trn_mode']}{fine}{noise}")
@@ -355,7 +381,7 @@ def bench_dem(a, dem_id, batch):
     p = casemod.CaseParams(radius=a.radius, resample=a.resample,
                            noise0_m=casemod.CaseParams.noise0_m * a.noise_scale,
                            noise_k=casemod.CaseParams.noise_k * a.noise_scale,
-                           local_mean=bool(a.truth_fine) and a.fine_local == "mean",
+                           local=a.fine_local if a.truth_fine else "point", mast_m=a.mast_view,
                            outlier_frac=a.outliers)
     tmp = tempfile.mkdtemp(prefix=f"bench_real_{dem_id}_")
     try:
@@ -398,7 +424,7 @@ def bench_dem(a, dem_id, batch):
                 "opencv_mask": peers.mask_supported(), "truth_fine": a.truth_fine,
                 "fine_map": a.fine_map if a.truth_fine else None,
                 "fine_local": a.fine_local if a.truth_fine else None,
-                "noise_scale": a.noise_scale, "outliers": a.outliers,
+                "noise_scale": a.noise_scale, "outliers": a.outliers, "mast_view": a.mast_view,
                 "fine_cell_m": fine.c if fine is not None else None,
                 "fine_path": fine.path if fine is not None else None}
         # the figure's case: the first trn success (else case 0); keep its local DEM
@@ -440,7 +466,9 @@ def main(argv):
         mode = a.trn_mode
         batch = trn_has_batch(a.trn) if mode == "auto" else mode == "batch"
         res = {"config": {"cases": a.cases, "seed": a.seed, "radius": a.radius, "resample": a.resample,
-                          "subcell": a.subcell, "truth_fine": a.truth_fine, "fine_map": a.fine_map, "trn": a.trn, "trn_args": a.trn_extra, "success_cells": SUCCESS_CELLS},
+                          "subcell": a.subcell, "truth_fine": a.truth_fine, "fine_map": a.fine_map,
+                          "fine_local": a.fine_local, "mast_view": a.mast_view, "noise_scale": a.noise_scale,
+                          "trn": a.trn, "trn_args": a.trn_extra, "success_cells": SUCCESS_CELLS},
                "dems": {}}
         for d in a.dem:
             r = bench_dem(a, d, batch)

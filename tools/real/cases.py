@@ -197,7 +197,8 @@ class CaseParams:
     full_view: bool = False  # tests: every cell within R seen
     resample: str = "bilinear"
     min_valid: float = 0.95
-    local_mean: bool = False  # with `fine`: each local cell the mean of the fine surface over it
+    local: str = "point"  # with `fine`: "point" | "mean" | "binned" (see make_local)
+    mast_m: float = 0.0  # > 0: a mast that high sees the cells (mast_visible); 0: every cell in the wedge
     outlier_frac: float = 0.0  # share of seen cells that are stereo blunders (see make_local)
 
     @property
@@ -240,39 +241,124 @@ def visibility(radius, c, azimuth_deg, p):
     return seen
 
 
+def cell_positions(fr, fc, R, scale, turn_deg, du=0.0, dv=0.0):
+    """Fractional (rows, cols) in the source grid of each local cell's point offset
+    (du east, dv south) local cells from its centre; the rover at source (fr, fc),
+    `scale` source cells per local cell, the terrain turned turn_deg counterclockwise."""
+    k = np.arange(-R, R + 1, dtype=np.float64)
+    x, y = k[None, :] + du + 0 * k[:, None], k[:, None] + dv + 0 * k[None, :]
+    if turn_deg == 0.0:
+        return fr + y * scale, fc + x * scale
+    ct, st = math.cos(math.radians(turn_deg)), math.sin(math.radians(turn_deg))
+    # column offset x (east), row offset y (south): (x c + y s, -x s + y c)
+    return fr + (-x * st + y * ct) * scale, fc + (x * ct + y * st) * scale
+
+
+@dataclass
+class Bins:
+    h: np.ndarray  # per local cell: the mean of its points' heights, noise included (NaN: no point)
+    h0: np.ndarray  # the same without the noise
+    n: np.ndarray  # points per cell
+    sd: np.ndarray  # sd of the mean of the cell's points' noises, sqrt(sum sd_i^2) / n
+    cx: np.ndarray  # the points' centroid, local cells east of the cell's centre
+    cy: np.ndarray  # and south of it
+
+
+def binned_points(src, fr, fc, R, scale, turn_deg, p, cell_m, gen, noisy=True):
+    """The issue's rover: stereo points of the true ground (the source surface, bilinear)
+    scattered uniformly at random (generator gen) over the local map's square, on
+    average one per source cell (scale^2 per local cell, so a cell's count varies), binned
+    into the local cells around the rover at its sub-cell position (fr, fc). Each point's
+    noise sd is the model's at its own range; a cell is the mean of its points."""
+    m = 2 * R + 1
+    npts = int(round(m * m * scale * scale))
+    x = gen.uniform(-R - 0.5, R + 0.5, npts)  # local east, local cells from the rover
+    y = gen.uniform(-R - 0.5, R + 0.5, npts)  # local south
+    ct, st = math.cos(math.radians(turn_deg)), math.sin(math.radians(turn_deg))
+    z = sample(src.z, fr + (-x * st + y * ct) * scale, fc + (x * ct + y * st) * scale)
+    sd = p.noise0_m + p.noise_k * (x * x + y * y) * cell_m
+    zn = z + gen.standard_normal(npts) * sd if noisy else z
+    use = np.isfinite(z)
+    ix = np.clip(np.floor(x + 0.5).astype(int) + R, 0, m - 1)
+    iy = np.clip(np.floor(y + 0.5).astype(int) + R, 0, m - 1)
+    cell = (iy * m + ix)[use]
+
+    def per_cell(w):
+        return np.bincount(cell, w[use], minlength=m * m).reshape(m, m)
+    n = np.bincount(cell, minlength=m * m).reshape(m, m)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        k = np.arange(-R, R + 1, dtype=np.float64)
+        return Bins(per_cell(zn) / n, per_cell(z) / n, n, np.sqrt(per_cell(sd * sd)) / n,
+                    per_cell(x) / n - k[None, :], per_cell(y) / n - k[:, None])
+
+
+def points_generator(rng, p, shape):
+    """The points' own generator: seeded from one normal per local cell drawn from the
+    case's generator (what the other constructions draw for their noise), so that the
+    cases (truth, wedge, offset, prior) stay those of the other constructions."""
+    if rng is None or not p.noise:
+        return np.random.default_rng(0)
+    return np.random.default_rng(np.frombuffer(rng.standard_normal(shape).tobytes(), dtype=np.uint32))
+
+
+def mast_visible(z, r0, c0, rows, cols, mast_m):
+    """Which ground points (rows, cols) (fractional indices into heights z, bilinear) a
+    mast head mast_m above the ground at (r0, c0) sees: the straight line from the head
+    to the point's ground passes above the surface at every sample along it, samples
+    at most half a grid cell apart (the end points excluded). A sample on no-data does
+    not block. Vectorized over the points: every ray gets the longest ray's sample
+    count, each at its own spacing."""
+    rows, cols = np.asarray(rows, dtype=np.float64), np.asarray(cols, dtype=np.float64)
+    head = sample(z, np.array([r0]), np.array([c0]))[0] + mast_m
+    end = sample(z, rows, cols)
+    n = np.maximum(2, np.ceil(2.0 * np.hypot(rows - r0, cols - c0))).ravel()
+    k = np.arange(1, int(n.max()))
+    t = np.minimum(k[None, :] / n[:, None], 1.0)  # past a ray's own end: its end (never blocks)
+    inner = k[None, :] < n[:, None]
+    rr = r0 + t * (rows.ravel()[:, None] - r0)
+    cc = c0 + t * (cols.ravel()[:, None] - c0)
+    line = head + t * (end.ravel()[:, None] - head)
+    ground = sample(z, rr, cc)
+    blocked = inner & (ground >= line)  # NaN ground compares False: no block
+    return ~blocked.any(axis=1).reshape(rows.shape)
+
+
 def make_local(dem, truth, p, rng=None, azimuth_deg=0.0, offset_m=0.0, fine=None, turn_deg=0.0):
     """The local DEM (heights + offset + noise, NaN unseen) of a rover at truth: cells
     of dem's cell size, heights sampled from `fine` (the true surface) if given, else
     from dem itself. turn_deg: the rover's believed heading is off by this much, so
     local cell offset (east e, north n) shows the terrain at (e, n) turned turn_deg
     counterclockwise about the rover (trn localize --heading-window-deg then finds
-    +turn_deg as the correction)."""
+    +turn_deg as the correction). p.local: "point" (each cell the surface at its
+    centre), "mean" (with `fine`: the mean of fine-spaced sub-samples over the cell),
+    "binned" (with `fine`: binned_points, its own noise). p.mast_m > 0: only cells whose ground a mast
+    that high above the rover's ground sees through the true surface (mast_visible)."""
     R = p.radius
     src = dem if fine is None else fine
     scale = 1.0 if fine is None else dem.c / fine.c  # source cells per local cell
     fr, fc = src.frac_index(*truth)
-    k = np.arange(-R, R + 1, dtype=np.float64)
-    ct, st = math.cos(math.radians(turn_deg)), math.sin(math.radians(turn_deg))
-    # sub-samples per local cell axis: one (its centre), or with local_mean and `fine`
-    # the fine cells' count across it, spread evenly (a rover gridding dense stereo
-    # into the map's cells by averaging)
-    ns = max(1, int(round(scale))) if (fine is not None and p.local_mean) else 1
-    subs = (np.arange(ns) + 0.5) / ns - 0.5
-    h = np.zeros((2 * R + 1, 2 * R + 1))
-    for du in subs:  # du along the local columns (east), dv along its rows (south)
-        for dv in subs:
-            x, y = k[None, :] + du, k[:, None] + dv
-            if turn_deg == 0.0:
-                rows, cols = fr + y * scale + 0 * x, fc + x * scale + 0 * y
-            else:  # column offset x (east), row offset y (south): (x c + y s, -x s + y c)
-                rows = fr + (-x * st + y * ct) * scale
-                cols = fc + (x * ct + y * st) * scale
-            h += sample(src.z, rows, cols, p.resample)
-    h = h / (ns * ns) + offset_m
+    e, n = rover_frame_offsets(R, dem.c)
+    sigma = p.noise0_m + p.noise_k * (e**2 + n**2) / dem.c
+    binned = p.local == "binned" and fine is not None
+    if binned:
+        gen = points_generator(rng, p, sigma.shape)
+        h = binned_points(src, fr, fc, R, scale, turn_deg, p, dem.c, gen, p.noise and rng is not None).h
+    else:
+        # sub-samples per local cell axis: one (its centre), or with "mean" and `fine`
+        # the fine cells' count across it, spread evenly (a rover gridding dense stereo
+        # into the map's cells by averaging)
+        ns = max(1, int(round(scale))) if (fine is not None and p.local == "mean") else 1
+        subs = (np.arange(ns) + 0.5) / ns - 0.5
+        h = np.zeros((2 * R + 1, 2 * R + 1))
+        for du in subs:  # du along the local columns (east), dv along its rows (south)
+            for dv in subs:
+                h += sample(src.z, *cell_positions(fr, fc, R, scale, turn_deg, du, dv), p.resample)
+        h = h / (ns * ns)
+    h = h + offset_m
     seen = visibility(R, dem.c, azimuth_deg, p)
-    if p.noise and rng is not None:
-        e, n = rover_frame_offsets(R, dem.c)
-        sigma = p.noise0_m + p.noise_k * (e**2 + n**2) / dem.c
+    if p.mast_m > 0.0:
+        seen &= mast_visible(src.z, fr, fc, *cell_positions(fr, fc, R, scale, turn_deg), p.mast_m)
+    if p.noise and rng is not None and not binned:
         h = h + rng.standard_normal(h.shape) * sigma
     seen &= np.isfinite(h)
     if p.outlier_frac > 0.0 and rng is not None and seen.any():

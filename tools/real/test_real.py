@@ -31,6 +31,15 @@ On small synthetic DEMs with analytic surfaces (no download, ~10 s):
 * bench_real.py exits 1 with one line on bad input;
 * --fine-local mean: on a plane the cell means equal the centre samples; a pattern
   alternating +-1 along the fine columns averages to exactly 0 in every local cell;
+* --fine-local binned: K^2 points a cell on average, their counts varying; on a plane each
+  cell equals the plane at its points' centroid, which lies in the cell; the noise is the
+  mean of the points' (residuals over sqrt(sum sd_i^2) / n of sd 1); the cases' draws kept;
+* --mast-view: the ray cast (cases.mast_visible) sees every cell on flat and tilted ground;
+  behind a wall of height W at distance d a mast of height H loses the cells up to
+  d H / (H - W) (similar triangles); in a pit of depth D behind a rim at distance d, the
+  floor up to d (H + D) / H; the cases' heights unchanged where seen;
+* tools/real/rover_map_error.py on a plane: no interpolation error, the binning error the
+  plane's rise to each cell's points' centroid;
 * --dem-file (a user's DEM): a missing or geographic file exits 1 with one line; a
   projected synthetic DEM runs end to end under its file name (when trn is built);
 * if build/host-release/trn exists: trn localize recovers the noiseless integer case
@@ -414,7 +423,9 @@ def test_cli():
                        (["--trn", "/nonexistent/trn"], "missing trn"), (["--bogus"], "unknown option"),
                       (["--truth-fine", "1"], "--truth-fine 1"), (["--noise-scale", "-1"], "--noise-scale -1"),
                       (["--noise-scale", "nan"], "--noise-scale nan"), (["--fine-local", "median"], "--fine-local median"),
-                      (["--outliers", "1"], "--outliers 1"), (["--outliers", "-0.1"], "--outliers -0.1")):
+                      (["--outliers", "1"], "--outliers 1"), (["--outliers", "-0.1"], "--outliers -0.1"),
+                      (["--mast-view", "0"], "--mast-view 0"), (["--mast-view", "inf"], "--mast-view inf"),
+                      (["--fine-local", "binned"], "--fine-local binned without --truth-fine")):
         r = subprocess.run([sys.executable, b] + args, capture_output=True, text=True)
         check(r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1 and r.stdout == "",
               f"bench_real {what}: exit 1, one line ({r.stderr.strip()})")
@@ -429,7 +440,7 @@ def test_local_mean():
     fine = synth_dem(plane, n=240, c=cf)
     g = cm.block_average(fine, K)
     R = 6
-    pm = cm.CaseParams(radius=R, noise=False, full_view=True, min_range_cells=0, local_mean=True)
+    pm = cm.CaseParams(radius=R, noise=False, full_view=True, min_range_cells=0, local="mean")
     pp = cm.CaseParams(radius=R, noise=False, full_view=True, min_range_cells=0)
     truth = (fine.x0 + 120 * cf + 3.7, fine.y0 - 120 * cf - 6.1)
     lm, _ = cm.make_local(g, truth, pm, None, 0.0, 0.0, fine)
@@ -450,6 +461,125 @@ def test_local_mean():
         spread = max(spread, float(np.nanmax(np.abs(lp))))
     check(worst < 1e-9 and spread > 0.5, f"local mean of a +-1 fine-column pattern (K = 2): every cell 0 "
                                          f"(max {worst:.1e}); the centre samples reach {spread:.2f}")
+
+
+def test_binned():
+    """--fine-local binned: each local cell the mean of the scattered points that fall in it."""
+    cf, R = 10.0, 6
+    fine = synth_dem(plane, n=240, c=cf)
+    pb = cm.CaseParams(radius=R, full_view=True, min_range_cells=0, local="binned")
+    truth = (fine.x0 + 120 * cf + 3.7, fine.y0 - 120 * cf - 6.1)
+    fr, fc = fine.frac_index(*truth)
+    for K, turn in ((2, 0.0), (3, 30.0)):
+        g = cm.block_average(fine, K)
+        b = cm.binned_points(fine, fr, fc, R, K, turn, pb, g.c, np.random.default_rng(K), False)
+        k = np.arange(-R, R + 1)
+        e, nn = k[None, :] + b.cx, -(k[:, None] + b.cy)  # the centroid, local cells east / north
+        ct, st = math.cos(math.radians(turn)), math.sin(math.radians(turn))
+        X, Y = truth[0] + (e * ct - nn * st) * g.c, truth[1] + (e * st + nn * ct) * g.c
+        d = np.nanmax(np.abs(b.h - plane(X, Y)))
+        inside = np.nanmax(np.abs(np.stack([b.cx, b.cy])))
+        check(d < 1e-6 and inside <= 0.5 and b.n.sum() == (2 * R + 1) ** 2 * K * K
+              and abs(b.n.mean() - K * K) < 1e-9 and b.n.min() < K * K < b.n.max(),
+              f"binned, K = {K}, turned {turn:g} deg, a plane: {b.n.sum()} points, {b.n.min()}-{b.n.max()} "
+              f"a cell; each cell the plane at its points' centroid (max diff {d:.1e} m), the centroid "
+              f"inside the cell")
+    # the noise: that of the mean of the cell's points' noises
+    g = cm.block_average(fine, 2)
+    pn = cm.CaseParams(radius=10, full_view=True, min_range_cells=0, local="binned")
+    e, nn = cm.rover_frame_offsets(10, g.c)
+    model = pn.noise0_m + pn.noise_k * (e ** 2 + nn ** 2) / g.c
+    z, ratio = [], []
+    for s in range(100):
+        b = cm.binned_points(fine, fr, fc, 10, 2, 0.0, pn, g.c, np.random.default_rng(s))
+        ok = b.n > 0
+        z.append(((b.h - b.h0) / b.sd)[ok])
+        ratio.append((b.sd * np.sqrt(b.n) / model)[ok])
+    z, ratio = np.concatenate(z), float(np.median(np.concatenate(ratio)))
+    check(z.size > 30000 and abs(z.std() - 1.0) < 0.02 and 0.9 < ratio < 1.1,
+          f"binned noise: residuals over the mean's sd have sd {z.std():.3f} (1); sd x sqrt(n) / the "
+          f"model's {ratio:.3f} (about 1)")
+    # make_local: the cases stay paired with the other constructions (the same draws follow)
+    r1, r2 = np.random.default_rng(8), np.random.default_rng(8)
+    cm.make_local(g, truth, pn, r1, 0.0, 0.0, fine)
+    cm.make_local(g, truth, cm.CaseParams(radius=10, full_view=True, min_range_cells=0), r2, 0.0, 0.0, fine)
+    check(r1.uniform() == r2.uniform(), "binned: the case generator's next draw as with --fine-local point")
+
+
+def test_rover_map_error():
+    """tools/real/rover_map_error.py on a plane: the map's interpolants are exact (the block
+    mean of a plane is the plane at the coarse centres), so the interpolation error is 0;
+    the binning error is the plane's rise from the cell's centre to its points' centroid."""
+    import rover_map_error as rme
+    fine = synth_dem(plane, n=240, c=10.0)
+    g = cm.block_average(fine, 2)
+    p = cm.CaseParams(radius=8, local="binned")
+    cs = cm.generate(g, 3, 5, p, None, fine)
+    x = np.concatenate([rme.case_errors(g, fine, c, 2, p, np.random.default_rng(1)) for c in cs], axis=1)
+    b = cm.binned_points(fine, *fine.frac_index(*cs[-1].truth), 8, 2, 0.0, p, g.c, np.random.default_rng(1), False)
+    rise = (0.3 * b.cx + 0.7 * b.cy) * g.c  # plane(): 0.3 per metre east, -0.7 per metre north
+    want = rise[cs[-1].seen & np.isfinite(b.h0)]
+    got = x[2, -want.size:]
+    check(np.abs(x[0:2]).max() < 1e-6 and np.abs(got - want).max() < 1e-6 and np.abs(want).max() > 1.0,
+          f"rover_map_error on a plane: interpolation error 0 (max {np.abs(x[0:2]).max():.1e} m), the "
+          f"binning error the rise to the points' centroid (up to {np.abs(want).max():.1f} m)")
+
+
+def mast_row(z, r0, c0, cols, H):
+    rows = np.full(len(cols), float(r0))
+    return cm.mast_visible(z, float(r0), float(c0), rows, np.asarray(cols, dtype=np.float64), H)
+
+
+def test_mast_view():
+    """cases.mast_visible against similar triangles; the grid's cells 1 index unit (the
+    ray cast never uses the horizontal metres)."""
+    n, r0, c0, H = 80, 40, 10, 2.0
+    yy, xx = np.mgrid[0:n, 0:n].astype(np.float64)
+    rr, cc = np.broadcast_arrays(yy[25:56, 11:60], xx[25:56, 11:60])
+    for name, z in (("flat", np.full((n, n), 7.0)), ("tilted", 0.3 * xx - 0.2 * yy)):
+        v = cm.mast_visible(z, r0, c0, rr, cc, H)
+        check(v.all(), f"mast view, {name} ground: every one of {v.size} cells seen")
+    W, xb = 0.6, 12  # a wall W high, its top from 1 to 2 cells before xb, xb cells from the mast
+    z = np.zeros((n, n))
+    z[:, c0 + xb - 1:c0 + xb + 1] = W
+    end = xb * H / (H - W)  # similar triangles: the shadow reaches d H / (H - W) = 17.14
+    dx = np.arange(1, 40)
+    v = mast_row(z, r0, c0, c0 + dx, H)
+    want = ~((dx > xb) & (dx <= end))
+    check(np.array_equal(v, want), f"mast {H:g} m, wall {W:g} m at {xb} cells: along the ray the hidden "
+                                   f"cells are {dx[~v].min()}-{dx[~v].max()} (similar triangles: "
+                                   f"{xb + 1}-{int(end)}, shadow {end - xb:.2f} cells)")
+    v = cm.mast_visible(z, r0, c0, rr, cc, H)
+    x = cc - c0
+    sure_hidden = (x > xb) & (x <= (xb - 0.5) * H / (H - W))  # a sample within half a cell of the top's edge
+    sure_seen = (x <= xb) | (x >= end + 1)
+    check(not v[sure_hidden].any() and v[sure_seen].all(),
+          f"wall, {v.size} cells off the ray too: hidden behind it, seen before it and beyond "
+          f"{end:.2f} + 1 cells")
+    D, xa, xf = 0.9, 10, 22  # a pit D deep, its floor from xa + 1 to xf
+    z = np.zeros((n, n))
+    z[:, c0 + xa + 1:c0 + xf + 1] = -D
+    floor = xa * (H + D) / H  # the floor is seen beyond d (H + D) / H = 14.5
+    v = mast_row(z, r0, c0, c0 + dx, H)
+    want = ~((dx > xa) & (dx < floor))
+    check(np.array_equal(v, want), f"pit {D:g} m deep, rim at {xa} cells: hidden floor cells "
+                                   f"{dx[~v].min()}-{dx[~v].max()} (similar triangles: to {floor:.2f}), "
+                                   f"the far floor, wall and ground seen")
+    v = cm.mast_visible(z, r0, c0, rr, cc, H)
+    x = cc - c0
+    sure_hidden = (x > xa) & (x <= (xa - 0.5) * (H + D) / H)
+    sure_seen = (x <= xa) | (x >= floor + 0.5)
+    check(not v[sure_hidden].any() and v[sure_seen].all(), f"pit, {v.size} cells off the ray too")
+    # through make_local: a wall in a fine DEM; seen cells keep their heights, the paired noise too
+    dem = synth_dem(hills, n=200, c=10.0)
+    truth = (dem.x0 + 1003.3, dem.y0 - 987.1)
+    p0 = cm.CaseParams(radius=15)
+    pm = cm.CaseParams(radius=15, mast_m=1.8)
+    a0, s0 = cm.make_local(dem, truth, p0, np.random.default_rng(9), 40.0, 3.0)
+    a1, s1 = cm.make_local(dem, truth, pm, np.random.default_rng(9), 40.0, 3.0)
+    check(s1.sum() < s0.sum() and not (s1 & ~s0).any() and np.array_equal(a0[s1], a1[s1]),
+          f"make_local with a 1.8 m mast on hills: {s1.sum()} of {s0.sum()} wedge cells seen, the "
+          f"same heights")
 
 
 def test_outliers():
@@ -546,6 +676,9 @@ def main():
     test_cli()
     test_local_mean()
     test_outliers()
+    test_binned()
+    test_mast_view()
+    test_rover_map_error()
     test_dem_file()
     if FAILS:
         print(f"test_real: {len(FAILS)} check(s) failed", file=sys.stderr)
