@@ -61,8 +61,9 @@ def read(path):
 
 
 def whole(path, **opts):
+    # the tiled field takes the paper's configuration (the voxel prediction)
     with trn.Map(path) as m:
-        return m.field(coarse_step_cells=1, **FAST, **opts)
+        return m.field(coarse_step_cells=1, map_config="paper", **FAST, **opts)
 
 
 # ---- the plan ------------------------------------------------------------------

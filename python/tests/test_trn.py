@@ -86,8 +86,9 @@ def test_select_equals_cli(cli, dems, gmap):
     # options, and the prepared selection map re-made when they change and kept when they do not
     for opts, args in (({"heading_deg": 30, "pan_deg": (-60, 60), "next_best": 3},
                         ["--heading-deg", 30, "--pan-deg", "-60,60", "--next-best", 3]),
-                       ({"sensors": [(1000.5, 2000.5), (1006.0, 2006.0)], "max_range_m": 2.5},
-                        ["--sensors", "1000.5,2000.5;1006.0,2006.0", "--max-range-m", 2.5]),
+                       # the voxel prediction's eq. 8 sensing positions
+                       ({"sensors": [(1000.5, 2000.5), (1006.0, 2006.0)], "max_range_m": 2.5, "map_config": "paper"},
+                        ["--sensors", "1000.5,2000.5;1006.0,2006.0", "--max-range-m", 2.5, "--map-config", "paper"]),
                        ({"heading_sigma_deg": 2, "heading_search": 1},
                         ["--heading-sigma-deg", 2, "--heading-search", 1]),
                        ({}, [])):

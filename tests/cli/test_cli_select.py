@@ -255,7 +255,7 @@ expect_error(1, "--heading-deg: 'north' is not a finite number", "select", "--de
              "--heading-deg", "north")
 expect_error(1, "--sensors: '1,2,3' is not a pair", "select", "--dem", g_tif, *R, "--sensors", "1,2,3")
 expect_error(1, "--next-best: 65 is out of range", "select", "--dem", g_tif, *R, "--next-best", "65")
-expect_error(1, "--out-map: cannot create", "select", "--dem", g_tif, *R, *SMALL, "--out-map", p("no/dir/x.tif"))
+expect_error(1, "--out-map: cannot create", "select", "--dem", g_tif, *R, *SMALL_H, "--out-map", p("no/dir/x.tif"))
 expect_error(2, "missing required option '--rover'", "select", "--dem", g_tif)
 expect_error(2, "unknown option '--prior'", "select", "--dem", g_tif, *R, "--prior", "1,2")
 
