@@ -55,8 +55,20 @@ static int cell_terms(const trn_grid_f32_t *hg, int32_t x, int32_t y, double *gx
     return 1;
 }
 
-/* v in quanta of 1 / q (|v q| within SELH_QLIM by the quantum's choice). */
-static int64_t quant(double v, double q) { return (int64_t)llround(v * q); }
+/* v in quanta of 1 / q, to the nearest (|v q| within SELH_QLIM by the
+ * quantum's choice). */
+static int64_t quant(double v, double q) { return (int64_t)floor(v * q + 0.5); }
+
+/* 2^k, exactly (k in 0..SELH_KMAX). */
+static double pow2(int32_t k)
+{
+    double p = 1.0;
+    int32_t i;
+    for (i = 0; i < k; ++i) {
+        p *= 2.0;
+    }
+    return p;
+}
 
 /* The quantized terms of cell (x, y) into q[SELH_NI] (all 0 without terms). */
 static void cell_q(const trn_grid_f32_t *hg, int32_t x, int32_t y, const selh_head_t *hd,
@@ -82,7 +94,7 @@ static void cell_q(const trn_grid_f32_t *hg, int32_t x, int32_t y, const selh_he
 static int32_t quantum_exp(double vmax, double lim)
 {
     int32_t k = SELH_KMAX;
-    while (k >= 0 && vmax * ldexp(1.0, k) > lim) {
+    while (k >= 0 && vmax * pow2(k) > lim) {
         --k;
     }
     return k;
@@ -113,8 +125,8 @@ static trn_status_t choose_quanta(const trn_grid_f32_t *hg, const trn_window_t *
     if (kg < 0 || ke < 0) {
         return TRN_E_SIZE;
     }
-    hd->gq = ldexp(1.0, kg);
-    hd->eq = ldexp(1.0, ke);
+    hd->gq = pow2(kg);
+    hd->eq = pow2(ke);
     return TRN_OK;
 }
 
