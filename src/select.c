@@ -543,7 +543,8 @@ static void selh_candidate(const trn_map_t *map, const trn_select_cfg_t *cfg, co
         return;
     }
     for (d = 0; d < 9; ++d) { /* the expected ln L at the nine offsets, about the centre */
-        const double lx = (double)(d % 3 - 1), ly = (double)(d / 3 - 1);
+        const int32_t ix = d % 3 - 1, iy = d / 3 - 1;
+        const double lx = (double)ix, ly = (double)iy;
         c->ll[d] = -0.5 * (lx * lx * s->axx + 2.0 * lx * ly * s->axy + ly * ly * s->ayy) / var;
     }
     memset(&pk, 0, sizeof pk);
