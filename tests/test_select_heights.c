@@ -383,6 +383,47 @@ static void test_flat_and_plane(void **state)
     free(h);
 }
 
+/* Holes: patches with no cell whose four neighbours are known, or fewer
+ * than 3, are uninformative; the rest as the slow prediction says. */
+static void test_holes(void **state)
+{
+    hmap_t *h = malloc(sizeof *h);
+    float *dem = malloc(sizeof(float) * N * N);
+    trn_select_cfg_t sc;
+    run_t r;
+    size_t i, none = 0, few = 0, inf = 0;
+    int x, y;
+    (void)state;
+    rough_dem(dem, 13u, 0);
+    for (y = 0; y < N; ++y) {
+        for (x = 0; x < N; ++x) {
+            /* known only in a 9 x 9 block and along a thin cross of 3 cells */
+            const int block = x >= 44 && x < 53 && y >= 30 && y < 39;
+            const int cross = (x == 20 && y >= 20 && y < 23) || (y == 21 && x >= 19 && x < 22);
+            if (!block && !cross) {
+                dem[y * N + x] = NAN;
+            }
+        }
+    }
+    hmap_init(h, dem);
+    small_cfg(&sc);
+    assert_int_equal(run_select(h, &sc, 36.0f, 36.0f, 0.0f, &r), TRN_OK);
+    for (i = 0; i < r.res.n_candidates; ++i) {
+        const trn_candidate_t *c = &r.cands[i];
+        double cov[3];
+        const int want = slow_cov(h, &sc, c, 36.0, 36.0, cov);
+        assert_int_equal(c->informative, want);
+        inf += (size_t)want;
+        none += !want && abs(c->x - 20) > 5 && abs(c->x - 48) > 5 ? 1u : 0u;
+        few += !want && abs(c->x - 20) <= 4 && abs(c->y - 21) <= 4 ? 1u : 0u;
+    }
+    assert_true(inf > 0u && none > 0u && few > 0u);
+    run_free(&r);
+    free(h->buf);
+    free(dem);
+    free(h);
+}
+
 /* trn_field and trn_field_fast on a heights map: the same bits. */
 static void test_field_same_bits(void **state)
 {
@@ -509,9 +550,10 @@ static void test_errors(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_against_slow),    cmocka_unit_test(test_ll_is_the_quadratic),
-        cmocka_unit_test(test_paraboloid),      cmocka_unit_test(test_flat_and_plane),
-        cmocka_unit_test(test_field_same_bits), cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_against_slow), cmocka_unit_test(test_ll_is_the_quadratic),
+        cmocka_unit_test(test_paraboloid),   cmocka_unit_test(test_flat_and_plane),
+        cmocka_unit_test(test_holes),        cmocka_unit_test(test_field_same_bits),
+        cmocka_unit_test(test_errors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
