@@ -250,7 +250,8 @@ def fisher_heights(z, target_rc, patch_cells, range_m, noise_m, noise_k_per_m, m
     """The height prediction's covariance of one candidate (src/select_heights.c's model):
     I = sum (g - mean g)(g - mean g)^T / s^2 over the patch's cells with four known neighbours,
     g the central-difference gradient (m per cell), s^2 = (noise_m + noise_k r^2)^2 +
-    map_sigma^2 + mean(e^2) / 4 (the last left out with representation=False). Returns
+    map_sigma^2 + mean(e^2) / 4 (the last left out with representation=False); singular where its
+    determinant is below 1e-12 of the uncentred sums' product (a plane, flat ground). Returns
     (sigma_east_m, sigma_north_m, rho_en, u_m); +inf when the information is singular."""
     sr, sc = patch_slices(target_rc, patch_cells, 1)
     w = z[sr, sc]
@@ -260,13 +261,15 @@ def fisher_heights(z, target_rc, patch_cells, range_m, noise_m, noise_k_per_m, m
     inf = (math.inf, math.inf, math.nan, math.inf)
     if ok.sum() < 3:
         return inf
-    gx, gy = gx[ok] - gx[ok].mean(), gy[ok] - gy[ok].mean()
+    gx, gy = gx[ok], gy[ok]
+    unc = float(gx @ gx) * float(gy @ gy)  # the uncentred sums: the singularity test's scale
+    gx, gy = gx - gx.mean(), gy - gy.mean()
     s2 = (noise_m + noise_k_per_m * range_m ** 2) ** 2 + map_sigma_m ** 2
     if representation:
         s2 += representation_term(z, target_rc, patch_cells)
     a, b, d = float(gx @ gx) / s2, float(gx @ gy) / s2, float(gy @ gy) / s2
     det = a * d - b * b
-    if not det > 1e-12 * max(a * d, 1e-300):
+    if not det > 1e-12 * unc / (s2 * s2) or unc == 0.0:
         return inf
     vx, vy, cxy = d / det * cell_m ** 2, a / det * cell_m ** 2, -b / det * cell_m ** 2
     sx, sy = math.sqrt(vx), math.sqrt(vy)
