@@ -82,7 +82,7 @@ gdal.UseExceptions()
 
 RIGHT_CELLS = 1.5
 FAIL_ZONE_CELLS = 2  # competitors at least this far (Chebyshev) from the truth: the localizer's zone
-DEFAULT_DEMS = ["jacksboro", "lidar_mn", "merewether", "kennemer_dunes", "san_juan_basin", "rhine"]
+DEFAULT_DEMS = ["jacksboro", "lidar_mn", "merewether", "kennemer_dunes", "san_juan_basin"]
 REL_EDGES = (0.0, 0.01, 0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 0.9, 1.0)
 
 
@@ -276,6 +276,29 @@ def fisher_heights(z, target_rc, patch_cells, range_m, noise_m, noise_k_per_m, m
     return sx, sy, -cxy / (sx * sy), math.sqrt(vx + vy)  # rows point south: rho flips sign
 
 
+def fisher_heights_percell(z, target_rc, patch_cells, s2_cells, cell_m):
+    """The height prediction with each cell's own variance s2_cells (P x P; the stereo model at the
+    cell's range) instead of one per patch: I = sum w (g - mean_w g)(g - mean_w g)^T, w = 1 / s2,
+    the offset profiled with the same weights. Returns u (m), +inf when singular."""
+    sr, sc = patch_slices(target_rc, patch_cells, 1)
+    w = z[sr, sc]
+    gx = 0.5 * (w[1:-1, 2:] - w[1:-1, :-2])
+    gy = 0.5 * (w[2:, 1:-1] - w[:-2, 1:-1])
+    ok = np.isfinite(gx) & np.isfinite(gy)
+    if ok.sum() < 3:
+        return math.inf
+    wt = 1.0 / s2_cells[ok]
+    gx, gy = gx[ok], gy[ok]
+    unc = float((wt * gx * gx).sum()) * float((wt * gy * gy).sum())
+    gx = gx - (wt * gx).sum() / wt.sum()
+    gy = gy - (wt * gy).sum() / wt.sum()
+    a, b, d = float((wt * gx * gx).sum()), float((wt * gx * gy).sum()), float((wt * gy * gy).sum())
+    det = a * d - b * b
+    if not det > 1e-12 * unc or unc == 0.0:
+        return math.inf
+    return math.sqrt((a + d) / det) * cell_m
+
+
 def self_similarity(z, target_rc, patch_cells, s2_cells, window_cells, zone=FAIL_ZONE_CELLS):
     """The expected ln L gaps D_d (nats) between the patch at its true place and shifted by every
     whole-cell d within +-window_cells at least `zone` cells (Chebyshev) away, with the offset
@@ -387,6 +410,32 @@ def stratified_draw(rng, logu, n, n_bins=10):
     return np.array(chosen, dtype=np.int64), (float(lo), float(hi))
 
 
+def map_predictions(dem, cases, a, noise_m, noise_k):
+    """The predictions from the map alone of every case (fisher_heights, with and without the
+    representation term, per cell; self_similarity), written into the case records; returns the
+    relative differences of fisher_heights' u from trn select's raster."""
+    c = dem.c
+    fis_rel = []
+    for cs in cases:
+        tr, tc = cs["target_rc"]
+        sx, sy, rho, u = fisher_heights(dem.z, (tr, tc), a.patch_cells, cs["range_m"], noise_m, noise_k,
+                                        a.map_sigma_m, c)
+        cs.update(sigma_x_pred_m=sx, sigma_y_pred_m=sy, rho_pred=rho, u_python_m=u)
+        if math.isfinite(u) and math.isfinite(cs["u_heights_m"]):
+            fis_rel.append(abs(u - cs["u_heights_m"]) / cs["u_heights_m"])
+        cs["u_norep_m"] = fisher_heights(dem.z, (tr, tc), a.patch_cells, cs["range_m"], noise_m, noise_k,
+                                         a.map_sigma_m, c, representation=False)[3]
+        fr, fc = dem.frac_index(*cs["rover"])
+        kx, ky = patch_offsets((fr, fc), (tr, tc), a.patch_cells)
+        rcell = c * np.hypot(kx, ky)
+        rep = representation_term(dem.z, (tr, tc), a.patch_cells)
+        s2 = (noise_m + noise_k * rcell ** 2) ** 2 + a.map_sigma_m ** 2 + rep
+        cs["u_percell_m"] = fisher_heights_percell(dem.z, (tr, tc), a.patch_cells, s2, c)
+        pb, pp, dmin, dbest = self_similarity(dem.z, (tr, tc), a.patch_cells, s2, a.window_cells)
+        cs.update(p_beat=pb, p_post=pp, gap_min_nats=dmin, best_competitor_cells=dbest)
+    return fis_rel
+
+
 def study_dem(a, dem_id):
     os.environ.setdefault("TRN", a.trn)
     try:
@@ -443,7 +492,7 @@ def study_dem(a, dem_id):
             ri, tr, tc = int(pool[k, 0]), int(pool[k, 1]), int(pool[k, 2])
             rv = rovers[ri]
             off = float(rng.uniform(-50.0, 50.0))
-            z, gt, rcell = local_patch(dem, rv, (tr, tc), a.patch_cells, noise_m, noise_k, off, rng)
+            z, gt, _ = local_patch(dem, rv, (tr, tc), a.patch_cells, noise_m, noise_k, off, rng)
             lp = os.path.join(tmp, f"local_{n:05d}.tif")
             write_patch(lp, z, gt)
             d = rng.uniform(-a.prior_cells, a.prior_cells, 2) * c
@@ -451,7 +500,7 @@ def study_dem(a, dem_id):
             lines.append(f"{lp} {prior[0]!r} {prior[1]!r} {a.window_cells * c!r}\n")
             cases.append({"rover": list(rv), "target_rc": [tr, tc], "range_m": float(pool[k, 5]),
                           "u_heights_m": float(pool[k, 3]), "u_voxel_m": float(pool[k, 4]),
-                          "prior": list(prior), "offset_m": off, "ranges": rcell})
+                          "prior": list(prior), "offset_m": off})
         lst = os.path.join(tmp, "cases.txt")
         with open(lst, "w") as f:
             f.writelines(lines)
@@ -461,22 +510,8 @@ def study_dem(a, dem_id):
         loc_s = time.perf_counter() - t1
         # predictions from the map alone, for the drawn targets
         t2 = time.perf_counter()
-        fis_rel = []
         for cs, r in zip(cases, res):
             rv = cs["rover"]
-            tr, tc = cs["target_rc"]
-            sx, sy, rho, u = fisher_heights(dem.z, (tr, tc), a.patch_cells, cs["range_m"], noise_m, noise_k,
-                                            a.map_sigma_m, c)
-            cs.update(sigma_x_pred_m=sx, sigma_y_pred_m=sy, rho_pred=rho, u_python_m=u)
-            cs["u_norep_m"] = fisher_heights(dem.z, (tr, tc), a.patch_cells, cs["range_m"], noise_m, noise_k,
-                                             a.map_sigma_m, c, representation=False)[3]
-            if math.isfinite(u) and math.isfinite(cs["u_heights_m"]):
-                fis_rel.append(abs(u - cs["u_heights_m"]) / cs["u_heights_m"])
-            rep = representation_term(dem.z, (tr, tc), a.patch_cells)
-            s2 = (noise_m + noise_k * cs["ranges"] ** 2) ** 2 + a.map_sigma_m ** 2 + rep
-            pb, pp, dmin, dbest = self_similarity(dem.z, (tr, tc), a.patch_cells, s2, a.window_cells)
-            cs.update(p_beat=pb, p_post=pp, gap_min_nats=dmin, best_competitor_cells=dbest)
-            del cs["ranges"]
             x, y = r.get("x_m"), r.get("y_m")
             if x is None or y is None:
                 cs.update(ex_m=math.inf, ey_m=math.inf, err_m=math.inf)
@@ -487,6 +522,7 @@ def study_dem(a, dem_id):
             fp = r.get("failure_probability")
             cs["failure_prob"] = float(fp) if fp is not None else math.nan
             cs["sigma_x_m"], cs["sigma_y_m"] = r.get("sigma_x_m"), r.get("sigma_y_m")
+        fis_rel = map_predictions(dem, cases, a, noise_m, noise_k)
         pred_s = time.perf_counter() - t2
         meta = {"path": path, "cell_m": c, "rows": dem.z.shape[0], "cols": dem.z.shape[1],
                 "character": dems.BY_ID[dem_id].character if dem_id in dems.BY_ID else "",
@@ -512,7 +548,7 @@ def at_competitor(cs, c):
 
 def stats(cases, c):
     col = {k: np.array([cs[k] for cs in cases], dtype=np.float64)
-           for k in ("u_heights_m", "u_voxel_m", "u_norep_m", "err_m", "ex_m", "ey_m", "failure_prob", "p_beat", "p_post",
+           for k in ("u_heights_m", "u_voxel_m", "u_norep_m", "u_percell_m", "err_m", "ex_m", "ey_m", "failure_prob", "p_beat", "p_post",
                      "sigma_x_pred_m", "sigma_y_pred_m")}
     right = np.array([cs["right"] for cs in cases], dtype=bool)
     wrong = ~right
@@ -520,7 +556,8 @@ def stats(cases, c):
     fps = {"localizer_fp": col["failure_prob"], "p_beat": col["p_beat"], "p_post": col["p_post"]}
     out = {"n": len(cases), "right": int(right.sum()), "right_rate": float(right.mean()) if cases else None,
            "status": {s: sum(1 for cs in cases if cs["status"] == s) for s in sorted({cs["status"] for cs in cases})}}
-    for name, key in (("heights", "u_heights_m"), ("voxel", "u_voxel_m"), ("heights_norep", "u_norep_m")):
+    for name, key in (("heights", "u_heights_m"), ("voxel", "u_voxel_m"), ("heights_norep", "u_norep_m"),
+                      ("heights_percell", "u_percell_m")):
         u = col[key]
         d = {"spearman_all": spearman(u, err), "spearman_right": spearman(u[right], err[right]),
              "finite": int(np.isfinite(u).sum())}
@@ -560,9 +597,9 @@ def print_dem(dem_id, r):
           f"{m['time_s']['localize']:.1f} s, map-alone predictions {m['time_s']['predict']:.1f} s; "
           f"python Fisher vs raster: median {fmt(m['fisher_check_median_rel'], '.1e')}, worst "
           f"{fmt(m['fisher_check_worst_rel'], '.1e')}")
-    for name in ("heights", "voxel", "heights_norep"):
+    for name in ("heights", "voxel", "heights_norep", "heights_percell"):
         d = s[name]
-        print(f"  {name:13s} Spearman all {fmt(d['spearman_all'], '.3f')}, right {fmt(d['spearman_right'], '.3f')}; "
+        print(f"  {name:15s} Spearman all {fmt(d['spearman_all'], '.3f')}, right {fmt(d['spearman_right'], '.3f')}; "
               f"finite {d['finite']}; decile ratio {fmt(d['ratio_range'] and d['ratio_range'][0], '.2f')}-"
               f"{fmt(d['ratio_range'] and d['ratio_range'][1], '.2f')}, {d['deciles_in_band']} of "
               f"{len(d['deciles'])} in [0.8, 1.25]")
@@ -573,8 +610,8 @@ def print_dem(dem_id, r):
               f"{fmt(x.get('ratio'), '6.2f')} {fmt(x.get('ratio_x'), '5.2f')} {fmt(x.get('ratio_y'), '5.2f')} "
               f"{fmt(x['wrong_rate'], '6.3f')} {fmt(x.get('localizer_fp_mean'), '7.3f')} "
               f"{fmt(x.get('p_beat_mean'), '7.3f')} {fmt(x.get('p_post_mean'), '7.3f')}")
-    print("  heights_norep ratio per decile: " + " ".join(fmt(x.get("ratio"), ".2f")
-                                                         for x in s["heights_norep"]["deciles"]))
+    for name in ("heights_norep", "heights_percell"):
+        print(f"  {name} ratio per decile: " + " ".join(fmt(x.get("ratio"), ".2f") for x in s[name]["deciles"]))
     w = s["wrong"]
     print(f"  wrong answers: {w['n']}, median {fmt(w['median_err_cells'], '.2f')} cells off, status {w['status']}, "
           f"{w['at_best_competitor']} within 1 cell of the map's most similar shift; median P_beat "
@@ -647,7 +684,7 @@ def parse_args(argv):
     ap = Parser(prog="predict_study.py", description=__doc__.split("\n\n")[0])
     ap.add_argument("--dem", action="append", help=f"DEM id (repeatable; default {' '.join(DEFAULT_DEMS)})")
     ap.add_argument("--cases", type=int, default=1000, help="localizations per DEM (default 1000)")
-    ap.add_argument("--rovers", type=int, default=100, help="rover positions per DEM (default 100)")
+    ap.add_argument("--rovers", type=int, default=50, help="rover positions per DEM (default 50)")
     ap.add_argument("--seed", type=int, default=36, help="seed (default 36)")
     ap.add_argument("--patch-cells", type=int, default=21, help="patch side, cells, odd (default 21)")
     ap.add_argument("--min-range-cells", type=float, default=12.0, help="nearest target, cells (default 12)")
@@ -662,6 +699,8 @@ def parse_args(argv):
     ap.add_argument("--out", default=os.path.join(dems.BUILD, "predict"), help="output folder (default build/real/predict)")
     ap.add_argument("--no-plot", action="store_true")
     ap.add_argument("--smoke", action="store_true", help="60 cases from 12 positions on the rock field")
+    ap.add_argument("--reanalyse", metavar="JSON", help="recompute the map-alone predictions and the statistics "
+                                                         "of a predict.json (no trn run)")
     a = ap.parse_args(argv)
     if a.smoke:
         a.dem = a.dem or ["rockfield"]
@@ -680,27 +719,64 @@ def parse_args(argv):
         raise Fail("--window-cells must be >= 2 and above --prior-cells >= 0")
     if not (a.map_sigma_m >= 0 and math.isfinite(a.map_sigma_m)):
         raise Fail(f"--map-sigma-m {a.map_sigma_m}: must be finite and >= 0")
+    if a.reanalyse:
+        if not os.path.isfile(a.reanalyse):
+            raise Fail(f"--reanalyse {a.reanalyse}: no such file")
+        return a
     if not (os.path.isfile(a.trn) and os.access(a.trn, os.X_OK)):
         raise Fail(f"trn binary {a.trn} not found or not executable (cmake --build --preset host-release)")
     return a
 
 
+def write_results(res, out):
+    os.makedirs(out, exist_ok=True)
+    pj = os.path.join(out, "predict.json")
+    with open(pj + ".part", "w") as f:
+        json.dump(finite(res), f, indent=1)
+    os.replace(pj + ".part", pj)
+    return pj
+
+
+def reanalyse(a):
+    """Recompute the predictions from the map alone and the statistics of a predict.json (its
+    trn results kept), e.g. after a change of this script's own predictions."""
+    with open(a.reanalyse) as f:
+        res = json.load(f)
+    for k, v in res["config"].items():
+        if k not in ("trn",):
+            setattr(a, k, v)
+    for d, r in res["dems"].items():
+        dem = casemod.read_dem(r["meta"]["path"])
+        cfg = r["meta"]["map_config"]
+        for cs in r["cases"]:
+            for k in ("ex_m", "ey_m", "err_m", "failure_prob", "u_heights_m", "u_voxel_m"):
+                cs[k] = math.inf if cs.get(k) is None and k != "failure_prob" else (
+                    math.nan if cs.get(k) is None else cs[k])
+        fis = map_predictions(dem, r["cases"], a, float(cfg["noise_m"]), float(cfg["noise_k_per_m"]))
+        r["meta"]["fisher_check_worst_rel"] = float(max(fis)) if fis else None
+        r["meta"]["fisher_check_median_rel"] = float(np.median(fis)) if fis else None
+        r["stats"] = stats(r["cases"], dem.c)
+        print_dem(d, r)
+    return res
+
+
 def main(argv):
     try:
         a = parse_args(argv)
-        res = {"config": {k: getattr(a, k) for k in ("cases", "rovers", "seed", "patch_cells", "min_range_cells",
-                                                      "max_range_cells", "footprint_cells", "prior_cells",
-                                                      "window_cells", "map_sigma_m", "trn")},
-               "dems": {}}
-        for d in a.dem:
-            print(f"predict_study: {d} ...", file=sys.stderr, flush=True)
-            r = study_dem(a, d)
-            res["dems"][d] = r
-            print_dem(d, r)
-        os.makedirs(a.out, exist_ok=True)
-        pj = os.path.join(a.out, "predict.json")
-        with open(pj, "w") as f:
-            json.dump(finite(res), f, indent=1)
+        if a.reanalyse:
+            res = reanalyse(a)
+        else:
+            res = {"config": {k: getattr(a, k) for k in ("cases", "rovers", "seed", "patch_cells",
+                                                          "min_range_cells", "max_range_cells", "footprint_cells",
+                                                          "prior_cells", "window_cells", "map_sigma_m", "trn")},
+                   "dems": {}}
+            for d in a.dem:
+                print(f"predict_study: {d} ...", file=sys.stderr, flush=True)
+                r = study_dem(a, d)
+                res["dems"][d] = r
+                print_dem(d, r)
+                write_results(res, a.out)  # after each DEM: a long run keeps what it has done
+        pj = write_results(res, a.out)
         print(f"\nresults: {pj}")
         if not a.no_plot:
             print(f"figure: {figure(res, a.out)}")
