@@ -6,7 +6,7 @@ error on real DEMs (issue 36 item 2, "Predicted against achieved"; docs/method.m
     /usr/bin/python3 tools/real/predict_study.py [--dem ID ...] [--cases N] [--rovers M] [--seed S]
         [--patch-cells P] [--min-range-cells A] [--max-range-cells B] [--footprint-cells F]
         [--prior-cells Q] [--window-cells W] [--map-sigma-m S0] [--trn PATH] [--out DIR]
-        [--no-plot] [--smoke]
+        [--no-plot] [--smoke] [--reanalyse predict.json]
 
 Per DEM (tools/real/dems.py ids; cached GeoTIFFs under build/real/):
 
@@ -38,6 +38,9 @@ Predictions computed here, for the drawn targets only (documented in docs/method
 * the height prediction's covariance again (fisher_heights: the profiled Fisher information of
   the patch's central-difference gradients, one variance per patch, as src/select_heights.c), for
   its per-axis sigmas; checked against the raster's scalar (JSON: fisher_check);
+* two variants of it, as diagnostics of its parts: without the representation term
+  (heights_norep) and with each cell's own variance at its range instead of one at the target's
+  (heights_percell, fisher_heights_percell);
 * a predicted failure probability from the map alone (self_similarity): for every integer shift
   d of the patch within +-W cells and at least 2 cells (Chebyshev) from its true place, the
   expected ln L gap between the truth and d under the height model with the offset profiled out,
@@ -55,6 +58,8 @@ fisher_heights' sigmas), the localizer's mean failure probability and P_beat aga
 wrong rate; reliability bins of each failure probability. Writes OUT/predict.json and
 OUT/predict_vs_achieved.png (one panel per DEM: log-log scatter, the 1:1 line, decile RMS).
 
+--reanalyse predict.json: those predictions and the statistics again from a run's JSON (its trn
+results kept; no trn run).
 --smoke: 60 cases from 12 positions on the rock field (a quick end-to-end run; it prints its
 numbers and checks only that the run is complete, not the goals).
 Exit status 0 ok, 1 bad input or a failed run (one line on stderr).

@@ -13,7 +13,8 @@
   offset plus the height offset; the rover-frame geotransform; the patch centred on the lattice
   point nearest the target; the noise's sd at each cell's range;
 * the height prediction's covariance on a paraboloid against its analytic value, a plane
-  uninformative;
+  uninformative; with a variance per cell: equal to it for one variance, against the information
+  formed directly with weighted centring for varying ones;
 * the self-similarity failure probability: on a plane every shift ties (P_beat near 1), on a
   surface periodic along x the period's shift ties, on a sharp bump nothing competes; the gap
   ln L(truth) - ln L(d) simulated with the noise has mean D_d and variance 2 D_d;
@@ -182,7 +183,25 @@ def test_fisher():
     check(abs(sx - want) / want < 1e-9 and abs(sy - want) / want < 1e-9 and abs(rho) < 1e-9,
           f"paraboloid: sigma per axis {sx:.6g} m (analytic {want:.6g}), rho 0")
     check(abs(u - math.sqrt(2) * want) / u < 1e-9, "u = sqrt(sx^2 + sy^2)")
+    # per cell: with one variance everywhere it is the per-patch prediction; with the variance
+    # quadrupled on one half (east of the centre) the information of x falls accordingly
+    s2c = np.full((P, P), s2)
+    up = ps.fisher_heights_percell(dem.z, (30, 30), P, s2c, c)
+    check(abs(up - u) / u < 1e-9, f"per cell, one variance: the per-patch u ({up:.6g} m)")
+    rng = np.random.default_rng(1)
+    s2r = s2 * np.exp(rng.uniform(-1, 1, (P, P)))
+    X = np.arange(P) - m + 0 * np.arange(P)[:, None]
+    wt = 1 / s2r
+    gxc = 2 * a * (X - (wt * X).sum() / wt.sum())
+    Y = X.T
+    gyc = 2 * a * (Y - (wt * Y).sum() / wt.sum())
+    A = np.array([[(wt * gxc * gxc).sum(), (wt * gxc * gyc).sum()], [(wt * gxc * gyc).sum(), (wt * gyc * gyc).sum()]])
+    want_u = math.sqrt(np.trace(np.linalg.inv(A))) * c
+    up = ps.fisher_heights_percell(dem.z, (30, 30), P, s2r, c)
+    check(abs(up - want_u) / want_u < 1e-9, f"per cell, varying variances: weighted centring ({up:.6g} m, "
+                                           f"direct {want_u:.6g})")
     flat = synth_dem(plane, n=60)
+    check(math.isinf(ps.fisher_heights_percell(flat.z, (30, 30), P, s2c, 2.0)), "per cell, a plane: uninformative")
     check(math.isinf(ps.fisher_heights(flat.z, (30, 30), P, 10.0, 0.01, 0.0, 0.0, 2.0)[3]), "a plane: uninformative")
 
 
