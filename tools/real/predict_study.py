@@ -21,7 +21,8 @@ Per DEM (tools/real/dems.py ids; cached GeoTIFFs under build/real/):
 2. N targets drawn from the pooled candidates of all M positions, stratified over the height
    prediction: ten bins of equal width in ln u between its 0.1 and 99.9 percentiles of the pool,
    N/10 from each (uniform within a bin, without replacement; a bin with too few takes all it has,
-   the rest drawn from the whole pool), so the draw covers the whole range of predictions.
+   the rest drawn from the whole pool), so the draw covers the whole range of predictions; only
+   candidates whose patch and search window lie on known map cells are drawn.
 3. Each target's local map (issue 12's construction, tools/real/cases.py): the P x P patch around
    the target on the rover's lattice (cells at whole-cell offsets from the rover's true sub-cell
    position, the patch's centre the target cell's nearest), each cell the DEM bilinear at the
@@ -87,7 +88,7 @@ gdal.UseExceptions()
 
 RIGHT_CELLS = 1.5
 FAIL_ZONE_CELLS = 2  # competitors at least this far (Chebyshev) from the truth: the localizer's zone
-DEFAULT_DEMS = ["jacksboro", "lidar_mn", "merewether", "kennemer_dunes", "san_juan_basin"]
+DEFAULT_DEMS = ["jacksboro", "lidar_mn", "merewether", "kennemer_dunes", "san_juan_basin", "rhine"]
 REL_EDGES = (0.0, 0.01, 0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 0.9, 1.0)
 
 
@@ -484,13 +485,19 @@ def study_dem(a, dem_id):
         with np.errstate(divide="ignore"):
             logu = np.where(np.isfinite(uh_all) & (uh_all > 0), np.log(np.maximum(uh_all, 1e-300)), np.nan)
         noise_m, noise_k = float(cfg["noise_m"]), float(cfg["noise_k_per_m"])
-        draw, (lo, hi) = stratified_draw(rng, logu, a.cases)
-        keep = []  # drop the drawn targets whose patch and window hold a missing map cell
-        for k in draw:
-            sr, sc = patch_slices((pool[k, 1], pool[k, 2]), a.patch_cells, pad)
-            if np.all(np.isfinite(dem.z[sr, sc])):
-                keep.append(k)
-        draw = np.array(keep, dtype=np.int64)
+        # only targets whose patch and window lie on known map cells (a summed-area table of the
+        # missing cells), so the draw's strata hold what can be localized
+        bad = np.pad(np.cumsum(np.cumsum(~np.isfinite(dem.z), 0), 1), ((1, 0), (1, 0)))
+        hw = a.patch_cells // 2 + pad
+        r0 = pool[:, 1].astype(np.int64) - hw
+        c0 = pool[:, 2].astype(np.int64) - hw
+        r1, c1 = r0 + 2 * hw + 1, c0 + 2 * hw + 1
+        inside = (r0 >= 0) & (c0 >= 0) & (r1 <= dem.z.shape[0]) & (c1 <= dem.z.shape[1])
+        r0, c0, r1, c1 = (np.clip(v, 0, m) for v, m in ((r0, dem.z.shape[0]), (c0, dem.z.shape[1]),
+                                                         (r1, dem.z.shape[0]), (c1, dem.z.shape[1])))
+        missing = bad[r1, c1] - bad[r0, c1] - bad[r1, c0] + bad[r0, c0]
+        usable = inside & (missing == 0)
+        draw, (lo, hi) = stratified_draw(rng, np.where(usable, logu, np.nan), a.cases)
         # the cases
         lines, cases = [], []
         for n, k in enumerate(draw):
@@ -534,6 +541,7 @@ def study_dem(a, dem_id):
                 "rovers": len(rovers), "rovers_with_candidates": n_sel, "candidates": int(len(pool)),
                 "candidates_informative_heights": int(np.isfinite(uh_all).sum()),
                 "candidates_informative_voxel": int(np.isfinite(pool[:, 4]).sum()),
+                "candidates_usable": int(usable.sum()),
                 "draw_log_range": [lo, hi], "map_config": cfg,
                 "fisher_check_worst_rel": float(max(fis_rel)) if fis_rel else None,
                 "fisher_check_median_rel": float(np.median(fis_rel)) if fis_rel else None,
