@@ -41,7 +41,9 @@ Predictions computed here, for the drawn targets only (documented in docs/method
   its per-axis sigmas; checked against the raster's scalar (JSON: fisher_check);
 * two variants of it, as diagnostics of its parts: without the representation term
   (heights_norep) and with each cell's own variance at its range instead of one at the target's
-  (heights_percell, fisher_heights_percell);
+  (heights_percell, fisher_heights_percell); and, needing the rover's true sub-cell position so not
+  a prediction, the information of the local map's own cells (bilinear_percell: the bilinear
+  surface's gradient at each local cell's sample point, each cell's own variance);
 * a predicted failure probability from the map alone (self_similarity): for every integer shift
   d of the patch within +-W cells and at least 2 cells (Chebyshev) from its true place, the
   expected ln L gap between the truth and d under the height model with the offset profiled out,
@@ -305,6 +307,27 @@ def fisher_heights_percell(z, target_rc, patch_cells, s2_cells, cell_m):
     return math.sqrt((a + d) / det) * cell_m
 
 
+def fisher_bilinear_percell(z, rover_rc, kx, ky, s2_cells, cell_m):
+    """A diagnostic, not a prediction (it needs the rover's true sub-cell position): the information
+    of the local map's own cells, the gradient of the bilinear surface at each local cell's sample
+    point (where the local map was sampled) instead of the central difference at the map's node,
+    each cell's own variance, the offset profiled with the same weights. Returns u (m)."""
+    rr, cc = rover_rc[0] + ky.astype(np.float64), rover_rc[1] + kx.astype(np.float64)
+    r0, c0 = np.floor(rr).astype(int), np.floor(cc).astype(int)
+    fr, fc = rr - r0, cc - c0
+    z00, z01, z10, z11 = z[r0, c0], z[r0, c0 + 1], z[r0 + 1, c0], z[r0 + 1, c0 + 1]
+    gx = (1 - fr) * (z01 - z00) + fr * (z11 - z10)
+    gy = (1 - fc) * (z10 - z00) + fc * (z11 - z01)
+    ok = np.isfinite(gx) & np.isfinite(gy)
+    wt = 1.0 / s2_cells[ok]
+    gx, gy = gx[ok], gy[ok]
+    gx = gx - (wt * gx).sum() / wt.sum()
+    gy = gy - (wt * gy).sum() / wt.sum()
+    a, b, d = float((wt * gx * gx).sum()), float((wt * gx * gy).sum()), float((wt * gy * gy).sum())
+    det = a * d - b * b
+    return math.sqrt((a + d) / det) * cell_m if det > 0 else math.inf
+
+
 def self_similarity(z, target_rc, patch_cells, s2_cells, window_cells, zone=FAIL_ZONE_CELLS):
     """The expected ln L gaps D_d (nats) between the patch at its true place and shifted by every
     whole-cell d within +-window_cells at least `zone` cells (Chebyshev) away, with the offset
@@ -437,6 +460,7 @@ def map_predictions(dem, cases, a, noise_m, noise_k):
         rep = representation_term(dem.z, (tr, tc), a.patch_cells)
         s2 = (noise_m + noise_k * rcell ** 2) ** 2 + a.map_sigma_m ** 2 + rep
         cs["u_percell_m"] = fisher_heights_percell(dem.z, (tr, tc), a.patch_cells, s2, c)
+        cs["u_bilinear_m"] = fisher_bilinear_percell(dem.z, (fr, fc), kx, ky, s2, c)
         pb, pp, dmin, dbest = self_similarity(dem.z, (tr, tc), a.patch_cells, s2, a.window_cells)
         cs.update(p_beat=pb, p_post=pp, gap_min_nats=dmin, best_competitor_cells=dbest)
     return fis_rel
@@ -561,7 +585,7 @@ def at_competitor(cs, c):
 
 def stats(cases, c):
     col = {k: np.array([cs[k] for cs in cases], dtype=np.float64)
-           for k in ("u_heights_m", "u_voxel_m", "u_norep_m", "u_percell_m", "err_m", "ex_m", "ey_m", "failure_prob", "p_beat", "p_post",
+           for k in ("u_heights_m", "u_voxel_m", "u_norep_m", "u_percell_m", "u_bilinear_m", "err_m", "ex_m", "ey_m", "failure_prob", "p_beat", "p_post",
                      "sigma_x_pred_m", "sigma_y_pred_m")}
     right = np.array([cs["right"] for cs in cases], dtype=bool)
     wrong = ~right
@@ -570,7 +594,7 @@ def stats(cases, c):
     out = {"n": len(cases), "right": int(right.sum()), "right_rate": float(right.mean()) if cases else None,
            "status": {s: sum(1 for cs in cases if cs["status"] == s) for s in sorted({cs["status"] for cs in cases})}}
     for name, key in (("heights", "u_heights_m"), ("voxel", "u_voxel_m"), ("heights_norep", "u_norep_m"),
-                      ("heights_percell", "u_percell_m")):
+                      ("heights_percell", "u_percell_m"), ("bilinear_percell", "u_bilinear_m")):
         u = col[key]
         d = {"spearman_all": spearman(u, err), "spearman_right": spearman(u[right], err[right]),
              "finite": int(np.isfinite(u).sum())}
@@ -610,7 +634,7 @@ def print_dem(dem_id, r):
           f"{m['time_s']['localize']:.1f} s, map-alone predictions {m['time_s']['predict']:.1f} s; "
           f"python Fisher vs raster: median {fmt(m['fisher_check_median_rel'], '.1e')}, worst "
           f"{fmt(m['fisher_check_worst_rel'], '.1e')}")
-    for name in ("heights", "voxel", "heights_norep", "heights_percell"):
+    for name in ("heights", "voxel", "heights_norep", "heights_percell", "bilinear_percell"):
         d = s[name]
         print(f"  {name:15s} Spearman all {fmt(d['spearman_all'], '.3f')}, right {fmt(d['spearman_right'], '.3f')}; "
               f"finite {d['finite']}; decile ratio {fmt(d['ratio_range'] and d['ratio_range'][0], '.2f')}-"
@@ -623,7 +647,7 @@ def print_dem(dem_id, r):
               f"{fmt(x.get('ratio'), '6.2f')} {fmt(x.get('ratio_x'), '5.2f')} {fmt(x.get('ratio_y'), '5.2f')} "
               f"{fmt(x['wrong_rate'], '6.3f')} {fmt(x.get('localizer_fp_mean'), '7.3f')} "
               f"{fmt(x.get('p_beat_mean'), '7.3f')} {fmt(x.get('p_post_mean'), '7.3f')}")
-    for name in ("heights_norep", "heights_percell"):
+    for name in ("heights_norep", "heights_percell", "bilinear_percell"):
         print(f"  {name} ratio per decile: " + " ".join(fmt(x.get("ratio"), ".2f") for x in s[name]["deciles"]))
     w = s["wrong"]
     print(f"  wrong answers: {w['n']}, median {fmt(w['median_err_cells'], '.2f')} cells off, status {w['status']}, "
