@@ -507,11 +507,11 @@ static trn_status_t sel_voxel(const trn_map_t *map, const trn_kernels_t *k, cons
 /* The heading-searched marginal of the height prediction (select.h): cov
  * (m^2) = (I^-1 + g g^T / (s_h^-2 + I_h)) c^2, g = I^-1 b. */
 static void selh_search_cov(trn_candidate_t *c, const trn_peak_t *pk, const trn_selh_sums_t *s,
-                            double var, double sh, double cell)
+                            double sh, double cell)
 {
-    const double bx = s->bx / var, by = s->by / var, cc = s->cc / var;
-    const double gx = pk->var_x * bx + pk->cov_xy * by, gy = pk->cov_xy * bx + pk->var_y * by;
-    double info = cc - (bx * gx + by * gy), den;
+    const double gx = pk->var_x * s->bx + pk->cov_xy * s->by;
+    const double gy = pk->cov_xy * s->bx + pk->var_y * s->by;
+    double info = s->cc - (s->bx * gx + s->by * gy), den;
     info = info > 0.0 ? info : 0.0;
     den = 1.0 / (sh * sh) + info;
     c->informative = 1;
@@ -526,36 +526,31 @@ static void selh_search_cov(trn_candidate_t *c, const trn_peak_t *pk, const trn_
 }
 
 /* The height prediction of one candidate from its patch's sums (select.h). */
-static void selh_candidate(const trn_map_t *map, const trn_select_cfg_t *cfg, const geom_t *g,
-                           const trn_selh_sums_t *s, trn_candidate_t *c)
+static void selh_candidate(const trn_select_cfg_t *cfg, const geom_t *g, const trn_selh_sums_t *s,
+                           trn_candidate_t *c)
 {
-    const double r = (double)c->range_m;
-    const double sn = (double)map->cfg.noise_m + (double)map->cfg.noise_k_per_m * r * r;
-    const double ms = (double)cfg->map_sigma_m;
-    const double var = sn * sn + ms * ms + 0.25 * s->e2;
     const double det = s->axx * s->ayy - s->axy * s->axy;
     const double sh = (double)cfg->sigma_heading_rad;
     trn_peak_t pk;
     int32_t d;
-    if (!(s->n >= 3.0) || !(s->axx > 0.0) || !(s->ayy > 0.0) || !(det > 1e-12 * s->raw * s->raw) ||
-        !(var > 0.0)) {
+    if (!(s->n >= 3.0) || !(s->axx > 0.0) || !(s->ayy > 0.0) || !(det > 1e-12 * s->raw * s->raw)) {
         sel_uninformative(c);
         return;
     }
     for (d = 0; d < 9; ++d) { /* the expected ln L at the nine offsets, about the centre */
         const int32_t ix = d % 3 - 1, iy = d / 3 - 1;
         const double lx = (double)ix, ly = (double)iy;
-        c->ll[d] = -0.5 * (lx * lx * s->axx + 2.0 * lx * ly * s->axy + ly * ly * s->ayy) / var;
+        c->ll[d] = -0.5 * (lx * lx * s->axx + 2.0 * lx * ly * s->axy + ly * ly * s->ayy);
     }
     memset(&pk, 0, sizeof pk);
-    pk.var_x = var * s->ayy / det;
-    pk.var_y = var * s->axx / det;
-    pk.cov_xy = -var * s->axy / det;
+    pk.var_x = s->ayy / det;
+    pk.var_y = s->axx / det;
+    pk.cov_xy = -s->axy / det;
     pk.sigma_x = sqrt(pk.var_x);
     pk.sigma_y = sqrt(pk.var_y);
     pk.rho = pk.cov_xy / (pk.sigma_x * pk.sigma_y);
     if (sel_moments(cfg)) {
-        selh_search_cov(c, &pk, s, var, sh, g->cell);
+        selh_search_cov(c, &pk, s, sh, g->cell);
     } else {
         sel_finish(c, &pk, g, cfg, sh * sh * g->cell * g->cell, NULL);
     }
@@ -568,9 +563,16 @@ static trn_status_t sel_heights_all(const trn_map_t *map, const trn_select_cfg_t
                                     trn_candidate_t *cands, size_t nc, void *ws)
 {
     const int heading = sel_moments(cfg);
-    trn_status_t st = trn_selh_build_(&map->heights, roi, heading, g->rxf, g->ryf, ws);
+    trn_selh_noise_t nm;
+    trn_status_t st;
     size_t i;
-    if (st != TRN_OK) {
+    nm.rxf = g->rxf;
+    nm.ryf = g->ryf;
+    nm.cell = g->cell;
+    nm.noise_m = (double)map->cfg.noise_m;
+    nm.noise_k = (double)map->cfg.noise_k_per_m;
+    nm.map_var = (double)cfg->map_sigma_m * (double)cfg->map_sigma_m;
+    if ((st = trn_selh_build_(&map->heights, roi, heading, &nm, ws)) != TRN_OK) {
         return st;
     }
     for (i = 0; i < nc; ++i) {
@@ -578,7 +580,7 @@ static trn_status_t sel_heights_all(const trn_map_t *map, const trn_select_cfg_t
         trn_selh_sums_t s;
         patch_window(g, cands[i].x, cands[i].y, &pw);
         trn_selh_sums_(ws, roi, &pw, heading, &s);
-        selh_candidate(map, cfg, g, &s, &cands[i]);
+        selh_candidate(cfg, g, &s, &cands[i]);
     }
     return TRN_OK;
 }

@@ -8,13 +8,13 @@
 #include <string.h>
 
 #define SELH_QLIM 4.0e18 /* largest magnitude a region's int64 sum may reach */
-#define SELH_NI 7        /* int64 tables: n, gx, gy, gxx, gxy, gyy, e2 */
-#define SELH_ND 4        /* double tables: gt, gt gx, gt gy, gt^2 */
-#define SELH_KMAX 40     /* finest quantum: 2^-40 (m per cell, m^2) */
+#define SELH_NI 7        /* int64 tables: n, w, w gx, w gy, w gx^2, w gx gy, w gy^2 */
+#define SELH_ND 4        /* double tables: w gt, w gt gx, w gt gy, w gt^2 */
+#define SELH_KMAX 40     /* finest quantum: 2^-40 of a table's unit */
 
-/* The tables' header: the quanta's inverses (1 / (m per cell), 1 / m^2). */
+/* The tables' header: each int64 table's quantum's inverse. */
 typedef struct {
-    double gq, eq;
+    double q[SELH_NI];
 } selh_head_t;
 
 #define SELH_HEAD TRN_ALIGN_UP(sizeof(selh_head_t))
@@ -32,12 +32,15 @@ size_t trn_selh_bytes_(int32_t w, int32_t h, int heading)
     return c.total;
 }
 
-/* The terms of map cell (x, y): 1 with its four neighbours' heights known
- * (gradient by central differences, e against their mean), else 0. */
-static int cell_terms(const trn_grid_f32_t *hg, int32_t x, int32_t y, double *gx, double *gy,
-                      double *e)
+/* The terms of map cell (x, y) into t[SELH_NI] (t[0] = 1, t[1] = w, then w
+ * times gx, gy, gx^2, gx gy, gy^2) and its gradient into g: 1 with its four
+ * neighbours' heights known, else 0 (t all 0). w = 1 / (the noise model at
+ * the cell's range from the rover + the map's error + e^2 / 4). */
+static int cell_terms(const trn_grid_f32_t *hg, const trn_selh_noise_t *nm, int32_t x, int32_t y,
+                      double t[SELH_NI], double g[2])
 {
-    double c, l, r, d, u;
+    double c, l, r, d, u, e, ux, uy, sd, w;
+    memset(t, 0, (size_t)SELH_NI * sizeof t[0]);
     if (x < 1 || y < 1 || x > hg->width - 2 || y > hg->height - 2) {
         return 0;
     }
@@ -49,15 +52,22 @@ static int cell_terms(const trn_grid_f32_t *hg, int32_t x, int32_t y, double *gx
     if (!(isfinite(c) && isfinite(l) && isfinite(r) && isfinite(d) && isfinite(u))) {
         return 0;
     }
-    *gx = 0.5 * (r - l);
-    *gy = 0.5 * (u - d);
-    *e = c - 0.25 * (l + r + d + u);
+    g[0] = 0.5 * (r - l);
+    g[1] = 0.5 * (u - d);
+    e = c - 0.25 * (l + r + d + u);
+    ux = ((double)x - nm->rxf) * nm->cell;
+    uy = ((double)y - nm->ryf) * nm->cell;
+    sd = nm->noise_m + nm->noise_k * (ux * ux + uy * uy);
+    w = 1.0 / (sd * sd + nm->map_var + 0.25 * e * e);
+    t[0] = 1.0;
+    t[1] = w;
+    t[2] = w * g[0];
+    t[3] = w * g[1];
+    t[4] = w * g[0] * g[0];
+    t[5] = w * g[0] * g[1];
+    t[6] = w * g[1] * g[1];
     return 1;
 }
-
-/* v in quanta of 1 / q, to the nearest (|v q| within SELH_QLIM by the
- * quantum's choice). */
-static int64_t quant(double v, double q) { return (int64_t)floor(v * q + 0.5); }
 
 /* 2^k, exactly (k in 0..SELH_KMAX). */
 static double pow2(int32_t k)
@@ -70,26 +80,8 @@ static double pow2(int32_t k)
     return p;
 }
 
-/* The quantized terms of cell (x, y) into q[SELH_NI] (all 0 without terms). */
-static void cell_q(const trn_grid_f32_t *hg, int32_t x, int32_t y, const selh_head_t *hd,
-                   int64_t q[SELH_NI])
-{
-    double gx, gy, e;
-    if (!cell_terms(hg, x, y, &gx, &gy, &e)) {
-        memset(q, 0, (size_t)SELH_NI * sizeof q[0]);
-        return;
-    }
-    q[0] = 1;
-    q[1] = quant(gx, hd->gq);
-    q[2] = quant(gy, hd->gq);
-    q[3] = q[1] * q[1];
-    q[4] = q[1] * q[2];
-    q[5] = q[2] * q[2];
-    q[6] = quant(e * e, hd->eq);
-}
-
 /* The finest power-of-two quantum 2^-k (k <= SELH_KMAX) with which the
- * region's sums of n terms of magnitude up to vmax stay within lim; -1 when
+ * region's sums of terms of magnitude up to vmax stay within lim; -1 when
  * even a quantum of 1 does not. */
 static int32_t quantum_exp(double vmax, double lim)
 {
@@ -100,38 +92,52 @@ static int32_t quantum_exp(double vmax, double lim)
     return k;
 }
 
-/* The quanta (hd) with which no sum over the region can leave SELH_QLIM: the
- * finest with the largest gradient squared, and e^2, times the region's
- * cells within it (exact sums as fine as the data allow); TRN_E_SIZE where
- * none is. */
+/* The quanta (hd) with which no table's sum over the region can leave
+ * SELH_QLIM: per table the finest with its largest term (plus one for the
+ * rounding) times the region's cells within it (exact sums as fine as the
+ * data allow); TRN_E_SIZE where none is (a term too large or not finite). */
 static trn_status_t choose_quanta(const trn_grid_f32_t *hg, const trn_window_t *roi,
-                                  selh_head_t *hd)
+                                  const trn_selh_noise_t *nm, selh_head_t *hd)
 {
-    double gmax = 0.0, emax = 0.0, cells;
-    int32_t x, y, kg, ke;
+    double tmax[SELH_NI] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0}, cells;
+    int32_t x, y, k;
     for (y = roi->y0; y <= roi->y1; ++y) {
         for (x = roi->x0; x <= roi->x1; ++x) {
-            double gx, gy, e;
-            if (cell_terms(hg, x, y, &gx, &gy, &e)) {
-                gmax = fmax(gmax, fmax(fabs(gx), fabs(gy)));
-                emax = fmax(emax, e * e);
+            double t[SELH_NI], g[2];
+            if (cell_terms(hg, nm, x, y, t, g)) {
+                for (k = 0; k < SELH_NI; ++k) {
+                    /* a NaN term (an infinite gradient times w) refuses the region */
+                    tmax[k] = isnan(t[k]) ? HUGE_VAL : fmax(tmax[k], fabs(t[k]));
+                }
             }
         }
     }
     cells = (double)(roi->x1 - roi->x0 + 1) * (double)(roi->y1 - roi->y0 + 1);
-    /* |g| q + 1/2 after rounding: (gmax + 1) q bounds it for q >= 1 */
-    kg = quantum_exp(gmax + 1.0, sqrt(SELH_QLIM / cells));
-    ke = quantum_exp(emax + 1.0, SELH_QLIM / cells);
-    if (kg < 0 || ke < 0) {
-        return TRN_E_SIZE;
+    for (k = 0; k < SELH_NI; ++k) {
+        const int32_t e = k == 0 ? 0 : quantum_exp(tmax[k] + 1.0, SELH_QLIM / cells);
+        if (e < 0 || !(tmax[k] < HUGE_VAL)) {
+            return TRN_E_SIZE;
+        }
+        hd->q[k] = pow2(e);
     }
-    hd->gq = pow2(kg);
-    hd->eq = pow2(ke);
     return TRN_OK;
 }
 
+/* One row of a table: t[r1 + x + 1] = t[r0 + x + 1] + the row's running sum. */
+static void sat_row_i(int64_t *t, size_t r0, size_t r1, int32_t x, int64_t *run, int64_t v)
+{
+    *run += v;
+    t[r1 + (size_t)x + 1u] = t[r0 + (size_t)x + 1u] + *run;
+}
+
+static void sat_row_d(double *t, size_t r0, size_t r1, int32_t x, double *run, double v)
+{
+    *run += v;
+    t[r1 + (size_t)x + 1u] = t[r0 + (size_t)x + 1u] + *run;
+}
+
 trn_status_t trn_selh_build_(const trn_grid_f32_t *heights, const trn_window_t *roi, int heading,
-                             double rxf, double ryf, void *base)
+                             const trn_selh_noise_t *nm, void *base)
 {
     const int32_t w = roi->x1 - roi->x0 + 1, h = roi->y1 - roi->y0 + 1;
     const size_t w1 = (size_t)w + 1u, cells = w1 * ((size_t)h + 1u);
@@ -140,7 +146,7 @@ trn_status_t trn_selh_build_(const trn_grid_f32_t *heights, const trn_window_t *
     double *td = (double *)(void *)((uint8_t *)base + SELH_HEAD +
                                     TRN_ALIGN_UP((size_t)SELH_NI * cells * sizeof(int64_t)));
     int32_t x, y, k;
-    trn_status_t st = choose_quanta(heights, roi, hd);
+    trn_status_t st = choose_quanta(heights, roi, nm, hd);
     if (st != TRN_OK) {
         return st;
     }
@@ -161,26 +167,21 @@ trn_status_t trn_selh_build_(const trn_grid_f32_t *heights, const trn_window_t *
             td[(size_t)k * cells + r1] = 0.0;
         }
         for (x = 0; x < w; ++x) {
-            int64_t q[SELH_NI];
-            cell_q(heights, roi->x0 + x, roi->y0 + y, hd, q);
+            double t[SELH_NI], g[2] = {0.0, 0.0};
+            const int seen = cell_terms(heights, nm, roi->x0 + x, roi->y0 + y, t, g);
             for (k = 0; k < SELH_NI; ++k) {
-                int64_t *t = ti + (size_t)k * cells;
-                run[k] += q[k];
-                t[r1 + (size_t)x + 1u] = t[r0 + (size_t)x + 1u] + run[k];
+                sat_row_i(ti + (size_t)k * cells, r0, r1, x, &run[k],
+                          (int64_t)floor(t[k] * hd->q[k] + 0.5));
             }
             if (heading != 0) {
-                /* the heading's column g . J u, u the offset from the rover */
-                const double gx = (double)q[1] / hd->gq, gy = (double)q[2] / hd->gq;
-                const double ux = (double)(roi->x0 + x) - rxf, uy = (double)(roi->y0 + y) - ryf;
-                const double gt = q[0] != 0 ? gy * ux - gx * uy : 0.0;
-                rund[0] += gt;
-                rund[1] += gt * gx;
-                rund[2] += gt * gy;
-                rund[3] += gt * gt;
-                for (k = 0; k < SELH_ND; ++k) {
-                    double *t = td + (size_t)k * cells;
-                    t[r1 + (size_t)x + 1u] = t[r0 + (size_t)x + 1u] + rund[k];
-                }
+                /* the heading's column g . J u, u the offset from the rover (cells) */
+                const double ux = (double)(roi->x0 + x) - nm->rxf;
+                const double uy = (double)(roi->y0 + y) - nm->ryf;
+                const double gt = seen ? g[1] * ux - g[0] * uy : 0.0;
+                sat_row_d(td, r0, r1, x, &rund[0], t[1] * gt);
+                sat_row_d(td + cells, r0, r1, x, &rund[1], t[2] * gt);
+                sat_row_d(td + 2u * cells, r0, r1, x, &rund[2], t[3] * gt);
+                sat_row_d(td + 3u * cells, r0, r1, x, &rund[3], t[1] * gt * gt);
             }
         }
     }
@@ -200,35 +201,31 @@ void trn_selh_sums_(const void *base, const trn_window_t *roi, const trn_window_
     const double *td = (const double *)(const void *)((const uint8_t *)base + SELH_HEAD +
                                                       TRN_ALIGN_UP((size_t)SELH_NI * cells *
                                                                    sizeof(int64_t)));
-    int64_t v[SELH_NI];
-    const double q2 = hd->gq * hd->gq;
-    double n, sx, sy;
+    double v[SELH_NI], sw;
     int32_t k;
     for (k = 0; k < SELH_NI; ++k) {
         const int64_t *t = ti + (size_t)k * cells;
-        v[k] = t[a] - t[b] - t[c] + t[d];
+        v[k] = (double)(t[a] - t[b] - t[c] + t[d]) / hd->q[k];
     }
     memset(s, 0, sizeof *s);
-    s->n = n = (double)v[0];
-    if (v[0] < 1) {
+    s->n = v[0];
+    sw = v[1];
+    if (!(sw > 0.0)) {
         return;
     }
-    sx = (double)v[1];
-    sy = (double)v[2];
-    /* profiled: sum g g^T - (sum g)(sum g)^T / n */
-    s->axx = ((double)v[3] - sx * sx / n) / q2;
-    s->axy = ((double)v[4] - sx * sy / n) / q2;
-    s->ayy = ((double)v[5] - sy * sy / n) / q2;
-    s->raw = ((double)v[3] + (double)v[5]) / q2;
-    s->e2 = (double)v[6] / hd->eq / n;
+    /* profiled: sum w g g^T - (sum w g)(sum w g)^T / sum w */
+    s->axx = v[4] - v[2] * v[2] / sw;
+    s->axy = v[5] - v[2] * v[3] / sw;
+    s->ayy = v[6] - v[3] * v[3] / sw;
+    s->raw = v[4] + v[6];
     if (heading != 0) {
         double e[SELH_ND];
         for (k = 0; k < SELH_ND; ++k) {
             const double *t = td + (size_t)k * cells;
             e[k] = t[a] - t[b] - t[c] + t[d];
         }
-        s->bx = e[1] - e[0] * (sx / hd->gq) / n;
-        s->by = e[2] - e[0] * (sy / hd->gq) / n;
-        s->cc = e[3] - e[0] * e[0] / n;
+        s->bx = e[1] - e[0] * v[2] / sw;
+        s->by = e[2] - e[0] * v[3] / sw;
+        s->cc = e[3] - e[0] * e[0] / sw;
     }
 }

@@ -34,6 +34,8 @@ typedef struct {
     void *buf;
 } hmap_t;
 
+static float g_noise_k = 0.002f; /* the noise model's range term of the next hmap_init */
+
 /* A heights map of dem (N x N). */
 static void hmap_init(hmap_t *h, const float *dem)
 {
@@ -44,7 +46,7 @@ static void hmap_init(hmap_t *h, const float *dem)
     h->cfg.terrain.cell_m = CELL;
     h->cfg.match = TRN_MATCH_HEIGHTS;
     h->cfg.noise_m = 0.01f;
-    h->cfg.noise_k_per_m = 0.002f;
+    h->cfg.noise_k_per_m = g_noise_k;
     mb = trn_map_bytes(&h->cfg, N, N);
     assert_true(mb > 0u);
     h->buf = selworld_alloc(mb);
@@ -131,13 +133,14 @@ static void run_free(run_t *r)
 }
 
 /* The slow prediction of candidate c: the 2 x 2 (or, heading searched, 3 x 3)
- * profiled information summed cell by cell, its covariance in m^2. Returns
- * 0 when uninformative. */
+ * profiled information summed cell by cell, each cell weighted by its own
+ * variance, its covariance in m^2. Returns 0 when uninformative. */
 static int slow_cov(const hmap_t *h, const trn_select_cfg_t *sc, const trn_candidate_t *c,
                     double rx, double ry, double cov[3])
 {
     const int half = (int)floor(sc->patch_m / CELL + 0.5) / 2;
-    double s[3] = {0, 0, 0}, ss[3][3], n = 0, e2 = 0, var, a, b, d, det, sn, sh;
+    const double ms = sc->map_sigma_m;
+    double s[3] = {0, 0, 0}, ss[3][3], n = 0, sw = 0, a, b, d, det, sh, raw;
     double inv[3];
     int x, y, i, j;
     memset(ss, 0, sizeof ss);
@@ -146,39 +149,42 @@ static int slow_cov(const hmap_t *h, const trn_select_cfg_t *sc, const trn_candi
             const double v = h->dem[y * N + x], l = h->dem[y * N + x - 1],
                          r = h->dem[y * N + x + 1], dn = h->dem[(y - 1) * N + x],
                          up = h->dem[(y + 1) * N + x];
-            double j3[3];
+            const double ux = (x - rx) * CELL, uy = (y - ry) * CELL;
+            double j3[3], e, sd, w;
             if (!(isfinite(v) && isfinite(l) && isfinite(r) && isfinite(dn) && isfinite(up))) {
                 continue;
             }
+            /* each cell's own variance: the noise at its range, the map's error, e^2 / 4 */
+            e = v - 0.25 * (l + r + dn + up);
+            sd = h->cfg.noise_m + h->cfg.noise_k_per_m * (ux * ux + uy * uy);
+            w = 1.0 / (sd * sd + ms * ms + 0.25 * e * e);
             j3[0] = 0.5 * (r - l);
             j3[1] = 0.5 * (up - dn);
             j3[2] = j3[1] * (x - rx) - j3[0] * (y - ry);
             for (i = 0; i < 3; ++i) {
-                s[i] += j3[i];
+                s[i] += w * j3[i];
                 for (j = 0; j < 3; ++j) {
-                    ss[i][j] += j3[i] * j3[j];
+                    ss[i][j] += w * j3[i] * j3[j];
                 }
             }
-            e2 += (v - 0.25 * (l + r + dn + up)) * (v - 0.25 * (l + r + dn + up));
+            sw += w;
             n += 1.0;
         }
     }
     if (n < 3) {
         return 0;
     }
+    raw = ss[0][0] + ss[1][1];
     for (i = 0; i < 3; ++i) {
         for (j = 0; j < 3; ++j) {
-            ss[i][j] -= s[i] * s[j] / n;
+            ss[i][j] -= s[i] * s[j] / sw;
         }
     }
-    sn = h->cfg.noise_m + h->cfg.noise_k_per_m * (double)c->range_m * (double)c->range_m;
-    var = sn * sn + (double)sc->map_sigma_m * (double)sc->map_sigma_m + 0.25 * e2 / n;
-    a = ss[0][0] / var;
-    b = ss[0][1] / var;
-    d = ss[1][1] / var;
+    a = ss[0][0];
+    b = ss[0][1];
+    d = ss[1][1];
     det = a * d - b * b;
-    if (!(det > 1e-12 * ((ss[0][0] + ss[1][1] + s[0] * s[0] / n + s[1] * s[1] / n) / var) *
-                    ((ss[0][0] + ss[1][1] + s[0] * s[0] / n + s[1] * s[1] / n) / var))) {
+    if (!(det > 1e-12 * raw * raw)) {
         return 0;
     }
     inv[0] = d / det;
@@ -186,7 +192,7 @@ static int slow_cov(const hmap_t *h, const trn_select_cfg_t *sc, const trn_candi
     inv[2] = -b / det;
     sh = sc->sigma_heading_rad;
     if (sc->heading_search == 1 && sh > 0.0) {
-        const double bx = ss[0][2] / var, by = ss[1][2] / var, cc = ss[2][2] / var;
+        const double bx = ss[0][2], by = ss[1][2], cc = ss[2][2];
         const double gx = inv[0] * bx + inv[2] * by, gy = inv[2] * bx + inv[1] * by;
         double info = cc - (bx * gx + by * gy), den;
         info = info > 0 ? info : 0;
@@ -300,9 +306,10 @@ static void test_ll_is_the_quadratic(void **state)
     free(h);
 }
 
-/* h = c ((x - x0)^2 + (y - y0)^2): gx = 2 c (x - x0) exactly, e = -c, so the
- * profiled information of a P x P patch (P = 2 m + 1) is 4 c^2 P m (m + 1)
- * (2 m + 1) / 3 on each axis, none across, and s^2 = s(r)^2 + S0^2 + c^2 / 4. */
+/* h = c ((x - x0)^2 + (y - y0)^2): gx = 2 c (x - x0) exactly, e = -c, so with
+ * a noise without range term (every cell's variance s^2 = s0^2 + S0^2 +
+ * c^2 / 4) the profiled information of a P x P patch (P = 2 m + 1) is
+ * 4 c^2 P m (m + 1) (2 m + 1) / 3 / s^2 on each axis, none across. */
 static void test_paraboloid(void **state)
 {
     hmap_t *h = malloc(sizeof *h);
@@ -319,7 +326,9 @@ static void test_paraboloid(void **state)
             dem[y * N + x] = (float)(cc * ((x - 30) * (x - 30) + (y - 41) * (y - 41)));
         }
     }
+    g_noise_k = 0.0f;
     hmap_init(h, dem);
+    g_noise_k = 0.002f;
     small_cfg(&sc);
     sc.map_sigma_m = 0.03f;
     assert_int_equal(run_select(h, &sc, 36.0f, 36.0f, 0.0f, &r), TRN_OK);
@@ -328,17 +337,20 @@ static void test_paraboloid(void **state)
     assert_int_equal(r.res.n_informative, r.res.n_candidates);
     for (i = 0; i < r.res.n_candidates; ++i) {
         const trn_candidate_t *c = &r.cands[i];
-        const double rr = c->range_m;
-        const double sn = 0.01 + 0.002 * rr * rr;
-        const double var = sn * sn + 0.03 * 0.03 + 0.25 * cc * cc;
+        const double sn = (double)0.01f;
+        const double var = sn * sn + (double)0.03f * (double)0.03f + 0.25 * cc * cc;
         const double want = var / info * (double)CELL * (double)CELL;
         assert_true(fabs(c->cov_m2[0] - want) <= 1e-4 * want);
         assert_true(fabs(c->cov_m2[1] - want) <= 1e-4 * want);
         assert_true(fabs(c->cov_m2[2]) <= 1e-4 * want);
     }
-    /* the noise grows with the range, so the nearest candidate wins */
+    run_free(&r);
+    /* with the range term the noise grows with the range: the nearest candidate wins */
+    free(h->buf);
+    hmap_init(h, dem);
+    assert_int_equal(run_select(h, &sc, 36.0f, 36.0f, 0.0f, &r), TRN_OK);
     for (i = 0; i < r.res.n_candidates; ++i) {
-        assert_true(r.cands[r.res.best].range_m <= r.cands[i].range_m);
+        assert_true(r.cands[r.res.best].range_m <= r.cands[i].range_m + 0.15f);
     }
     run_free(&r);
     free(dem);
@@ -529,10 +541,11 @@ static void test_errors(void **state)
         trn_select(&h->map, NULL, NULL, &sc, &rv, r.cands, r.cap, ranked, 2u, &res, r.ws, wb),
         TRN_E_RANGE);
     rv.pos.x_cells = 36.0f;
-    /* gradients too large for exact int64 sums over the region */
+    /* gradients too large for exact int64 sums over the region (w gx^2 about
+     * 1e28 per cell even at a quantum of 1) */
     for (y = 0; y < N; ++y) {
         for (x = 0; x < N; ++x) {
-            dem[y * N + x] = (float)(((x + y) % 2) != 0 ? 3.0e7 : -3.0e7);
+            dem[y * N + x] = (float)(1.0e12 * x + 3.0e11 * ((x * 7 + y * 3) % 5));
         }
     }
     free(h->buf);

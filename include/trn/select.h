@@ -64,23 +64,22 @@
  * own model instead, and k and pg are not read (they may be NULL). The
  * local heights l = h(p + u) + dz + noise of a patch's cells give the
  * information of the pose p (per cell^2)
- *   I = sum (g - mean g)(g - mean g)^T / s^2
+ *   I = sum w (g - gw)(g - gw)^T,   gw = sum w g / sum w,
  * over the patch's cells whose four neighbours are known, g the map's
  * central-difference gradient (m per cell; the offset dz profiled out,
- * hence the centred gradients), and one variance per patch
- *   s^2 = (noise_m + noise_k_per_m r^2)^2 + map_sigma_m^2 + mean(e^2) / 4,
- * r the target's range, the first term the matcher's own noise model
- * (map->cfg), e = h - the mean of its four neighbours (the map's
- * representation error: a bilinear interpolant's is at most half of it).
- * The covariance is I^-1 (cells^2, times cell_m^2), ll[d] the expected
+ * hence the weighted centring), w = 1 / s^2 each cell's own variance
+ *   s^2 = (noise_m + noise_k_per_m r^2)^2 + map_sigma_m^2 + e^2 / 4,
+ * r the cell's range from the rover, the first term the matcher's own
+ * noise model (map->cfg), e = h - the mean of its four neighbours (the
+ * map's representation error: a bilinear interpolant's is at most half of
+ * it). The covariance is I^-1 (cells^2, times cell_m^2), ll[d] the expected
  * -d^T I d / 2; a patch with fewer than 3 such cells, or whose I is singular
- * to 1e-12 of its uncentred sums (flat ground, a plane: a shift along a
- * plane is a height offset) is uninformative. Exact int64 summed-area
- * tables give every candidate's sums in O(1). The heading's lever arm
- * applies as above; heading searched, the marginal above with the
- * heights' b = sum (g - mean g)(t - mean t) / s^2, c = sum (t - mean t)^2 /
- * s^2, t = g . J u the heading's column (u the cell's offset from the rover,
- * cells).
+ * to 1e-12 of its uncentred sum w |g|^2 (flat ground, a plane: a shift
+ * along a plane is a height offset) is uninformative. Exact int64
+ * summed-area tables give every candidate's sums in O(1). The heading's
+ * lever arm applies as above; heading searched, the marginal above with
+ * the heights' b = sum w (g - gw)(t - tw), c = sum w (t - tw)^2, t = g . J u
+ * the heading's column (u the cell's offset from the rover, cells).
  */
 #ifndef TRN_SELECT_H
 #define TRN_SELECT_H

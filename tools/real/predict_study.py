@@ -253,31 +253,40 @@ def representation_term(z, target_rc, patch_cells):
     return float(np.mean(e * e)) / 4.0 if e.size else math.nan
 
 
-def fisher_heights(z, target_rc, patch_cells, range_m, noise_m, noise_k_per_m, map_sigma_m, cell_m,
+def fisher_heights(z, target_rc, patch_cells, rover_rc, noise_m, noise_k_per_m, map_sigma_m, cell_m,
                    representation=True):
     """The height prediction's covariance of one candidate (src/select_heights.c's model):
-    I = sum (g - mean g)(g - mean g)^T / s^2 over the patch's cells with four known neighbours,
-    g the central-difference gradient (m per cell), s^2 = (noise_m + noise_k r^2)^2 +
-    map_sigma^2 + mean(e^2) / 4 (the last left out with representation=False); singular where its
-    determinant is below 1e-12 of the uncentred sums' product (a plane, flat ground). Returns
-    (sigma_east_m, sigma_north_m, rho_en, u_m); +inf when the information is singular."""
+    I = sum w (g - g_w)(g - g_w)^T over the patch's cells with four known neighbours, g the
+    central-difference gradient (m per cell), g_w its w-weighted mean, w = 1 / s^2 each cell's own
+    s^2 = (noise_m + noise_k r^2)^2 + map_sigma^2 + e^2 / 4 (r the cell's range from the rover at
+    fractional (row, col) rover_rc; e the cell's height minus its four neighbours' mean, left out
+    with representation=False); singular where its determinant is below 1e-12 of the squared
+    uncentred sum w |g|^2 (a plane, flat ground). Returns (sigma_east_m, sigma_north_m, rho_en,
+    u_m); +inf when the information is singular."""
     sr, sc = patch_slices(target_rc, patch_cells, 1)
     w = z[sr, sc]
+    c0 = w[1:-1, 1:-1]
     gx = 0.5 * (w[1:-1, 2:] - w[1:-1, :-2])  # along columns (east)
     gy = 0.5 * (w[2:, 1:-1] - w[:-2, 1:-1])  # along rows (south)
-    ok = np.isfinite(gx) & np.isfinite(gy)
+    e = c0 - 0.25 * (w[:-2, 1:-1] + w[2:, 1:-1] + w[1:-1, :-2] + w[1:-1, 2:])
+    ok = np.isfinite(gx) & np.isfinite(gy) & np.isfinite(e)
     inf = (math.inf, math.inf, math.nan, math.inf)
     if ok.sum() < 3:
         return inf
-    gx, gy = gx[ok], gy[ok]
-    unc = float(gx @ gx) * float(gy @ gy)  # the uncentred sums: the singularity test's scale
-    gx, gy = gx - gx.mean(), gy - gy.mean()
-    s2 = (noise_m + noise_k_per_m * range_m ** 2) ** 2 + map_sigma_m ** 2
+    rows = np.arange(sr.start + 1, sr.stop - 1)[:, None] + 0 * np.arange(sc.start + 1, sc.stop - 1)[None, :]
+    cols = np.arange(sc.start + 1, sc.stop - 1)[None, :] + 0 * rows
+    r2 = ((rows - rover_rc[0]) ** 2 + (cols - rover_rc[1]) ** 2) * cell_m ** 2
+    s2 = (noise_m + noise_k_per_m * r2) ** 2 + map_sigma_m ** 2
     if representation:
-        s2 += representation_term(z, target_rc, patch_cells)
-    a, b, d = float(gx @ gx) / s2, float(gx @ gy) / s2, float(gy @ gy) / s2
+        s2 = s2 + e * e / 4.0
+    wt = 1.0 / s2[ok]
+    gx, gy = gx[ok], gy[ok]
+    raw = float((wt * (gx * gx + gy * gy)).sum())  # the uncentred sum: the singularity test's scale
+    gx = gx - (wt * gx).sum() / wt.sum()
+    gy = gy - (wt * gy).sum() / wt.sum()
+    a, b, d = float((wt * gx * gx).sum()), float((wt * gx * gy).sum()), float((wt * gy * gy).sum())
     det = a * d - b * b
-    if not det > 1e-12 * unc / (s2 * s2) or unc == 0.0:
+    if not det > 1e-12 * raw * raw or raw == 0.0:
         return inf
     vx, vy, cxy = d / det * cell_m ** 2, a / det * cell_m ** 2, -b / det * cell_m ** 2
     sx, sy = math.sqrt(vx), math.sqrt(vy)
@@ -447,14 +456,14 @@ def map_predictions(dem, cases, a, noise_m, noise_k):
     fis_rel = []
     for cs in cases:
         tr, tc = cs["target_rc"]
-        sx, sy, rho, u = fisher_heights(dem.z, (tr, tc), a.patch_cells, cs["range_m"], noise_m, noise_k,
+        fr, fc = dem.frac_index(*cs["rover"])
+        sx, sy, rho, u = fisher_heights(dem.z, (tr, tc), a.patch_cells, (fr, fc), noise_m, noise_k,
                                         a.map_sigma_m, c)
         cs.update(sigma_x_pred_m=sx, sigma_y_pred_m=sy, rho_pred=rho, u_python_m=u)
         if math.isfinite(u) and math.isfinite(cs["u_heights_m"]):
             fis_rel.append(abs(u - cs["u_heights_m"]) / cs["u_heights_m"])
-        cs["u_norep_m"] = fisher_heights(dem.z, (tr, tc), a.patch_cells, cs["range_m"], noise_m, noise_k,
+        cs["u_norep_m"] = fisher_heights(dem.z, (tr, tc), a.patch_cells, (fr, fc), noise_m, noise_k,
                                          a.map_sigma_m, c, representation=False)[3]
-        fr, fc = dem.frac_index(*cs["rover"])
         kx, ky = patch_offsets((fr, fc), (tr, tc), a.patch_cells)
         rcell = c * np.hypot(kx, ky)
         rep = representation_term(dem.z, (tr, tc), a.patch_cells)

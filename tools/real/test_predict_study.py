@@ -171,7 +171,7 @@ def test_fisher():
         return a * ((x - 500.0) / c - 30.0) ** 2 + a * ((3000.0 - y) / c - 30.0) ** 2
     dem = synth_dem(para, n=60, c=c)
     noise_m = 0.02
-    sx, sy, rho, u = ps.fisher_heights(dem.z, (30, 30), P, 0.0, noise_m, 0.0, 0.01, c)
+    sx, sy, rho, u = ps.fisher_heights(dem.z, (30, 30), P, (30.0, 30.0), noise_m, 0.0, 0.01, c)
     # g = 2 a X per axis (central differences are exact on a quadratic), centred over the patch's
     # cells: sum X^2 over a P x P square = P * 2 * sum_{k=1}^{m} k^2; e = -a everywhere (the mean of
     # the 4 neighbours of a (X^2 + Y^2) is a (X^2 + Y^2) + a)
@@ -202,7 +202,7 @@ def test_fisher():
                                            f"direct {want_u:.6g})")
     flat = synth_dem(plane, n=60)
     check(math.isinf(ps.fisher_heights_percell(flat.z, (30, 30), P, s2c, 2.0)), "per cell, a plane: uninformative")
-    check(math.isinf(ps.fisher_heights(flat.z, (30, 30), P, 10.0, 0.01, 0.0, 0.0, 2.0)[3]), "a plane: uninformative")
+    check(math.isinf(ps.fisher_heights(flat.z, (30, 30), P, (25.0, 24.0), 0.01, 0.002, 0.0, 2.0)[3]), "a plane: uninformative")
 
 
 def test_self_similarity():
