@@ -81,13 +81,19 @@ void mapopt_cli(mapopt_t *m, cli_opt_t *o)
 
 const char *const *mapopt_not_taken(mapopt_use_t use)
 {
-    /* read only by trn_localize_dem and the height matcher */
-    static const char *const k_search[] = {"--local-highpass", "--refine", "--noise-auto",
-                                           "--max-failure-prob", NULL};
+    /* the local filter and the voxel refinement: read only where trn_localize_dem
+     * matches a local DEM's voxels; the noise rescale and the acceptance limit:
+     * only by trn_localize_dem */
+    static const char *const k_exp[] = {"--local-highpass", "--refine", NULL};
     static const char *const k_map[] = {"--local-highpass",   "--refine", "--noise-auto",
                                         "--max-failure-prob", "--match",  NULL};
     static const char *const k_none[] = {NULL};
-    return use == MAPOPT_USE_VOXEL_MAP ? k_map : use == MAPOPT_USE_VOXEL_SEARCH ? k_search : k_none;
+    return use == MAPOPT_USE_VOXEL_MAP ? k_map : use == MAPOPT_USE_EXPERIMENT ? k_exp : k_none;
+}
+
+int mapopt_heights(const mapopt_t *m)
+{
+    return m->match != NULL ? strcmp(m->match, "heights") == 0 : strcmp(m->config, "auto") == 0;
 }
 
 int mapopt_check_use(const mapopt_t *m, mapopt_use_t use, char *err, size_t err_len)
@@ -101,15 +107,19 @@ int mapopt_check_use(const mapopt_t *m, mapopt_use_t use, char *err, size_t err_
         return 0; /* not a choice: mapopt_config says so (bad input) */
     }
     auto_cfg = strcmp(m->config, "auto") == 0;
-    heights = m->match != NULL ? strcmp(m->match, "heights") == 0 : auto_cfg;
+    heights = mapopt_heights(m);
     refine = m->refine >= 0 ? m->refine != 0 : auto_cfg;
     /* the auto configuration's height bin and bin count come from the noise model */
     auto_bins = auto_cfg && !(m->zbin_m > 0.0 && m->nz > 0);
     if (use != MAPOPT_USE_LOCALIZE) {
-        if (use == MAPOPT_USE_VOXEL_SEARCH && heights && m->match != NULL) {
+        if (use == MAPOPT_USE_EXPERIMENT && heights) {
+            return 0; /* the voxel map's options shape the selection, the rest the matcher */
+        }
+        if (use == MAPOPT_USE_EXPERIMENT && (m->noise_auto >= 0 || m->max_failure_prob > 0.0)) {
             snprintf(err, err_len,
-                     "--match heights: the experiment localizes with the voxel search only (the "
-                     "height matcher is not wired into it yet)");
+                     "%s applies to the height matcher (--match heights); the experiment's voxel "
+                     "search has neither a noise rescale nor an acceptance test",
+                     m->noise_auto >= 0 ? "--noise-auto" : "--max-failure-prob");
             return -1;
         }
         if ((m->noise_m > 0.0 || m->noise_k >= 0.0) && !auto_bins) {

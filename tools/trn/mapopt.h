@@ -53,11 +53,16 @@ int mapopt_config(const mapopt_t *m, const float *data, int width, int height, d
 /* What a command does with the map: which of the options above apply.
  *   MAPOPT_USE_LOCALIZE      trn localize: a local DEM matched by either matcher
  *                            (every option, each where that matcher reads it);
- *   MAPOPT_USE_VOXEL_SEARCH  trn experiment: sampled points, the voxel search
- *                            alone (no local DEM, no refinement, no acceptance);
+ *   MAPOPT_USE_EXPERIMENT    trn experiment: the voxel map for the selection,
+ *                            and either matcher on simulated local maps: with
+ *                            the voxel matcher sampled points and the voxel
+ *                            search alone (no refinement, no acceptance); with
+ *                            the height matcher trn_localize_dem on height
+ *                            grids (its noise model, noise rescale and
+ *                            acceptance limit; never the local filter);
  *   MAPOPT_USE_VOXEL_MAP     trn select, trn field: the voxel map alone, no
  *                            localization. */
-typedef enum { MAPOPT_USE_LOCALIZE, MAPOPT_USE_VOXEL_SEARCH, MAPOPT_USE_VOXEL_MAP } mapopt_use_t;
+typedef enum { MAPOPT_USE_LOCALIZE, MAPOPT_USE_EXPERIMENT, MAPOPT_USE_VOXEL_MAP } mapopt_use_t;
 
 /* The options a command of this use never reads (NULL-terminated names):
  * they are left out of its table (cli_remove), so its --help does not offer
@@ -71,10 +76,15 @@ const char *const *mapopt_not_taken(mapopt_use_t use);
  * never silently ignored: with the height matcher the voxel map's --zbin-m,
  * --nz, --highpass-m, --sigma-m, --local-highpass and --refine; with the
  * voxel matcher --noise-auto, and --noise-m / --noise-k unless --refine 1 or
- * the auto configuration's bins read them; --match heights where only the
- * voxel search runs. Values that are not one of the choices pass here and are
- * refused by mapopt_config as before. */
+ * the auto configuration's bins read them; in the experiment with the voxel
+ * matcher also --max-failure-prob (its voxel search has no acceptance test).
+ * Values that are not one of the choices pass here and are refused by
+ * mapopt_config as before. */
 int mapopt_check_use(const mapopt_t *m, mapopt_use_t use, char *err, size_t err_len);
+
+/* 1 if the options resolve to the height matcher (--match heights, or
+ * --map-config auto without --match), else 0. */
+int mapopt_heights(const mapopt_t *m);
 
 /* Write the configuration as the JSON object "map_config". */
 void mapopt_json(json_t *j, const trn_map_cfg_t *cfg);
