@@ -251,6 +251,17 @@ static void experiment_help(const cmd_experiment_params_t *p, cli_opt_t *opts, s
         "the localizer: voxel (the paper's: local maps sampled from the probability map, the voxel "
         "search) or heights (the DEM's heights with the noise model, trn_localize_dem) (default: "
         "--map-config's)";
+    cli_find(opts, n_opts, "--noise-m")->help =
+        "height noise of the local maps, constant part, m: with --match heights the simulated "
+        "sensor's and the matcher's model; with voxel it sets only auto's height bin "
+        "(default " MAPOPT_STR(MAPOPT_NOISE_M) ")";
+    cli_find(opts, n_opts, "--noise-k")->help = "height noise of the local maps, range-squared "
+                                                "part, 1/m (as --noise-m; default " MAPOPT_STR(
+                                                    MAPOPT_NOISE_K_PER_CELL) "/cell)";
+    cli_find(opts, n_opts, "--max-failure-prob")->help =
+        "with --match heights: an answer whose failure probability is above P is 'ambiguous', not "
+        "a fix (the arms' fixes, wrong_fixes, ambiguous; default " MAPOPT_STR(
+            TRN_MAP_MAX_FAILURE_PROB_AUTO) " with auto, 1 = never with paper)";
 }
 
 /* argv -> p. Returns CLI_OK, CLI_HELP (usage printed) or the usage / bad input status (message printed). */

@@ -25,12 +25,6 @@ void mapopt_init(mapopt_t *m)
     m->max_failure_prob = 0.0;
 }
 
-/* The tools' local height noise: 1 cm plus 0.04 % of r^2 / cell (issue 12's
- * sensor model); the help texts print these same macros. */
-#define MAPOPT_NOISE_M 0.01
-#define MAPOPT_NOISE_K_PER_CELL 0.0004
-#define MAPOPT_STR_(x) #x
-#define MAPOPT_STR(x) MAPOPT_STR_(x)
 
 void mapopt_cli(mapopt_t *m, cli_opt_t *o)
 {

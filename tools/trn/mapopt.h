@@ -21,6 +21,13 @@
 
 #define MAPOPT_N 13 /* cli_opt_t entries mapopt_cli writes */
 
+/* The tools' local height noise: 1 cm plus 0.04 % of r^2 / cell (issue 12's
+ * sensor model); the help texts print these same macros. */
+#define MAPOPT_NOISE_M 0.01
+#define MAPOPT_NOISE_K_PER_CELL 0.0004
+#define MAPOPT_STR_(x) #x
+#define MAPOPT_STR(x) MAPOPT_STR_(x)
+
 typedef struct {
     const char *config;      /* "auto" | "paper" */
     double zbin_m;           /* height bin, metres; 0 = from the configuration */
