@@ -25,7 +25,6 @@ void mapopt_init(mapopt_t *m)
     m->max_failure_prob = 0.0;
 }
 
-
 void mapopt_cli(mapopt_t *m, cli_opt_t *o)
 {
     const cli_opt_t t[MAPOPT_N] = {

@@ -80,8 +80,9 @@ const char *const *mapopt_not_taken(mapopt_use_t use);
  * to use under the configuration it resolves to (--map-config, --match,
  * --refine), else -1 with the one-line reason in err (a usage error: the
  * command exits CLI_USAGE). An option that would change nothing is refused,
- * never silently ignored: with the height matcher the voxel map's --zbin-m,
- * --nz, --highpass-m, --sigma-m, --local-highpass and --refine; with the
+ * never silently ignored: with the height matcher in trn localize the voxel
+ * map's --zbin-m, --nz, --highpass-m, --sigma-m, --local-highpass and
+ * --refine (in the experiment the voxel map shapes the selection); with the
  * voxel matcher --noise-auto, and --noise-m / --noise-k unless --refine 1 or
  * the auto configuration's bins read them; in the experiment with the voxel
  * matcher also --max-failure-prob (its voxel search has no acceptance test).
