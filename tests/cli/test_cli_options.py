@@ -278,6 +278,31 @@ SELMAP = {
     "--json": effect(drop=["--json"]),
 }
 EXP_DEM = ["--dem", G2]  # with drop=["--size-cells"]: the experiment on a given DEM
+# `trn experiment`: the voxel map for the selection (the base run: the paper's
+# configuration, the voxel matcher) and, with --match heights, the height
+# matcher on height grids, which reads the noise model, the noise rescale and
+# the acceptance limit; the voxel matcher reads neither of the last two
+HEIGHTS = ["--match", "heights"]
+MAP_EXPERIMENT = {
+    **MAP_VOXEL,
+    # the noise model: the auto configuration's height bin; the height matcher's local maps
+    "--noise-m": [effect("--noise-m", "0.05", ctx=["--map-config", "auto", "--match", "voxel"]),
+                  effect("--noise-m", "0.05", ctx=HEIGHTS),
+                  refused("--noise-m", "0.05", rc=2, needle="--map-config auto")],
+    "--noise-k": [effect("--noise-k", "0.5", ctx=["--map-config", "auto", "--match", "voxel"]),
+                  effect("--noise-k", "0.5", ctx=HEIGHTS),
+                  refused("--noise-k", "0.5", rc=2, needle="--map-config auto")],
+    # the voxel map shapes the selection whichever matcher localizes
+    "--zbin-m": [effect("--zbin-m", "0.05"), effect("--zbin-m", "0.3", ctx=HEIGHTS)],
+    "--inlier-prob": [effect("--inlier-prob", "0.5"), effect("--inlier-prob", "0.5", ctx=HEIGHTS)],
+    # the residuals of the wrong answers reject the noise model (noise_rescaled)
+    "--noise-auto": [effect("--noise-auto", "1", ctx=HEIGHTS),
+                     refused("--noise-auto", "1", rc=2, needle="--match heights")],
+    # the status: answers above the limit are 'ambiguous', not fixes
+    "--max-failure-prob": [effect("--max-failure-prob", "0.01", ctx=HEIGHTS),
+                           refused("--max-failure-prob", "0.01", rc=2, needle="--match heights")],
+    "--match": effect("--match", "heights"),
+}
 
 CASES = {
     "terrain": {
@@ -358,10 +383,13 @@ CASES = {
         "--patch-m": effect("--patch-m", "1.5"),
         "--footprint-m": effect("--footprint-m", "2"),
         "--success-cells": effect("--success-cells", "0.5"),
-        "--sensor": effect("--sensor", "dem"),
+        "--sensor": [effect("--sensor", "dem"),
+                     refused("--sensor", "dem", ctx=HEIGHTS, rc=2, needle="--match voxel")],
         "--height-noise-m": [effect("--height-noise-m", "0.05", ctx=["--sensor", "dem"]),
-                             refused("--height-noise-m", "0.05", rc=1, needle="dem sensor")],
-        "--heading-error-deg": effect("--heading-error-deg", "2"),
+                             refused("--height-noise-m", "0.05", rc=1, needle="dem sensor"),
+                             refused("--height-noise-m", "0.05", ctx=HEIGHTS, rc=2, needle="--match voxel")],
+        "--heading-error-deg": [effect("--heading-error-deg", "2"),
+                                refused("--heading-error-deg", "2", ctx=HEIGHTS, rc=2, needle="--match voxel")],
         "--heading-window-deg": [effect("--heading-window-deg", "2", ctx=["--heading-error-deg", "2"]),
                                  refused("--heading-window-deg", "2", rc=2, needle="--heading-error-deg")],
         "--select-heading-search": [effect("--select-heading-search", "0", ctx=["--heading-error-deg", "2"]),
@@ -371,10 +399,7 @@ CASES = {
         "--global-sigma-k": effect("--global-sigma-k", "0.05"),
         "--global-error": [effect("--global-error", p("gerr128.tif"), ctx=EXP_DEM, drop=["--size-cells"]),
                            refused("--global-error", p("gerr128.tif"), rc=2, needle="--dem")],
-        **MAP_VOXEL,
-        # the experiment localizes with the voxel search only, until the
-        # height matcher is wired into it; voxel is what it does anyway
-        "--match": refused("--match", "heights", rc=2, needle="--match heights"),
+        **MAP_EXPERIMENT,
         "--json": effect(drop=["--json"]),
     },
     "profile": {

@@ -50,6 +50,7 @@ except ValueError:
     check(False, f"not one JSON object: {out1!r}")
 check(out1.count("\n") == 1, "JSON is not one line")
 H.check_version(r, "experiment --json")
+check(r.get("localizer") == "voxel", f"the generated terrain's default localizer: {r.get('localizer')}")
 check(r.get("trials") == 6 and r.get("seed") == 5, f"trials / seed wrong: {r.get('trials')}, {r.get('seed')}")
 check(r.get("terrain", {}).get("seed") == 5 and r["terrain"].get("size_cells") == 128,
       "terrain seed defaults to --seed, size as asked")
@@ -193,6 +194,7 @@ if rc == 0:
     check(d.get("map_config_name") == "paper" and d["parameters"].get("max_range_m") == 10, "paper config, 10 m reach")
 rc, outa, erra = run("--dem", dem128, "--trials", 6, "--seed", 5, "--json")
 check(rc == 0 and json.loads(outa).get("map_config_name") == "auto", f"--dem defaults to --map-config auto: {erra.strip()}")
+check(rc == 0 and json.loads(outa).get("localizer") == "heights", "--dem's auto configuration localizes with heights")
 # 10x the cell: every length scales by 10 (the same experiment in cells)
 try:
     from osgeo import gdal

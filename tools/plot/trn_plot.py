@@ -28,6 +28,7 @@ prior, estimate), and save.
 """
 import argparse
 import json
+import os
 import sys
 
 import matplotlib
@@ -289,7 +290,12 @@ def fig_experiment(args):
         if len(labels) != len(runs):
             sys.exit(f"trn_plot: --labels has {len(labels)} names for {len(runs)} runs")
     else:
-        labels = [f"k = {r['terrain']['coverage_k']:g}" for r in runs]
+        def label(r):
+            t = r["terrain"]
+            name = (os.path.splitext(os.path.basename(t["dem"]))[0] if "dem" in t
+                    else f"k = {t['coverage_k']:g}")
+            return name + (", heights" if r.get("localizer") == "heights" else "")
+        labels = [label(r) for r in runs]
     arms = (("with_selection", "with selection", "#1f77b4"), ("without_selection", "without selection", "#d62728"))
     x = np.arange(len(runs))
     wbar = 0.38

@@ -26,11 +26,15 @@ static int map_cfg_cb(void *ctx, const float *dem, int width, int height, double
     if (mapopt_config(r->mo, dem, width, height, cell_m, cfg, &r->sigma_h, err, err_len) != 0) {
         return -1;
     }
-    /* what the experiment does, whatever the configuration would do in trn
-     * localize: sampled points, the voxel search (trn_localize_points), a local
-     * DEM (--sensor dem) filtered on its own, no refinement, no acceptance
-     * limit; the JSON's map_config says so */
-    cfg->match = TRN_MATCH_VOXEL;
+    if (cfg->match == TRN_MATCH_HEIGHTS) {
+        /* the height matcher (trn_localize_dem) as configured; it always refines */
+        cfg->refine = 1;
+        return 0;
+    }
+    /* what the voxel experiment does, whatever the configuration would do in
+     * trn localize: sampled points, the voxel search (trn_localize_points), a
+     * local DEM (--sensor dem) filtered on its own, no refinement, no
+     * acceptance limit; the JSON's map_config says so */
     cfg->refine = 0;
     cfg->noise_auto = 0;
     cfg->local_highpass = TRN_LOCAL_HP_BOX;
@@ -66,7 +70,7 @@ static void json_u64(json_t *j, const char *key, uint64_t v)
     fprintf(j->out, ": %llu", (unsigned long long)v);
 }
 
-static void json_arm(json_t *j, const char *key, const exp_arm_t *a, long trials)
+static void json_arm(json_t *j, const char *key, const exp_arm_t *a, long trials, int heights)
 {
     json_obj(j, key);
     json_int(j, "localizations", a->localizations);
@@ -85,6 +89,12 @@ static void json_arm(json_t *j, const char *key, const exp_arm_t *a, long trials
     json_int(j, "ill_conditioned", a->ill_conditioned);
     json_num(j, "mean_local_points", a->mean_points);
     json_num(j, "mean_target_range_m", a->mean_range_m);
+    if (heights) { /* trn_localize_dem's status: accepted answers, and the wrong ones among them */
+        json_int(j, "fixes", a->fixes);
+        json_int(j, "wrong_fixes", a->wrong_fixes);
+        json_int(j, "ambiguous", a->ambiguous);
+        json_int(j, "noise_rescaled", a->noise_rescaled);
+    }
     json_obj_end(j);
 }
 
@@ -118,6 +128,35 @@ void cmd_experiment_params_default(cmd_experiment_params_t *p)
     p->heading_search = e.select_heading_search;
 }
 
+/* With the height matcher the local map is the DEM's heights with the noise
+ * model: the voxel search's sensor options and the heading error (whose
+ * 3-DOF search is the voxel search's) do not apply. 0, or -1 with the reason. */
+static int experiment_heights_usage(const cmd_experiment_params_t *p, cli_opt_t *opts,
+                                    size_t n_opts, char *err, size_t err_len)
+{
+    static const char *const vox[] = {"--sensor", "--height-noise-m"};
+    size_t i;
+    if (!mapopt_heights(&p->so.mo)) {
+        return 0;
+    }
+    for (i = 0; i < sizeof vox / sizeof vox[0]; ++i) {
+        if (cli_find(opts, n_opts, vox[i])->seen) {
+            snprintf(err, err_len,
+                     "%s shapes the voxel search's local map (--match voxel); the height matcher "
+                     "senses the DEM's heights with the noise model (--noise-m, --noise-k)",
+                     vox[i]);
+            return -1;
+        }
+    }
+    if (p->heading_err > 0.0) {
+        snprintf(err, err_len,
+                 "--heading-error-deg: the experiment's 3-DOF search is the voxel search's "
+                 "(--match voxel); the height matcher runs without a heading error here");
+        return -1;
+    }
+    return 0;
+}
+
 /* The usage rules between options: the terrain's options without --dem, --global-error with it. */
 static int experiment_usage(cmd_experiment_params_t *p, cli_opt_t *opts, size_t n_opts)
 {
@@ -125,7 +164,11 @@ static int experiment_usage(cmd_experiment_params_t *p, cli_opt_t *opts, size_t 
                                         "--relief-m", "--size-cells"};
     char err[512];
     size_t i;
-    if (mapopt_check_use(&p->so.mo, MAPOPT_USE_VOXEL_SEARCH, err, sizeof err) != 0) {
+    if (p->dem_path != NULL && !cli_find(opts, n_opts, "--map-config")->seen) {
+        p->so.mo.config = "auto";
+    }
+    if (mapopt_check_use(&p->so.mo, MAPOPT_USE_EXPERIMENT, err, sizeof err) != 0 ||
+        experiment_heights_usage(p, opts, n_opts, err, sizeof err) != 0) {
         fprintf(stderr, "trn experiment: %s\n", err);
         return CLI_USAGE;
     }
@@ -155,9 +198,6 @@ static int experiment_usage(cmd_experiment_params_t *p, cli_opt_t *opts, size_t 
                         synth[i]);
                 return CLI_USAGE;
             }
-        }
-        if (!cli_find(opts, n_opts, "--map-config")->seen) {
-            p->so.mo.config = "auto";
         }
     } else if (p->so.gerr != NULL) {
         fprintf(stderr,
@@ -205,9 +245,24 @@ static void experiment_help(const cmd_experiment_params_t *p, cli_opt_t *opts, s
     cli_find(opts, n_opts, "--global-sigma-m")->help = h[4];
     cli_find(opts, n_opts, "--global-sigma-k")->help = h[5];
     cli_find(opts, n_opts, "--map-config")->help =
-        "map configuration: paper (as in the paper, scaled to the cell; default on the generated "
-        "terrain) "
-        "or auto (from the DEM, docs/method.md 9; default with --dem)";
+        "map configuration: paper (as in the paper, scaled to the cell, the voxel matcher; default "
+        "on the generated terrain) or auto (from the DEM, the height matcher, docs/method.md 9; "
+        "default with --dem)";
+    cli_find(opts, n_opts, "--match")->help =
+        "the localizer: voxel (the paper's: local maps sampled from the probability map, the voxel "
+        "search) or heights (the DEM's heights with the noise model, trn_localize_dem) (default: "
+        "--map-config's)";
+    cli_find(opts, n_opts, "--noise-m")->help =
+        "height noise of the local maps, constant part, m: with --match heights the simulated "
+        "sensor's and the matcher's model; with voxel it sets only auto's height bin "
+        "(default " MAPOPT_STR(MAPOPT_NOISE_M) ")";
+    cli_find(opts, n_opts, "--noise-k")->help = "height noise of the local maps, range-squared "
+                                                "part, 1/m (as --noise-m; default " MAPOPT_STR(
+                                                    MAPOPT_NOISE_K_PER_CELL) "/cell)";
+    cli_find(opts, n_opts, "--max-failure-prob")->help =
+        "with --match heights: an answer whose failure probability is above P is 'ambiguous', not "
+        "a fix (the arms' fixes, wrong_fixes, ambiguous; default " MAPOPT_STR(
+            TRN_MAP_MAX_FAILURE_PROB_AUTO) " with auto, 1 = never with paper)";
 }
 
 /* argv -> p. Returns CLI_OK, CLI_HELP (usage printed) or the usage / bad input status (message printed). */
@@ -279,10 +334,14 @@ static int experiment_parse(int argc, char **argv, cmd_experiment_params_t *p)
         "Per trial: random start and finish, the rover at the finish with a prior off by up to\n"
         "--prior-error-m; with selection it senses trn_select's best target, without it senses\n"
         "the target midway between start and prior and the eight around it (each a localization\n"
-        "of its own). Local maps are sampled from the probability map (eqs. 8-9), localized in\n"
-        "the prior window; success = error <= --success-cells. Rates with Wilson 95 % intervals,\n"
-        "mean error of the successes with t intervals (docs/method.md section 8). Seeded: the\n"
-        "same options give the same output.\n"
+        "of its own). With the voxel matcher (--match voxel, --map-config paper) local maps are\n"
+        "sampled from the probability map (eqs. 8-9) and localized by the voxel search; with the\n"
+        "height matcher (--match heights, --map-config auto) a local map is the DEM's true "
+        "heights\n"
+        "over the sensed patch plus Gaussian noise of sd --noise-m + --noise-k r^2, localized by\n"
+        "trn_localize_dem. Either in the prior window; success = error <= --success-cells.\n"
+        "Rates with Wilson 95 % intervals, mean error of the successes with t intervals\n"
+        "(docs/method.md section 8). Seeded: the same options give the same output.\n"
         "Every length defaults to its value at the paper's 0.1 m cells scaled by cell / 0.1 m\n"
         "(the same experiment in cells), and so do the error models (constant x cell/0.1, r^2 term "
         "/\n"
@@ -297,11 +356,8 @@ static int experiment_parse(int argc, char **argv, cmd_experiment_params_t *p)
     selmap_gerr_opts(&p->so, opts + EXP_N_OWN);
     mapopt_cli(&p->so.mo, opts + EXP_N_OWN + SELMAP_N_GERR_OPTS);
     experiment_help(p, opts, n_opts, h);
-    cli_find(opts, n_opts, "--match")->help =
-        "the matcher: voxel, the default and the only one (heights is refused until the height "
-        "matcher is wired into the experiment)";
-    /* the localizer's options the voxel search of sampled points never reads */
-    cmd.n_opts = cli_remove(opts, n_opts, mapopt_not_taken(MAPOPT_USE_VOXEL_SEARCH));
+    /* the localizer's options neither matcher reads here */
+    cmd.n_opts = cli_remove(opts, n_opts, mapopt_not_taken(MAPOPT_USE_EXPERIMENT));
     rc = cli_parse(&cmd, argc, argv);
     return rc != CLI_OK ? rc : experiment_usage(p, opts, cmd.n_opts);
 }
@@ -453,11 +509,20 @@ static void experiment_json_parameters(json_t *j, const cmd_experiment_result_t 
     json_num(j, "prior_error_m", e->prior_error_m);
     json_num(j, "grid_spacing_m", x->grid_cells * e->cell_m);
     json_num(j, "success_radius_m", x->success_radius_m);
-    json_str(j, "sensor", e->sensor == EXP_SENSOR_PROB ? "prob" : "dem");
-    json_str(j, "sensor_model",
-             e->sensor == EXP_SENSOR_PROB
-                 ? "each voxel of the sensed patch occupied with probability min(P, 1), eqs. 8-9"
-                 : "true DEM + Gaussian height noise per cell, high-passed and binned on its own");
+    if (x->heights) {
+        json_str(j, "sensor", "heights");
+        json_str(j, "sensor_model",
+                 "the DEM's true heights over the sensed patch + Gaussian noise of sd noise_m + "
+                 "noise_k_per_m r^2 (map_config), r metres from the rover");
+    } else {
+        json_str(j, "sensor", e->sensor == EXP_SENSOR_PROB ? "prob" : "dem");
+        json_str(
+            j, "sensor_model",
+            e->sensor == EXP_SENSOR_PROB
+                ? "each voxel of the sensed patch occupied with probability min(P, 1), eqs. 8-9"
+                : "true DEM + Gaussian height noise per cell, high-passed and binned on its "
+                  "own");
+    }
     json_num(j, "height_noise_m", e->height_noise_m);
     json_str(j, "global_sensing_position", "map centre");
     json_obj_end(j);
@@ -471,6 +536,7 @@ static void experiment_report_json(const cmd_experiment_params_t *p,
     json_begin(&j, stdout);
     json_int(&j, "trials", p->trials);
     json_u64(&j, "seed", p->seed);
+    json_str(&j, "localizer", r->r.heights ? "heights" : "voxel");
     experiment_json_terrain(&j, p, r);
     experiment_json_parameters(&j, r);
     g.gsig_m = r->r.global_sigma.sigma_min_m; /* the model used (scaled when not given) */
@@ -478,8 +544,8 @@ static void experiment_report_json(const cmd_experiment_params_t *p,
     selmap_json_config(&j, &g, &r->r.map_cfg, r->sigma_h);
     json_int(&j, "draws", r->r.draws);
     json_num(&j, "mean_traverse_m", r->r.mean_traverse_m);
-    json_arm(&j, "with_selection", &r->r.with, p->trials);
-    json_arm(&j, "without_selection", &r->r.without, p->trials);
+    json_arm(&j, "with_selection", &r->r.with, p->trials, r->r.heights);
+    json_arm(&j, "without_selection", &r->r.without, p->trials, r->r.heights);
     json_num(&j, "accuracy_gain", r->gain);
     if (r->p.heading_error_deg > 0.0) {
         json_obj(&j, "heading");
@@ -488,8 +554,8 @@ static void experiment_report_json(const cmd_experiment_params_t *p,
         json_num(&j, "selection_sigma_heading_rad", (double)r->r.scfg.sigma_heading_rad);
         json_int(&j, "select_heading_search", r->p.select_heading_search);
         json_int(&j, "trials_3dof_other_target", r->r.with3_other_target);
-        json_arm(&j, "with_selection_3dof", &r->r.with3, p->trials);
-        json_arm(&j, "without_selection_3dof", &r->r.without3, p->trials);
+        json_arm(&j, "with_selection_3dof", &r->r.with3, p->trials, 0);
+        json_arm(&j, "without_selection_3dof", &r->r.without3, p->trials, 0);
         json_obj_end(&j);
     }
     json_end(&j);
@@ -511,7 +577,9 @@ static void experiment_report_text(const cmd_experiment_params_t *p,
                p->trials, (unsigned long long)p->seed, p->size, p->size, e->cell_m, p->k,
                (unsigned long long)e->terrain_seed, x->rocks);
     }
-    printf("sensor: %s\n", e->sensor == EXP_SENSOR_PROB
+    printf("sensor: %s\n", x->heights ? "the DEM's heights + noise of sd noise_m + noise_k r^2, "
+                                        "localized by the height matcher (trn_localize_dem)"
+                           : e->sensor == EXP_SENSOR_PROB
                                ? "local maps sampled from the probability map (eqs. 8-9)"
                                : "true DEM + height noise (diagnostic, not the paper's)");
     printf("patch %d cells, window +-%g m, prior error +-%g m, grid %g m, success <= %g m; mean "
@@ -541,6 +609,13 @@ static void experiment_report_text(const cmd_experiment_params_t *p,
                    x->with3_other_target, e->trials);
         }
         print_arm("without, 3-DOF", &x->without3);
+    }
+    if (x->heights) {
+        printf("height matcher's status, with / without selection: fixes %ld / %ld (wrong %ld / "
+               "%ld), ambiguous %ld / %ld, ill-conditioned %ld / %ld\n",
+               x->with.fixes, x->without.fixes, x->with.wrong_fixes, x->without.wrong_fixes,
+               x->with.ambiguous, x->without.ambiguous, x->with.ill_conditioned,
+               x->without.ill_conditioned);
     }
     printf("\nsuccessful localizations %.1f %% more accurate with selection (paper: 97.8 %% vs "
            "29.5 %%, 15.3 %%)\n",

@@ -380,6 +380,11 @@ typedef struct {
     size_t hws_b;
     int hp_cells;
     trn_terrain_cfg_t tcfg;
+    /* the height matcher (map.cfg.match == TRN_MATCH_HEIGHTS) */
+    int heights;
+    float *hgrid;        /* the sensed patch's heights, (patch side) squared */
+    void *dws, *dws_raw; /* trn_localize_dem's workspace, grown on demand */
+    size_t dws_b;
 } world_t;
 
 /* Would trn_select accept (tx, ty) as a candidate from the rover cell (px, py)?
@@ -431,6 +436,8 @@ typedef struct {
     size_t n_points;
     double err3_m; /* the 3-DOF search's error (w->h3win_rad > 0) */
     int illcond3;
+    int fix, ambiguous; /* the height matcher's status: TRN_OK, TRN_E_AMBIGUOUS */
+    int rescaled;       /* ... its noise model rescaled (trn_loc_result_t.noise_scale != 1) */
 } sense_t;
 
 /* Standard normal from two uniforms (Box-Muller, cosine branch). */
@@ -521,6 +528,77 @@ static int localize_3dof(world_t *w, size_t n, const trn_window_t *win, int fx, 
     return 0;
 }
 
+/* The height matcher's trial (experiment.h): the true heights over roi plus
+ * Gaussian noise of sd noise_m + noise_k_per_m r^2, r metres from the true
+ * rover cell (fx, fy) (the map configuration's model, trn_refine_noise_var_'s),
+ * one normal per cell with data, in row order; trn_localize_dem in win. */
+static int heights_localize(world_t *w, const trn_window_t *roi, const trn_window_t *win, int fx,
+                            int fy, exp_rng_t *r, sense_t *s, char *err, size_t err_len)
+{
+    const int pw = roi->x1 - roi->x0 + 1, ph = roi->y1 - roi->y0 + 1;
+    const double nm = (double)w->map.cfg.noise_m, nk = (double)w->map.cfg.noise_k_per_m,
+                 cell = (double)w->map.cfg.terrain.cell_m;
+    const size_t max_pts = (size_t)pw * (size_t)ph * (size_t)w->pg.nz;
+    trn_grid_f32_t lg;
+    trn_loc_result_t res;
+    trn_status_t st;
+    size_t n = 0, need;
+    int x, y;
+    for (y = 0; y < ph; ++y) {
+        for (x = 0; x < pw; ++x) {
+            double h = (double)
+                           w->dem[(size_t)(roi->y0 + y) * (size_t)w->nx + (size_t)(roi->x0 + x)];
+            double dx = (double)(roi->x0 + x - fx) * cell, dy = (double)(roi->y0 + y - fy) * cell;
+            float v = NAN;
+            if (isfinite(h)) {
+                v = (float)(h + (nm + nk * (dx * dx + dy * dy)) * rng_normal(r));
+                ++n;
+            }
+            w->hgrid[(size_t)y * (size_t)pw + (size_t)x] = v;
+        }
+    }
+    s->n_points = n;
+    if (n == 0 || trn_grid_f32_init(&lg, w->hgrid, (size_t)pw * (size_t)ph, pw, ph) != TRN_OK) {
+        s->no_points = 1;
+        return 0;
+    }
+    need = trn_localize_dem_workspace_bytes(&w->map, pw, ph, max_pts, win);
+    if (need == 0) {
+        snprintf(err, err_len, "internal error: trn_localize_dem refused a %d x %d local map", pw,
+                 ph);
+        return -1;
+    }
+    if (grow_ws(&w->dws, &w->dws_raw, &w->dws_b, need, "height matcher", err, err_len) != 0) {
+        return -1;
+    }
+    st = trn_localize_dem(&w->map, &lg, fx - roi->x0, fy - roi->y0, max_pts, win, w->dws, w->dws_b,
+                          &res);
+    if (st == TRN_E_NODATA) {
+        s->no_points = 1;
+        return 0;
+    }
+    if (st != TRN_OK && st != TRN_E_ILLCOND && st != TRN_E_AMBIGUOUS) {
+        snprintf(err, err_len, "trn_localize_dem: %s", trn_strerror(st));
+        return -1;
+    }
+    s->illcond = st == TRN_E_ILLCOND;
+    s->fix = st == TRN_OK;
+    s->ambiguous = st == TRN_E_AMBIGUOUS;
+    s->rescaled = res.noise_scale != 1.0;
+    s->err_m = sqrt((res.x - fx) * (res.x - fx) + (res.y - fy) * (res.y - fy)) * cell;
+    s->ok = 1;
+    return 0;
+}
+
+/* The prior window around (px, py), clipped to the map. */
+static void prior_window(const world_t *w, int px, int py, trn_window_t *win)
+{
+    win->x0 = px - w->win_cells < 0 ? 0 : px - w->win_cells;
+    win->y0 = py - w->win_cells < 0 ? 0 : py - w->win_cells;
+    win->x1 = px + w->win_cells > w->nx - 1 ? w->nx - 1 : px + w->win_cells;
+    win->y1 = py + w->win_cells > w->ny - 1 ? w->ny - 1 : py + w->win_cells;
+}
+
 /* Sense the patch centred on (cx, cy) (global cells, the patch actually seen)
  * from the true rover cell (fx, fy), localize in the window around (px, py). */
 static int sense_and_localize(world_t *w, int cx, int cy, int fx, int fy, int px, int py,
@@ -545,6 +623,10 @@ static int sense_and_localize(world_t *w, int cx, int cy, int fx, int fy, int px
     }
     pw = roi.x1 - roi.x0 + 1;
     ph = roi.y1 - roi.y0 + 1;
+    prior_window(w, px, py, &win);
+    if (w->heights) {
+        return heights_localize(w, &roi, &win, fx, fy, r, s, err, err_len);
+    }
     if (w->p->sensor == EXP_SENSOR_DEM) {
         if (dem_sensor(w, &roi, fx, fy, r, &n, err, err_len) != 0) {
             return -1;
@@ -583,10 +665,6 @@ sensed:
         snprintf(err, err_len, "trn_points_order: %s", trn_strerror(st));
         return -1;
     }
-    win.x0 = px - w->win_cells < 0 ? 0 : px - w->win_cells;
-    win.y0 = py - w->win_cells < 0 ? 0 : py - w->win_cells;
-    win.x1 = px + w->win_cells > w->nx - 1 ? w->nx - 1 : px + w->win_cells;
-    win.y1 = py + w->win_cells > w->ny - 1 ? w->ny - 1 : py + w->win_cells;
     need = trn_localize_workspace_bytes(&w->map, &win);
     if (need == 0) {
         snprintf(err, err_len, "internal error: window rejected by trn_localize_workspace_bytes");
@@ -635,6 +713,10 @@ static void tally(exp_arm_t *a, const sense_t *s, double success_m, double cell,
         return;
     }
     a->ill_conditioned += s->illcond;
+    a->fixes += s->fix;
+    a->ambiguous += s->ambiguous;
+    a->noise_rescaled += s->rescaled;
+    a->wrong_fixes += s->fix && !(s->err_m <= success_m + 1e-9);
     a->success_1cell += s->err_m <= 1.0 * cell + 1e-9;
     a->success_5cells += s->err_m <= 5.0 * cell + 1e-9;
     if (s->err_m <= success_m + 1e-9) {
@@ -744,6 +826,7 @@ static int world_map(world_t *w, const exp_params_t *p, exp_result_t *out, void 
         cfg.sigma_m = w->cellf;
     }
     out->map_cfg = cfg;
+    w->heights = out->heights = cfg.match == TRN_MATCH_HEIGHTS;
     if (trn_grid_f32_init(&g, w->dem, (size_t)nx * (size_t)ny, nx, ny) != TRN_OK) {
         snprintf(err, err_len, "map of %d x %d cells rejected by the core", nx, ny);
         return -1;
@@ -911,6 +994,13 @@ static int world_buffers(world_t *w, const exp_params_t *p, void **raw, char *er
         snprintf(err, err_len, "out of memory for the selection and localization workspaces");
         return -1;
     }
+    if (w->heights) {
+        w->hgrid = malloc((size_t)(2 * w->half + 1) * (size_t)(2 * w->half + 1) * sizeof(float));
+        if (w->hgrid == NULL) {
+            snprintf(err, err_len, "out of memory for the local height map");
+            return -1;
+        }
+    }
     if (p->sensor == EXP_SENSOR_DEM) {
         int side;
         w->hp_cells = (int)floor((double)w->tcfg.highpass_half_m / (double)w->tcfg.cell_m + 0.5);
@@ -935,8 +1025,16 @@ static int build_world(world_t *w, const exp_params_t *p, exp_result_t *out, voi
 {
     int need;
     if (world_heights(w, p, out, err, err_len) != 0 ||
-        world_map(w, p, out, raw, err, err_len) != 0 ||
-        world_prob(w, p, out, raw, err, err_len) != 0 ||
+        world_map(w, p, out, raw, err, err_len) != 0) {
+        return -1;
+    }
+    if (w->heights && (p->sensor != EXP_SENSOR_PROB || p->heading_error_deg > 0.0)) {
+        snprintf(err, err_len,
+                 "the height matcher's local maps are the DEM's heights with the noise model: "
+                 "no --sensor dem, no heading error (the 3-DOF search is the voxel search's)");
+        return -1;
+    }
+    if (world_prob(w, p, out, raw, err, err_len) != 0 ||
         world_rules(w, p, out, err, err_len) != 0 || world_buffers(w, p, raw, err, err_len) != 0) {
         return -1;
     }
@@ -1266,6 +1364,8 @@ done:
     free(w.lhp);
     free(w.lws_raw);
     free(w.h3ws_raw);
+    free(w.dws_raw);
+    free(w.hgrid);
     free(w.cands);
     free(w.pts);
     clusters_free(&c);

@@ -22,6 +22,14 @@
  *  5. trn_localize_points in the window P +- window_m; error = distance from
  *     the subpixel estimate to F (metres); success = error <= success_cells.
  *
+ * With the height matcher (the map configuration's match is
+ * TRN_MATCH_HEIGHTS) steps 4-5 are instead: the local map is a height grid
+ * over the sensed patch, the DEM's true heights plus Gaussian noise of sd
+ * noise_m + noise_k_per_m r^2 (r metres from F; the configuration's noise
+ * model, the one the matcher assumes), one normal per cell from the trial's
+ * stream; trn_localize_dem localizes it in the same window (selection and
+ * the trials' draws as above). Its status is counted too (fixes, ambiguous).
+ *
  * Without selection every one of the nine targets is a localization of its
  * own (9 per trial); its confidence intervals account for the nine sharing a
  * trial (effective sample size / cluster-robust variance, see exp_arm_t).
@@ -112,7 +120,10 @@ typedef struct {
     const float *dem;
     int dem_width, dem_height;
     /* The map configuration: NULL = the paper's scaled to the cell (bins and s
-   * one cell, high-pass 10 cells); else called once with the DEM. */
+   * one cell, high-pass 10 cells); else called once with the DEM. Its match
+   * picks the localizer: TRN_MATCH_HEIGHTS the height matcher (above; then
+   * the sensor must be EXP_SENSOR_PROB's default and no heading error), else
+   * the voxel search. */
     int (*map_cfg)(void *ctx, const float *dem, int width, int height, double cell_m,
                    trn_map_cfg_t *cfg, char *err, size_t err_len);
     void *map_cfg_ctx;
@@ -159,7 +170,13 @@ typedef struct {
     long successes;
     long no_target;       /* trn_select found no informative target (counted as failures) */
     long no_points;       /* a sampled local map came out empty (failures) */
-    long ill_conditioned; /* localizations whose eq. 6 fit failed (integer pose used) */
+    long ill_conditioned; /* localizations whose eq. 6 fit failed (integer pose used); the
+                             height matcher: status TRN_E_ILLCOND (the window's edge, a
+                             misfit or a failed refinement; its pose is used) */
+    long fixes;           /* the height matcher: status TRN_OK (accepted answers) */
+    long wrong_fixes;     /* ... of those, the ones beyond the success radius */
+    long ambiguous;       /* ... status TRN_E_AMBIGUOUS (failure probability above the limit) */
+    long noise_rescaled;  /* ... answers whose noise model the residuals rescaled (noise_auto) */
     long success_1cell, success_5cells; /* sensitivity of the threshold */
     exp_stats_t st;
     double mean_points;  /* sampled local voxels per localization */
@@ -178,6 +195,7 @@ typedef struct {
     double mean_traverse_m; /* |S - F| of the accepted trials */
     int patch_cells, grid_cells, window_cells, prior_cells;
     double success_radius_m;
+    int heights;                    /* 1: localized with the height matcher (map_cfg.match) */
     trn_map_cfg_t map_cfg;          /* the map configuration used */
     trn_sigma_model_t global_sigma; /* eq. 8's model used (raster aside) */
     trn_select_cfg_t scfg;          /* the selection rules used (ranges in metres) */

@@ -25,13 +25,6 @@ void mapopt_init(mapopt_t *m)
     m->max_failure_prob = 0.0;
 }
 
-/* The tools' local height noise: 1 cm plus 0.04 % of r^2 / cell (issue 12's
- * sensor model); the help texts print these same macros. */
-#define MAPOPT_NOISE_M 0.01
-#define MAPOPT_NOISE_K_PER_CELL 0.0004
-#define MAPOPT_STR_(x) #x
-#define MAPOPT_STR(x) MAPOPT_STR_(x)
-
 void mapopt_cli(mapopt_t *m, cli_opt_t *o)
 {
     const cli_opt_t t[MAPOPT_N] = {
@@ -81,11 +74,14 @@ void mapopt_cli(mapopt_t *m, cli_opt_t *o)
 
 const char *const *mapopt_not_taken(mapopt_use_t use)
 {
-    /* read only by trn_localize_dem and the height matcher */
-    static const char *const k_search[] = {"--local-highpass", "--refine", "--noise-auto",
-                                           "--max-failure-prob", NULL};
+    /* the local filter and the voxel refinement: read only where trn_localize_dem
+     * matches a local DEM's voxels; the noise rescale and the acceptance limit:
+     * only by trn_localize_dem */
+    static const char *const k_exp[] = {"--local-highpass", "--refine", NULL};
+    static const char *const k_pred[] = {"--local-highpass", "--refine", "--noise-auto",
+                                         "--max-failure-prob", NULL};
     static const char *const k_none[] = {NULL};
-    return use == MAPOPT_USE_LOCALIZE ? k_none : k_search;
+    return use == MAPOPT_USE_PREDICT ? k_pred : use == MAPOPT_USE_EXPERIMENT ? k_exp : k_none;
 }
 
 int mapopt_heights(const mapopt_t *m)
@@ -104,15 +100,19 @@ int mapopt_check_use(const mapopt_t *m, mapopt_use_t use, char *err, size_t err_
         return 0; /* not a choice: mapopt_config says so (bad input) */
     }
     auto_cfg = strcmp(m->config, "auto") == 0;
-    heights = m->match != NULL ? strcmp(m->match, "heights") == 0 : auto_cfg;
+    heights = mapopt_heights(m);
     refine = m->refine >= 0 ? m->refine != 0 : auto_cfg;
     /* the auto configuration's height bin and bin count come from the noise model */
     auto_bins = auto_cfg && !(m->zbin_m > 0.0 && m->nz > 0);
-    if (use == MAPOPT_USE_VOXEL_SEARCH || (use == MAPOPT_USE_PREDICT && !heights)) {
-        if (use == MAPOPT_USE_VOXEL_SEARCH && heights && m->match != NULL) {
+    /* with the height matcher the selection predicts it too (trn_select on a
+     * map that matches heights): the voxel map's options are refused below,
+     * as trn localize's */
+    if (use != MAPOPT_USE_LOCALIZE && !heights) {
+        if (use == MAPOPT_USE_EXPERIMENT && (m->noise_auto >= 0 || m->max_failure_prob > 0.0)) {
             snprintf(err, err_len,
-                     "--match heights: the experiment localizes with the voxel search only (the "
-                     "height matcher is not wired into it yet)");
+                     "%s applies to the height matcher (--match heights); the experiment's voxel "
+                     "search has neither a noise rescale nor an acceptance test",
+                     m->noise_auto >= 0 ? "--noise-auto" : "--max-failure-prob");
             return -1;
         }
         if ((m->noise_m > 0.0 || m->noise_k >= 0.0) && !auto_bins) {
@@ -135,6 +135,10 @@ int mapopt_check_use(const mapopt_t *m, mapopt_use_t use, char *err, size_t err_
         if (voxel_only != NULL) {
             snprintf(err, err_len,
                      "%s applies to the voxel matcher (--match voxel, or --map-config paper); the "
+                     "height matcher %s",
+                     voxel_only,
+                     use == MAPOPT_USE_LOCALIZE ? "matches the DEM's heights and always refines"
+                                                : "and its prediction read the DEM's heights"); the "
                      "height matcher %s the DEM's heights%s",
                      voxel_only, use == MAPOPT_USE_PREDICT ? "is predicted from" : "matches",
                      use == MAPOPT_USE_PREDICT ? "" : " and always refines");

@@ -21,6 +21,13 @@
 
 #define MAPOPT_N 13 /* cli_opt_t entries mapopt_cli writes */
 
+/* The tools' local height noise: 1 cm plus 0.04 % of r^2 / cell (issue 12's
+ * sensor model); the help texts print these same macros. */
+#define MAPOPT_NOISE_M 0.01
+#define MAPOPT_NOISE_K_PER_CELL 0.0004
+#define MAPOPT_STR_(x) #x
+#define MAPOPT_STR(x) MAPOPT_STR_(x)
+
 typedef struct {
     const char *config;      /* "auto" | "paper" */
     double zbin_m;           /* height bin, metres; 0 = from the configuration */
@@ -53,12 +60,18 @@ int mapopt_config(const mapopt_t *m, const float *data, int width, int height, d
 /* What a command does with the map: which of the options above apply.
  *   MAPOPT_USE_LOCALIZE      trn localize: a local DEM matched by either matcher
  *                            (every option, each where that matcher reads it);
- *   MAPOPT_USE_VOXEL_SEARCH  trn experiment: sampled points, the voxel search
- *                            alone (no local DEM, no refinement, no acceptance);
+ *   MAPOPT_USE_EXPERIMENT    trn experiment: the map for the selection, and
+ *                            either matcher on simulated local maps: with the
+ *                            voxel matcher sampled points and the voxel search
+ *                            alone (no refinement, no acceptance); with the
+ *                            height matcher trn_localize_dem on height grids
+ *                            (its noise model, noise rescale and acceptance
+ *                            limit; never the local filter) and the height
+ *                            prediction for the selection;
  *   MAPOPT_USE_PREDICT       trn select, trn field: the prediction of the
  *                            matcher the configuration resolves to (--match:
  *                            heights or voxel), no localization. */
-typedef enum { MAPOPT_USE_LOCALIZE, MAPOPT_USE_VOXEL_SEARCH, MAPOPT_USE_PREDICT } mapopt_use_t;
+typedef enum { MAPOPT_USE_LOCALIZE, MAPOPT_USE_EXPERIMENT, MAPOPT_USE_PREDICT } mapopt_use_t;
 
 /* 1 if the configuration resolves to the height matcher (--match, else
  * --map-config auto). */
@@ -73,13 +86,19 @@ const char *const *mapopt_not_taken(mapopt_use_t use);
  * to use under the configuration it resolves to (--map-config, --match,
  * --refine), else -1 with the one-line reason in err (a usage error: the
  * command exits CLI_USAGE). An option that would change nothing is refused,
- * never silently ignored: with the height matcher the voxel map's --zbin-m,
- * --nz, --highpass-m, --sigma-m, --local-highpass and --refine; with the
+ * never silently ignored: with the height matcher in trn localize the voxel
+ * map's --zbin-m, --nz, --highpass-m, --sigma-m, --local-highpass and
+ * --refine (in the experiment the voxel map shapes the selection); with the
  * voxel matcher --noise-auto, and --noise-m / --noise-k unless --refine 1 or
- * the auto configuration's bins read them; --match heights where only the
- * voxel search runs. Values that are not one of the choices pass here and are
- * refused by mapopt_config as before. */
+ * the auto configuration's bins read them; in the experiment with the voxel
+ * matcher also --max-failure-prob (its voxel search has no acceptance test).
+ * Values that are not one of the choices pass here and are refused by
+ * mapopt_config as before. */
 int mapopt_check_use(const mapopt_t *m, mapopt_use_t use, char *err, size_t err_len);
+
+/* 1 if the options resolve to the height matcher (--match heights, or
+ * --map-config auto without --match), else 0. */
+int mapopt_heights(const mapopt_t *m);
 
 /* Write the configuration as the JSON object "map_config". */
 void mapopt_json(json_t *j, const trn_map_cfg_t *cfg);
