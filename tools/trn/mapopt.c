@@ -138,10 +138,7 @@ int mapopt_check_use(const mapopt_t *m, mapopt_use_t use, char *err, size_t err_
                      "height matcher %s",
                      voxel_only,
                      use == MAPOPT_USE_LOCALIZE ? "matches the DEM's heights and always refines"
-                                                : "and its prediction read the DEM's heights"); the "
-                     "height matcher %s the DEM's heights%s",
-                     voxel_only, use == MAPOPT_USE_PREDICT ? "is predicted from" : "matches",
-                     use == MAPOPT_USE_PREDICT ? "" : " and always refines");
+                                                : "and its prediction read the DEM's heights");
             return -1;
         }
         return 0;
