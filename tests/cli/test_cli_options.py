@@ -292,8 +292,10 @@ MAP_EXPERIMENT = {
     "--noise-k": [effect("--noise-k", "0.5", ctx=["--map-config", "auto", "--match", "voxel"]),
                   effect("--noise-k", "0.5", ctx=HEIGHTS),
                   refused("--noise-k", "0.5", rc=2, needle="--map-config auto")],
-    # the voxel map shapes the selection whichever matcher localizes
-    "--zbin-m": [effect("--zbin-m", "0.05"), effect("--zbin-m", "0.3", ctx=HEIGHTS)],
+    # the voxel map shapes the voxel matcher's selection; with heights the selection predicts
+    # the height matcher, which reads the DEM's heights
+    "--zbin-m": [effect("--zbin-m", "0.05"),
+                 refused("--zbin-m", "0.3", rc=2, needle="--match voxel", ctx=HEIGHTS)],
     "--inlier-prob": [effect("--inlier-prob", "0.5"), effect("--inlier-prob", "0.5", ctx=HEIGHTS)],
     # the residuals of the wrong answers reject the noise model (noise_rescaled)
     "--noise-auto": [effect("--noise-auto", "1", ctx=HEIGHTS),
@@ -355,7 +357,7 @@ CASES = {
         "--area-m": effect("--area-m", "3,3,5,5"),
         "--coarse-step-cells": effect("--coarse-step-cells", "4"),
         "--margin-rel": effect("--margin-rel", "0"),
-        "--change-rel": effect("--change-rel", "50"),
+        "--change-rel": effect("--change-rel", "0"),
         "--evaluated-out": effect("--evaluated-out", "ev.tif"),
         # trn_field instead of trn_field_fast: the same raster bit for bit by
         # design (docs/modules/field.md), the voxel prediction's smaller
@@ -395,9 +397,14 @@ CASES = {
         "--select-heading-search": [effect("--select-heading-search", "0", ctx=["--heading-error-deg", "2"]),
                                     refused("--select-heading-search", "0", rc=2,
                                             needle="--heading-error-deg")],
-        "--global-sigma-m": effect("--global-sigma-m", "0.2"),
-        "--global-sigma-k": effect("--global-sigma-k", "0.05"),
-        "--global-error": [effect("--global-error", p("gerr128.tif"), ctx=EXP_DEM, drop=["--size-cells"]),
+        # the voxel prediction's eq. 8; with heights --global-sigma-m is the DEM's error
+        "--global-sigma-m": [effect("--global-sigma-m", "0.2"), effect("--global-sigma-m", "0.2", ctx=HEIGHTS)],
+        "--global-sigma-k": [effect("--global-sigma-k", "0.05"),
+                             refused("--global-sigma-k", "0.05", rc=2, needle="voxel prediction", ctx=HEIGHTS)],
+        "--global-error": [effect("--global-error", p("gerr128.tif"), ctx=[*EXP_DEM, "--match", "voxel"],
+                                  drop=["--size-cells"]),
+                           refused("--global-error", p("gerr128.tif"), rc=2, needle="voxel prediction",
+                                   ctx=EXP_DEM, drop=["--size-cells"]),
                            refused("--global-error", p("gerr128.tif"), rc=2, needle="--dem")],
         **MAP_EXPERIMENT,
         "--json": effect(drop=["--json"]),

@@ -234,7 +234,10 @@ try:
     expect_error(1, "--dem:", "--dem", nod, "--trials", 1)
     errr = os.path.join(WORK, "err_small.tif")
     clitest.write_raster(errr, np.full((64, 64), 0.1, dtype=np.float32), (0.0, 0.1, 0.0, 6.4, 0.0, -0.1), srs=srs)
-    expect_error(1, "must be on the DEM's grid", "--dem", dem128, "--trials", 1, "--global-error", errr)
+    expect_error(1, "must be on the DEM's grid", "--dem", dem128, "--trials", 1, "--match", "voxel", "--global-error",
+                 errr)
+    # with the height matcher (auto, the default with --dem) eq. 8's raster is the voxel prediction's only
+    expect_error(2, "applies to the voxel prediction", "--dem", dem128, "--trials", 1, "--global-error", errr)
     errok = os.path.join(WORK, "err_nan.tif")
     clitest.write_raster(errok, np.full((128, 128), np.nan, dtype=np.float32), (0.0, 0.1, 0.0, 12.8, 0.0, -0.1),
                          srs=srs)

@@ -135,6 +135,8 @@ static int experiment_heights_usage(const cmd_experiment_params_t *p, cli_opt_t 
                                     size_t n_opts, char *err, size_t err_len)
 {
     static const char *const vox[] = {"--sensor", "--height-noise-m"};
+    /* eq. 8's inputs beyond its constant: the voxel prediction's P_G only */
+    static const char *const pg[] = {"--global-sigma-k", "--global-error"};
     size_t i;
     if (!mapopt_heights(&p->so.mo)) {
         return 0;
@@ -145,6 +147,15 @@ static int experiment_heights_usage(const cmd_experiment_params_t *p, cli_opt_t 
                      "%s shapes the voxel search's local map (--match voxel); the height matcher "
                      "senses the DEM's heights with the noise model (--noise-m, --noise-k)",
                      vox[i]);
+            return -1;
+        }
+    }
+    for (i = 0; i < sizeof pg / sizeof pg[0]; ++i) {
+        if (cli_find(opts, n_opts, pg[i])->seen) {
+            snprintf(err, err_len,
+                     "%s applies to the voxel prediction (--match voxel); the height matcher's "
+                     "selection takes the DEM's error as one sd, --global-sigma-m",
+                     pg[i]);
             return -1;
         }
     }
@@ -339,7 +350,8 @@ static int experiment_parse(int argc, char **argv, cmd_experiment_params_t *p)
         "height matcher (--match heights, --map-config auto) a local map is the DEM's true "
         "heights\n"
         "over the sensed patch plus Gaussian noise of sd --noise-m + --noise-k r^2, localized by\n"
-        "trn_localize_dem. Either in the prior window; success = error <= --success-cells.\n"
+        "trn_localize_dem, and the selection predicts it (trn select's height prediction).\n"
+        "Either in the prior window; success = error <= --success-cells.\n"
         "Rates with Wilson 95 % intervals, mean error of the successes with t intervals\n"
         "(docs/method.md section 8). Seeded: the same options give the same output.\n"
         "Every length defaults to its value at the paper's 0.1 m cells scaled by cell / 0.1 m\n"

@@ -928,6 +928,9 @@ static int world_rules(world_t *w, const exp_params_t *p, exp_result_t *out, cha
     w->scfg.min_separation_m = (float)((double)w->scfg.min_separation_m * f);
     w->scfg.local_sigma.sigma_min_m = (float)((double)w->scfg.local_sigma.sigma_min_m * f);
     w->scfg.local_sigma.k_per_m = (float)((double)w->scfg.local_sigma.k_per_m / f);
+    /* the height prediction's DEM error: the global model's constant part, as P_G's */
+    w->scfg.map_sigma_m = (float)(p->global_sigma_m >= 0.0 ? p->global_sigma_m
+                                                           : (double)w->scfg.map_sigma_m * f);
     if (p->heading_error_deg > 0.0) {
         /* the heading error is known in distribution: selection counts its
          * lever arm (at most the core's 0.5 rad), and the 3-DOF arms search
