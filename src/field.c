@@ -389,7 +389,7 @@ size_t trn_field_fast_workspace_bytes(const trn_select_cfg_t *scfg, const trn_ma
     trn_selpre_t *pre;
     void *t;
     size_t tb;
-    if (field_fast_delegates(scfg, map) && map->cfg.match == (int32_t)TRN_MATCH_HEIGHTS) {
+    if (map != NULL && map->cfg.match == (int32_t)TRN_MATCH_HEIGHTS) {
         return trn_field_workspace_bytes(scfg, map, k);
     }
     if (field_fast_delegates(scfg, map) && pg != NULL && trn_selpre_bytes(scfg, map, k, pg) != 0u) {

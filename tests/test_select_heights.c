@@ -479,6 +479,14 @@ static void test_field_same_bits(void **state)
     assert_int_equal(
         trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.2f, &area, &g2, e2, n, &s2, ws2, b2),
         TRN_OK);
+    {
+        /* the sizing functions without a map: refused, also for the heading-searched prediction */
+        trn_select_cfg_t hs = sc;
+        hs.heading_search = 1;
+        hs.sigma_heading_rad = 0.05f;
+        assert_int_equal(trn_field_fast_workspace_bytes(&hs, NULL, &w.k, &w.pg), 0u);
+        assert_int_equal(trn_field_workspace_bytes(&hs, NULL, &w.k), 0u);
+    }
     assert_memory_equal(o1, o2, n * sizeof(float));
     assert_memory_equal(e1, e2, n);
     assert_int_equal(s1.evaluations, s2.evaluations);

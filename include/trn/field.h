@@ -109,6 +109,9 @@ trn_status_t trn_field(const trn_map_t *map, const trn_kernels_t *k, const trn_v
  * with the map (main job, 256 x 256 x 16: 9.2 MB; trn_field 5.5 MB).
  * @param[in] scfg, map, k as trn_select_workspace_bytes.
  * @param[in] pg the eq. 8 map trn_field_fast will read (its nonzeros are counted).
+ * On a map that matches heights (the height prediction, select.h) and for the
+ * heading-searched prediction trn_field_fast runs trn_field's path, and this
+ * is trn_field_workspace_bytes.
  */
 size_t trn_field_fast_workspace_bytes(const trn_select_cfg_t *scfg, const trn_map_t *map,
                                       const trn_kernels_t *k, const trn_vol_f32_t *pg);
