@@ -329,6 +329,25 @@ void trn_sel_moment_sums_(const int64_t *sat, const double *rp1, const double *r
     q7[6] += cyy * mxx;
 }
 
+/* The position's marginal with the heading searched (select.h): cov (m^2) =
+ * (A^-1 + g g^T / (s_h^-2 + I)) c^2, g = A^-1 b, I = max(0, cc - b^T g), from
+ * the fit's A^-1 (pk, cells^2), the (x, y) x heading information b and the
+ * heading's cc. Returns sqrt(var_x + var_y); *head_m |g| c / sqrt(s_h^-2 + I).
+ * One function for the voxel and the height predictions. */
+static double sel_marginal(const trn_peak_t *pk, double bx, double by, double cc, double cell,
+                           double sh, double cov[3], double *head_m)
+{
+    const double gx = pk->var_x * bx + pk->cov_xy * by, gy = pk->cov_xy * bx + pk->var_y * by;
+    double info = cc - (bx * gx + by * gy), den;
+    info = info > 0.0 ? info : 0.0;
+    den = 1.0 / (sh * sh) + info;
+    cov[0] = (pk->var_x + gx * gx / den) * cell * cell;
+    cov[1] = (pk->var_y + gy * gy / den) * cell * cell;
+    cov[2] = (pk->cov_xy + gx * gy / den) * cell * cell;
+    *head_m = sqrt((gx * gx + gy * gy) / den) * cell;
+    return sqrt(cov[0] + cov[1]);
+}
+
 /* The heading-searched covariance (select.h) of a fitted candidate: cov
  * (m^2) = (A^-1 + g g^T / (s_h^-2 + I)) c^2 from the fit's A^-1, eq. 6's
  * Hessian of ll, the seven sums q7 and the rover-to-target offset (ox, oy)
@@ -338,7 +357,7 @@ double trn_sel_search_cov_(const trn_peak_t *pk, const double ll[9], const doubl
                            double cell, double sh, double ox, double oy, double cov[3],
                            double *head_m)
 {
-    double hxx = 0.0, hyy = 0.0, hxy = 0.0, bx, by, cc, gx, gy, info, den;
+    double hxx = 0.0, hyy = 0.0, hxy = 0.0, bx, by, cc;
     int32_t d;
     for (d = 0; d < 9; ++d) {
         const int32_t ix = d % 3 - 1, iy = d / 3 - 1;
@@ -354,16 +373,7 @@ double trn_sel_search_cov_(const trn_peak_t *pk, const double ll[9], const doubl
     cc = -(q7[4] + 2.0 * oy * q7[0] + oy * oy * hxx) +
          2.0 * (q7[5] + ox * q7[2] + oy * q7[1] + ox * oy * hxy) -
          (q7[6] + 2.0 * ox * q7[3] + ox * ox * hyy);
-    gx = pk->var_x * bx + pk->cov_xy * by;
-    gy = pk->cov_xy * bx + pk->var_y * by;
-    info = cc - (bx * gx + by * gy);
-    info = info > 0.0 ? info : 0.0;
-    den = 1.0 / (sh * sh) + info;
-    cov[0] = (pk->var_x + gx * gx / den) * cell * cell;
-    cov[1] = (pk->var_y + gy * gy / den) * cell * cell;
-    cov[2] = (pk->cov_xy + gx * gy / den) * cell * cell;
-    *head_m = sqrt((gx * gx + gy * gy) / den) * cell;
-    return sqrt(cov[0] + cov[1]);
+    return sel_marginal(pk, bx, by, cc, cell, sh, cov, head_m);
 }
 
 static int64_t window_sum(const int64_t *sat, size_t w1, const trn_window_t *roi,
@@ -504,22 +514,13 @@ static trn_status_t sel_voxel(const trn_map_t *map, const trn_kernels_t *k, cons
     return TRN_OK;
 }
 
-/* The heading-searched marginal of the height prediction (select.h): cov
- * (m^2) = (I^-1 + g g^T / (s_h^-2 + I_h)) c^2, g = I^-1 b. */
+/* The heading-searched marginal of the height prediction (select.h), with
+ * the heights' b and c (sel_marginal). */
 static void selh_search_cov(trn_candidate_t *c, const trn_peak_t *pk, const trn_selh_sums_t *s,
                             double sh, double cell)
 {
-    const double gx = pk->var_x * s->bx + pk->cov_xy * s->by;
-    const double gy = pk->cov_xy * s->bx + pk->var_y * s->by;
-    double info = s->cc - (s->bx * gx + s->by * gy), den;
-    info = info > 0.0 ? info : 0.0;
-    den = 1.0 / (sh * sh) + info;
     c->informative = 1;
-    c->cov_m2[0] = (pk->var_x + gx * gx / den) * cell * cell;
-    c->cov_m2[1] = (pk->var_y + gy * gy / den) * cell * cell;
-    c->cov_m2[2] = (pk->cov_xy + gx * gy / den) * cell * cell;
-    c->heading_m = sqrt((gx * gx + gy * gy) / den) * cell;
-    c->uncertainty_m = sqrt(c->cov_m2[0] + c->cov_m2[1]);
+    c->uncertainty_m = sel_marginal(pk, s->bx, s->by, s->cc, cell, sh, c->cov_m2, &c->heading_m);
     c->sigma_x_m = sqrt(c->cov_m2[0]);
     c->sigma_y_m = sqrt(c->cov_m2[1]);
     c->rho = c->cov_m2[2] / (c->sigma_x_m * c->sigma_y_m);
@@ -616,6 +617,21 @@ static size_t sel_rank(const trn_candidate_t *cands, size_t nc, double sep_cells
     return nr;
 }
 
+/* The voxel prediction's map: its distances valid, P_G of their size, the
+ * cap in range (trn_select and the ground path). */
+static trn_status_t sel_voxel_map_check(const trn_map_t *map, const trn_vol_f32_t *pg)
+{
+    trn_status_t st;
+    if ((st = trn_vol_u8_check(&map->dist)) != TRN_OK) {
+        return st;
+    }
+    if (pg->nx != map->dist.nx || pg->ny != map->dist.ny || pg->nz != map->dist.nz ||
+        map->lnp.cap < 1u || map->lnp.cap > TRN_CHAMFER_CAP_MAX) {
+        return TRN_E_SIZE;
+    }
+    return TRN_OK;
+}
+
 /* The arguments of trn_select that depend on the prediction: the voxel's
  * kernels, P_G and distances, or the heights. */
 static trn_status_t sel_check_map(const trn_map_t *map, const trn_kernels_t *k,
@@ -636,12 +652,8 @@ static trn_status_t sel_check_map(const trn_map_t *map, const trn_kernels_t *k,
     if (k == NULL || pg == NULL || pg->data == NULL || map->dist.data == NULL) {
         return TRN_E_NULL;
     }
-    if ((st = trn_vol_u8_check(&map->dist)) != TRN_OK) {
+    if ((st = sel_voxel_map_check(map, pg)) != TRN_OK) {
         return st;
-    }
-    if (pg->nx != map->dist.nx || pg->ny != map->dist.ny || pg->nz != map->dist.nz ||
-        map->lnp.cap < 1u || map->lnp.cap > TRN_CHAMFER_CAP_MAX) {
-        return TRN_E_SIZE;
     }
     *nx = map->dist.nx;
     *ny = map->dist.ny;
@@ -937,14 +949,7 @@ static trn_status_t pre_check(const trn_select_cfg_t *cfg, const trn_map_t *map,
         k->radius[TRN_KERNEL_COUNT - 1] > TRN_KERNEL_MAX_RADIUS) {
         return TRN_E_ARG; /* not a built table (trn_prob_local's check) */
     }
-    if ((st = trn_vol_u8_check(&map->dist)) != TRN_OK) {
-        return st;
-    }
-    if (pg->nx != map->dist.nx || pg->ny != map->dist.ny || pg->nz != map->dist.nz ||
-        map->lnp.cap < 1u || map->lnp.cap > TRN_CHAMFER_CAP_MAX) {
-        return TRN_E_SIZE;
-    }
-    return TRN_OK;
+    return sel_voxel_map_check(map, pg);
 }
 
 size_t trn_selpre_bytes(const trn_select_cfg_t *cfg, const trn_map_t *map, const trn_kernels_t *k,
