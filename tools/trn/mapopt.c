@@ -60,7 +60,8 @@ void mapopt_cli(mapopt_t *m, cli_opt_t *o)
          "auto, 0 with paper)",
          0},
         {"--match", CLI_STRING, &m->match, 0, 0, 0, "voxel|heights",
-         "what localize matches: voxel occupancy (paper) or heights (auto) (default: "
+         "the matcher (localized with, or predicted): voxel occupancy (paper) or heights (auto) "
+         "(default: "
          "--map-config's)",
          0},
         {"--max-failure-prob", CLI_DOUBLE, &m->max_failure_prob, 1e-6, 1.0, 0, "P",

@@ -243,9 +243,10 @@ void selmap_opts(selmap_opts_t *o, cli_opt_t *d)
     mapopt_cli(&o->mo, d + SELMAP_N_SEL_OPTS + SELMAP_N_GERR_OPTS);
     for (i = SELMAP_N_SEL_OPTS + SELMAP_N_GERR_OPTS; i < SELMAP_N_OPTS; ++i) {
         if (strcmp(d[i].name, "--map-config") == 0) {
-            d[i].help = "map configuration: auto (from the DEM, docs/method.md 9; default, as "
-                        "`trn localize`): the height matcher's prediction; or paper (as in the "
-                        "paper, scaled to the cell): the voxel prediction (eqs. 8-9)";
+            d[i].help = "map configuration (default " SELMAP_MAP_CONFIG_DEFAULT
+                        ", as `trn localize`): auto (from the DEM, docs/method.md 9), the height "
+                        "matcher's prediction; or paper (as in the paper, scaled to the cell), the "
+                        "voxel prediction (eqs. 8-9)";
         }
     }
 }
