@@ -47,7 +47,7 @@ static const int32_t k_pow2[TRN_HB_MAX_LEVELS] = {1,   2,   4,    8,    16,   32
 
 typedef struct {
     size_t hb, dz, msd, done, ub[TRN_HB_MAX_LEVELS], mn[TRN_HB_MAX_LEVELS], mx[TRN_HB_MAX_LEVELS],
-        cls, vtab, gs, cl, ch, cnt, stack, rstack, df, ft, total;
+        cls, hs, cl, ch, cnt, stack, rstack, df, ft, total;
     int32_t levels, rw, rh, ww, wh;
 } hb_layout_t;
 
@@ -85,8 +85,7 @@ static int hb_layout(const trn_window_t *win, int32_t lw, int32_t lh, hb_layout_
             lay->mx[l] = trn_ws_offset(&ws, region * sizeof(float));
         }
         lay->cls = trn_ws_offset(&ws, (size_t)lw * (size_t)lh);
-        lay->vtab = trn_ws_offset(&ws, (size_t)lw * (size_t)lh * sizeof(double));
-        lay->gs = trn_ws_offset(&ws, (size_t)lw * (size_t)lh * sizeof(double));
+        lay->hs = trn_ws_offset(&ws, trn_hs_bytes(lw, lh));
         lay->cl = trn_ws_offset(&ws, (size_t)TRN_HB_MAX_Q * TRN_HB_MAX_BINS * sizeof(uint32_t));
         lay->ch = trn_ws_offset(&ws, (size_t)TRN_HB_MAX_Q * TRN_HB_MAX_BINS * sizeof(uint32_t));
         lay->cnt = trn_ws_offset(&ws, (size_t)TRN_HB_MAX_Q * (TRN_HB_MAX_J + 1) * sizeof(int32_t));
@@ -405,8 +404,7 @@ trn_status_t trn_hb_eval(trn_hb_t *hb, int32_t x, int32_t y)
     }
     *hb->work += 1u;
     hb->evals += 1u;
-    hb->ll[at] = trn_refine_pose_ll_(hb->global, hb->local, hb->rx, hb->ry, x, y, &hb->cfg,
-                                     hb->vtab, hb->gs, hb->a, hb->k, &dz, &m);
+    hb->ll[at] = trn_hs_ll(&hb->hs, x, y, &dz, &m);
     hb->dz[at] = dz;
     hb->msd[at] = m;
     hb->done[at] = 1u;
@@ -765,8 +763,7 @@ trn_status_t trn_hb_init(trn_hb_t **out, void *ws, const trn_grid_f32_t *global,
         }
     }
     hb->cls = b + lay.cls;
-    hb->vtab = (double *)(void *)(b + lay.vtab);
-    hb->gs = (double *)(void *)(b + lay.gs);
+    (void)trn_hs_init(&hb->hs, b + lay.hs, global, local, rx, ry, cfg, hb->a);
     hb->cl = (uint32_t *)(void *)(b + lay.cl);
     hb->ch = (uint32_t *)(void *)(b + lay.ch);
     hb->cnt = (int32_t *)(void *)(b + lay.cnt);
@@ -814,8 +811,7 @@ trn_status_t trn_hb_init(trn_hb_t **out, void *ws, const trn_grid_f32_t *global,
                 hb->cls[at] = 255u;
                 continue;
             }
-            hb->vtab[at] = trn_refine_noise_var_(cfg, x, y, rx, ry);
-            s = sqrt(hb->vtab[at]);
+            s = sqrt(trn_refine_noise_var_(cfg, x, y, rx, ry));
             q = (int32_t)floor(log(s / smin) / log(HB_Q_RATIO));
             q = q < 0 ? 0 : q >= TRN_HB_MAX_Q ? TRN_HB_MAX_Q - 1 : q;
             hb->cls[at] = (uint8_t)q;

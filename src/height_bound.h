@@ -18,6 +18,8 @@
 #include "trn/localize.h"
 #include "trn/refine.h"
 
+#include "height_score.h"
+
 /* Most noise classes, m2 classes and distance steps of the bound. */
 #define TRN_HB_MAX_Q 8
 #define TRN_HB_MAX_C 40
@@ -44,8 +46,7 @@ typedef struct {
     float *mn[TRN_HB_MAX_LEVELS];  /* per level: the map's least height over the square */
     float *mx[TRN_HB_MAX_LEVELS];  /* ... and its greatest (mn > mx: none finite) */
     uint8_t *cls;                  /* local cells: noise class, 255 unseen */
-    double *vtab;                  /* local cells: noise variance (the scores read it) */
-    double *gs;                    /* local cells: the scores' scratch */
+    trn_hs_t hs;                   /* the pose score (height_score.c) */
     uint32_t *cl, *ch;             /* TRN_HB_MAX_Q x bins: counts of low / high ends */
     int32_t *cnt;                  /* TRN_HB_MAX_Q x TRN_HB_MAX_J */
     int32_t *stack;                /* the tree walk's nodes, 3 ints each */

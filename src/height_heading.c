@@ -6,20 +6,10 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "height_score.h"
 #include "localize_int.h"
 #include "refine_int.h"
 #include "ws.h"
-
-/* One seen local cell: height, noise variance, offset from the rover. */
-typedef struct {
-    double h, v;
-    int32_t ox, oy;
-} obs_t;
-
-/* An offset turned to one heading, rounded to the cell. */
-typedef struct {
-    int32_t x, y;
-} toff_t;
 
 static int rcfg_ok(const trn_refine_cfg_t *cfg)
 {
@@ -69,173 +59,20 @@ trn_status_t trn_height_heading_steps(const trn_grid_f32_t *local, int32_t rover
     return trn_heading_steps(&far, r2 < 0 ? 0u : 1u, cfg, step_rad, half_steps);
 }
 
-/* The search's workspace: the seen cells, then their offsets turned to the
- * heading being scored (one table, remade per heading). */
-static size_t search_carve(int32_t width, int32_t height, void *base, obs_t **obs, toff_t **tab)
-{
-    trn_ws_t w;
-    size_t n = (size_t)width * (size_t)height;
-    *obs = NULL;
-    *tab = NULL;
-    if (width < 1 || height < 1 || width > TRN_MAX_DIM || height > TRN_MAX_DIM) {
-        return 0u;
-    }
-    trn_ws_begin(&w, base);
-    *obs = (obs_t *)trn_ws_take(&w, n * sizeof(obs_t));
-    *tab = (toff_t *)trn_ws_take(&w, n * sizeof(toff_t));
-    return w.total;
-}
-
 size_t trn_height_heading_workspace_bytes(int32_t width, int32_t height)
 {
-    obs_t *obs;
-    toff_t *tab;
-    return search_carve(width, height, NULL, &obs, &tab);
-}
-
-/* Spread of the seen local heights (standard deviation about their mean),
- * the same arithmetic as trn_height_search's, and their count. */
-static double local_spread(const obs_t *obs, size_t n)
-{
-    size_t i;
-    double ref = 0.0, s1 = 0.0, s2 = 0.0, v;
-    for (i = 0; i < n; ++i) {
-        if (i == 0u) {
-            ref = obs[i].h;
-        }
-        s1 += obs[i].h - ref;
-        s2 += (obs[i].h - ref) * (obs[i].h - ref);
-    }
-    v = s2 / (double)n - (s1 / (double)n) * (s1 / (double)n);
-    return v > 0.0 ? sqrt(v) : 0.0;
-}
-
-/* The scoring context of one heading. */
-typedef struct {
-    const trn_grid_f32_t *g;
-    const obs_t *obs;
-    const toff_t *t; /* the offsets turned to this heading */
-    size_t n;
-} score_t;
-
-/* Global height under observation i at pose (px, py), or NaN. */
-static double global_at(const score_t *s, int32_t px, int32_t py, size_t i)
-{
-    int64_t gx = (int64_t)px + s->t[i].x, gy = (int64_t)py + s->t[i].y;
-    if (gx < 0 || gy < 0 || gx >= s->g->width || gy >= s->g->height) {
-        return (double)NAN;
-    }
-    return (double)TRN_GRID_AT(s->g, (int32_t)gx, (int32_t)gy);
-}
-
-/* Weighted offset and model variance at pose (px, py) over the points within
- * clip of (dz, m2) (clip < 0: all); trn_height_search's pose fit. */
-static int32_t pose_fit(const score_t *s, int32_t px, int32_t py, double clip, double *dz,
-                        double *m2)
-{
-    size_t i;
-    trn_pose_mom_t a = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0};
-    for (i = 0; i < s->n; ++i) {
-        double gv = global_at(s, px, py, i), r, v;
-        if (!isfinite(gv)) {
-            continue;
-        }
-        r = s->obs[i].h - gv;
-        v = s->obs[i].v;
-        if (clip >= 0.0 && fabs(r - *dz) > clip * sqrt(v + *m2)) {
-            continue;
-        }
-        trn_pose_mom_add_(&a, r, v, *m2);
-    }
-    return trn_pose_mom_end_(&a, dz, m2);
-}
-
-/* ln L of pose (px, py) at this heading (trn_height_search's pose_ll). */
-static double pose_ll(const score_t *s, int32_t px, int32_t py, double a, double k, double *dz_out,
-                      double *m_out)
-{
-    const double two_pi = 6.283185307179586;
-    size_t i;
-    int32_t n_all;
-    double dz = 0.0, m2 = 0.0, ll = 0.0, lout = log((1.0 - a) * k);
-    n_all = pose_fit(s, px, py, -1.0, &dz, &m2);
-    if (n_all > 0 && pose_fit(s, px, py, -1.0, &dz, &m2) > 0) {
-        /* then within the clip of the last fit, again while that drops
-         * points (trn_clip_again_) */
-        double dz1 = dz, m21 = m2;
-        int32_t n_prev = n_all, n, again;
-        for (again = 0; again <= TRN_CLIP_AGAIN; ++again) {
-            n = pose_fit(s, px, py, TRN_REFINE_CLIP, &dz1, &m21);
-            if (n <= 0) {
-                break;
-            }
-            dz = dz1;
-            m2 = m21;
-            if (!trn_clip_again_(n_all, n_prev, n)) {
-                break;
-            }
-            n_prev = n;
-        }
-    }
-    for (i = 0; i < s->n; ++i) {
-        double gv = global_at(s, px, py, i), v, u;
-        if (!isfinite(gv)) {
-            ll += lout;
-            continue;
-        }
-        v = s->obs[i].v + m2;
-        u = s->obs[i].h - dz - gv;
-        ll += log(a * exp(-0.5 * u * u / v) / sqrt(two_pi * v) + (1.0 - a) * k);
-    }
-    *dz_out = dz;
-    *m_out = sqrt(m2);
-    return ll;
-}
-
-/* The offsets turned by angle (trn_points_rotate's rounding). */
-static void turn_offsets(const obs_t *obs, size_t n, double angle, toff_t *t)
-{
-    double c, s;
-    size_t i;
-    trn_heading_trig_(angle, &c, &s);
-    for (i = 0; i < n; ++i) {
-        const double x = (double)obs[i].ox, y = (double)obs[i].oy;
-        t[i].x = (int32_t)floor(x * c + y * s + 0.5);
-        t[i].y = (int32_t)floor(-x * s + y * c + 0.5);
-    }
-}
-
-/* The seen local cells in scan order; their count. */
-static size_t gather(const trn_grid_f32_t *local, int32_t rx, int32_t ry,
-                     const trn_refine_cfg_t *cfg, obs_t *obs)
-{
-    int32_t x, y;
-    size_t n = 0;
-    for (y = 0; y < local->height; ++y) {
-        for (x = 0; x < local->width; ++x) {
-            double h = (double)TRN_GRID_AT(local, x, y);
-            if (!isfinite(h)) {
-                continue;
-            }
-            obs[n].h = h;
-            obs[n].v = trn_refine_noise_var_(cfg, x, y, rx, ry);
-            obs[n].ox = x - rx;
-            obs[n].oy = y - ry;
-            ++n;
-        }
-    }
-    return n;
+    return trn_hs_bytes(width, height);
 }
 
 /* Score every pose of the window at heading step k (grid: its slice, may be
  * NULL), keeping a better best (strictly higher ln L). */
-static void search_heading(const score_t *s, const trn_window_t *win, int32_t k, double a,
-                           double kd, double *grid, int *found, trn_height_best3_t *best)
+static void search_heading(trn_hs_t *s, const trn_window_t *win, int32_t k, double *grid,
+                           int *found, trn_height_best3_t *best)
 {
     int32_t x, y;
     for (y = win->y0; y <= win->y1; ++y) {
         for (x = win->x0; x <= win->x1; ++x) {
-            double dz, m, ll = pose_ll(s, x, y, a, kd, &dz, &m);
+            double dz, m, ll = trn_hs_ll(s, x, y, &dz, &m);
             if (grid != NULL) {
                 grid[(size_t)(y - win->y0) * (size_t)(win->x1 - win->x0 + 1) +
                      (size_t)(x - win->x0)] = ll;
@@ -261,10 +98,8 @@ trn_status_t trn_height_search_heading(const trn_grid_f32_t *global, const trn_g
                                        double *ll_grid, trn_height_best3_t *best)
 {
     trn_status_t st;
-    score_t sc;
-    obs_t *obs;
-    toff_t *tab;
-    double step, spread, kd;
+    trn_hs_t sc;
+    double step;
     int32_t kk, i;
     size_t poses;
     int found = 0;
@@ -286,28 +121,23 @@ trn_status_t trn_height_search_heading(const trn_grid_f32_t *global, const trn_g
         win->x1 >= global->width || win->y1 >= global->height) {
         return TRN_E_RANGE;
     }
-    if ((st = trn_ws_check(ws, ws_bytes,
-                           search_carve(local->width, local->height, ws, &obs, &tab))) != TRN_OK) {
+    if ((st = trn_ws_check(ws, ws_bytes, trn_hs_bytes(local->width, local->height))) != TRN_OK) {
         return st;
     }
-    sc.g = global;
-    sc.obs = obs;
-    sc.t = tab;
-    sc.n = gather(local, rover_x, rover_y, rcfg, obs);
-    if (sc.n < 8u) {
+    if (trn_hs_init(&sc, ws, global, local, rover_x, rover_y, rcfg, (double)inlier_prob) < 8u) {
         return TRN_E_NODATA;
     }
-    spread = local_spread(obs, sc.n);
-    kd = 1.0 / (10.0 * (spread > (double)rcfg->noise_m ? spread : (double)rcfg->noise_m));
     poses = (size_t)(win->x1 - win->x0 + 1) * (size_t)(win->y1 - win->y0 + 1);
     best->poses = 0u;
     best->step_rad = step;
     best->half_steps = kk;
     for (i = 0; i < 2 * kk + 1; ++i) {
         const int32_t k = trn_heading_step_of_(i);
-        turn_offsets(obs, sc.n, hcfg->center_rad + (double)k * step, tab);
-        search_heading(&sc, win, k, (double)inlier_prob, kd,
-                       ll_grid != NULL ? ll_grid + (size_t)(k + kk) * poses : NULL, &found, best);
+        double c, sn;
+        trn_heading_trig_(hcfg->center_rad + (double)k * step, &c, &sn);
+        trn_hs_turn(&sc, c, sn);
+        search_heading(&sc, win, k, ll_grid != NULL ? ll_grid + (size_t)(k + kk) * poses : NULL,
+                       &found, best);
     }
     return TRN_OK;
 }

@@ -8,6 +8,7 @@
 #include <stdlib.h>
 
 #include "height_bound.h"
+#include "height_score.h"
 #include "localize_int.h"
 #include "refine_int.h"
 #include "ws.h"
@@ -470,7 +471,7 @@ static int loc_layout(const trn_map_t *map, int32_t w, int32_t h, size_t max_poi
             }
             lay->hb = trn_ws_offset(&ws, hbb);
         } else { /* the exhaustive search's scratch (trn_height_search_ws_) */
-            lay->hb = trn_ws_offset(&ws, 2u * (size_t)w * (size_t)h * sizeof(double));
+            lay->hb = trn_ws_offset(&ws, trn_hs_bytes(w, h));
         }
     }
     lay->total = ws.total;
@@ -626,7 +627,7 @@ static trn_status_t search_window(const trn_map_t *map, const trn_grid_f32_t *lo
         }
         *work += poses;
         return trn_height_search_ws_(&map->heights, local, rx, ry, win, NULL, rc,
-                                     map->cfg.inlier_prob, 1.0, ll_grid, (double *)hbws, best);
+                                     map->cfg.inlier_prob, 1.0, ll_grid, hbws, best);
     }
     if ((st = trn_hb_init(hb, hbws, &map->heights, local, rx, ry, win, rc, map->cfg.inlier_prob,
                           ll_grid, work, (uint64_t)map->cfg.node_budget)) != TRN_OK ||

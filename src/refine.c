@@ -5,6 +5,7 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "height_score.h"
 #include "refine_int.h"
 
 /* cos and sin of an angle (finite), by the Taylor series after reduction to
@@ -1054,24 +1055,23 @@ static double global_at(const trn_grid_f32_t *g, int32_t px, int32_t py, int32_t
  * over the points within clip standard deviations of (dz, m2) (clip < 0:
  * every point). Returns the number of points used. */
 static int32_t pose_fit(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_t rx, int32_t ry,
-                        int32_t px, int32_t py, const trn_refine_cfg_t *cfg, const double *vtab,
-                        const double *gs, double clip, double *dz, double *m2)
+                        int32_t px, int32_t py, const trn_refine_cfg_t *cfg, double clip,
+                        double *dz, double *m2)
 {
     int32_t x, y;
     trn_pose_mom_t a = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0};
     for (y = 0; y < l->height; ++y) {
         for (x = 0; x < l->width; ++x) {
-            const size_t at = (size_t)y * (size_t)l->width + (size_t)x;
             double h = (double)TRN_GRID_AT(l, x, y), gv, r, v;
             if (!isfinite(h)) {
                 continue;
             }
-            gv = gs != NULL ? gs[at] : global_at(g, px, py, x, y, rx, ry);
+            gv = global_at(g, px, py, x, y, rx, ry);
             if (!isfinite(gv)) {
                 continue;
             }
             r = h - gv;
-            v = vtab != NULL ? vtab[at] : trn_refine_noise_var_(cfg, x, y, rx, ry);
+            v = trn_refine_noise_var_(cfg, x, y, rx, ry);
             if (clip >= 0.0 && fabs(r - *dz) > clip * sqrt(v + *m2)) {
                 continue;
             }
@@ -1081,34 +1081,25 @@ static int32_t pose_fit(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_
     return trn_pose_mom_end_(&a, dz, m2);
 }
 
-/* Log-likelihood of pose (px, py), nats. */
+/* Log-likelihood of pose (px, py), nats: the model of height_score.c read
+ * straight from the grids, the obvious reference the tests hold it to. */
 static double pose_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_t rx, int32_t ry,
-                      int32_t px, int32_t py, const trn_refine_cfg_t *cfg, const double *vtab,
-                      double *gs, double a, double k, double *dz_out, double *m_out)
+                      int32_t px, int32_t py, const trn_refine_cfg_t *cfg, double a, double k,
+                      double *dz_out, double *m_out)
 {
     const double two_pi = 6.283185307179586;
     int32_t x, y, n_all;
     double dz = 0.0, m2 = 0.0, ll = 0.0, lout = log((1.0 - a) * k);
-    if (gs != NULL) { /* the map under each seen local cell, read once */
-        for (y = 0; y < l->height; ++y) {
-            for (x = 0; x < l->width; ++x) {
-                gs[(size_t)y * (size_t)l->width + (size_t)x] = isfinite(TRN_GRID_AT(l, x, y))
-                                                                   ? global_at(g, px, py, x, y, rx,
-                                                                               ry)
-                                                                   : (double)NAN;
-            }
-        }
-    }
     /* dz and m2: over every point (m2 = 0 weights, then those of the first
      * m2), then over the points within the clip of that fit */
-    n_all = pose_fit(g, l, rx, ry, px, py, cfg, vtab, gs, -1.0, &dz, &m2);
-    if (n_all > 0 && pose_fit(g, l, rx, ry, px, py, cfg, vtab, gs, -1.0, &dz, &m2) > 0) {
+    n_all = pose_fit(g, l, rx, ry, px, py, cfg, -1.0, &dz, &m2);
+    if (n_all > 0 && pose_fit(g, l, rx, ry, px, py, cfg, -1.0, &dz, &m2) > 0) {
         /* then within the clip of the last fit, again while that drops
          * points (trn_clip_again_) */
         double dz1 = dz, m21 = m2;
         int32_t n_prev = n_all, n, again;
         for (again = 0; again <= TRN_CLIP_AGAIN; ++again) {
-            n = pose_fit(g, l, rx, ry, px, py, cfg, vtab, gs, TRN_REFINE_CLIP, &dz1, &m21);
+            n = pose_fit(g, l, rx, ry, px, py, cfg, TRN_REFINE_CLIP, &dz1, &m21);
             if (n <= 0) {
                 break;
             }
@@ -1126,13 +1117,12 @@ static double pose_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_t 
             if (!isfinite(h)) {
                 continue;
             }
-            const size_t at = (size_t)y * (size_t)l->width + (size_t)x;
-            gv = gs != NULL ? gs[at] : global_at(g, px, py, x, y, rx, ry);
+            gv = global_at(g, px, py, x, y, rx, ry);
             if (!isfinite(gv)) {
                 ll += lout;
                 continue;
             }
-            v = (vtab != NULL ? vtab[at] : trn_refine_noise_var_(cfg, x, y, rx, ry)) + m2;
+            v = trn_refine_noise_var_(cfg, x, y, rx, ry) + m2;
             u = h - dz - gv;
             ll += log(a * exp(-0.5 * u * u / v) / sqrt(two_pi * v) + (1.0 - a) * k);
         }
@@ -1140,14 +1130,6 @@ static double pose_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_t 
     *dz_out = dz;
     *m_out = sqrt(m2);
     return ll;
-}
-
-/* The search's ln L of integer pose (px, py) (refine_int.h): pose_ll. */
-double trn_refine_pose_ll_(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_t rx, int32_t ry,
-                           int32_t px, int32_t py, const trn_refine_cfg_t *cfg, const double *vtab,
-                           double *gs, double a, double k, double *dz_out, double *m_out)
-{
-    return pose_ll(g, l, rx, ry, px, py, cfg, vtab, gs, a, k, dz_out, m_out);
 }
 
 /* ln(exp(a) + exp(b)) without overflow; a may be -inf. */
@@ -1174,9 +1156,9 @@ trn_status_t trn_height_search_ws_(const trn_grid_f32_t *global, const trn_grid_
                                    int32_t rover_x, int32_t rover_y, const trn_window_t *win,
                                    const trn_exclusion_t *ex, const trn_refine_cfg_t *cfg,
                                    float inlier_prob, double ll_scale, double *ll_grid,
-                                   double *scratch, trn_height_best_t *best)
+                                   void *scratch, trn_height_best_t *best)
 {
-    double *vtab = NULL, *gs = NULL;
+    trn_hs_t hs;
     trn_status_t st;
     int32_t x, y, n_seen = 0;
     double spread, k, floor_m;
@@ -1202,16 +1184,8 @@ trn_status_t trn_height_search_ws_(const trn_grid_f32_t *global, const trn_grid_
     }
     floor_m = (double)cfg->noise_m;
     k = 1.0 / (10.0 * (spread > floor_m ? spread : floor_m));
-    if (scratch != NULL) { /* each cell's noise variance, once; the scores' scratch */
-        const size_t cells = (size_t)local->width * (size_t)local->height;
-        vtab = scratch;
-        gs = scratch + cells;
-        for (y = 0; y < local->height; ++y) {
-            for (x = 0; x < local->width; ++x) {
-                vtab[(size_t)y * (size_t)local->width + (size_t)x] = trn_refine_noise_var_(
-                    cfg, x, y, rover_x, rover_y);
-            }
-        }
+    if (scratch != NULL) { /* the seen cells gathered once (height_score.c) */
+        (void)trn_hs_init(&hs, scratch, global, local, rover_x, rover_y, cfg, (double)inlier_prob);
     }
     best->poses = 0u;
     best->lse_all = best->lse_out = -(double)INFINITY;
@@ -1220,8 +1194,9 @@ trn_status_t trn_height_search_ws_(const trn_grid_f32_t *global, const trn_grid_
             double ll, dz, m, q;
             int inside = ex != NULL && abs(x - ex->cx) <= ex->radius &&
                          abs(y - ex->cy) <= ex->radius;
-            ll = pose_ll(global, local, rover_x, rover_y, x, y, cfg, vtab, gs, (double)inlier_prob,
-                         k, &dz, &m);
+            ll = scratch != NULL ? trn_hs_ll(&hs, x, y, &dz, &m)
+                                 : pose_ll(global, local, rover_x, rover_y, x, y, cfg,
+                                           (double)inlier_prob, k, &dz, &m);
             if (ll_grid != NULL) {
                 ll_grid[(size_t)(y - win->y0) * (size_t)(win->x1 - win->x0 + 1) +
                         (size_t)(x - win->x0)] = ll;

@@ -32,28 +32,17 @@ double trn_refine_weight_(const trn_grid_f32_t *g, double x, double y, double re
  * none), and their count (trn_height_search's K is 1 / (10 x it)). */
 double trn_refine_local_spread_(const trn_grid_f32_t *local, int32_t *n_seen);
 
-/* The height search's ln L of integer pose (px, py): the pose fit (offset
- * and model variance, clipped) and the mixture of inlier probability a and
- * outlier density k over the seen local cells, bit for bit the value the
- * exhaustive search stores; its offset and model sd into dz_out, m_out.
- * vtab: NULL, or each local cell's noise variance (trn_refine_noise_var_,
- * row-major over the local grid), read instead of computed; gs: NULL, or
- * scratch of one double per local cell, where the map's height under each
- * seen cell is read once for the pose's passes (the same values). */
-double trn_refine_pose_ll_(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_t rx, int32_t ry,
-                           int32_t px, int32_t py, const trn_refine_cfg_t *cfg, const double *vtab,
-                           double *gs, double a, double k, double *dz_out, double *m_out);
-/* trn_height_search with scratch: NULL, or 2 x the local grid's cells
- * doubles, where each cell's noise variance and each pose's map heights are
- * kept (the same ln L, bit for bit, faster). */
+/* trn_height_search with scratch: NULL (the reference, scored straight from
+ * the grids), or trn_hs_bytes of the local grid, where height_score.c's
+ * scorer keeps the seen cells (the same model within rounding, faster). */
 trn_status_t trn_height_search_ws_(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
                                    int32_t rover_x, int32_t rover_y, const trn_window_t *win,
                                    const trn_exclusion_t *ex, const trn_refine_cfg_t *cfg,
                                    float inlier_prob, double ll_scale, double *ll_grid,
-                                   double *scratch, trn_height_best_t *best);
+                                   void *scratch, trn_height_best_t *best);
 /* The noise model's variance of local cell (x, y), rover cell (rx, ry): the
  * sd noise_m + noise_k_per_m r^2 at r metres from the rover, squared. The
- * one copy for refine.c, refine_heading.c, height_heading.c and
+ * one copy for refine.c, refine_heading.c, height_score.c and
  * height_bound.c (inline: the searches and refinements call it for every
  * cell of every pass). */
 static inline double trn_refine_noise_var_(const trn_refine_cfg_t *cfg, int32_t x, int32_t y,
