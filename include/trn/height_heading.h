@@ -77,14 +77,17 @@ trn_status_t trn_height_heading_steps(const trn_grid_f32_t *local, int32_t rover
                                       int32_t *half_steps);
 
 /** @brief Workspace bytes of trn_height_search_heading for a width x height
- * local DEM (the seen cells and one table of turned offsets; 0 if invalid). */
+ * local DEM (the seen cells, their turned offsets and one pose's residuals,
+ * 44 bytes a cell; 0 if invalid). */
 size_t trn_height_heading_workspace_bytes(int32_t width, int32_t height);
 
 /**
  * @brief Exhaustive height search over every integer pose of the window at
  * every heading step (see the file comment). Per (pose, heading): the same
- * score as trn_height_search with the offsets turned; at a heading of 0 it
- * is trn_height_search's ln L bit for bit. Ties: the heading first in the
+ * score as trn_height_search with the offsets turned (src/height_score.c, the
+ * one scorer of the searches with a workspace); at a heading of 0 it is
+ * trn_height_search's ln L within rounding (1e-12 relative), and
+ * trn_localize_dem's search's bit for bit. Ties: the heading first in the
  * order 0, -1, +1, -2, ..., then the scan order (y, then x).
  * @param[in] ws       trn_height_heading_workspace_bytes(width, height) bytes,
  *                     TRN_WS_ALIGN-aligned
