@@ -18,14 +18,14 @@ static size_t carve(int32_t lw, int32_t lh, void *base, trn_hs_t *s)
     n = (size_t)lw * (size_t)lh;
     trn_ws_begin(&w, base);
     s->h = (double *)trn_ws_take(&w, n * sizeof(double));
-    s->v = (double *)trn_ws_take(&w, n * sizeof(double));
-    s->w = (double *)trn_ws_take(&w, n * sizeof(double));
     s->r = (double *)trn_ws_take(&w, n * sizeof(double));
+    s->cv = (double *)trn_ws_take(&w, n * sizeof(double));
     s->off = (int64_t *)trn_ws_take(&w, n * sizeof(int64_t));
     s->ox = (int32_t *)trn_ws_take(&w, n * sizeof(int32_t));
     s->oy = (int32_t *)trn_ws_take(&w, n * sizeof(int32_t));
     s->tx = (int32_t *)trn_ws_take(&w, n * sizeof(int32_t));
     s->ty = (int32_t *)trn_ws_take(&w, n * sizeof(int32_t));
+    s->cs = (int32_t *)trn_ws_take(&w, (n + 1u) * sizeof(int32_t));
     return w.total;
 }
 
@@ -33,6 +33,54 @@ size_t trn_hs_bytes(int32_t lw, int32_t lh)
 {
     trn_hs_t s;
     return carve(lw, lh, NULL, &s);
+}
+
+/* Squared distance of seen cell i from the rover, cells^2. */
+static int64_t r2_of(const trn_hs_t *s, int32_t i)
+{
+    return (int64_t)s->ox[i] * s->ox[i] + (int64_t)s->oy[i] * s->oy[i];
+}
+
+/* Permutation p before q: nearer first, then scan order. */
+static int before(const trn_hs_t *s, int32_t p, int32_t q)
+{
+    const int64_t a = r2_of(s, p), b = r2_of(s, q);
+    return a < b || (a == b && p < q);
+}
+
+/* Moves perm[root] down the heap perm[0..end) (largest on top). */
+static void sift(const trn_hs_t *s, int32_t *perm, int32_t root, int32_t end)
+{
+    while (2 * root + 1 < end) {
+        int32_t c = 2 * root + 1;
+        int32_t t;
+        if (c + 1 < end && before(s, perm[c], perm[c + 1])) {
+            ++c;
+        }
+        if (!before(s, perm[root], perm[c])) {
+            return;
+        }
+        t = perm[root];
+        perm[root] = perm[c];
+        perm[c] = t;
+        root = c;
+    }
+}
+
+/* Heap sort of the permutation perm[0..n) by distance (no recursion, no
+ * allocation). */
+static void sort_by_range(const trn_hs_t *s, int32_t *perm, int32_t n)
+{
+    int32_t i;
+    for (i = n / 2 - 1; i >= 0; --i) {
+        sift(s, perm, i, n);
+    }
+    for (i = n - 1; i > 0; --i) {
+        const int32_t t = perm[0];
+        perm[0] = perm[i];
+        perm[i] = t;
+        sift(s, perm, 0, i);
+    }
 }
 
 /* Spread of the seen heights (standard deviation about their mean), the
@@ -52,36 +100,73 @@ static double spread_of(const double *h, size_t n)
     return v > 0.0 ? sqrt(v) : 0.0;
 }
 
-size_t trn_hs_init(trn_hs_t *s, void *ws, const trn_grid_f32_t *global, const trn_grid_f32_t *local,
-                   int32_t rx, int32_t ry, const trn_refine_cfg_t *cfg, double inlier_prob)
+/* The seen cells in scan order into h, ox, oy; their count. */
+static int32_t gather(trn_hs_t *s, const trn_grid_f32_t *local, int32_t rx, int32_t ry)
 {
-    int32_t x, y;
-    size_t n = 0;
-    double spread;
-    (void)carve(local->width, local->height, ws, s);
-    s->g = global;
+    int32_t x, y, n = 0;
     for (y = 0; y < local->height; ++y) {
         for (x = 0; x < local->width; ++x) {
             const double h = (double)TRN_GRID_AT(local, x, y);
-            if (!isfinite(h)) {
-                continue;
+            if (isfinite(h)) {
+                s->h[n] = h;
+                s->ox[n] = x - rx;
+                s->oy[n] = y - ry;
+                ++n;
             }
-            s->h[n] = h;
-            s->v[n] = trn_refine_noise_var_(cfg, x, y, rx, ry);
-            s->w[n] = 1.0 / s->v[n];
-            s->ox[n] = x - rx;
-            s->oy[n] = y - ry;
-            ++n;
         }
     }
-    s->n = n;
-    spread = spread_of(s->h, n);
+    return n;
+}
+
+/* The cells ordered by distance from the rover, and the noise classes: the
+ * runs of one distance, which share one noise variance. */
+static void classes(trn_hs_t *s, int32_t n, int32_t rx, int32_t ry, const trn_refine_cfg_t *cfg)
+{
+    int32_t i, c = 0;
+    for (i = 0; i < n; ++i) {
+        s->tx[i] = i;
+    }
+    sort_by_range(s, s->tx, n);
+    for (i = 0; i < n; ++i) { /* apply the permutation through r and ty */
+        s->r[i] = s->h[s->tx[i]];
+        s->ty[i] = s->ox[s->tx[i]];
+    }
+    for (i = 0; i < n; ++i) {
+        s->h[i] = s->r[i];
+        s->ox[i] = s->ty[i];
+        s->ty[i] = s->oy[s->tx[i]];
+    }
+    for (i = 0; i < n; ++i) {
+        s->oy[i] = s->ty[i];
+    }
+    for (i = 0; i < n; ++i) {
+        if (i == 0 || r2_of(s, i) != r2_of(s, i - 1)) {
+            s->cs[c] = i;
+            s->cv[c] = trn_refine_noise_var_(cfg, rx + s->ox[i], ry + s->oy[i], rx, ry);
+            ++c;
+        }
+    }
+    s->cs[c] = n;
+    s->nc = c;
+}
+
+size_t trn_hs_init(trn_hs_t *s, void *ws, const trn_grid_f32_t *global, const trn_grid_f32_t *local,
+                   int32_t rx, int32_t ry, const trn_refine_cfg_t *cfg, double inlier_prob)
+{
+    int32_t n;
+    double spread;
+    (void)carve(local->width, local->height, ws, s);
+    s->g = global;
+    n = gather(s, local, rx, ry);
+    s->n = (size_t)n;
+    spread = spread_of(s->h, s->n); /* in scan order, as trn_height_search */
+    classes(s, n, rx, ry, cfg);
     s->a = inlier_prob;
     s->k = 1.0 / (10.0 * (spread > (double)cfg->noise_m ? spread : (double)cfg->noise_m));
     s->b = (1.0 - s->a) * s->k;
     s->lout = log(s->b);
     trn_hs_turn(s, 1.0, 0.0);
-    return n;
+    return s->n;
 }
 
 void trn_hs_turn(trn_hs_t *s, double c, double sn)
@@ -125,69 +210,57 @@ static void residuals(trn_hs_t *s, int32_t px, int32_t py)
     }
 }
 
-/* The weighted moments' offset and model variance (trn_pose_mom_end_'s) from
- * sums relative to ref. */
-static int32_t fit_end(const double m[6], double ref, int32_t n, double *dz, double *m2)
+/* The weighted moments' fit at model variance *m2 over the residuals within
+ * clip sds of *dz (clip < 0: all of them): per noise class the count, sum
+ * and sum of squares of the residuals (relative to ref) it keeps, weighted
+ * by w = 1 / (v + m2) for the offset and by w^2 for the model variance (the
+ * weighted mean squared residual about the offset less the weighted mean
+ * noise variance, never negative). Their count (0: dz and m2 untouched). */
+static int32_t fit(const trn_hs_t *s, double ref, double clip, double *dz, double *m2)
 {
-    double d, v;
+    double sw = 0.0, swr = 0.0, sq = 0.0, sqr = 0.0, sqrr = 0.0, sqv = 0.0, d, v;
+    const double c2 = clip < 0.0 ? (double)INFINITY : clip * clip, z = *dz, mm = *m2;
+    int32_t c, n = 0;
+    for (c = 0; c < s->nc; ++c) {
+        const double vm = s->cv[c] + mm, w = 1.0 / vm, q = w * w, lim = c2 * vm;
+        /* two running sums, even and odd cells: half the additions' chain */
+        double s1 = 0.0, s2 = 0.0, t1 = 0.0, t2 = 0.0, k;
+        int32_t i, kk = 0;
+        for (i = s->cs[c]; i < s->cs[c + 1]; i += 2) {
+            const double r = s->r[i], e = r - z;
+            if (isfinite(r) && e * e <= lim) {
+                ++kk;
+                s1 += r - ref;
+                s2 += (r - ref) * (r - ref);
+            }
+            if (i + 1 < s->cs[c + 1]) {
+                const double r1 = s->r[i + 1], e1 = r1 - z;
+                if (isfinite(r1) && e1 * e1 <= lim) {
+                    ++kk;
+                    t1 += r1 - ref;
+                    t2 += (r1 - ref) * (r1 - ref);
+                }
+            }
+        }
+        k = (double)kk;
+        s1 += t1;
+        s2 += t2;
+        sw += w * k;
+        swr += w * s1;
+        sq += q * k;
+        sqr += q * s1;
+        sqrr += q * s2;
+        sqv += q * s->cv[c] * k;
+        n += kk;
+    }
     if (n == 0) {
         return 0;
     }
-    d = m[1] / m[0];
-    v = (m[4] - 2.0 * d * m[3] + d * d * m[2] - m[5]) / m[2];
+    d = swr / sw;
+    v = (sqrr - 2.0 * d * sqr + d * d * sq - sqv) / sq;
     *dz = d + ref;
     *m2 = v > 0.0 ? v : 0.0;
     return n;
-}
-
-/* The fit over every residual at model variance m2 = 0 (weights 1 / v). */
-static int32_t fit_first(const trn_hs_t *s, double ref, double *dz, double *m2)
-{
-    double m[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
-    int32_t n = 0;
-    size_t i;
-    for (i = 0; i < s->n; ++i) {
-        const double d = s->r[i] - ref, w = s->w[i], q = w * w;
-        if (!isfinite(d)) {
-            continue;
-        }
-        m[0] += w;
-        m[1] += w * d;
-        m[2] += q;
-        m[3] += q * d;
-        m[4] += q * d * d;
-        m[5] += w; /* q v */
-        ++n;
-    }
-    return fit_end(m, ref, n, dz, m2);
-}
-
-/* The fit at model variance *m2 over the residuals within clip sds of *dz
- * (clip < 0: all of them); their count (0: dz and m2 untouched). */
-static int32_t fit_pass(const trn_hs_t *s, double ref, double clip, double *dz, double *m2)
-{
-    double m[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
-    const double c2 = clip < 0.0 ? (double)INFINITY : clip * clip, z = *dz, mm = *m2;
-    int32_t n = 0;
-    size_t i;
-    for (i = 0; i < s->n; ++i) {
-        const double r = s->r[i], vm = s->v[i] + mm, e = r - z;
-        double w, q, d;
-        if (!isfinite(r) || e * e > c2 * vm) {
-            continue;
-        }
-        w = 1.0 / vm;
-        q = w * w;
-        d = r - ref;
-        m[0] += w;
-        m[1] += w * d;
-        m[2] += q;
-        m[3] += q * d;
-        m[4] += q * d * d;
-        m[5] += q * s->v[i];
-        ++n;
-    }
-    return fit_end(m, ref, n, dz, m2);
 }
 
 /* The first residual on the map (the moments' reference), 0 if none. */
@@ -202,22 +275,51 @@ static double first_residual(const trn_hs_t *s)
     return 0.0;
 }
 
-double trn_hs_ll(trn_hs_t *s, int32_t px, int32_t py, double *dz_out, double *model_m)
+/* ln L at the fitted (dz, m2). The sum of logs as the log of products, one
+ * log per many cells: a term lies within [b, a / sqrt(2 pi v) + b], b above
+ * 1e-47 (a float inlier probability below 1, float heights' spread) and the
+ * top below 1e45 (a float noise sd above 0), so a product kept within
+ * 1e+-150 takes one more and stays a normal number (its rounding: 1e-16
+ * relative a term, 1e-12 nats over 4,096 cells). */
+static double mixture_ll(const trn_hs_t *s, double dz, double m2)
 {
     const double inv_two_pi = 0.15915494309189535;
-    double dz = 0.0, m2 = 0.0, ll = 0.0, prod = 1.0, ref;
+    double ll = 0.0, prod = 1.0;
+    int32_t c;
+    for (c = 0; c < s->nc; ++c) {
+        const double iv = 1.0 / (s->cv[c] + m2), peak = s->a * sqrt(iv * inv_two_pi);
+        const double half = -0.5 * iv;
+        int32_t i;
+        for (i = s->cs[c]; i < s->cs[c + 1]; ++i) {
+            const double u = s->r[i] - dz;
+            if (!isfinite(u)) {
+                ll += s->lout;
+                continue;
+            }
+            prod *= peak * exp(half * u * u) + s->b;
+            if (prod < 1e-150 || prod > 1e150) {
+                ll += log(prod);
+                prod = 1.0;
+            }
+        }
+    }
+    return ll + log(prod);
+}
+
+double trn_hs_ll(trn_hs_t *s, int32_t px, int32_t py, double *dz_out, double *model_m)
+{
+    double dz = 0.0, m2 = 0.0, ref;
     int32_t n_all;
-    size_t i;
     residuals(s, px, py);
     ref = first_residual(s);
-    n_all = fit_first(s, ref, &dz, &m2);
-    if (n_all > 0 && fit_pass(s, ref, -1.0, &dz, &m2) > 0) {
+    n_all = fit(s, ref, -1.0, &dz, &m2); /* every point at m2 = 0 */
+    if (n_all > 0 && fit(s, ref, -1.0, &dz, &m2) > 0) {
         /* then within the clip of the last fit, again while that drops
          * points (trn_clip_again_) */
         double dz1 = dz, m21 = m2;
         int32_t n_prev = n_all, n, again;
         for (again = 0; again <= TRN_CLIP_AGAIN; ++again) {
-            n = fit_pass(s, ref, TRN_REFINE_CLIP, &dz1, &m21);
+            n = fit(s, ref, TRN_REFINE_CLIP, &dz1, &m21);
             if (n <= 0) {
                 break;
             }
@@ -229,26 +331,7 @@ double trn_hs_ll(trn_hs_t *s, int32_t px, int32_t py, double *dz_out, double *mo
             n_prev = n;
         }
     }
-    /* the sum of logs as the log of products, one log per many cells: a
-     * term lies within [b, a / sqrt(2 pi v) + b], b above 1e-47 (a float
-     * inlier probability below 1, float heights' spread) and the top below
-     * 1e45 (a float noise sd above 0), so a product kept within 1e+-150
-     * takes one more and stays a normal number (its rounding: 1e-16
-     * relative a term, 1e-12 nats over 4,096 cells) */
-    for (i = 0; i < s->n; ++i) {
-        const double u = s->r[i] - dz, iv = 1.0 / (s->v[i] + m2);
-        if (!isfinite(u)) {
-            ll += s->lout;
-            continue;
-        }
-        prod *= s->a * exp(-0.5 * u * u * iv) * sqrt(iv * inv_two_pi) + s->b;
-        if (prod < 1e-150 || prod > 1e150) {
-            ll += log(prod);
-            prod = 1.0;
-        }
-    }
-    ll += log(prod);
     *dz_out = dz;
     *model_m = sqrt(m2);
-    return ll;
+    return mixture_ll(s, dz, m2);
 }

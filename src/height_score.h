@@ -14,11 +14,15 @@
  * which has no workspace, scores the same model straight from the grids: it is
  * the obvious reference the tests hold this to (within rounding).
  *
- * What makes this one fast: the seen cells are gathered once per search
- * (height, noise variance and its inverse, offset), the map's heights under
- * them once per pose into one array of residuals, each pass a loop over that
- * array with no square root (the clip compares squares), and a pose whose
- * cells all fall on the map reads them without bounds checks. */
+ * What makes this one fast: the seen cells are gathered once per search and
+ * ordered by their distance from the rover, so that the cells of one
+ * distance, which share one noise variance (a noise class: 457 for a 64 x 64
+ * local map), are one run; each pass then takes one division a class, sums
+ * counts, residuals and squares a cell, and compares squares in the clip (no
+ * square root); ln L takes one exp a cell and one log per some hundred cells
+ * (the log of running products). The map's heights under the cells are read
+ * once per pose into one array of residuals, without bounds checks where the
+ * whole local map lies on the map. */
 #ifndef TRN_HEIGHT_SCORE_H
 #define TRN_HEIGHT_SCORE_H
 
@@ -30,11 +34,14 @@
 
 typedef struct {
     const trn_grid_f32_t *g; /* the map */
-    double *h, *v, *w;       /* seen local cells in scan order: height, noise variance, 1 / v */
+    double *h;               /* seen local cells, nearest the rover first: height */
     double *r;               /* per pose: residual h - map height, NaN where none */
     int32_t *ox, *oy;        /* offset of each seen cell from the rover cell */
     int32_t *tx, *ty;        /* the offsets turned to the heading scored */
     int64_t *off;            /* ty * stride + tx */
+    double *cv;              /* per noise class (one distance from the rover): variance */
+    int32_t *cs;             /* class c's cells: cs[c] .. cs[c + 1] - 1 */
+    int32_t nc;              /* noise classes */
     size_t n;                /* seen cells */
     int32_t x0, x1, y0, y1;  /* extent of (tx, ty) */
     double a, k, b, lout;    /* inlier probability, outlier density, (1 - a) k, ln b */

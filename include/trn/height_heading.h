@@ -78,7 +78,7 @@ trn_status_t trn_height_heading_steps(const trn_grid_f32_t *local, int32_t rover
 
 /** @brief Workspace bytes of trn_height_search_heading for a width x height
  * local DEM (the seen cells, their turned offsets and one pose's residuals,
- * 44 bytes a cell; 0 if invalid). */
+ * 52 bytes a cell; 0 if invalid). */
 size_t trn_height_heading_workspace_bytes(int32_t width, int32_t height);
 
 /**
