@@ -27,7 +27,9 @@
  * window, timed by the public functions its localization is made of
  * (src/localize.c, localize_heights) and whole:
  *   height_map_build    mapopt_config (trn_map_cfg_auto) + trn_map_build
- *   height_search       trn_height_search: every pose of the window scored
+ *   height_search       trn_height_search_heading at the one heading 0: every
+ *                       pose of the window scored by the pose score
+ *                       trn_localize_dem's search runs (src/height_score.c)
  *   height_refine       trn_refine_pose from the search's best pose
  *   height_failure      trn_height_mass (the posterior mass outside the
  *                       exclusion zone) + trn_prob_beyond (the refined
@@ -39,10 +41,7 @@
  *                       the input checks. Not run: time median = whole's
  *                       median - the parts' medians, max = whole's max -
  *                       the parts' medians; instructions = whole's - the
- *                       parts' (exact). trn_localize_dem's own search keeps
- *                       each pose's map heights in scratch, the public
- *                       trn_height_search does not: the rest is the lower
- *                       by that difference (it may even be negative).
+ *                       parts' (exact).
  *   height_localize     trn_localize_dem with that map: one whole localization
  *
  * --dem FILE: a real DEM (any raster GDAL reads in a projected CRS, e.g. one
@@ -128,7 +127,7 @@ static const char *const k_what[ST_COUNT] = {
     "9 x trn_score_pose + trn_peak_fit (eq. 6)",
     "trn_localize_dem, one localization",
     "trn_map_cfg_auto + trn_map_build, height matcher's map",
-    "trn_height_search, every pose of the window",
+    "trn_height_search_heading at heading 0, every pose",
     "trn_refine_pose from the best pose",
     "trn_height_mass + trn_prob_beyond",
     "height_localize minus the three stages above",
@@ -146,7 +145,7 @@ static const char *const k_funcs[ST_COUNT] = {"trn_highpass,trn_occupancy",
                                               "trn_score_pose,trn_peak_fit",
                                               "trn_localize_dem",
                                               "trn_map_cfg_auto,trn_map_build",
-                                              "trn_height_search",
+                                              "trn_height_search_heading",
                                               "trn_refine_pose",
                                               "trn_height_mass,trn_prob_beyond",
                                               "trn_localize_dem",
@@ -216,6 +215,9 @@ typedef struct {
     trn_map_t hmap;
     trn_refine_cfg_t hrc;
     double *ll_grid;
+    void *hs_ws; /* the search's workspace (trn_height_heading_workspace_bytes) */
+    size_t hs_ws_bytes;
+    trn_height_best3_t hbest3;
     trn_height_best_t hbest, hsecond;
     trn_refine_t href;
     double hfail;
@@ -255,6 +257,7 @@ static void world_free(world_t *w)
     free(w->hmapbuf);
     free(w->ll_grid);
     free(w->hloc_ws);
+    free(w->hs_ws);
 }
 
 /* The height matcher's map: the configuration trn localize chooses by
@@ -371,10 +374,19 @@ static trn_status_t run_stage(world_t *w, stage_t s)
         }
         break;
     case ST_H_MAP: st = height_map(w); break;
-    case ST_H_SEARCH:
-        st = trn_height_search(&w->hmap.heights, &w->lg, w->rx, w->ry, &w->win, NULL, &w->hrc,
-                               w->hcfg.inlier_prob, 1.0, w->ll_grid, &w->hbest);
+    case ST_H_SEARCH: {
+        /* the search trn_localize_dem runs: its pose score (src/height_score.c)
+         * at the one heading 0; trn_height_search, without a workspace, is
+         * the slower reference */
+        const trn_heading_cfg_t one = {0.0, 0.0, 0.0};
+        st = trn_height_search_heading(&w->hmap.heights, &w->lg, w->rx, w->ry, &w->win, &one,
+                                       &w->hrc, w->hcfg.inlier_prob, w->hs_ws, w->hs_ws_bytes,
+                                       w->ll_grid, &w->hbest3);
+        w->hbest.x = w->hbest3.x;
+        w->hbest.y = w->hbest3.y;
+        w->hbest.ll = w->hbest3.ll;
         break;
+    }
     case ST_H_REFINE:
         st = trn_refine_pose(&w->hmap.heights, &w->lg, w->rx, w->ry, w->hbest.x, w->hbest.y,
                              &w->hrc, &w->href);
@@ -432,6 +444,7 @@ static void stage_bytes(const world_t *w, stage_t s, size_t *scratch, size_t *to
     case ST_LOCALIZE: sc = w->loc_ws_bytes; break;
     case ST_H_MAP: sc = w->hmap_bytes + w->hauto_bytes; break;
     case ST_H_SEARCH:
+        sc = w->hs_ws_bytes;
         out = (size_t)(w->win.x1 - w->win.x0 + 1) * (size_t)(w->win.y1 - w->win.y0 + 1) *
               sizeof(double); /* the ln L grid */
         break;
@@ -700,7 +713,10 @@ static int world_local(world_t *w, char *err, size_t err_len)
     w->hloc_ws_bytes = trn_localize_dem_workspace_bytes(&w->hmap, (int32_t)w->nl, (int32_t)w->nl,
                                                         w->max_pts, &w->win);
     w->hloc_ws = alloc16(w->hloc_ws_bytes);
-    if (w->ll_grid == NULL || w->hloc_ws_bytes == 0 || w->hloc_ws == NULL) {
+    w->hs_ws_bytes = trn_height_heading_workspace_bytes((int32_t)w->nl, (int32_t)w->nl);
+    w->hs_ws = alloc16(w->hs_ws_bytes);
+    if (w->ll_grid == NULL || w->hloc_ws_bytes == 0 || w->hloc_ws == NULL || w->hs_ws_bytes == 0 ||
+        w->hs_ws == NULL) {
         snprintf(err, err_len, "cannot size or allocate the height matcher's workspace");
         return 1;
     }
