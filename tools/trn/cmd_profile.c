@@ -260,6 +260,21 @@ static void world_free(world_t *w)
     free(w->hs_ws);
 }
 
+/* The search trn_localize_dem runs: its pose score (src/height_score.c) at
+ * the one heading 0 (trn_height_search, without a workspace, is the slower
+ * reference). */
+static trn_status_t height_search(world_t *w)
+{
+    const trn_heading_cfg_t one = {0.0, 0.0, 0.0};
+    const trn_status_t st = trn_height_search_heading(
+        &w->hmap.heights, &w->lg, w->rx, w->ry, &w->win, &one, &w->hrc, w->hcfg.inlier_prob,
+        w->hs_ws, w->hs_ws_bytes, w->ll_grid, &w->hbest3);
+    w->hbest.x = w->hbest3.x;
+    w->hbest.y = w->hbest3.y;
+    w->hbest.ll = w->hbest3.ll;
+    return st;
+}
+
 /* The height matcher's map: the configuration trn localize chooses by
  * default (mapopt: trn_map_cfg_auto with the tools' noise model), built. */
 static trn_status_t height_map(world_t *w)
@@ -374,19 +389,7 @@ static trn_status_t run_stage(world_t *w, stage_t s)
         }
         break;
     case ST_H_MAP: st = height_map(w); break;
-    case ST_H_SEARCH: {
-        /* the search trn_localize_dem runs: its pose score (src/height_score.c)
-         * at the one heading 0; trn_height_search, without a workspace, is
-         * the slower reference */
-        const trn_heading_cfg_t one = {0.0, 0.0, 0.0};
-        st = trn_height_search_heading(&w->hmap.heights, &w->lg, w->rx, w->ry, &w->win, &one,
-                                       &w->hrc, w->hcfg.inlier_prob, w->hs_ws, w->hs_ws_bytes,
-                                       w->ll_grid, &w->hbest3);
-        w->hbest.x = w->hbest3.x;
-        w->hbest.y = w->hbest3.y;
-        w->hbest.ll = w->hbest3.ll;
-        break;
-    }
+    case ST_H_SEARCH: st = height_search(w); break;
     case ST_H_REFINE:
         st = trn_refine_pose(&w->hmap.heights, &w->lg, w->rx, w->ry, w->hbest.x, w->hbest.y,
                              &w->hrc, &w->href);
