@@ -48,9 +48,10 @@ static int before(const trn_hs_t *s, int32_t p, int32_t q)
     return a < b || (a == b && p < q);
 }
 
-/* Moves perm[root] down the heap perm[0..end) (largest on top). */
-static void sift(const trn_hs_t *s, int32_t *perm, int32_t root, int32_t end)
+/* Moves perm[top] down the heap perm[0..end) (largest on top). */
+static void sift(const trn_hs_t *s, int32_t *perm, int32_t top, int32_t end)
 {
+    int32_t root = top;
     while (2 * root + 1 < end) {
         int32_t c = 2 * root + 1;
         int32_t t;
