@@ -134,28 +134,26 @@ void cmd_experiment_params_default(cmd_experiment_params_t *p)
 static int experiment_heights_usage(const cmd_experiment_params_t *p, cli_opt_t *opts,
                                     size_t n_opts, char *err, size_t err_len)
 {
-    static const char *const vox[] = {"--sensor", "--height-noise-m"};
-    /* eq. 8's inputs beyond its constant: the voxel prediction's P_G only */
-    static const char *const pg[] = {"--global-sigma-k", "--global-error"};
+    /* the voxel search's sensor options, then eq. 8's inputs beyond its
+     * constant (the voxel prediction's P_G only) */
+    static const char *const vox_sensor =
+        "shapes the voxel search's local map (--match voxel); the height matcher senses the "
+        "DEM's heights with the noise model (--noise-m, --noise-k)";
+    static const char *const vox_pg =
+        "applies to the voxel prediction (--match voxel); the height matcher's selection takes "
+        "the DEM's error as one sd, --global-sigma-m";
+    static const struct {
+        const char *opt;
+        int pg; /* 1: eq. 8's input, 0: the sensor's */
+    } refused[] = {
+        {"--sensor", 0}, {"--height-noise-m", 0}, {"--global-sigma-k", 1}, {"--global-error", 1}};
     size_t i;
     if (!mapopt_heights(&p->so.mo)) {
         return 0;
     }
-    for (i = 0; i < sizeof vox / sizeof vox[0]; ++i) {
-        if (cli_find(opts, n_opts, vox[i])->seen) {
-            snprintf(err, err_len,
-                     "%s shapes the voxel search's local map (--match voxel); the height matcher "
-                     "senses the DEM's heights with the noise model (--noise-m, --noise-k)",
-                     vox[i]);
-            return -1;
-        }
-    }
-    for (i = 0; i < sizeof pg / sizeof pg[0]; ++i) {
-        if (cli_find(opts, n_opts, pg[i])->seen) {
-            snprintf(err, err_len,
-                     "%s applies to the voxel prediction (--match voxel); the height matcher's "
-                     "selection takes the DEM's error as one sd, --global-sigma-m",
-                     pg[i]);
+    for (i = 0; i < sizeof refused / sizeof refused[0]; ++i) {
+        if (cli_find(opts, n_opts, refused[i].opt)->seen) {
+            snprintf(err, err_len, "%s %s", refused[i].opt, refused[i].pg ? vox_pg : vox_sensor);
             return -1;
         }
     }
