@@ -1,5 +1,9 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* refine.c - continuous sub-cell pose refinement over heights (trn/refine.h). */
+/* refine.c - the height model's arithmetic under the refinement
+ * (refine_pose.c): the interpolants and their mix, the relief rule's
+ * weight, the model variance's moments, the noise model's rescale, and
+ * trn_height_search, the exhaustive search read straight from the grids
+ * (the reference of height_score.c), with trn_height_mass (trn/refine.h). */
 #include "trn/refine.h"
 
 #include <math.h>
@@ -137,7 +141,7 @@ static void keys(double t, double *w, double *dw)
  * bilinear's O(h^2)); bilinear where the 4 x 4 support is incomplete. */
 static int sample(const trn_grid_f32_t *g, double x, double y, double out[3])
 {
-    double wx[4], dwx[4], wy[4], dwy[4];
+    double wx[4], dwx[4];
     int32_t x0, y0, i, j;
     if (!(x >= 1.0 && y >= 1.0 && x < (double)(g->width - 2) && y < (double)(g->height - 2))) {
         return sample_bilinear(g, x, y, out);
@@ -146,338 +150,26 @@ static int sample(const trn_grid_f32_t *g, double x, double y, double out[3])
     y0 = (int32_t)floor(y);
     for (i = 0; i < 4; ++i) {
         keys(x - (double)(x0 - 1 + i), &wx[i], &dwx[i]);
-        keys(y - (double)(y0 - 1 + i), &wy[i], &dwy[i]);
     }
     out[0] = out[1] = out[2] = 0.0;
+    /* row by row: each row's sums over x, then weighted by the row's y
+     * weights (no table of the y weights: the frame stays small) */
     for (j = 0; j < 4; ++j) {
+        double wy, dwy, r0 = 0.0, r1 = 0.0;
+        keys(y - (double)(y0 - 1 + j), &wy, &dwy);
         for (i = 0; i < 4; ++i) {
             double v = (double)TRN_GRID_AT(g, x0 - 1 + i, y0 - 1 + j);
             if (!isfinite(v)) {
                 return sample_bilinear(g, x, y, out);
             }
-            out[0] += wx[i] * wy[j] * v;
-            out[1] += dwx[i] * wy[j] * v;
-            out[2] += wx[i] * dwy[j] * v;
+            r0 += wx[i] * v;
+            r1 += dwx[i] * v;
         }
+        out[0] += wy * r0;
+        out[1] += wy * r1;
+        out[2] += dwy * r0;
     }
     return 1;
-}
-
-/* Inverse of the symmetric 3x3 matrix a (a[0..8] row-major); 0 if singular
- * relative to its diagonal. */
-static int inv3(const double a[9], double r[9])
-{
-    double c00 = a[4] * a[8] - a[5] * a[7];
-    double c01 = a[5] * a[6] - a[3] * a[8];
-    double c02 = a[3] * a[7] - a[4] * a[6];
-    double det = a[0] * c00 + a[1] * c01 + a[2] * c02;
-    double scale = a[0] * a[4] * a[8];
-    if (!(scale > 0.0) || !(det > 1e-9 * scale) || !isfinite(det)) {
-        return 0;
-    }
-    r[0] = c00 / det;
-    r[1] = (a[2] * a[7] - a[1] * a[8]) / det;
-    r[2] = (a[1] * a[5] - a[2] * a[4]) / det;
-    r[3] = c01 / det;
-    r[4] = (a[0] * a[8] - a[2] * a[6]) / det;
-    r[5] = (a[2] * a[3] - a[0] * a[5]) / det;
-    r[6] = c02 / det;
-    r[7] = (a[1] * a[6] - a[0] * a[7]) / det;
-    r[8] = (a[0] * a[4] - a[1] * a[3]) / det;
-    return 1;
-}
-
-typedef struct {
-    double a[9], b[3];   /* normal matrix and right-hand side */
-    double ss;           /* sum of squared normalized residuals of the inliers */
-    double rr, noise2;   /* sums of q r^2 and of q s^2 over the inliers, q = 1 / (s^2 + m^2)^2 */
-    double q;            /* sum of q */
-    double vv;           /* sum of q^2 2 s^4: the variance of rr - noise2 if m were 0 */
-    double al[3], all;   /* the interpolants' mix column: its cross terms and its own term */
-    double bl;           /* its right-hand side */
-    int32_t n_in, n_all; /* inliers, points with a global height */
-} accum_t;
-
-/* Height and gradient of the mixed interpolant B + lam (C - B) at (x, y)
- * (B bilinear, C bicubic; they agree where the 4 x 4 support is
- * incomplete: there C - B = 0), and C - B, the derivative in lam. */
-static int sample_mix(const trn_grid_f32_t *g, double x, double y, double lam, double out[3],
-                      double *dcb)
-{
-    double b3[3];
-    int32_t k;
-    if (!sample(g, x, y, out)) {
-        return 0;
-    }
-    *dcb = 0.0;
-    if (sample_bilinear(g, x, y, b3)) {
-        *dcb = out[0] - b3[0];
-        for (k = 0; k < 3; ++k) {
-            out[k] = b3[k] + lam * (out[k] - b3[k]);
-        }
-    }
-    return 1;
-}
-
-/* One pass over the seen local points of local cells [i0, i1) x [j0, j1) at
- * pose (x, y) and offset dz: normal equations of the points within clip (in
- * normalized residual units). */
-static void accumulate_rect(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
-                            int32_t ry, double x, double y, double dz, double lam, double clip,
-                            double model2, const trn_refine_cfg_t *cfg, int32_t i0, int32_t j0,
-                            int32_t i1, int32_t j1, accum_t *acc)
-{
-    int32_t i, j;
-    for (i = 0; i < 9; ++i) {
-        acc->a[i] = 0.0;
-    }
-    acc->b[0] = acc->b[1] = acc->b[2] = 0.0;
-    acc->al[0] = acc->al[1] = acc->al[2] = acc->all = acc->bl = 0.0;
-    acc->ss = acc->rr = acc->noise2 = acc->q = acc->vv = 0.0;
-    acc->n_in = acc->n_all = 0;
-    for (j = j0; j < j1; ++j) {
-        for (i = i0; i < i1; ++i) {
-            double h = (double)TRN_GRID_AT(local, i, j), s3[3], px, py, sd, w, res, u, jv[3], dcb,
-                   hw;
-            int32_t p, q;
-            if (!isfinite(h)) {
-                continue;
-            }
-            px = (double)(i - rx);
-            py = (double)(j - ry);
-            if (!sample_mix(global, x + px, y + py, lam, s3, &dcb)) {
-                continue;
-            }
-            acc->n_all += 1;
-            w = trn_refine_noise_var_(cfg, i, j, rx, ry);
-            sd = sqrt(w + model2);
-            res = h - dz - s3[0];
-            u = res / sd;
-            hw = trn_refine_weight_(global, x + px, y + py, res, sd, clip);
-            if (!(hw > 0.0)) {
-                continue;
-            }
-            if (hw >= 1.0) {
-                /* precision-squared weights: the model variance is estimated
-                 * mostly where the noise is small (near the rover), not
-                 * swamped by the far points' large noise; from the points
-                 * within the plain clip only */
-                double qw = 1.0 / ((sd * sd) * (sd * sd));
-                acc->noise2 += qw * w;
-                acc->rr += qw * res * res;
-                acc->q += qw;
-                acc->vv += 2.0 * qw * qw * w * w;
-            }
-            w = hw / (sd * sd);
-            jv[0] = s3[1];
-            jv[1] = s3[2];
-            jv[2] = 1.0;
-            for (p = 0; p < 3; ++p) {
-                for (q = 0; q < 3; ++q) {
-                    acc->a[p * 3 + q] += w * jv[p] * jv[q];
-                }
-                acc->b[p] += w * jv[p] * res;
-                acc->al[p] += w * jv[p] * dcb;
-            }
-            acc->all += w * dcb * dcb;
-            acc->bl += w * dcb * res;
-            acc->ss += hw * u * u;
-            acc->n_in += 1;
-        }
-    }
-}
-
-static void accumulate(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
-                       int32_t ry, double x, double y, double dz, double lam, double clip,
-                       double model2, const trn_refine_cfg_t *cfg, accum_t *acc)
-{
-    accumulate_rect(global, local, rx, ry, x, y, dz, lam, clip, model2, cfg, 0, 0, local->width,
-                    local->height, acc);
-}
-
-/* Fold the mix out of the normal equations of (x, y, dz, mix) (Schur
- * complement), its prior (mean TRN_REFINE_MIX_MEAN, sd TRN_REFINE_MIX_SD)
- * added: a and b become those of (x, y, dz) with the mix at its
- * conditional best, so inv(a) is the marginal covariance of (x, y, dz).
- * g = al / all' (the mix's coupling). Returns the mix's step at d = 0;
- * for a step d of (x, y, dz) it is that minus g . d. */
-static double fold_mix(accum_t *acc, double lam, double g[3])
-{
-    double pw = 1.0 / (TRN_REFINE_MIX_SD * TRN_REFINE_MIX_SD);
-    double all = acc->all + pw, bl = acc->bl + pw * (TRN_REFINE_MIX_MEAN - lam);
-    int32_t p, q;
-    for (p = 0; p < 3; ++p) {
-        g[p] = acc->al[p] / all;
-    }
-    for (p = 0; p < 3; ++p) {
-        for (q = 0; q < 3; ++q) {
-            acc->a[p * 3 + q] -= acc->al[p] * g[q];
-        }
-        acc->b[p] -= g[p] * bl;
-    }
-    return bl / all;
-}
-
-/* One Gauss-Newton pass of the bilinear surface at (bx, by, bz) onto the
- * bicubic model's own heights at the estimate (x, y, dz): normal equations
- * over the estimate's inliers, weights 1 / (noise + model variance). No
- * local height enters but through the inlier test, so the shift it leads
- * to is the model's, free of the data's noise. acc->ss is the weighted sum
- * of squares at (bx, by) with the best offset (closed form). */
-static void model_pass(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
-                       int32_t ry, double x, double y, double dz, double bx, double by, double bz,
-                       double model2, const trn_refine_cfg_t *cfg, accum_t *acc)
-{
-    int32_t i, j, p, q;
-    for (p = 0; p < 9; ++p) {
-        acc->a[p] = 0.0;
-    }
-    acc->b[0] = acc->b[1] = acc->b[2] = 0.0;
-    acc->n_in = 0;
-    acc->q = acc->rr = acc->noise2 = 0.0; /* sum w, sum w r0, sum w r0^2 */
-    for (j = 0; j < local->height; ++j) {
-        for (i = 0; i < local->width; ++i) {
-            double h = (double)TRN_GRID_AT(local, i, j), s3[3], b3[3], px, py, v, w, res, jv[3];
-            if (!isfinite(h)) {
-                continue;
-            }
-            px = (double)(i - rx);
-            py = (double)(j - ry);
-            if (!sample(global, x + px, y + py, s3) ||
-                !sample_bilinear(global, bx + px, by + py, b3)) {
-                continue;
-            }
-            v = trn_refine_noise_var_(cfg, i, j, rx, ry) + model2;
-            w = trn_refine_weight_(global, x + px, y + py, h - dz - s3[0], sqrt(v),
-                                   TRN_REFINE_CLIP_RELIEF) /
-                v;
-            if (!(w > 0.0)) {
-                continue;
-            }
-            res = (dz + s3[0]) - b3[0];
-            acc->q += w;
-            acc->rr += w * res;
-            acc->noise2 += w * res * res;
-            res -= bz;
-            jv[0] = b3[1];
-            jv[1] = b3[2];
-            jv[2] = 1.0;
-            for (p = 0; p < 3; ++p) {
-                for (q = 0; q < 3; ++q) {
-                    acc->a[p * 3 + q] += w * jv[p] * jv[q];
-                }
-                acc->b[p] += w * jv[p] * res;
-            }
-            acc->n_in += 1;
-        }
-    }
-    acc->ss = acc->q > 0.0 ? acc->noise2 - acc->rr * acc->rr / acc->q : 0.0;
-}
-
-/* Shift of the estimate (x, y, dz) had the global heights been bilinear
- * instead of bicubic between cell centres: the pose where the bilinear
- * surface best fits the bicubic model's own heights at the estimate, minus
- * the estimate (model_pass, Gauss-Newton). The two interpolants bracket how
- * the DEM runs between its samples; their disagreement is a systematic
- * error of the model, common to all points, that no residual statistic
- * sees. The bilinear surface has kinks at cell edges, where a plain step
- * can overshoot and cycle: each step is halved until the sum of squares
- * drops over the same points, and the search stops when no halving does
- * (or the bilinear normal matrix is singular). */
-static void interp_shift(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
-                         int32_t ry, double x, double y, double dz, double model2,
-                         const trn_refine_cfg_t *cfg, accum_t *work, double bi[9], double shift[3])
-{
-    /* work and bi are the caller's, dead by now, and each trial step is
-     * made in work itself (only the last accepted point's sums are kept
-     * aside): the stack stays within TRN_STACK_LIMIT_BYTES */
-    accum_t *acc = work;
-    double bx = x, by = y, bz = dz, d[3];
-    int32_t it, h;
-    model_pass(global, local, rx, ry, x, y, dz, bx, by, bz, model2, cfg, acc);
-    for (it = 0; it < TRN_REFINE_MAX_ITER && inv3(acc->a, bi); ++it) {
-        double step = 1.0, ss0 = acc->ss;
-        int32_t n0 = acc->n_in;
-        d[0] = bi[0] * acc->b[0] + bi[1] * acc->b[1] + bi[2] * acc->b[2];
-        d[1] = bi[3] * acc->b[0] + bi[4] * acc->b[1] + bi[5] * acc->b[2];
-        d[2] = bi[6] * acc->b[0] + bi[7] * acc->b[1] + bi[8] * acc->b[2];
-        for (h = 0; h < TRN_REFINE_HALVINGS; ++h) {
-            model_pass(global, local, rx, ry, x, y, dz, bx + step * d[0], by + step * d[1],
-                       bz + step * d[2], model2, cfg, acc);
-            if (acc->n_in == n0 && acc->ss < ss0) {
-                break;
-            }
-            step *= 0.5;
-        }
-        if (h == TRN_REFINE_HALVINGS) {
-            break; /* acc holds a rejected trial: it is not used again */
-        }
-        bx += step * d[0];
-        by += step * d[1];
-        bz += step * d[2];
-        if (fabs(step * d[0]) < 1e-4 && fabs(step * d[1]) < 1e-4) {
-            break;
-        }
-    }
-    shift[0] = bx - x;
-    shift[1] = by - y;
-    shift[2] = bz - dz;
-}
-
-/* The "meat" of the cluster-robust (sandwich) covariance: the sum over
- * TRN_REFINE_BLOCK x TRN_REFINE_BLOCK blocks of local cells of the outer
- * product of each block's score (sum of w r J over its inliers). Residuals
- * correlated within a block (the global DEM's interpolation error is smooth
- * over about a cell) add up there instead of averaging out. h0[p] is the sum
- * over the blocks of the squared variance each block's term of the
- * sandwich's position variance p, (inv score)[p]^2, would have if the
- * residuals were the noise model's alone: (inv V inv)[pp], V the block's
- * own normal matrix with the mix profiled out ([I, -g] N_b [I, -g]^T). So
- * sqrt(2 h0[p]) is that variance's sampling sd under the noise model. */
-static void block_meat(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
-                       int32_t ry, double x, double y, double dz, double lam, const double g[3],
-                       const double inv[9], double model2, const trn_refine_cfg_t *cfg,
-                       accum_t *work, double meat[9], double h0[2])
-{
-    /* work is the caller's, dead by now (the stack, as in interp_shift) */
-    accum_t *acc = work;
-    int32_t bi, bj, p, q;
-    for (p = 0; p < 9; ++p) {
-        meat[p] = 0.0;
-    }
-    h0[0] = h0[1] = 0.0;
-    for (bj = 0; bj < local->height; bj += TRN_REFINE_BLOCK) {
-        for (bi = 0; bi < local->width; bi += TRN_REFINE_BLOCK) {
-            int32_t i1 = bi + TRN_REFINE_BLOCK < local->width ? bi + TRN_REFINE_BLOCK
-                                                              : local->width;
-            int32_t j1 = bj + TRN_REFINE_BLOCK < local->height ? bj + TRN_REFINE_BLOCK
-                                                               : local->height;
-            accumulate_rect(global, local, rx, ry, x, y, dz, lam, TRN_REFINE_CLIP_RELIEF, model2,
-                            cfg, bi, bj, i1, j1, acc);
-            for (p = 0; p < 3; ++p) {
-                acc->b[p] -= g[p] * acc->bl; /* the score with the mix profiled out */
-            }
-            for (p = 0; p < 3; ++p) {
-                for (q = 0; q < 3; ++q) {
-                    meat[p * 3 + q] += acc->b[p] * acc->b[q];
-                }
-            }
-            for (p = 0; p < 2; ++p) {
-                const double v = trn_refine_block_var_(acc->a, acc->al, acc->all, g,
-                                                       &inv[(size_t)p * 3u], 3);
-                h0[p] += v * v;
-            }
-        }
-    }
-}
-
-/* Model variance that makes the inliers' squared residuals equal their
- * total variance (noise + model) on average, weighted by the squared
- * precision at the previous estimate (a fixed point of the weighted moment
- * equation), never negative. */
-static double next_model2(const accum_t *acc)
-{
-    return trn_refine_model2_(acc->rr, acc->noise2, acc->q);
 }
 
 double trn_refine_model2_(double rr, double noise2, double q)
@@ -496,23 +188,6 @@ double trn_refine_sys_weight_(double rr, double noise2, double q, double vv)
 double trn_refine_excess_(double ratio, double rel_sd)
 {
     return ratio > 1.0 + TRN_REFINE_SYS_Z * rel_sd ? ratio : 1.0;
-}
-
-double trn_refine_block_var_(const double *a, const double *al, double all, const double *g,
-                             const double *u, int32_t n)
-{
-    /* u^T V u with V = A - al g^T - g al^T + all g g^T: the variance of
-     * u . (b - g bl) when b and bl have the covariance [[A, al], [al^T, all]] */
-    double ua = 0.0, ug = 0.0, v = 0.0;
-    int32_t r, t;
-    for (r = 0; r < n; ++r) {
-        for (t = 0; t < n; ++t) {
-            v += u[r] * a[r * n + t] * u[t];
-        }
-        ua += u[r] * al[r];
-        ug += u[r] * g[r];
-    }
-    return v - 2.0 * ua * ug + all * ug * ug;
 }
 
 static double local_spread(const trn_grid_f32_t *local, int32_t *n_seen);
@@ -540,218 +215,6 @@ static trn_status_t common_args(const trn_grid_f32_t *global, const trn_grid_f32
     return TRN_OK;
 }
 
-/* The mixture log-likelihood of trn_height_search at a continuous pose,
- * the mixed interpolant's heights, offset dz and model variance model2. */
-static double refined_ll(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
-                         int32_t ry, double x, double y, double dz, double lam, double model2,
-                         const trn_refine_cfg_t *cfg)
-{
-    double a = (double)cfg->inlier_prob;
-    const double two_pi = 6.283185307179586;
-    int32_t i, j, n_seen = 0;
-    double spread = local_spread(local, &n_seen), floor_m = (double)cfg->noise_m, k, lout, ll = 0.0;
-    k = 1.0 / (10.0 * (spread > floor_m ? spread : floor_m));
-    lout = log((1.0 - a) * k);
-    for (j = 0; j < local->height; ++j) {
-        for (i = 0; i < local->width; ++i) {
-            double h = (double)TRN_GRID_AT(local, i, j), s3[3], dcb, v, u;
-            if (!isfinite(h)) {
-                continue;
-            }
-            if (!sample_mix(global, x + (double)(i - rx), y + (double)(j - ry), lam, s3, &dcb)) {
-                ll += lout;
-                continue;
-            }
-            v = trn_refine_noise_var_(cfg, i, j, rx, ry) + model2;
-            u = h - dz - s3[0];
-            ll += log(a * exp(-0.5 * u * u / v) / sqrt(two_pi * v) + (1.0 - a) * k);
-        }
-    }
-    return ll;
-}
-
-static void set_fail(trn_refine_t *out, int32_t ix, int32_t iy)
-{
-    out->x = (double)ix;
-    out->y = (double)iy;
-    out->cov_cells[0] = out->cov_cells[1] = INFINITY;
-    out->cov_cells[2] = 0.0;
-    out->inflation = out->ll_inflation = 1.0;
-    out->interp_shift[0] = out->interp_shift[1] = 0.0;
-    out->interp_mix = TRN_REFINE_MIX_MEAN;
-    out->sys_weight = 0.0;
-    out->shoulders = 1.0;
-    out->ll = -(double)INFINITY;
-}
-
-trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
-                             int32_t rover_x, int32_t rover_y, int32_t ix, int32_t iy,
-                             const trn_refine_cfg_t *cfg, trn_refine_t *out)
-{
-    trn_status_t st;
-    accum_t acc;
-    double x = (double)ix, y = (double)iy, dz = 0.0, model2 = 0.0, inv[9], d[3], chi2, g[3];
-    double lam = TRN_REFINE_MIX_MEAN;
-    const double lam_lo = TRN_REFINE_MIX_MEAN - 2.0 * TRN_REFINE_MIX_SD;
-    const double lam_hi = TRN_REFINE_MIX_MEAN + 2.0 * TRN_REFINE_MIX_SD;
-    int32_t it, phase_end = TRN_REFINE_MAX_ITER;
-
-    if ((st = trn_refine_args_(global, local, rover_x, rover_y, cfg, out)) != TRN_OK) {
-        return st;
-    }
-    out->x = x;
-    out->y = y;
-    out->dz_m = 0.0;
-    out->chi2_dof = 0.0;
-    out->n_used = out->n_seen = out->iterations = 0;
-    set_fail(out, ix, iy);
-    if (ix < 0 || iy < 0 || ix >= global->width || iy >= global->height) {
-        return TRN_E_RANGE;
-    }
-    /* Start: the offset alone, over every point; then the model variance
-     * (what the residuals hold beyond the noise model: the global DEM's own
-     * interpolation error, a stale map) from the residuals, re-estimated at
-     * every step, so the weights and the clip follow the data. */
-    accumulate(global, local, rover_x, rover_y, x, y, 0.0, lam, (double)INFINITY, 0.0, cfg, &acc);
-    out->n_seen = acc.n_all;
-    if (acc.n_all < 8) {
-        return TRN_E_NODATA;
-    }
-    dz = acc.b[2] / acc.a[8];
-    for (it = 0; it < 3; ++it) {
-        accumulate(global, local, rover_x, rover_y, x, y, dz, lam,
-                   it == 0 ? (double)INFINITY : TRN_REFINE_CLIP, model2, cfg, &acc);
-        if (acc.n_in < 8) {
-            break;
-        }
-        model2 = next_model2(&acc);
-        dz += acc.b[2] / acc.a[8];
-    }
-    /* Two phases: the plain clip from the integer start, then the relief
-     * rule (trn_refine_weight_) from the first phase's estimate. */
-    for (it = 0; it < 2 * TRN_REFINE_MAX_ITER; ++it) {
-        double dl, clip = it < phase_end ? TRN_REFINE_CLIP : TRN_REFINE_CLIP_RELIEF;
-        accumulate(global, local, rover_x, rover_y, x, y, dz, lam, clip, model2, cfg, &acc);
-        model2 = next_model2(&acc);
-        dl = fold_mix(&acc, lam, g);
-        if (acc.n_in < 8 || !inv3(acc.a, inv)) {
-            set_fail(out, ix, iy);
-            out->n_used = acc.n_in;
-            return TRN_E_ILLCOND;
-        }
-        d[0] = inv[0] * acc.b[0] + inv[1] * acc.b[1] + inv[2] * acc.b[2];
-        d[1] = inv[3] * acc.b[0] + inv[4] * acc.b[1] + inv[5] * acc.b[2];
-        d[2] = inv[6] * acc.b[0] + inv[7] * acc.b[1] + inv[8] * acc.b[2];
-        d[0] = d[0] > 0.5 ? 0.5 : d[0] < -0.5 ? -0.5 : d[0];
-        d[1] = d[1] > 0.5 ? 0.5 : d[1] < -0.5 ? -0.5 : d[1];
-        x += d[0];
-        y += d[1];
-        dz += d[2];
-        lam += dl - (g[0] * d[0] + g[1] * d[1] + g[2] * d[2]);
-        /* within two prior sds: beyond, the "mix" would be a free
-         * sharpening that fits the map to anything */
-        lam = lam > lam_hi ? lam_hi : lam < lam_lo ? lam_lo : lam;
-        out->iterations = it + 1;
-        if (fabs(x - (double)ix) > TRN_REFINE_MAX_SHIFT ||
-            fabs(y - (double)iy) > TRN_REFINE_MAX_SHIFT) {
-            set_fail(out, ix, iy);
-            return TRN_E_ILLCOND;
-        }
-        if (it + 1 == phase_end || (fabs(d[0]) < 1e-4 && fabs(d[1]) < 1e-4)) {
-            if (it >= phase_end) {
-                break;
-            }
-            phase_end = it + 1; /* the first phase converged (or ran out) */
-        }
-    }
-    /* Covariance at the final pose. */
-    accumulate(global, local, rover_x, rover_y, x, y, dz, lam, TRN_REFINE_CLIP_RELIEF, model2, cfg,
-               &acc);
-    (void)fold_mix(&acc, lam, g);
-    if (acc.n_in < 8 || 2 * acc.n_in < acc.n_all || !inv3(acc.a, inv)) {
-        set_fail(out, ix, iy);
-        out->n_used = acc.n_in;
-        return TRN_E_ILLCOND;
-    }
-    chi2 = acc.ss / (double)(acc.n_in - 4);
-    out->chi2_dof = chi2;
-    /* the noise model's scale, raised only where the residuals exceed it
-     * beyond TRN_REFINE_SYS_Z sampling sds (sqrt(2 / dof)) */
-    chi2 = trn_refine_excess_(chi2, sqrt(2.0 / (double)(acc.n_in - 4)));
-    out->x = x;
-    out->y = y;
-    out->dz_m = dz;
-    out->model_m = sqrt(model2);
-    out->interp_mix = lam;
-    out->ll = refined_ll(global, local, rover_x, rover_y, x, y, dz, lam, model2, cfg);
-    /* Sandwich A^-1 B A^-1 (B from blocks); the model-based A^-1 (times the
-     * chi-square factor) is a lower bound on each variance: the block
-     * estimate is noisy, and independent errors must not shrink it; nor
-     * raise it by chance: a ratio counts only beyond TRN_REFINE_SYS_Z
-     * sampling sds of 1 (docs/method.md 9, "the floors"). */
-    {
-        /* q > 0: at least 8 inliers, each noise variance > 0. The systematic
-         * weight counts the misfit beyond TRN_REFINE_SYS_TERM_Z sampling sds of
-         * what the noise alone would give (with no misfit, next_model2's
-         * estimate is positive in about a third of the cases); taken before
-         * block_meat reuses acc. */
-        double meat[9], f, sw[2], h0[2];
-        double w = trn_refine_sys_weight_(acc.rr, acc.noise2, acc.q, acc.vv);
-        int32_t p, q, r;
-        out->n_used = acc.n_in;
-        block_meat(global, local, rover_x, rover_y, x, y, dz, lam, g, inv, model2, cfg, &acc, meat,
-                   h0);
-        /* the sandwich's two position variances, (inv meat inv)[pp] */
-        for (p = 0; p < 2; ++p) {
-            sw[p] = 0.0;
-            for (q = 0; q < 3; ++q) {
-                for (r = 0; r < 3; ++r) {
-                    sw[p] += inv[p * 3 + q] * meat[q * 3 + r] * inv[r * 3 + p];
-                }
-            }
-        }
-        {
-            /* one inflation factor for the position block, so the ellipse
-             * keeps the model's shape: the larger of the two variance
-             * ratios, each where beyond its sampling sd (h0) of 1. ln L's
-             * factor (the failure probability) takes them whole: there a
-             * factor low by chance would make a wrong answer confident */
-            const double c1 = out->chi2_dof > 1.0 ? out->chi2_dof : 1.0;
-            double fx = sw[0] / (inv[0] * c1), fy = sw[1] / (inv[4] * c1);
-            f = fx > fy ? fx : fy;
-            out->ll_inflation = f > 1.0 ? f : 1.0; /* as before the gate: max(1, chi2) */
-            fx = sw[0] / (inv[0] * chi2);
-            fy = sw[1] / (inv[4] * chi2);
-            fx = trn_refine_excess_(fx, sqrt(2.0 * h0[0]) / inv[0]);
-            fy = trn_refine_excess_(fy, sqrt(2.0 * h0[1]) / inv[4]);
-            f = fx > fy ? fx : fy;
-        }
-        out->inflation = f;
-        out->cov_cells[0] = inv[0] * chi2 * f;
-        out->cov_cells[1] = inv[4] * chi2 * f;
-        out->cov_cells[2] = inv[1] * chi2 * f;
-        {
-            /* The interpolants' disagreement, weighted by the share of the
-             * misfit (beyond its sampling noise: w above) in the residuals'
-             * (precision-squared weighted) variance: where a mix of the two
-             * interpolants explains the data (m^2 ~ 0) the mix's own
-             * uncertainty is in inv already;
-             * where the data show a misfit beyond the noise, the map runs
-             * between its samples in a way neither interpolant follows, a
-             * systematic error the residuals cannot show. */
-            double sh[3];
-            interp_shift(global, local, rover_x, rover_y, x, y, dz, model2, cfg, &acc, inv, sh);
-            out->interp_shift[0] = sh[0];
-            out->interp_shift[1] = sh[1];
-            out->sys_weight = w;
-            out->cov_cells[0] += w * sh[0] * sh[0];
-            out->cov_cells[1] += w * sh[1] * sh[1];
-            out->cov_cells[2] += w * sh[0] * sh[1];
-        }
-    }
-    return TRN_OK;
-}
-
 /* One pass of trn_refine_noise_scale at variance factor k2 and model
  * variance m2: the weighted normal equations of r^2 = k2 s^2 + m2 over the
  * points within the clip, in n[0..4] = sums of q s^4, q s^2, q, q r^2 s^2,
@@ -768,8 +231,9 @@ static int32_t noise_pass(const trn_grid_f32_t *global, const trn_grid_f32_t *lo
             const double ox = (double)(i - rx), oy = (double)(j - ry);
             /* the offset turned by the heading, as trn_refine_pose_heading's */
             if (!isfinite(h) ||
-                !sample_mix(global, at->x + ox * cs_sn[0] + oy * cs_sn[1],
-                            at->y - ox * cs_sn[1] + oy * cs_sn[0], at->interp_mix, s3, &dcb)) {
+                !trn_refine_sample_mix_(global, at->x + ox * cs_sn[0] + oy * cs_sn[1],
+                                        at->y - ox * cs_sn[1] + oy * cs_sn[0], at->interp_mix, s3,
+                                        &dcb)) {
                 continue;
             }
             s2 = trn_refine_noise_var_(cfg, i, j, rx, ry);
@@ -807,8 +271,8 @@ static double resid_in_clip(const trn_grid_f32_t *global, const trn_grid_f32_t *
     }
     h = (double)TRN_GRID_AT(local, i, j);
     if (!isfinite(h) ||
-        !sample_mix(global, at->x + ox * cs_sn[0] + oy * cs_sn[1],
-                    at->y - ox * cs_sn[1] + oy * cs_sn[0], at->interp_mix, s3, &dcb)) {
+        !trn_refine_sample_mix_(global, at->x + ox * cs_sn[0] + oy * cs_sn[1],
+                                at->y - ox * cs_sn[1] + oy * cs_sn[0], at->interp_mix, s3, &dcb)) {
         return (double)NAN;
     }
     r = h - at->dz_m - s3[0];
@@ -845,123 +309,6 @@ double trn_refine_noise_scale_diff_(const trn_grid_f32_t *global, const trn_grid
     }
     *pairs = n;
     return n > 0 ? sum / (double)n : (double)NAN;
-}
-
-/* ln L on the line through (px, py) across the valley: the pose (px, py) +
- * o e2 with the perpendicular offset o and the offset dz at their best
- * (Gauss-Newton from *o, *dz, at most TRN_VALLEY_ITER steps, the relief
- * rule; the mix lam and the model variance model2 held). */
-static double valley_point(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
-                           int32_t ry, const trn_refine_cfg_t *cfg, double px, double py,
-                           const double e2[2], double lam, double model2, double *o, double *dz)
-{
-    accum_t acc;
-    int32_t it;
-    for (it = 0; it < TRN_VALLEY_ITER; ++it) {
-        double aoo, aoz, azz, bo, det, step;
-        accumulate(global, local, rx, ry, px + *o * e2[0], py + *o * e2[1], *dz, lam,
-                   TRN_REFINE_CLIP_RELIEF, model2, cfg, &acc);
-        aoo = e2[0] * e2[0] * acc.a[0] + 2.0 * e2[0] * e2[1] * acc.a[1] + e2[1] * e2[1] * acc.a[4];
-        aoz = e2[0] * acc.a[2] + e2[1] * acc.a[5];
-        azz = acc.a[8];
-        bo = e2[0] * acc.b[0] + e2[1] * acc.b[1];
-        det = aoo * azz - aoz * aoz;
-        if (acc.n_in < 8 || !(det > 1e-12 * aoo * azz)) {
-            break;
-        }
-        step = (azz * bo - aoz * acc.b[2]) / det;
-        step = step > 0.5 ? 0.5 : step < -0.5 ? -0.5 : step;
-        *dz += (aoo * acc.b[2] - aoz * bo) / det;
-        *o += step;
-        if (fabs(step) < 1e-3) {
-            break;
-        }
-    }
-    return refined_ll(global, local, rx, ry, px + *o * e2[0], py + *o * e2[1], *dz, lam, model2,
-                      cfg);
-}
-
-/* The axes of a 2 x 2 covariance (var_x, var_y, cov_xy): lam[0] >= lam[1]
- * its eigenvalues, e1 the unit eigenvector of lam[0] (from the better
- * conditioned of the two rows of cov - lam[0] I; any axis for a round
- * ellipse), e2 = e1 turned by 90 degrees. */
-static void cov_axes(const double cov[3], double lam[2], double e1[2], double e2[2])
-{
-    const double a = cov[0], b = cov[1], c = cov[2];
-    const double d = sqrt(0.25 * (a - b) * (a - b) + c * c);
-    double n;
-    lam[0] = 0.5 * (a + b) + d;
-    lam[1] = 0.5 * (a + b) - d;
-    if (a >= b) {
-        e1[0] = lam[0] - b;
-        e1[1] = c;
-    } else {
-        e1[0] = c;
-        e1[1] = lam[0] - a;
-    }
-    n = sqrt(e1[0] * e1[0] + e1[1] * e1[1]);
-    if (!(n > 0.0) || !isfinite(n)) {
-        e1[0] = 1.0;
-        e1[1] = 0.0;
-        n = 1.0;
-    }
-    e1[0] /= n;
-    e1[1] /= n;
-    e2[0] = -e1[1];
-    e2[1] = e1[0];
-}
-
-double trn_refine_valley_fail_(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
-                               int32_t rx, int32_t ry, const trn_refine_cfg_t *cfg,
-                               const trn_refine_t *at, double infl, const double lo[2],
-                               const double hi[2])
-{
-    const double h = TRN_VALLEY_STEP_CELLS;
-    const int32_t kmax = (int32_t)(TRN_VALLEY_REACH_CELLS / TRN_VALLEY_STEP_CELLS + 0.5);
-    const double model2 = at->model_m * at->model_m;
-    double in = 1.0, out = 0.0, d1[2] = {-INFINITY, -INFINITY}, q, lam[2], e1[2], e2[2];
-    int32_t side, k;
-    cov_axes(at->cov_cells, lam, e1, e2);
-    if (!(infl >= 1.0) || !isfinite(at->ll) || !isfinite(lam[0])) {
-        return 0.0;
-    }
-    for (side = 0; side < 2; ++side) {
-        const double sg = side == 0 ? -1.0 : 1.0;
-        double o = 0.0, dz = at->dz_m;
-        for (k = 1; k <= kmax; ++k) {
-            const double t = sg * (double)k * h;
-            const double px = at->x + t * e1[0], py = at->y + t * e1[1];
-            double d;
-            if (px < lo[0] || px > hi[0] || py < lo[1] || py > hi[1]) {
-                break; /* the window: the prior puts no mass beyond it */
-            }
-            d = (valley_point(global, local, rx, ry, cfg, px, py, e2, at->interp_mix, model2, &o,
-                              &dz) -
-                 at->ll) /
-                infl;
-            if (!isfinite(d)) {
-                break;
-            }
-            if (k == 1) {
-                d1[side] = d;
-            }
-            if ((double)k * h > TRN_FAIL_RADIUS_CELLS) {
-                out += exp(fmin(d, 700.0));
-            } else {
-                in += exp(fmin(d, 700.0));
-            }
-            if (d < -TRN_VALLEY_NATS) {
-                break;
-            }
-        }
-    }
-    /* A centre narrower than the step: its mass is the quadratic's through
-     * t = -h, 0, h (Laplace), not the one sample at t = 0. */
-    q = -(d1[0] + d1[1]) / (h * h);
-    if (q > 0.0 && isfinite(q)) {
-        in += fmin(1.0, sqrt(6.283185307179586 / q) / h) - 1.0;
-    }
-    return out / (in + out);
 }
 
 trn_status_t trn_refine_noise_scale(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
@@ -1263,7 +610,7 @@ trn_status_t trn_height_mass(const double *ll_grid, const trn_window_t *win,
     return found ? TRN_OK : TRN_E_NODATA;
 }
 
-/* The interpolants for the heading refinement (refine_int.h). */
+/* The interpolants for the refinement (refine_int.h). */
 int trn_refine_sample_(const trn_grid_f32_t *g, double x, double y, double out[3])
 {
     return sample(g, x, y, out);
@@ -1291,50 +638,4 @@ trn_status_t trn_refine_args_(const trn_grid_f32_t *global, const trn_grid_f32_t
         return st;
     }
     return cfg->inlier_prob > 0.0f && cfg->inlier_prob < 1.0f ? TRN_OK : TRN_E_ARG;
-}
-
-/* The mean of ln L's fall over the two sides of the answer at distance t
- * along the unit axis e, each point's offset along perp and dz at their
- * best (valley_point), over t^2: the curvature of the quadratic through
- * the answer and those two points. */
-static double fall_per_t2(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
-                          int32_t ry, const trn_refine_cfg_t *cfg, const trn_refine_t *at,
-                          const double e[2], const double perp[2], double t)
-{
-    const double model2 = at->model_m * at->model_m;
-    double fall = 0.0;
-    int32_t side;
-    for (side = 0; side < 2; ++side) {
-        const double sg = side == 0 ? -1.0 : 1.0;
-        double o = 0.0, dz = at->dz_m;
-        fall += at->ll - valley_point(global, local, rx, ry, cfg, at->x + sg * t * e[0],
-                                      at->y + sg * t * e[1], perp, at->interp_mix, model2, &o, &dz);
-    }
-    return 0.5 * fall / (t * t);
-}
-
-void trn_refine_shoulders_(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
-                           int32_t ry, const trn_refine_cfg_t *cfg, trn_refine_t *at)
-{
-    double lam[2], e[2][2], kap[2];
-    int32_t k;
-    cov_axes(at->cov_cells, lam, e[0], e[1]);
-    if (!isfinite(lam[0]) || !(lam[1] > 0.0) || !isfinite(at->ll)) {
-        return;
-    }
-    for (k = 0; k < 2; ++k) {
-        const double sd = sqrt(lam[k]);
-        const double near = fall_per_t2(global, local, rx, ry, cfg, at, e[k], e[1 - k],
-                                        TRN_SHOULDER_NEAR_SD * sd);
-        const double far = fall_per_t2(global, local, rx, ry, cfg, at, e[k], e[1 - k],
-                                       TRN_SHOULDER_FAR_SD * sd);
-        /* NaN (a point with no data) or a profile that does not fall: no
-         * factor from it (the failure probability sees a rising profile) */
-        kap[k] = near > 0.0 && far > 0.0 ? near / far : 1.0;
-        kap[k] = kap[k] < 1.0 ? 1.0 : kap[k] > TRN_SHOULDER_MAX ? TRN_SHOULDER_MAX : kap[k];
-    }
-    at->shoulders = kap[0] > kap[1] ? kap[0] : kap[1];
-    at->cov_cells[0] = kap[0] * lam[0] * e[0][0] * e[0][0] + kap[1] * lam[1] * e[1][0] * e[1][0];
-    at->cov_cells[1] = kap[0] * lam[0] * e[0][1] * e[0][1] + kap[1] * lam[1] * e[1][1] * e[1][1];
-    at->cov_cells[2] = kap[0] * lam[0] * e[0][0] * e[0][1] + kap[1] * lam[1] * e[1][0] * e[1][1];
 }

@@ -17,6 +17,30 @@ int trn_refine_sample_(const trn_grid_f32_t *g, double x, double y, double out[3
 /* The same by bilinear interpolation only. */
 int trn_refine_sample_bilinear_(const trn_grid_f32_t *g, double x, double y, double out[3]);
 
+/* Height and gradient of the mixed interpolant B + lam (C - B) at (x, y)
+ * (B bilinear, C bicubic; they agree where the 4 x 4 support is
+ * incomplete: there C - B = 0), and C - B, the derivative in lam; 0 when
+ * there is no height there. The one copy, inline: every pass of the
+ * refinement calls it for every cell, and a frame of its own would sit on
+ * the deepest stack. */
+static inline int trn_refine_sample_mix_(const trn_grid_f32_t *g, double x, double y, double lam,
+                                         double out[3], double *dcb)
+{
+    double b3[3];
+    int k;
+    if (!trn_refine_sample_bilinear_(g, x, y, b3)) {
+        return 0;
+    }
+    /* the bicubic sampler has a height exactly where the bilinear one has
+     * (it falls back to bilinear where its 4 x 4 support is incomplete) */
+    (void)trn_refine_sample_(g, x, y, out);
+    *dcb = out[0] - b3[0];
+    for (k = 0; k < 3; ++k) {
+        out[k] = b3[k] + lam * (out[k] - b3[k]);
+    }
+    return 1;
+}
+
 /* The relief rule's clip (a negative clip in trn_refine_weight_). */
 #define TRN_REFINE_CLIP_RELIEF (-TRN_REFINE_CLIP)
 
@@ -42,7 +66,7 @@ trn_status_t trn_height_search_ws_(const trn_grid_f32_t *global, const trn_grid_
                                    void *scratch, trn_height_best_t *best);
 /* The noise model's variance of local cell (x, y), rover cell (rx, ry): the
  * sd noise_m + noise_k_per_m r^2 at r metres from the rover, squared. The
- * one copy for refine.c, refine_heading.c, height_score.c and
+ * one copy for refine.c, refine_pose.c, height_score.c and
  * height_bound.c (inline: the searches and refinements call it for every
  * cell of every pass). */
 static inline double trn_refine_noise_var_(const trn_refine_cfg_t *cfg, int32_t x, int32_t y,
@@ -128,12 +152,6 @@ double trn_refine_sys_weight_(double rr, double noise2, double q, double vv);
  * counts only where beyond TRN_REFINE_SYS_Z of its sampling sds (rel_sd,
  * relative to 1) under the noise model: ratio there, else 1. */
 double trn_refine_excess_(double ratio, double rel_sd);
-
-/* u^T V u, V = [I, -g] N_b [I, -g]^T with N_b = [[a, al], [al^T, all]] (a
- * n x n row-major, al and g and u of n): the variance, under the noise
- * model, of u . (b - g bl), a block's score with the mix profiled out. */
-double trn_refine_block_var_(const double *a, const double *al, double all, const double *g,
-                             const double *u, int32_t n);
 
 /* cos and sin of a finite angle without libm's exact argument reduction
  * and its stack (src/refine.c; within 1e-14 for |a| <= 4 pi). */

@@ -471,11 +471,10 @@ static void test_heading_mix(void **state)
     trn_grid_f32_t g, l;
     trn_refine_cfg_t c = cfg_of();
     trn_refine3_t o;
-    trn_refine_t o2;
     trn_rng_t r;
     const double mixes[4] = {0.0, 0.3, 1.0, 1.8}, deg = 3.14159265358979323846 / 180.0;
     int k, i;
-    double worst = 0.0, worst_h = 0.0, worst_mix = 0.0, worst_ll = 0.0, worst_2d = 0.0;
+    double worst = 0.0, worst_h = 0.0, worst_mix = 0.0, worst_ll = 0.0;
     (void)state;
     trn_rng_seed(&r, 23);
     make_global(&g);
@@ -496,35 +495,22 @@ static void test_heading_mix(void **state)
                              TRN_OK);
             worst_ll = fmax(worst_ll, fabs(o.pos.ll - slow_ll3(&c, &o)));
             assert_true(o.pos.sys_weight >= 0.0 && o.pos.sys_weight <= TRN_REFINE_SYS);
-            /* heading 0 held: trn_refine_pose's answer */
+            /* the heading held: it stays where it was put, with no variance
+             * (trn_refine_pose is this call at heading 0, one path) */
             make_local_mix(&l, tx, ty, 2.0, 1.0, mixes[k], &c, &r);
             assert_int_equal(trn_refine_pose_heading(&g, &l, LW / 2, LW / 2, (int)floor(tx + 0.5),
                                                      (int)floor(ty + 0.5), 0.0, 0.0, &c, &o),
                              TRN_OK);
-            assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, (int)floor(tx + 0.5),
-                                             (int)floor(ty + 0.5), &c, &o2),
-                             TRN_OK);
-            worst_2d = fmax(worst_2d, fabs(o.pos.x - o2.x) + fabs(o.pos.y - o2.y) +
-                                          fabs(o.pos.interp_mix - o2.interp_mix) +
-                                          fabs(o.pos.ll - o2.ll) / (1.0 + fabs(o2.ll)) +
-                                          fabs(o.pos.sys_weight - o2.sys_weight) +
-                                          fabs(o.pos.inflation - o2.inflation));
-            worst_2d = fmax(worst_2d, fabs(o.pos.cov_cells[0] / o2.cov_cells[0] - 1.0) +
-                                          fabs(o.pos.cov_cells[1] / o2.cov_cells[1] - 1.0) +
-                                          fabs(o.pos.cov_cells[2] - o2.cov_cells[2]) /
-                                              sqrt(o2.cov_cells[0] * o2.cov_cells[1]));
             assert_true(o.heading_rad == 0.0 && o.cov3[8] == 0.0);
         }
     }
     printf("mix over heading: worst pose error %.2e cells, heading %.2e rad, mix %.2e "
-           "(noise-free, 24 poses turned up to 5 deg); ll against the slow sum %.2e nats; "
-           "heading 0 held against trn_refine_pose %.2e\n",
-           worst, worst_h, worst_mix, worst_ll, worst_2d);
+           "(noise-free, 24 poses turned up to 5 deg); ll against the slow sum %.2e nats\n",
+           worst, worst_h, worst_mix, worst_ll);
     assert_true(worst < 1e-4);
     assert_true(worst_h < 1e-5);
     assert_true(worst_mix < 5e-3);
     assert_true(worst_ll < 1e-6);
-    assert_true(worst_2d < 1e-9);
     {
         /* a mix beyond the bounds stops at two prior sds; a noise model
          * above the local heights' spread sets K (slow_ll3's floor) */
