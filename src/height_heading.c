@@ -399,6 +399,17 @@ static int rescale_noise3(const trn_map_t *map, const trn_grid_f32_t *local, int
     return trn_loc_noise_rejected_(map, local, rx, ry, at, heading, rc, &out->loc.noise_scale);
 }
 
+/* The valley's share of the failure probability at the refined answer's
+ * heading, held (trn_refine_valley_fail_ over the window). */
+static double valley3(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
+                      const trn_window_t *win, const trn_refine_cfg_t *rc, const trn_refine3_t *ref)
+{
+    const double lo[2] = {(double)win->x0, (double)win->y0};
+    const double hi[2] = {(double)win->x1, (double)win->y1};
+    return trn_refine_valley_fail_(&map->heights, local, rx, ry, rc, &ref->pos, ref->heading_rad,
+                                   ref->pos.ll_inflation, lo, hi);
+}
+
 trn_status_t trn_localize_heights3_(const trn_map_t *map, const trn_grid_f32_t *local,
                                     int32_t rover_x, int32_t rover_y, const trn_window_t *win,
                                     const trn_heading_cfg_t *cfg, void *ws, size_t ws_bytes,
@@ -460,6 +471,12 @@ trn_status_t trn_localize_heights3_(const trn_map_t *map, const trn_grid_f32_t *
                                     (size_t)(far->mx - win->x0)];
             out->loc.on_window_edge = trn_loc_on_edge_(win, far->mx, far->my) || far->edge;
         }
+        /* the final answer's ellipse: ln L's fall at 2 sds at its heading,
+         * cov3's position block stretched alike (trn_localize_dem's
+         * shoulders, docs/method.md 9) */
+        trn_loc_refine_cfg_(map, &out->loc, &rc);
+        trn_refine_shoulders_(&map->heights, local, rover_x, rover_y, &rc, ref->heading_rad,
+                              &ref->pos, ref->cov3);
         refine_result(map, ref, out);
     }
     out->loc.refinement = ref->pos;
@@ -471,10 +488,13 @@ trn_status_t trn_localize_heights3_(const trn_map_t *map, const trn_grid_f32_t *
         out->loc.failure_probability = fmax(
             out->loc.failure_probability,
             trn_loc_basins_failure_(far, ref->pos.ll_inflation, &out->loc));
-        /* and the position ellipse's tail beyond the failure radius (the
-         * valley's profile is the x-y path's only: docs/method.md 9) */
+        /* the position ellipse's tail beyond the failure radius, and the
+         * valley's share along its major axis at the answer's heading (as
+         * trn_localize_dem's: docs/method.md 9) */
         out->loc.failure_probability = fmax(out->loc.failure_probability,
                                             trn_loc_tail_failure_(ref->pos.cov_cells));
+        out->loc.failure_probability = fmax(out->loc.failure_probability,
+                                            valley3(map, local, rover_x, rover_y, win, &rc, ref));
     }
     /* the best pose on the window's edge, or the refined heading beyond the
      * heading window: the likelihood may rise beyond what was searched, so

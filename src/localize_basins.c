@@ -312,7 +312,7 @@ void trn_loc_shoulders_(const trn_map_t *map, const trn_grid_f32_t *local, int32
 {
     trn_refine_cfg_t rc;
     trn_loc_refine_cfg_(map, out, &rc);
-    trn_refine_shoulders_(&map->heights, local, rx, ry, &rc, &out->refinement);
+    trn_refine_shoulders_(&map->heights, local, rx, ry, &rc, 0.0, &out->refinement, NULL);
     trn_loc_take_refinement_(map, out);
 }
 
@@ -324,7 +324,7 @@ double trn_loc_peak_failure_(const trn_map_t *map, const trn_grid_f32_t *local, 
     const double hi[2] = {(double)win->x1, (double)win->y1};
     trn_refine_cfg_t rc;
     trn_loc_refine_cfg_(map, out, &rc);
-    return fmax(
-        trn_loc_tail_failure_(out->refinement.cov_cells),
-        trn_refine_valley_fail_(&map->heights, local, rx, ry, &rc, &out->refinement, infl, lo, hi));
+    return fmax(trn_loc_tail_failure_(out->refinement.cov_cells),
+                trn_refine_valley_fail_(&map->heights, local, rx, ry, &rc, &out->refinement, 0.0,
+                                        infl, lo, hi));
 }

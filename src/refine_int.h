@@ -206,15 +206,16 @@ double trn_refine_noise_scale_diff_(const trn_grid_f32_t *global, const trn_grid
  * profile's mass beyond TRN_FAIL_RADIUS_CELLS over its whole, the centre's
  * by the quadratic through its first steps where narrower than a step. The
  * integer grid samples a valley narrower than a cell across poorly, so its
- * mass along the valley can vanish from the grid; this samples it along. */
+ * mass along the valley can vanish from the grid; this samples it along.
+ * At the answer's heading heading_rad, held. */
 #define TRN_VALLEY_STEP_CELLS 0.25
 #define TRN_VALLEY_REACH_CELLS 4.0
 #define TRN_VALLEY_NATS 30.0
 #define TRN_VALLEY_ITER 3
 double trn_refine_valley_fail_(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
                                int32_t rx, int32_t ry, const trn_refine_cfg_t *cfg,
-                               const trn_refine_t *at, double infl, const double lo[2],
-                               const double hi[2]);
+                               const trn_refine_t *at, double heading_rad, double infl,
+                               const double lo[2], const double hi[2]);
 /* The covariance's shoulders (docs/method.md 9, "The shoulders"): along
  * each axis of at's (x, y) covariance, ln L's fall over t^2 at
  * TRN_SHOULDER_NEAR_SD and at TRN_SHOULDER_FAR_SD sds (both sides
@@ -222,7 +223,12 @@ double trn_refine_valley_fail_(const trn_grid_f32_t *global, const trn_grid_f32_
  * mix and model variance held); where the far fall is smaller (ln L's
  * shoulders flatter than its peak: a bilinear map's kinks at the cell
  * edges), that axis's variance is multiplied by the ratio, in [1,
- * TRN_SHOULDER_MAX]; at->shoulders the larger factor. */
+ * TRN_SHOULDER_MAX]; at->shoulders the larger factor. At the answer's heading
+ * heading_rad, held; cov3 (NULL: none), the (x, y, heading) covariance in
+ * cells and radians, takes the same stretch of its position (T cov T^T, T
+ * the square root of the stretch along the axes), the heading's own
+ * variance unchanged. */
 void trn_refine_shoulders_(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
-                           int32_t ry, const trn_refine_cfg_t *cfg, trn_refine_t *at);
+                           int32_t ry, const trn_refine_cfg_t *cfg, double heading_rad,
+                           trn_refine_t *at, double cov3[9]);
 #endif /* TRN_REFINE_INT_H */

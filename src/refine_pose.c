@@ -715,25 +715,22 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
 /* ln L on the line through (px, py) across the valley: the pose (px, py) +
  * o e2 with the perpendicular offset o and the offset dz at their best
  * (Gauss-Newton from *o, *dz, at most TRN_VALLEY_ITER steps, the relief
- * rule; the mix lam and the model variance model2 held): the refinement's
- * own normal equations and ln L, at heading 0. */
-static double valley_point(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
-                           int32_t ry, const trn_refine_cfg_t *cfg, double px, double py,
+ * rule; the mix lam, the model variance model2 and the heading held): the
+ * refinement's own normal equations and ln L. */
+static double valley_point(const rctx_t *c, double heading, double px, double py,
                            const double e2[2], double lam, double model2, double *o, double *dz)
 {
-    rctx_t c;
     acc4_t acc;
     double p[5];
     int32_t it;
-    ctx_level(&c, global, local, rx, ry, cfg);
-    p[2] = 0.0;
+    p[2] = heading;
     p[4] = lam;
     for (it = 0; it < TRN_VALLEY_ITER; ++it) {
         double aoo, aoz, azz, bo, det, step;
         p[0] = px + *o * e2[0];
         p[1] = py + *o * e2[1];
         p[3] = *dz;
-        accumulate_all(&c, p, TRN_REFINE_CLIP_RELIEF, model2, &acc);
+        accumulate_all(c, p, TRN_REFINE_CLIP_RELIEF, model2, &acc);
         /* rows and columns 0, 1, 3 of the four: x, y, dz */
         aoo = e2[0] * e2[0] * acc.a[0] + 2.0 * e2[0] * e2[1] * acc.a[1] + e2[1] * e2[1] * acc.a[4];
         aoz = e2[0] * acc.a[3] + e2[1] * acc.a[6];
@@ -754,7 +751,7 @@ static double valley_point(const trn_grid_f32_t *global, const trn_grid_f32_t *l
     p[0] = px + *o * e2[0];
     p[1] = py + *o * e2[1];
     p[3] = *dz;
-    return refined_ll(&c, p, model2);
+    return refined_ll(c, p, model2);
 }
 
 /* The axes of a 2 x 2 covariance (var_x, var_y, cov_xy): lam[0] >= lam[1]
@@ -789,14 +786,16 @@ static void cov_axes(const double cov[3], double lam[2], double e1[2], double e2
 
 double trn_refine_valley_fail_(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
                                int32_t rx, int32_t ry, const trn_refine_cfg_t *cfg,
-                               const trn_refine_t *at, double infl, const double lo[2],
-                               const double hi[2])
+                               const trn_refine_t *at, double heading_rad, double infl,
+                               const double lo[2], const double hi[2])
 {
+    rctx_t c;
     const double h = TRN_VALLEY_STEP_CELLS;
     const int32_t kmax = (int32_t)(TRN_VALLEY_REACH_CELLS / TRN_VALLEY_STEP_CELLS + 0.5);
     const double model2 = at->model_m * at->model_m;
     double in = 1.0, out = 0.0, d1[2] = {-INFINITY, -INFINITY}, q, lam[2], e1[2], e2[2];
     int32_t side, k;
+    ctx_level(&c, global, local, rx, ry, cfg);
     cov_axes(at->cov_cells, lam, e1, e2);
     if (!(infl >= 1.0) || !isfinite(at->ll) || !isfinite(lam[0])) {
         return 0.0;
@@ -811,8 +810,7 @@ double trn_refine_valley_fail_(const trn_grid_f32_t *global, const trn_grid_f32_
             if (px < lo[0] || px > hi[0] || py < lo[1] || py > hi[1]) {
                 break; /* the window: the prior puts no mass beyond it */
             }
-            d = (valley_point(global, local, rx, ry, cfg, px, py, e2, at->interp_mix, model2, &o,
-                              &dz) -
+            d = (valley_point(&c, heading_rad, px, py, e2, at->interp_mix, model2, &o, &dz) -
                  at->ll) /
                 infl;
             if (!isfinite(d)) {
@@ -844,8 +842,7 @@ double trn_refine_valley_fail_(const trn_grid_f32_t *global, const trn_grid_f32_
  * along the unit axis e, each point's offset along perp and dz at their
  * best (valley_point), over t^2: the curvature of the quadratic through
  * the answer and those two points. */
-static double fall_per_t2(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
-                          int32_t ry, const trn_refine_cfg_t *cfg, const trn_refine_t *at,
+static double fall_per_t2(const rctx_t *c, const trn_refine_t *at, double heading,
                           const double e[2], const double perp[2], double t)
 {
     const double model2 = at->model_m * at->model_m;
@@ -854,26 +851,29 @@ static double fall_per_t2(const trn_grid_f32_t *global, const trn_grid_f32_t *lo
     for (side = 0; side < 2; ++side) {
         const double sg = side == 0 ? -1.0 : 1.0;
         double o = 0.0, dz = at->dz_m;
-        fall += at->ll - valley_point(global, local, rx, ry, cfg, at->x + sg * t * e[0],
-                                      at->y + sg * t * e[1], perp, at->interp_mix, model2, &o, &dz);
+        fall += at->ll - valley_point(c, heading, at->x + sg * t * e[0], at->y + sg * t * e[1],
+                                      perp, at->interp_mix, model2, &o, &dz);
     }
     return 0.5 * fall / (t * t);
 }
 
 void trn_refine_shoulders_(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
-                           int32_t ry, const trn_refine_cfg_t *cfg, trn_refine_t *at)
+                           int32_t ry, const trn_refine_cfg_t *cfg, double heading_rad,
+                           trn_refine_t *at, double cov3[9])
 {
-    double lam[2], e[2][2], kap[2];
-    int32_t k;
+    rctx_t c;
+    double lam[2], e[2][2], kap[2], t[4];
+    int32_t k, q;
+    ctx_level(&c, global, local, rx, ry, cfg);
     cov_axes(at->cov_cells, lam, e[0], e[1]);
     if (!isfinite(lam[0]) || !(lam[1] > 0.0) || !isfinite(at->ll)) {
         return;
     }
     for (k = 0; k < 2; ++k) {
         const double sd = sqrt(lam[k]);
-        const double near = fall_per_t2(global, local, rx, ry, cfg, at, e[k], e[1 - k],
+        const double near = fall_per_t2(&c, at, heading_rad, e[k], e[1 - k],
                                         TRN_SHOULDER_NEAR_SD * sd);
-        const double far = fall_per_t2(global, local, rx, ry, cfg, at, e[k], e[1 - k],
+        const double far = fall_per_t2(&c, at, heading_rad, e[k], e[1 - k],
                                        TRN_SHOULDER_FAR_SD * sd);
         /* NaN (a point with no data) or a profile that does not fall: no
          * factor from it (the failure probability sees a rising profile) */
@@ -884,4 +884,24 @@ void trn_refine_shoulders_(const trn_grid_f32_t *global, const trn_grid_f32_t *l
     at->cov_cells[0] = kap[0] * lam[0] * e[0][0] * e[0][0] + kap[1] * lam[1] * e[1][0] * e[1][0];
     at->cov_cells[1] = kap[0] * lam[0] * e[0][1] * e[0][1] + kap[1] * lam[1] * e[1][1] * e[1][1];
     at->cov_cells[2] = kap[0] * lam[0] * e[0][0] * e[0][1] + kap[1] * lam[1] * e[1][0] * e[1][1];
+    if (cov3 == NULL) {
+        return;
+    }
+    /* the (x, y, heading) covariance by the same stretch of the position,
+     * T = sum_k sqrt(kap_k) e_k e_k^T on x and y (T C T^T is the 2 x 2
+     * above), the heading untouched: cov3 <- T3 cov3 T3^T */
+    for (q = 0; q < 4; ++q) {
+        const int32_t r = q / 2, s = q % 2;
+        t[q] = sqrt(kap[0]) * e[0][r] * e[0][s] + sqrt(kap[1]) * e[1][r] * e[1][s];
+    }
+    for (q = 0; q < 3; ++q) { /* columns: cov3 T3^T */
+        const double a = cov3[q * 3], b = cov3[q * 3 + 1];
+        cov3[q * 3] = a * t[0] + b * t[1];
+        cov3[q * 3 + 1] = a * t[2] + b * t[3];
+    }
+    for (q = 0; q < 3; ++q) { /* rows: T3 (cov3 T3^T) */
+        const double a = cov3[q], b = cov3[3 + q];
+        cov3[q] = t[0] * a + t[1] * b;
+        cov3[3 + q] = t[2] * a + t[3] * b;
+    }
 }

@@ -222,11 +222,20 @@ static double fast_factor(const trn_refine_t *o, const trn_refine_t *w, int k)
            lam;
 }
 
+/* The heading's variance given the position, hh - c^T C^-1 c, of a 3 x 3
+ * (x, y, heading) covariance. */
+static double cond_heading(const double c3[9])
+{
+    const double a = c3[0], b = c3[1], d = c3[4], hx = c3[2], hy = c3[5];
+    const double det = a * d - b * b;
+    return c3[8] - (d * hx * hx - 2.0 * b * hx * hy + a * hy * hy) / det;
+}
+
 static void run(int rough, int n, uint64_t seed, int *widened)
 {
     trn_grid_f32_t g, l;
     trn_refine_cfg_t c = cfg_of();
-    trn_refine_t o, w;
+    trn_refine_t o, w, w2;
     trn_rng_t r;
     int i, k;
     trn_rng_seed(&r, seed);
@@ -240,7 +249,35 @@ static void run(int rough, int n, uint64_t seed, int *widened)
                          TRN_OK);
         assert_true(o.shoulders == 1.0); /* trn_refine_pose's own */
         w = o;
-        trn_refine_shoulders_(&g, &l, LW / 2, LW / 2, &c, &w);
+        {
+            /* a heading block beside the position's: cov3 takes the same
+             * stretch, so its position block is the new ellipse, the heading's
+             * variance stays, and so does its variance given the position
+             * (c^T C^-1 c is unchanged by C -> T C T, c -> T c) */
+            const double hh = 1e-4, hx = 0.3 * sqrt(o.cov_cells[0] * hh),
+                         hy = -0.2 * sqrt(o.cov_cells[1] * hh);
+            double c3[9], cond0, cond1;
+            c3[0] = o.cov_cells[0];
+            c3[4] = o.cov_cells[1];
+            c3[1] = c3[3] = o.cov_cells[2];
+            c3[2] = c3[6] = hx;
+            c3[5] = c3[7] = hy;
+            c3[8] = hh;
+            cond0 = cond_heading(c3);
+            trn_refine_shoulders_(&g, &l, LW / 2, LW / 2, &c, 0.0, &w, c3);
+            cond1 = cond_heading(c3);
+            assert_true(fabs(c3[0] - w.cov_cells[0]) <= 1e-12 * w.cov_cells[0]);
+            assert_true(fabs(c3[4] - w.cov_cells[1]) <= 1e-12 * w.cov_cells[1]);
+            assert_true(fabs(c3[1] - w.cov_cells[2]) <=
+                        1e-12 * sqrt(w.cov_cells[0] * w.cov_cells[1]));
+            assert_true(fabs(c3[3] - c3[1]) <= 1e-12 * sqrt(c3[0] * c3[4]));
+            assert_true(c3[2] == c3[6] && c3[5] == c3[7] && c3[8] == hh);
+            assert_true(fabs(cond1 - cond0) <= 1e-9 * hh);
+            /* no cov3: the same ellipse */
+            w2 = o;
+            trn_refine_shoulders_(&g, &l, LW / 2, LW / 2, &c, 0.0, &w2, NULL);
+            assert_true(w2.cov_cells[0] == w.cov_cells[0] && w2.shoulders == w.shoulders);
+        }
         assert_true(w.shoulders >= 1.0 && w.shoulders <= TRN_SHOULDER_MAX);
         for (k = 0; k < 2; ++k) {
             const double ff = fast_factor(&o, &w, k), sf = slow_factor(&c, &o, k);
