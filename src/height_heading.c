@@ -423,6 +423,7 @@ trn_status_t trn_localize_heights3_(const trn_map_t *map, const trn_grid_f32_t *
     trn_refine3_t *ref;
     trn_loc_basins_t *far;
     double step, *grid;
+    uint64_t cost, work = 0u;
     int32_t kk, pass;
     int found = 0;
 
@@ -441,11 +442,18 @@ trn_status_t trn_localize_heights3_(const trn_map_t *map, const trn_grid_f32_t *
     grid = (double *)(void *)(b + lay.grid);
     far = (trn_loc_basins_t *)(void *)(b + lay.basins);
     out->loc.noise_scale = 1.0;
+    /* one pass scores every (pose, heading) of the window */
+    cost = (uint64_t)(win->x1 - win->x0 + 1) * (uint64_t)(win->y1 - win->y0 + 1) *
+           (uint64_t)(2 * kk + 1);
     pass = 0;
     do {
         /* the configured noise model; once more, rescaled, if the residuals
          * at the answer reject it (trn_localize_dem's rule) */
         trn_loc_refine_cfg_(map, &out->loc, &rc);
+        if (map->cfg.node_budget != 0u && work + cost > (uint64_t)map->cfg.node_budget) {
+            return TRN_E_BUDGET; /* before the pass, as trn_localize_dem's */
+        }
+        work += cost;
         if ((st = trn_height_search_heading(&map->heights, local, rover_x, rover_y, win, cfg, &rc,
                                             map->cfg.inlier_prob, b + lay.search,
                                             ws_bytes - lay.search, grid, best)) != TRN_OK) {

@@ -412,6 +412,41 @@ static void test_recovers_heading(void **state)
     assert_true(sqrt(se_xy / n) < 0.3);
 }
 
+/* The node budget over heading: a pass scores every (pose, heading) of the
+ * window, and the search checks that count against the map's node_budget
+ * before each pass; a budget of one pass less one gives TRN_E_BUDGET, of one
+ * pass (the noise rescale off) the unbudgeted answer. */
+static void test_node_budget_heading(void **state)
+{
+    const trn_window_t win = window_at(60, 60, 3);
+    trn_heading_cfg_t c = {0.0, 5.0 * DEG, 0.0};
+    trn_heading_result_t res, ref;
+    double step = 0.0;
+    int32_t kk = 0;
+    uint32_t pass;
+    (void)state;
+    world_build(13, 0);
+    local_dem(60.4, 59.8, 2.0 * DEG, 0.1, 1);
+    assert_int_equal(trn_height_heading_steps(&g_lg, LR, LR, &c, &step, &kk), TRN_OK);
+    pass = (uint32_t)((win.x1 - win.x0 + 1) * (win.y1 - win.y0 + 1) * (2 * kk + 1));
+    g_w.map.cfg.noise_auto = 0;
+    g_w.map.cfg.node_budget = 0u;
+    assert_int_equal(loc3(&win, &c, &ref), TRN_OK);
+    g_w.map.cfg.node_budget = pass - 1u;
+    assert_int_equal(loc3(&win, &c, &res), TRN_E_BUDGET);
+    g_w.map.cfg.node_budget = 1u;
+    assert_int_equal(trn_localize_dem_heading(&g_w.map, &g_lg, LR, LR, MAXPTS, &win, &c, g_ws,
+                                              sizeof g_ws, &res),
+                     TRN_E_BUDGET);
+    g_w.map.cfg.node_budget = pass;
+    assert_int_equal(loc3(&win, &c, &res), TRN_OK);
+    assert_true(res.loc.x == ref.loc.x && res.loc.y == ref.loc.y &&
+                res.heading_rad == ref.heading_rad &&
+                res.loc.failure_probability == ref.loc.failure_probability);
+    g_w.map.cfg.node_budget = 0u;
+    g_w.map.cfg.noise_auto = 1;
+}
+
 /* The noise model's scale from the data over heading (noise_auto, as
  * trn_localize_dem's): local maps with 3 times the configured noise, turned
  * by up to 6 degrees; the scale comes back within 20 % of 3 in at least 16
@@ -1110,12 +1145,13 @@ static void test_edges_localize(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_w0_bit_equal),  cmocka_unit_test(test_grid_vs_slow),
-        cmocka_unit_test(test_refine_turned), cmocka_unit_test(test_recovers_heading),
-        cmocka_unit_test(test_calibration),   cmocka_unit_test(test_noise_scale_heading),
-        cmocka_unit_test(test_bad_search),    cmocka_unit_test(test_bad_refine),
-        cmocka_unit_test(test_bad_localize),  cmocka_unit_test(test_edges_search),
-        cmocka_unit_test(test_edges_refine),  cmocka_unit_test(test_edges_localize),
+        cmocka_unit_test(test_w0_bit_equal),        cmocka_unit_test(test_grid_vs_slow),
+        cmocka_unit_test(test_refine_turned),       cmocka_unit_test(test_recovers_heading),
+        cmocka_unit_test(test_calibration),         cmocka_unit_test(test_noise_scale_heading),
+        cmocka_unit_test(test_node_budget_heading), cmocka_unit_test(test_bad_search),
+        cmocka_unit_test(test_bad_refine),          cmocka_unit_test(test_bad_localize),
+        cmocka_unit_test(test_edges_search),        cmocka_unit_test(test_edges_refine),
+        cmocka_unit_test(test_edges_localize),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

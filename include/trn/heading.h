@@ -132,7 +132,9 @@ size_t trn_localize_dem_heading_workspace_bytes(const trn_map_t *map, int32_t wi
  *         refines), TRN_E_CAPACITY (more than max_points occupied voxels),
  *         TRN_E_NODATA (local DEM all missing) and, with a height map,
  *         TRN_E_AMBIGUOUS and TRN_E_ILLCOND as trn_localize_dem's (the
- *         window's edge including a refined heading beyond centre +- W);
+ *         window's edge including a refined heading beyond centre +- W),
+ *         and TRN_E_BUDGET, the map's node_budget below a pass's (pose,
+ *         heading) scores;
  *         TRN_E_RANGE also when the
  *         window is not inside the map or the local DEM's size is out of
  *         range.

@@ -95,11 +95,12 @@ typedef struct {
                                       trn_map_cfg_auto sets 1, trn_map_cfg_default 0 */
     int32_t search;              /**< trn_search_t: the height matcher's search over (x, y)
                                       (the search over heading is exhaustive) */
-    uint32_t node_budget;        /**< the height matcher's search over (x, y): most pose
-                                      scores (and, bounded, block bounds) in one
-                                      localization; beyond it trn_localize_dem gives up
-                                      with TRN_E_BUDGET (a hard bound on its time; the
-                                      exhaustive search checks each pass's poses before
+    uint32_t node_budget;        /**< the height matcher's searches: most pose scores (over
+                                      heading, (pose, heading) scores; bounded, also block
+                                      bounds) in one localization; beyond it
+                                      trn_localize_dem and trn_localize_dem_heading give
+                                      up with TRN_E_BUDGET (a hard bound on their time; an
+                                      exhaustive search checks each pass's count before
                                       it starts); 0: none */
 } trn_map_cfg_t;
 

@@ -437,7 +437,8 @@ int cmd_localize_parse(int argc, char **argv, cmd_localize_params_t *p)
          0},
         {"--node-budget", CLI_LONG, &p->node_budget, 0, 2000000000L, 0, "N",
          "the height matcher gives up (exit 1, 'search node budget exhausted') beyond N pose "
-         "scores (bounded: and block bounds): a hard bound on its time (default 0: none)",
+         "scores (over heading: pose-heading scores; bounded: and block bounds): a hard bound "
+         "on its time (default 0: none)",
          0},
     };
     cli_opt_t json_opt = {
