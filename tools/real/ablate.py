@@ -18,6 +18,15 @@ Brier score of the failure probability, and the range over the DEMs of the 1/2/3
 of the right answers (target 39.3 / 86.5 / 98.9 %); then per variant and DEM with the median
 error and time. Writes OUT/ablation.json and OUT/ablation.md. --bench-arg passes a construction
 to bench_real (e.g. --bench-arg=--outliers=0.2); --reuse takes results already in OUT.
+
+With --bench-arg=--prior-miss=F (a share F of the cases with a prior that misses: the truth
+1.5 cells or more outside the search window, so never right) the first table is over the cases
+whose prior hits, and a third table gives per variant, over the cases whose prior misses: the
+fixes (status ok), the confidently wrong (status ok, failure probability below 0.5, off by more
+than 1.5 cells), the answers flagged ambiguous and ill_conditioned, the count with a failure
+probability below 0.5, and the Brier score of the failure probability against 1, over all of
+them and over those not flagged ill_conditioned; a fourth the same per variant and DEM. With
+--prior-miss=1 only these two.
 """
 import argparse
 import json
@@ -152,6 +161,11 @@ def main(argv):
         res[name] = {"what": what, "dems": {}}
         for d in dem_ids:
             m = dems[d]["metrics"]["trn"]
+            if m.get("prior_miss") is not None:
+                res[name].setdefault("miss", {})[d] = m["prior_miss"]
+                m = m["prior_hit"]
+                if m is None:  # --prior-miss=1: no case whose prior hits
+                    continue
             res[name]["dems"][d] = {
                 "right_pct": 100.0 * m["rate"], "median_err_cells": m["median_err_cells"],
                 "cover_pct": m["calibration"]["inside_pct"], "conf_wrong": m["confidently_wrong"],
@@ -163,6 +177,8 @@ def main(argv):
     for name in names:
         v = list(res[name]["dems"].values())
         n = sum(x["n"] for x in v)
+        if n == 0:
+            continue
         c = [[x["cover_pct"][k] for x in v] for k in range(3)]
         lines.append(f"| {name}: {res[name]['what']} | {100.0 * sum(x['right'] for x in v) / n:.2f} | "
                      f"{sum(x['conf_wrong'] for x in v)} | {sum(x['fixes'] for x in v)} | "
@@ -176,7 +192,31 @@ def main(argv):
             lines.append(f"| {name} | {d} | {v['right_pct']:.1f} | {v['median_err_cells']:.3f} | "
                          f"{c[0]:.1f} / {c[1]:.1f} / {c[2]:.1f} | {v['conf_wrong']} | {v['fixes']} | "
                          f"{v['median_ms']:.1f} |")
-    md = "\n".join(lines) + "\n"
+    if not any(res[name]["dems"] for name in names):
+        lines = []  # --prior-miss=1: no case whose prior hits, only the missing priors' tables
+    if any("miss" in res[name] for name in names):
+        lines += ["", "Cases whose prior misses (the truth outside the window; never right):", "",
+                  "| removed | cases | fixes | conf. wrong | ambiguous | ill-conditioned | p < 0.5 | Brier | "
+                  "Brier, not ill-cond. (n) |",
+                  "|---|---|---|---|---|---|---|---|---|"]
+        for name in names:
+            v = list(res[name].get("miss", {}).values())
+            n = sum(x["n"] for x in v)
+            nb, nu = sum(x["n_failure_probability"] for x in v), sum(x["n_unflagged"] for x in v)
+            br = sum(x["brier"] * x["n_failure_probability"] for x in v if x["brier"] is not None)
+            bu = sum(x["brier_unflagged"] * x["n_unflagged"] for x in v if x["brier_unflagged"] is not None)
+            lines.append(f"| {name} | {n} | {sum(x['fixes'] for x in v)} | "
+                         f"{sum(x['confidently_wrong'] for x in v)} | "
+                         f"{sum(x['status'].get('ambiguous', 0) for x in v)} | "
+                         f"{sum(x['status'].get('ill_conditioned', 0) for x in v)} | "
+                         f"{sum(x['below_half'] for x in v)} | {br / nb if nb else float('nan'):.4f} | "
+                         f"{bu / nu if nu else float('nan'):.4f} ({nu}) |")
+        lines += ["", "| variant | DEM | cases | fixes | conf. wrong | p < 0.5 | Brier |", "|---|---|---|---|---|---|---|"]
+        for name in names:
+            for d, x in res[name].get("miss", {}).items():
+                lines.append(f"| {name} | {d} | {x['n']} | {x['fixes']} | {x['confidently_wrong']} | "
+                             f"{x['below_half']} | {x['brier'] if x['brier'] is not None else float('nan'):.4f} |")
+    md = "\n".join(lines).lstrip("\n") + "\n"
     with open(os.path.join(a.out, "ablation.md"), "w") as f:
         f.write(md)
     with open(os.path.join(a.out, "ablation.json"), "w") as f:

@@ -5,7 +5,7 @@
     /usr/bin/python3 tools/real/bench_real.py [--dem ID ...] [--dem-file PATH ...] [--cases N] [--seed S]
         [--radius R] [--resample bilinear|cubic] [--truth-fine K] [--fine-map mean|point]
         [--fine-local point|mean|binned] [--noise-scale F] [--outliers P] [--mast-view H]
-        [--subcell axis|quad2d]
+        [--subcell axis|quad2d] [--prior-miss F] [--miss-max C]
         [--trn PATH] [--trn-mode auto|batch|single]
         [--out DIR] [--keep-cases] [--no-plot] [-- TRN_ARGS...]
 
@@ -48,12 +48,30 @@ with --truth-fine) is unseen (NaN): the line from the mast head to the cell cent
 ground must pass above the surface (bilinear) at every sample, samples at most half a
 grid cell apart (cases.mast_visible). Default: every cell of the wedge seen.
 
+--prior-miss F (a prior that misses): a share F of each DEM's cases (round(F N), chosen by a
+generator of their own) get a prior displaced so that the truth lies OUTSIDE the search
+window: its Chebyshev distance from the truth uniform in [window + 1.5, C] cells, C from
+--miss-max (default 12 = twice the +-6-cell window's half-width: from just past the edge to
+a window's width away), on a random axis and side. The dead reckoning drifted beyond what the
+window was sized for; no pose in the window is within 1.5 cells of the truth, and what a
+localizer can still do right is say so: not answer `ok` and give a failure probability near 1.
+Such a case is never counted right, whatever its error (the answer the window was asked for
+does not exist); its failure, for the Brier score, is always 1. The truths keep a margin of
+R + window + C + 3 cells from the map's edge, so they differ from those without the option.
+
 Metrics per DEM and method: success (radial error <= 1.5 cells) rate, median error
 (cells) over all cases and over the successes, median time per localization (ms);
 trn also: confidently wrong (error > 1.5 cells, status ok, failure_probability < 0.5),
 calibration over the successful cases with a finite covariance (fraction inside the
 1, 2, 3-sigma ellipses of the reported 2x2 covariance; targets 39.3 / 86.5 / 98.9 %)
 and reliability (bins of failure_probability against the observed failure rate).
+With --prior-miss, trn's metrics also hold `prior_hit` (the same metrics over the cases whose
+prior does not miss) and `prior_miss` (over the missing ones: status counts, fixes = status ok,
+confidently wrong = status ok with failure_probability < 0.5 and error > 1.5 cells, the Brier
+score of failure_probability against 1 over all of them and over those not ill_conditioned,
+its median and the count below 0.5, and the answers within 1.5 cells of the truth all the
+same, outside the window: counted, never right); each is printed. The overall `confidently
+wrong` counts every status-ok answer under 0.5 that is not a success, missing priors' too.
 Prints a table per DEM; writes OUT/bench.json, OUT/reliability.png and
 OUT/match_<ID>.png (tools/real/plot_real.py). OUT defaults to build/real/.
 Exit status 0 ok, 1 bad input or a failed run (one line on stderr).
@@ -132,6 +150,12 @@ def parse_args(argv):
                     help="share of the seen local cells that are stereo blunders: a height uniform over "
                          "the seen heights' range widened by that range on each side (default 0); trn is "
                          "not told")
+    ap.add_argument("--prior-miss", type=float, default=0.0, metavar="F",
+                    help="share of the cases whose prior misses: displaced so that the truth lies 1.5 "
+                         "cells or more outside the search window (default 0)")
+    ap.add_argument("--miss-max", type=float, default=None, metavar="C",
+                    help="with --prior-miss: a missing prior's largest Chebyshev distance from the "
+                         "truth, cells (default 12, twice the window's half-width; at least 7.5)")
     ap.add_argument("--subcell", default="axis", choices=("axis", "quad2d"),
                     help="peers' sub-cell fit: a parabola per axis (default) or the 3x3 2-D quadratic")
     ap.add_argument("--trn", default=os.path.join(dems.ROOT, "build", "host-release", "trn"),
@@ -164,6 +188,15 @@ def parse_args(argv):
         raise Fail(f"--noise-scale {a.noise_scale}: must be a finite number >= 0")
     if not 0.0 <= a.outliers < 1.0:
         raise Fail(f"--outliers {a.outliers}: must be in [0, 1)")
+    if not 0.0 <= a.prior_miss <= 1.0:
+        raise Fail(f"--prior-miss {a.prior_miss}: must be in [0, 1]")
+    miss_min = casemod.CaseParams.window_cells + 1.5
+    if a.miss_max is not None and a.prior_miss == 0.0:
+        raise Fail(f"--miss-max {a.miss_max}: needs --prior-miss F > 0")
+    a.miss_max = 2.0 * casemod.CaseParams.window_cells if a.miss_max is None else a.miss_max
+    if not (a.miss_max >= miss_min and math.isfinite(a.miss_max)):
+        raise Fail(f"--miss-max {a.miss_max}: must be a finite distance >= {miss_min:g} cells "
+                   f"(1.5 cells past the window's edge)")
     if a.mast_view is not None and not (a.mast_view > 0.0 and math.isfinite(a.mast_view)):
         raise Fail(f"--mast-view {a.mast_view}: must be a finite height > 0 metres")
     if a.fine_local != "point" and a.truth_fine is None:
@@ -279,9 +312,12 @@ def med(v):
     return float(np.median(v)) if v else None
 
 
-def metrics(records, method):
+def metrics(records, method, split=True):
+    """A method's metrics over the records; a case whose prior misses is never a success.
+    For trn with missing priors among the records (and split): also `prior_hit`, the same
+    metrics over the others, and `prior_miss` (miss_metrics)."""
     errs = [r[method]["err_cells"] for r in records]
-    ok = [e <= SUCCESS_CELLS for e in errs]
+    ok = [e <= SUCCESS_CELLS and not r.get("prior_miss") for e, r in zip(errs, records)]
     n = len(records)
     m = {"n": n, "success": int(sum(ok)), "rate": sum(ok) / n,
          "median_err_cells": med([e if math.isfinite(e) else 1e9 for e in errs]),
@@ -311,7 +347,42 @@ def metrics(records, method):
                      "observed": float(np.mean([f for _, f in inb])) if inb else None})
     m["reliability"] = bins
     m["brier"] = float(np.mean([(p - f) ** 2 for p, f in fp])) if fp else None
+    if split and any(r.get("prior_miss") for r in records):
+        hit = [r for r in records if not r.get("prior_miss")]
+        m["prior_hit"] = metrics(hit, method, split=False) if hit else None
+        m["prior_miss"] = miss_metrics([r for r in records if r.get("prior_miss")])
     return m
+
+
+def miss_metrics(records):
+    """trn on the cases whose prior misses (the truth outside the window): every one a failure.
+    fixes: status ok; confidently wrong: status ok, failure_probability < 0.5 and the error
+    above 1.5 cells; near_truth: answers within 1.5 cells of the truth all the same (outside
+    the window; counted, never right); Brier: of failure_probability against 1, over all of
+    them and over those not flagged ill_conditioned (status ok or ambiguous: where the failure
+    probability is what decides)."""
+    t = [r["trn"] for r in records]
+
+    def probs(xs):
+        v = [x.get("failure_probability") for x in xs]
+        return [p for p in v if p is not None and math.isfinite(p)]
+    fp = probs(t)
+    fu = probs([x for x in t if x["status"] in ("ok", "ambiguous")])
+    return {"n": len(t),
+            "status": {s: sum(1 for x in t if x["status"] == s) for s in sorted({x["status"] for x in t})},
+            "fixes": sum(1 for x in t if x["status"] == "ok"),
+            "confidently_wrong": sum(1 for x in t if x["status"] == "ok" and x["err_cells"] > SUCCESS_CELLS
+                                     and x.get("failure_probability") is not None
+                                     and x["failure_probability"] < 0.5),
+            "near_truth": sum(1 for x in t if x["err_cells"] <= SUCCESS_CELLS),
+            "n_failure_probability": len(fp),
+            "brier": float(np.mean([(p - 1.0) ** 2 for p in fp])) if fp else None,
+            "n_unflagged": len(fu),
+            "brier_unflagged": float(np.mean([(p - 1.0) ** 2 for p in fu])) if fu else None,
+            "median_failure_probability": med(fp),
+            "below_half": sum(1 for p in fp if p < 0.5),
+            "truth_outside_cells": [min(r["truth_outside_cells"] for r in records),
+                                    max(r["truth_outside_cells"] for r in records)]}
 
 
 def fmt(v, spec):
@@ -332,6 +403,9 @@ def print_table(dem_id, meta, ms):
         noise += f", {100 * meta['outliers']:g} % of the seen cells blunders (trn not told)"
     if meta.get("mast_view"):
         noise += f", seen from a {meta['mast_view']:g} m mast (hidden cells unseen)"
+    if meta.get("prior_miss"):
+        noise += (f", {100 * meta['prior_miss']:g} % of the priors miss (truth 1.5-"
+                  f"{meta['miss_max'] - meta['window_m'] / meta['cell_m']:g} cells outside the window)")
     print(f"\n{dem_id} ({meta['character']}, held_out={meta['held_out']}): {meta['cols']} x {meta['rows']} "
           f"cells of {meta['cell_m']:g} m, {ms['trn']['n']} cases, R = {meta['radius']} cells, "
           f"{meta['resample']}, trn {meta['trn_mode']}{fine}{noise}")
@@ -351,6 +425,18 @@ def print_table(dem_id, meta, ms):
     rel = "  ".join(f"[{b['lo']:g},{b['hi']:g}) {b['n']}: {fmt(b['observed'], '.2f')}"
                     for b in t["reliability"] if b["n"])
     print(f"  trn reliability (bin n: observed failure rate): {rel}")
+    h, mi = t.get("prior_hit"), t.get("prior_miss")
+    if mi is not None:
+        if h is not None:
+            print(f"  trn, the {h['n']} cases whose prior hits: right {h['success']} ({100 * h['rate']:.1f} %); "
+                  f"confidently wrong {h['confidently_wrong']}; fixes {h['status'].get('ok', 0)}; "
+                  f"Brier {fmt(h['brier'], '.4f')}")
+        print(f"  trn, the {mi['n']} cases whose prior misses (truth {mi['truth_outside_cells'][0]:.1f}-"
+              f"{mi['truth_outside_cells'][1]:.1f} cells outside the window): status {mi['status']}; "
+              f"confidently wrong {mi['confidently_wrong']}; failure probability below 0.5 in "
+              f"{mi['below_half']}, median {fmt(mi['median_failure_probability'], '.3g')}; "
+              f"Brier {fmt(mi['brier'], '.4f')} (over the {mi['n_unflagged']} not ill_conditioned "
+              f"{fmt(mi['brier_unflagged'], '.4f')}); within 1.5 cells of the truth all the same {mi['near_truth']}")
 
 
 # --- one DEM --------------------------------------------------------------------
@@ -382,7 +468,7 @@ def bench_dem(a, dem_id, batch):
                            noise0_m=casemod.CaseParams.noise0_m * a.noise_scale,
                            noise_k=casemod.CaseParams.noise_k * a.noise_scale,
                            local=a.fine_local if a.truth_fine else "point", mast_m=a.mast_view,
-                           outlier_frac=a.outliers)
+                           outlier_frac=a.outliers, prior_miss=a.prior_miss, miss_max_cells=a.miss_max)
     tmp = tempfile.mkdtemp(prefix=f"bench_real_{dem_id}_")
     try:
         t0 = time.perf_counter()
@@ -400,7 +486,10 @@ def bench_dem(a, dem_id, batch):
         for cs_, tr in zip(cs, trn_res):
             rec = {"index": cs_.index, "truth": list(cs_.truth), "prior": list(cs_.prior),
                    "window_m": cs_.window_m, "azimuth_deg": cs_.azimuth_deg, "offset_m": cs_.offset_m,
-                   "seen_cells": int(cs_.seen.sum())}
+                   "seen_cells": int(cs_.seen.sum()), "prior_miss": cs_.prior_miss,
+                   # Chebyshev distance of the truth beyond the window's edge, cells (< 0: inside)
+                   "truth_outside_cells": max(abs(cs_.prior[0] - cs_.truth[0]), abs(cs_.prior[1] - cs_.truth[1]))
+                   / dem.c - p.window_cells}
             tr["err_cells"] = radial_cells(tr, cs_.truth, dem.c)
             tr["mahalanobis2"] = mahalanobis2(tr, cs_.truth) if math.isfinite(tr["err_cells"]) else None
             rec["trn"] = tr
@@ -425,10 +514,12 @@ def bench_dem(a, dem_id, batch):
                 "fine_map": a.fine_map if a.truth_fine else None,
                 "fine_local": a.fine_local if a.truth_fine else None,
                 "noise_scale": a.noise_scale, "outliers": a.outliers, "mast_view": a.mast_view,
+                "prior_miss": a.prior_miss, "miss_max": a.miss_max if a.prior_miss else None,
                 "fine_cell_m": fine.c if fine is not None else None,
                 "fine_path": fine.path if fine is not None else None}
         # the figure's case: the first trn success (else case 0); keep its local DEM
-        pick = next((r["index"] for r in records if r["trn"]["err_cells"] <= SUCCESS_CELLS), 0)
+        pick = next((r["index"] for r in records if r["trn"]["err_cells"] <= SUCCESS_CELLS
+                     and not r["prior_miss"]), 0)
         os.makedirs(a.out, exist_ok=True)
         keep = os.path.join(a.out, f"match_{dem_id}_local.tif")
         shutil.copyfile(cs[pick].path, keep)
@@ -468,6 +559,8 @@ def main(argv):
         res = {"config": {"cases": a.cases, "seed": a.seed, "radius": a.radius, "resample": a.resample,
                           "subcell": a.subcell, "truth_fine": a.truth_fine, "fine_map": a.fine_map,
                           "fine_local": a.fine_local, "mast_view": a.mast_view, "noise_scale": a.noise_scale,
+                          "outliers": a.outliers, "prior_miss": a.prior_miss,
+                          "miss_max": a.miss_max if a.prior_miss else None,
                           "trn": a.trn, "trn_args": a.trn_extra, "success_cells": SUCCESS_CELLS},
                "dems": {}}
         for d in a.dem:

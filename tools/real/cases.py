@@ -17,6 +17,17 @@ For a global DEM G (north-up, square cell c metres) a case is:
 * prior: truth + a uniform offset in +-prior_cells cells per axis; search window
   +-window_cells cells (half-width, metres in the list file).
 
+A prior that misses (`prior_miss` F > 0, bench_real.py --prior-miss F): round(F n) of the n
+cases, chosen by a generator of their own (seeded (seed, 1)), get instead a prior whose
+Chebyshev distance from the truth is uniform in [window_cells + 1.5, miss_max_cells] cells
+(default 7.5-12 with the +-6-cell window: from just past the window's edge to one window's
+width away; the axis, the side and the offset along the other axis, uniform within that
+distance, drawn at random): the truth lies at least 1.5 cells outside the search window, so
+no pose in the window is within 1.5 cells of it. The dead reckoning drifted past what the
+window was sized for. The margin then grows to R + window + miss_max + 3 cells (every
+window as far inside the map as without misses), so the truths differ from those of the
+construction without misses; the main generator's draws are the same in number and order.
+
 Model error (`fine`, bench_real.py --truth-fine K): the global map G is then the fine
 DEM F block-averaged over K x K cells (block_average: cell c = K c_F, the same
 corner, so coarse cell (I, J)'s centre is the centroid of F's cells (KI..KI+K-1,
@@ -200,10 +211,18 @@ class CaseParams:
     local: str = "point"  # with `fine`: "point" | "mean" | "binned" (see make_local)
     mast_m: float = 0.0  # > 0: a mast that high sees the cells (mast_visible); 0: every cell in the wedge
     outlier_frac: float = 0.0  # share of seen cells that are stereo blunders (see make_local)
+    prior_miss: float = 0.0  # share of the cases whose prior misses (the truth outside the window)
+    miss_max_cells: float = 12.0  # a missing prior's largest Chebyshev distance from the truth, cells
+
+    @property
+    def miss_min_cells(self):
+        """A missing prior's least Chebyshev distance from the truth: 1.5 cells past the window."""
+        return self.window_cells + 1.5
 
     @property
     def margin_cells(self):
-        return self.radius + self.window_cells + self.prior_cells + 3
+        far = max(self.prior_cells, self.miss_max_cells) if self.prior_miss > 0.0 else self.prior_cells
+        return self.radius + self.window_cells + far + 3
 
 
 @dataclass
@@ -218,6 +237,7 @@ class Case:
     offset_m: float
     path: str = ""
     extra: dict = field(default_factory=dict)
+    prior_miss: bool = False  # the prior misses: the truth lies outside the window
 
 
 def rover_frame_offsets(radius, c):
@@ -391,6 +411,33 @@ def draw_truth(dem, rng, p, tries=10000):
     raise InputError(f"{dem.path}: no position with a mostly valid local map")
 
 
+def miss_choice(n, seed, p):
+    """Which of n cases get a prior that misses (a set of indices, round(prior_miss n) of
+    them), and the generator of their offsets: both from a generator of their own, seeded
+    (seed, 1), so that the main generator's draws stay those of the construction without."""
+    if not 0.0 <= p.prior_miss <= 1.0:
+        raise InputError(f"prior_miss {p.prior_miss}: must be in [0, 1]")
+    if p.prior_miss > 0.0 and not (p.miss_max_cells >= p.miss_min_cells and math.isfinite(p.miss_max_cells)):
+        raise InputError(f"miss_max_cells {p.miss_max_cells}: must be at least window + 1.5 = "
+                         f"{p.miss_min_cells:g} cells")
+    gm = np.random.default_rng((seed, 1))
+    k = int(round(p.prior_miss * n))
+    return (set(int(i) for i in gm.permutation(n)[:k]) if k else set()), gm
+
+
+def miss_offset(gm, p):
+    """A missing prior's offset from the truth (east, north), cells: its Chebyshev distance
+    uniform in [window + 1.5, miss_max], on a random axis and side, the other axis uniform
+    within that distance."""
+    dist = gm.uniform(p.miss_min_cells, p.miss_max_cells)
+    axis = int(gm.integers(2))
+    side = 1.0 if gm.uniform() < 0.5 else -1.0
+    d = np.empty(2)
+    d[axis] = side * dist
+    d[1 - axis] = gm.uniform(-dist, dist)
+    return d
+
+
 def generate(dem, n, seed, p, folder=None, fine=None):
     """n seeded cases; with `folder`, each local DEM is written there as a GeoTIFF
     and a batch list (LOCAL.tif PRIOR_X PRIOR_Y WINDOW_M per line) as cases.txt.
@@ -398,6 +445,7 @@ def generate(dem, n, seed, p, folder=None, fine=None):
     from it (model error); everything else is in dem's cells."""
     rng = np.random.default_rng(seed)
     c = dem.c
+    misses, gm = miss_choice(n, seed, p)
     cases = []
     for i in range(n):
         truth = draw_truth(dem, rng, p)
@@ -405,8 +453,10 @@ def generate(dem, n, seed, p, folder=None, fine=None):
         off = float(rng.uniform(-p.offset_m, p.offset_m))
         local, seen = make_local(dem, truth, p, rng, az, off, fine)
         d = rng.uniform(-p.prior_cells, p.prior_cells, 2) * c
+        if i in misses:
+            d = miss_offset(gm, p) * c
         prior = (truth[0] + float(d[0]), truth[1] + float(d[1]))
-        cases.append(Case(i, truth, prior, p.window_cells * c, local, seen, az, off))
+        cases.append(Case(i, truth, prior, p.window_cells * c, local, seen, az, off, prior_miss=i in misses))
     if folder is not None:
         write_cases(cases, c, folder)
     return cases

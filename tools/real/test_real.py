@@ -40,6 +40,12 @@ On small synthetic DEMs with analytic surfaces (no download, ~10 s):
   floor up to d (H + D) / H; the cases' heights unchanged where seen;
 * tools/real/rover_map_error.py on a plane: no interpolation error, the binning error the
   plane's rise to each cell's points' centroid;
+* --prior-miss F: round(F n) cases get a prior whose Chebyshev distance from the truth lies in
+  [window + 1.5, miss max] cells (so the truth lies 1.5 cells or more outside the window), the
+  others within +-4; the margin grows by the miss; the main draws (azimuth, offset) unchanged;
+  F = 0 the cases bit for bit; a missing case is never right in the metrics, even 0.5 cells
+  off, and its failure counts 1 in the Brier score; bad values exit 1 with one line; end to
+  end (when trn is built) the JSON's missing cases have their truth outside their window;
 * --dem-file (a user's DEM): a missing or geographic file exits 1 with one line; a
   projected synthetic DEM runs end to end under its file name (when trn is built);
 * if build/host-release/trn exists: trn localize recovers the noiseless integer case
@@ -609,6 +615,73 @@ def test_outliers():
     check(abs(m - 0.2) < 0.025, f"--outliers 0.2: {100 * m:.1f} % of the seen cells changed (expected 20 %)")
 
 
+def test_prior_miss():
+    dem = synth_dem(hills, n=200)
+    c = dem.c
+    p0 = cm.CaseParams(radius=10)
+    ref = cm.generate(dem, 200, 9, p0)
+    same = cm.generate(dem, 200, 9, cm.CaseParams(radius=10, prior_miss=0.0))
+    check(all(a.truth == b.truth and a.prior == b.prior and np.array_equal(a.local, b.local, equal_nan=True)
+              and not b.prior_miss for a, b in zip(ref, same)), "--prior-miss 0: the cases bit for bit")
+    p = cm.CaseParams(radius=10, prior_miss=0.3)
+    cs = cm.generate(dem, 200, 9, p)
+    miss = [x for x in cs if x.prior_miss]
+    hit = [x for x in cs if not x.prior_miss]
+    check(len(miss) == 60, f"--prior-miss 0.3 of 200: 60 missing priors ({len(miss)})")
+    cheb = np.array([max(abs(x.prior[0] - x.truth[0]), abs(x.prior[1] - x.truth[1])) for x in miss]) / c
+    win = np.array([x.window_m for x in miss]) / c
+    out = cheb - win
+    check(len(miss) > 0 and out.min() >= 1.5 - 1e-9 and cheb.max() <= 12.0 + 1e-9 and cheb.min() < 8.0
+          and cheb.max() > 11.5,
+          f"missing priors: the truth {out.min():.2f}-{out.max():.2f} cells outside its window (>= 1.5), "
+          f"Chebyshev {cheb.min():.2f}-{cheb.max():.2f} cells (in [7.5, 12], spread over it)")
+    d = np.array([[x.prior[0] - x.truth[0], x.prior[1] - x.truth[1]] for x in miss]) / c
+    big = np.abs(d).argmax(axis=1)
+    sides = {(int(k), bool(d[i, k] > 0)) for i, k in enumerate(big)}
+    check(len(sides) == 4, f"missing priors on both axes and both sides ({len(sides)} of 4)")
+    dh = np.array([[x.prior[0] - x.truth[0], x.prior[1] - x.truth[1]] for x in hit]) / c
+    check(np.abs(dh).max() <= 4.0, f"the other priors within +-4 cells (max {np.abs(dh).max():.2f})")
+    rc = np.array([dem.frac_index(*x.truth) for x in cs])
+    m = p.margin_cells
+    check(m == 10 + 6 + 12 + 3 and rc.min() >= m - 1e-9 and rc.max() <= dem.z.shape[0] - 1 - m + 1e-9,
+          f"--prior-miss: truths at least {m:g} cells from the edge (R + window + 12 + 3)")
+    check(all(a.azimuth_deg == b.azimuth_deg and a.offset_m == b.offset_m for a, b in zip(ref, cs)),
+          "--prior-miss: the main generator's azimuths and offsets unchanged")
+    cs2 = cm.generate(dem, 200, 9, p)
+    check([x.prior for x in cs2] == [x.prior for x in cs], "--prior-miss: same seed, same priors")
+    # the metrics: a missing case is never right, its failure is 1
+    import bench_real as br
+    recs = []
+    for k, (err, pm, st, fp) in enumerate(((0.2, False, "ok", 0.01), (3.0, False, "ambiguous", 0.4),
+                                           (0.5, True, "ill_conditioned", 0.001), (4.0, True, "ok", 0.01),
+                                           (5.0, True, "ambiguous", 0.9))):
+        recs.append({"prior_miss": pm, "truth_outside_cells": 2.0 if pm else -3.0,
+                     "trn": {"err_cells": err, "status": st, "failure_probability": fp, "mahalanobis2": 1.0,
+                             "time_ms": 1.0}})
+    mt = br.metrics(recs, "trn")
+    mi = mt["prior_miss"]
+    want_brier = np.mean([(0.01 - 0) ** 2, (0.4 - 1) ** 2, (0.001 - 1) ** 2, (0.01 - 1) ** 2, (0.9 - 1) ** 2])
+    check(mt["success"] == 1 and mt["prior_hit"]["success"] == 1 and mt["prior_hit"]["n"] == 2
+          and abs(mt["brier"] - want_brier) < 1e-12,
+          f"metrics: the missing case 0.5 cells off is not right (successes {mt['success']}), Brier "
+          f"{mt['brier']:.4f} counts it failed ({want_brier:.4f})")
+    want_miss = np.mean([(0.001 - 1) ** 2, (0.01 - 1) ** 2, (0.9 - 1) ** 2])
+    want_unfl = np.mean([(0.01 - 1) ** 2, (0.9 - 1) ** 2])
+    check(mi["n"] == 3 and mi["fixes"] == 1 and mi["confidently_wrong"] == 1 and mi["near_truth"] == 1
+          and mi["below_half"] == 2 and abs(mi["brier"] - want_miss) < 1e-12
+          and mi["n_unflagged"] == 2 and abs(mi["brier_unflagged"] - want_unfl) < 1e-12,
+          f"miss metrics: 3 cases, 1 fix, 1 confidently wrong, 1 near the truth, Brier against 1 {mi['brier']:.4f} "
+          f"({want_miss:.4f}), not ill_conditioned {mi['brier_unflagged']:.4f} ({want_unfl:.4f})")
+    b = os.path.join(HERE, "bench_real.py")
+    for args, what in ((["--prior-miss", "1.5"], "--prior-miss 1.5"), (["--prior-miss", "-0.1"], "--prior-miss -0.1"),
+                       (["--prior-miss", "0.5", "--miss-max", "7"], "--miss-max 7"),
+                       (["--prior-miss", "0.5", "--miss-max", "inf"], "--miss-max inf"),
+                       (["--miss-max", "10"], "--miss-max without --prior-miss")):
+        r = subprocess.run([sys.executable, b] + args, capture_output=True, text=True)
+        check(r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1 and r.stdout == "",
+              f"bench_real {what}: exit 1, one line ({r.stderr.strip()})")
+
+
 def test_dem_file():
     """--dem-file: a user's own DEM. Missing and geographic files exit 1 with one line;
     a projected one runs end to end (when trn is built) under its file name's id."""
@@ -661,6 +734,25 @@ def test_dem_file():
             rate = d["metrics"]["trn"]["rate"]
             check(rate >= 0.9, f"bench_real --dem-file: trn right in {100 * rate:.0f} % of 20 noisy cases "
                                f"on smooth rolling terrain (>= 90 %)")
+        out2 = os.path.join(tmp, "out_miss")
+        r = subprocess.run([sys.executable, b, "--dem-file", paths["my_hills"], "--cases", "20", "--seed", "3",
+                            "--radius", "12", "--no-plot", "--prior-miss", "0.5", "--out", out2],
+                           capture_output=True, text=True)
+        ok = r.returncode == 0 and os.path.exists(os.path.join(out2, "bench.json"))
+        d = json.load(open(os.path.join(out2, "bench.json")))["dems"]["my_hills"] if ok else None
+        if d is None:
+            check(False, f"bench_real --prior-miss 0.5 runs (exit {r.returncode}: {r.stderr.strip()[-200:]})")
+            return
+        c = d["meta"]["cell_m"]
+        miss = [x for x in d["cases"] if x["prior_miss"]]
+        outside = [max(abs(x["prior"][0] - x["truth"][0]), abs(x["prior"][1] - x["truth"][1])) - x["window_m"]
+                   for x in miss]
+        t = d["metrics"]["trn"]
+        check(len(miss) == 10 and min(outside) >= 1.5 * c - 1e-6 and t["prior_miss"]["n"] == 10
+              and t["prior_hit"]["n"] == 10 and t["success"] == t["prior_hit"]["success"]
+              and "prior misses" in r.stdout,
+              f"bench_real --prior-miss 0.5, 20 cases: 10 missing, each truth {min(outside) / c:.2f} cells "
+              f"or more outside its window (>= 1.5), scored apart, none right, printed")
 
 
 def main():
@@ -679,6 +771,7 @@ def main():
     test_binned()
     test_mast_view()
     test_rover_map_error()
+    test_prior_miss()
     test_dem_file()
     if FAILS:
         print(f"test_real: {len(FAILS)} check(s) failed", file=sys.stderr)
