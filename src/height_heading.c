@@ -332,12 +332,11 @@ static int refine_starts(const trn_map_t *map, const trn_grid_f32_t *local, int3
         }
     }
     /* then the far basins (trn_loc_find_basins3_), at their own headings: one
-     * replaces the answer if trn_loc_basin_wins_ says so (its refined ln L
-     * beats it by more than TRN_REFINE_FAR_NATS, or within that margin its
-     * zone holds more mass), the answer taking its slot (far->moved, mx, my,
-     * mk: the new start) */
+     * replaces the answer if trn_loc_far_wins_ says so (its refined ln L
+     * beats it by more than TRN_REFINE_FAR_NATS), the answer taking its slot
+     * (far->moved, mx, my, mk: the new start) */
     for (k = 0; found && k < far->n; ++k) {
-        int32_t ax, ay, wins;
+        int32_t ax, ay;
         far->ok[k] = trn_refine_pose_heading(&map->heights, local, rx, ry, far->x[k], far->y[k],
                                              heading + (double)(far->k[k] - b->half_steps - b->k) *
                                                            b->step_rad,
@@ -345,20 +344,13 @@ static int refine_starts(const trn_map_t *map, const trn_grid_f32_t *local, int3
         far->px[k] = cand->pos.x;
         far->py[k] = cand->pos.y;
         far->rll[k] = cand->pos.ll;
-        /* the answer's start so far in the slot first: trn_loc_basin_wins_
-         * weighs the zone around it */
+        /* the answer's start so far goes into the slot */
         ax = far->moved ? far->mx : b->x;
         ay = far->moved ? far->my : b->y;
-        wins = far->ok[k] ? trn_loc_basin_wins_(grid, win, 2 * b->half_steps + 1,
-                                                map->cfg.min_exclusion_cells, far, k, &cand->pos,
-                                                ax, ay, &ref->pos)
-                          : 0;
-        if (wins != 0) {
+        if (far->ok[k] && trn_loc_far_wins_(cand->pos.x, cand->pos.y, cand->pos.ll, ref->pos.x,
+                                            ref->pos.y, ref->pos.ll, ref->pos.ll_inflation)) {
             const trn_refine3_t t = *ref;
             const int32_t sx = far->x[k], sy = far->y[k], sk = far->k[k];
-            /* a move by the zones' mass leaves the likelihood's highest pose
-             * where it was: on the window's edge, still no fix */
-            far->edge = far->edge || (wins == 2 && trn_loc_on_edge_(win, ax, ay));
             far->x[k] = ax;
             far->y[k] = ay;
             far->k[k] = far->moved ? far->mk : b->k + b->half_steps;
@@ -477,7 +469,7 @@ trn_status_t trn_localize_heights3_(const trn_map_t *map, const trn_grid_f32_t *
                                         (size_t)(win->y1 - win->y0 + 1) +
                                     (size_t)(far->my - win->y0) * (size_t)(win->x1 - win->x0 + 1) +
                                     (size_t)(far->mx - win->x0)];
-            out->loc.on_window_edge = trn_loc_on_edge_(win, far->mx, far->my) || far->edge;
+            out->loc.on_window_edge = trn_loc_on_edge_(win, far->mx, far->my);
         }
         /* the final answer's ellipse: ln L's fall at 2 sds at its heading,
          * cov3's position block stretched alike (trn_localize_dem's

@@ -85,66 +85,14 @@ int trn_loc_far_wins_(double cx, double cy, double cll, double ax, double ay, do
     return beyond_radius(cx, cy, ax, ay) && cll - all > TRN_REFINE_FAR_NATS * fmax(1.0, infl);
 }
 
-double trn_loc_zone_lse_(const double *g, const trn_window_t *win, int32_t slices, int32_t cx,
-                         int32_t cy, int32_t radius, double infl)
-{
-    const size_t poses = (size_t)(win->x1 - win->x0 + 1) * (size_t)(win->y1 - win->y0 + 1);
-    double top = -(double)INFINITY, sum = 0.0;
-    int32_t x, y, s, pass;
-    /* two passes: the largest term, then the sum relative to it */
-    for (pass = 0; pass < 2; ++pass) {
-        for (s = 0; s < slices; ++s) {
-            for (y = cy - radius; y <= cy + radius; ++y) {
-                for (x = cx - radius; x <= cx + radius; ++x) {
-                    double v;
-                    if (x < win->x0 || x > win->x1 || y < win->y0 || y > win->y1) {
-                        continue;
-                    }
-                    v = grid_at(g + (size_t)s * poses, win, x, y);
-                    if (!isfinite(v)) {
-                        continue;
-                    }
-                    if (pass == 0) {
-                        top = fmax(top, v / infl);
-                    } else {
-                        sum += exp(v / infl - top);
-                    }
-                }
-            }
-        }
-        if (!isfinite(top)) {
-            return top;
-        }
-    }
-    return top + log(sum);
-}
-
-int trn_loc_basin_wins_(const double *g, const trn_window_t *win, int32_t slices, int32_t radius,
-                        const trn_loc_basins_t *b, int32_t i, const trn_refine_t *cand, int32_t ax,
-                        int32_t ay, const trn_refine_t *ans)
-{
-    const double infl = fmax(1.0, ans->ll_inflation);
-    if (trn_loc_far_wins_(cand->x, cand->y, cand->ll, ans->x, ans->y, ans->ll, ans->ll_inflation)) {
-        return 1;
-    }
-    if (!beyond_radius(cand->x, cand->y, ans->x, ans->y) ||
-        (cand->ll - ans->ll) / infl < -TRN_REFINE_FAR_NATS) {
-        return 0; /* its own basin again, or the answer's refined ln L wins outright */
-    }
-    return trn_loc_zone_lse_(g, win, slices, b->x[i], b->y[i], radius, infl) >
-                   trn_loc_zone_lse_(g, win, slices, ax, ay, radius, infl)
-               ? 2
-               : 0;
-}
-
 /* Refine from each far basin's start; the answer moves to one that wins
- * (trn_loc_basin_wins_; the answer it replaced takes the basin's slot). */
+ * (trn_loc_far_wins_; the answer it replaced takes the basin's slot). */
 static void refine_basins(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
                           const double *g, const trn_window_t *win, trn_loc_basins_t *b,
                           trn_refine_t *cand, trn_loc_result_t *out)
 {
     trn_refine_cfg_t rc;
-    int32_t i, wins;
+    int32_t i;
     trn_loc_refine_cfg_(map, out, &rc);
     for (i = 0; i < b->n; ++i) {
         b->ok[i] = trn_refine_pose(&map->heights, local, rx, ry, b->x[i], b->y[i], &rc, cand) ==
@@ -152,11 +100,10 @@ static void refine_basins(const trn_map_t *map, const trn_grid_f32_t *local, int
         b->px[i] = cand->x;
         b->py[i] = cand->y;
         b->rll[i] = cand->ll;
-        wins = b->ok[i] ? trn_loc_basin_wins_(g, win, 1, map->cfg.min_exclusion_cells, b, i, cand,
-                                              out->ix, out->iy, &out->refinement)
-                        : 0;
-        if (wins != 0) {
-            const int32_t sx = b->x[i], sy = b->y[i], edge = out->on_window_edge;
+        if (b->ok[i] &&
+            trn_loc_far_wins_(cand->x, cand->y, cand->ll, out->refinement.x, out->refinement.y,
+                              out->refinement.ll, out->refinement.ll_inflation)) {
+            const int32_t sx = b->x[i], sy = b->y[i];
             b->x[i] = out->ix;
             b->y[i] = out->iy;
             b->px[i] = out->refinement.x;
@@ -166,11 +113,7 @@ static void refine_basins(const trn_map_t *map, const trn_grid_f32_t *local, int
             out->ix = sx;
             out->iy = sy;
             out->ll_best = grid_at(g, win, out->ix, out->iy);
-            /* a move by the zones' mass leaves the likelihood's highest
-             * pose where it was: on the window's edge it may still rise
-             * beyond the window */
-            out->on_window_edge = trn_loc_on_edge_(win, out->ix, out->iy) ||
-                                  (wins == 2 && edge != 0);
+            out->on_window_edge = trn_loc_on_edge_(win, out->ix, out->iy);
             trn_loc_take_refinement_(map, out);
         }
     }
@@ -236,7 +179,6 @@ void trn_loc_find_basins3_(const double *grid, const trn_window_t *win, int32_t 
     int32_t x, y, s;
     b->n = 0;
     b->moved = 0;
-    b->edge = 0;
     for (s = 0; s <= 2 * half_steps; ++s) {
         for (y = win->y0; y <= win->y1; ++y) {
             for (x = win->x0; x <= win->x1; ++x) {

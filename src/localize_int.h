@@ -27,8 +27,6 @@ typedef struct {
     double px[TRN_REFINE_BASINS], py[TRN_REFINE_BASINS], rll[TRN_REFINE_BASINS];
     int32_t ok[TRN_REFINE_BASINS];
     int32_t moved, mx, my, mk; /* over heading: 1 if the answer moved to start (mx, my, slice mk) */
-    int32_t edge;              /* over heading: 1 if it moved by mass from a start on the window's
-                                  edge (trn_loc_basin_wins_ 2) */
 } trn_loc_basins_t;
 
 /* The signed heading step of the i-th heading searched: 0, -1, 1, -2, 2, ...
@@ -122,9 +120,8 @@ double trn_loc_peak_failure_(const trn_map_t *map, const trn_grid_f32_t *local, 
  * the answer's start out->ix, out->iy); then, in a second call (so that the
  * search's frame is not under the refinement's on the stack), refine from
  * each (cand: a trn_refine_t of the workspace) and move the answer to each
- * in turn that trn_loc_basin_wins_ prefers (the answer it replaced takes
- * that basin's slot; a move by mass from a start on the window's edge keeps
- * out->on_window_edge). */
+ * in turn that trn_loc_far_wins_ prefers (the answer it replaced takes
+ * that basin's slot). */
 void trn_loc_find_basins_(const double *ll_grid, const trn_window_t *win, int32_t radius,
                           const trn_loc_result_t *out, trn_loc_basins_t *b);
 void trn_loc_refine_basins_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
@@ -139,25 +136,6 @@ void trn_loc_refine_basins_(const trn_map_t *map, const trn_grid_f32_t *local, i
  * the slice. */
 void trn_loc_find_basins3_(const double *grid, const trn_window_t *win, int32_t half_steps,
                            int32_t radius, int32_t bx, int32_t by, trn_loc_basins_t *b);
-
-/* ln of the posterior mass (uniform prior) of the integer poses of the
- * window win within Chebyshev radius of (cx, cy), at every one of the grid's
- * slices (headings; 1 in 2-D, each slice a window's poses row by row), ln L
- * (the grid g) over infl: ln sum exp(g / infl); -inf where no pose there has
- * a finite ln L. */
-double trn_loc_zone_lse_(const double *g, const trn_window_t *win, int32_t slices, int32_t cx,
-                         int32_t cy, int32_t radius, double infl);
-/* Whether far basin i (start b->x[i], b->y[i]), refined to cand, replaces
- * the answer (start ax, ay; refined to ans) on the grid g of slices over win
- * with failure zone radius: 1 if its refined ln L wins by more than
- * TRN_REFINE_FAR_NATS over the inflation (trn_loc_far_wins_); else 2 if it
- * ends beyond TRN_FAIL_RADIUS_CELLS, its refined ln L is not lower by more
- * than that margin, and the zone around its start holds more posterior mass
- * than the zone around the answer's (trn_loc_zone_lse_): the answer most
- * likely right; 0 otherwise (docs/method.md 9, "the zone's mass"). */
-int trn_loc_basin_wins_(const double *g, const trn_window_t *win, int32_t slices, int32_t radius,
-                        const trn_loc_basins_t *b, int32_t i, const trn_refine_t *cand, int32_t ax,
-                        int32_t ay, const trn_refine_t *ans);
 
 /* The refined far basins' share of the failure probability (see the .c). */
 double trn_loc_basins_failure_(const trn_loc_basins_t *b, double infl, const trn_loc_result_t *out);

@@ -186,10 +186,9 @@ typedef struct {
 /** A far basin whose refinement ends more than TRN_FAIL_RADIUS_CELLS from
  *  the answer's replaces it if its refined ln L, over the inflation (the
  *  failure probability's scale), is higher by more than this many nats: odds
- *  of e^3 = 20 to 1, the 5 % level. Within this margin either way the data
- *  do not break the tie by the peaks: the zone holding more of the grid's
- *  posterior mass wins, the answer most likely right (docs/method.md 9, "The
- *  zone's mass"). */
+ *  of e^3 = 20 to 1, the 5 % level. Within this margin the answer stays;
+ *  the far basins' share of the failure probability carries the tie
+ *  (docs/method.md 9, "Which basin is the answer"). */
 #define TRN_REFINE_FAR_NATS 3.0
 /** A localization fails when its answer is more than this many cells from
  *  the truth: the event of the failure probability (docs/method.md 9). */

@@ -51,9 +51,6 @@ VARIANTS = {
         "the far basins (refinement from the 4 highest other local maxima, their moves and share)",
         [("src/localize.c", "        } else {\n            trn_loc_find_basins_(ll_grid, win, radius, out, bs);",
           "        } else {\n            bs->n = 0;\n            bs->moved = 0;")], []),
-    "no_zone_mass": (
-        "the move to a far basin whose zone holds more posterior mass (within 3 nats)",
-        [("src/localize_basins.c", "               ? 2\n", "               ? 0\n")], []),
     "no_basin_share": (
         "the refined far basins' share of the failure probability",
         [("src/localize.c", "out->refined ? trn_loc_basins_failure_(bs, infl, out) : 0.0);",
