@@ -894,10 +894,11 @@ void trn_refine_shoulders_(const trn_grid_f32_t *global, const trn_grid_f32_t *l
         const int32_t r = q / 2, s = q % 2;
         t[q] = sqrt(kap[0]) * e[0][r] * e[0][s] + sqrt(kap[1]) * e[1][r] * e[1][s];
     }
-    for (q = 0; q < 3; ++q) { /* columns: cov3 T3^T */
-        const double a = cov3[q * 3], b = cov3[q * 3 + 1];
-        cov3[q * 3] = a * t[0] + b * t[1];
-        cov3[q * 3 + 1] = a * t[2] + b * t[3];
+    for (q = 0; q < 3; ++q) { /* columns: cov3 T3^T, row q */
+        double *row = &cov3[(size_t)q * 3u];
+        const double a = row[0], b = row[1];
+        row[0] = a * t[0] + b * t[1];
+        row[1] = a * t[2] + b * t[3];
     }
     for (q = 0; q < 3; ++q) { /* rows: T3 (cov3 T3^T) */
         const double a = cov3[q], b = cov3[3 + q];
