@@ -235,7 +235,7 @@ static double fold_mix(acc4_t *acc, double lam, double g[4])
  * variance); no local height enters but through the inlier test, so the
  * shift it leads to is the model's, free of the data's noise:
  * returns the weighted sum of squares at bp with the best offset (closed
- * form) and the inliers' count; with acc, also the normal equations. */
+ * form), the inliers' count and, in acc, the normal equations. */
 static double model_pass(const rctx_t *c, const double p[5], const double bp[4], double model2,
                          acc4_t *acc, int32_t *n_in)
 {
@@ -243,9 +243,7 @@ static double model_pass(const rctx_t *c, const double p[5], const double bp[4],
     int32_t i, j;
     trn_heading_trig_(p[2], &cs, &sn);
     trn_heading_trig_(bp[2], &bc, &bs);
-    if (acc != NULL) {
-        acc_clear(acc);
-    }
+    acc_clear(acc);
     *n_in = 0;
     for (j = 0; j < c->l->height; ++j) {
         for (i = 0; i < c->l->width; ++i) {
@@ -275,10 +273,8 @@ static double model_pass(const rctx_t *c, const double p[5], const double bp[4],
             sw += w;
             swr += w * res;
             swrr += w * res * res;
-            if (acc != NULL) {
-                jacobian(c, b3, btx, bty, jv);
-                acc_add(acc, jv, w, res - bp[3]);
-            }
+            jacobian(c, b3, btx, bty, jv);
+            acc_add(acc, jv, w, res - bp[3]);
             *n_in += 1;
         }
     }
@@ -294,9 +290,9 @@ static double model_pass(const rctx_t *c, const double p[5], const double bp[4],
  * at cell edges, where a plain step can overshoot and cycle, so each step
  * is halved until the sum of squares drops over the same points, and the
  * search stops when no halving does (or the normal matrix is singular). acc and bi
- * are the caller's (dead by now); a trial step's pass keeps its sums only,
- * and the normal equations are remade at the step taken (one more pass,
- * less stack). */
+ * are the caller's (dead by now); each trial step's pass makes its normal
+ * equations in acc (the direction d is taken before), so the step taken
+ * leaves acc ready for the next iteration without another pass. */
 static void interp_shift(const rctx_t *c, const double p[5], double model2, acc4_t *acc,
                          double bi[16], double shift[4])
 {
@@ -315,7 +311,7 @@ static void interp_shift(const rctx_t *c, const double p[5], double model2, acc4
             for (q = 0; q < 4; ++q) {
                 tp[q] = shift[q] + step * d[q];
             }
-            ss_t = model_pass(c, p, tp, model2, NULL, &n_t);
+            ss_t = model_pass(c, p, tp, model2, acc, &n_t);
             if (n_t == n && ss_t < ss) {
                 break;
             }
@@ -330,7 +326,7 @@ static void interp_shift(const rctx_t *c, const double p[5], double model2, acc4
         if (fabs(step * d[0]) < 1e-4 && fabs(step * d[1]) < 1e-4) {
             break;
         }
-        ss = model_pass(c, p, shift, model2, acc, &n);
+        ss = ss_t; /* acc holds the step's normal equations (n_t == n) */
     }
     for (q = 0; q < 4; ++q) {
         shift[q] -= p[q];
