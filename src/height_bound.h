@@ -95,10 +95,10 @@ trn_status_t trn_hb_best(trn_hb_t *hb, const trn_exclusion_t *ex, trn_height_bes
  * t. */
 trn_status_t trn_hb_resolve(trn_hb_t *hb, double t, const trn_exclusion_t *ex);
 
-/* The exhaustive far basins (trn_loc_find_basins_'s, over the grid) among
+/* The exhaustive far basins (trn_loc_find_basins3_'s, over the grid) among
  * the local maxima outside the zone of (bx, by, radius) with ln L of at
  * least t: every pose that could be one, or a neighbour above one, is
- * scored, so that trn_loc_find_basins_ on the grid then finds them. */
+ * scored, so that trn_loc_find_basins3_ on the grid then finds them. */
 trn_status_t trn_hb_basins(trn_hb_t *hb, double t, int32_t bx, int32_t by, int32_t radius,
                            int32_t nbasins);
 

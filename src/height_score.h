@@ -1,8 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* height_score.h - the height matcher's score of one integer pose, one copy
- * for every search that scores poses from a workspace: the (x, y) search of
- * trn_localize_dem (trn_height_search_ws_), the search over heading
- * (trn_height_search_heading) and the bounded search (height_bound.c).
+ * for every search that scores poses from a workspace: the search over
+ * heading (trn_height_search_heading; trn_localize_dem's is its case of one
+ * heading) and the bounded search (height_bound.c).
  * Internal (docs/method.md 9.3, "The pose score").
  *
  * The model is trn_height_search's (trn/refine.h): over the seen local cells

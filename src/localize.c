@@ -438,8 +438,10 @@ trn_status_t trn_localize_points(const trn_map_t *map, const trn_point_t *pts, s
 /* Layout of trn_localize_dem's workspace: [hp grid | highpass ws | points | search ws | ln L grid
  * (TRN_MATCH_HEIGHTS only)]. */
 
+/* Layout of the voxel path's workspace: [hp grid | highpass ws | points |
+ * trn_localize_points' workspace]. */
 typedef struct {
-    size_t hp, hpws, pts, search, llgrid, cand, basins, hb, total;
+    size_t hp, hpws, pts, search, total;
 } loc_layout_t;
 
 static int loc_layout(const trn_map_t *map, int32_t w, int32_t h, size_t max_points,
@@ -457,34 +459,14 @@ static int loc_layout(const trn_map_t *map, int32_t w, int32_t h, size_t max_poi
     lay->hpws = trn_ws_offset(&ws, hpws);
     lay->pts = trn_ws_offset(&ws, max_points * sizeof(trn_point_t));
     lay->search = trn_ws_offset(&ws, sw);
-    lay->llgrid = lay->cand = lay->basins = lay->hb = ws.total;
-    if (map->cfg.match == TRN_MATCH_HEIGHTS) { /* every pose's ln L (trn_height_search) */
-        lay->llgrid = trn_ws_offset(&ws, (size_t)(win->x1 - win->x0 + 1) *
-                                             (size_t)(win->y1 - win->y0 + 1) * sizeof(double));
-        /* a refinement from a neighbouring start (refine_result) */
-        lay->cand = trn_ws_offset(&ws, sizeof(trn_refine_t));
-        lay->basins = trn_ws_offset(&ws, trn_loc_basins_bytes_()); /* far basins (refine_basins) */
-        if (map->cfg.search == TRN_SEARCH_BOUNDED) {               /* the bounded search's state */
-            const size_t hbb = trn_hb_bytes(win, w, h);
-            if (hbb == 0u) {
-                return 0;
-            }
-            lay->hb = trn_ws_offset(&ws, hbb);
-        } else { /* the exhaustive search's scratch (trn_height_search_ws_) */
-            lay->hb = trn_ws_offset(&ws, trn_hs_bytes(w, h));
-        }
-    }
     lay->total = ws.total;
     return 1;
 }
 
-size_t trn_localize_dem_workspace_bytes(const trn_map_t *map, int32_t width, int32_t height,
-                                        size_t max_points, const trn_window_t *win)
+size_t trn_loc_voxel_dem_bytes_(const trn_map_t *map, int32_t width, int32_t height,
+                                size_t max_points, const trn_window_t *win)
 {
     loc_layout_t lay;
-    if (map == NULL || win == NULL) {
-        return 0u;
-    }
     return loc_layout(map, width, height, max_points, win, &lay) ? lay.total : 0u;
 }
 
@@ -540,268 +522,19 @@ trn_status_t trn_loc_highpass_by_map_(const trn_map_t *map, const trn_grid_f32_t
     return TRN_OK;
 }
 
-/* 1 if the integer pose (sx, sy) is a start for the refinement beside the
- * best one: inside the window, its ln L in the grid within
- * TRN_REFINE_START_NATS of the best's. */
-static int refine_start(const trn_window_t *win, const double *ll_grid, double ll_best, int32_t sx,
-                        int32_t sy)
-{
-    if (sx < win->x0 || sx > win->x1 || sy < win->y0 || sy > win->y1) {
-        return 0;
-    }
-    return ll_grid[(size_t)(sy - win->y0) * (size_t)(win->x1 - win->x0 + 1) +
-                   (size_t)(sx - win->x0)] > ll_best - TRN_REFINE_START_NATS;
-}
-
-/* trn_refine_pose from the search's integer pose, and from each neighbour
- * refine_start takes (with the ln L grid of the height search): on terrain
- * a cell or two wide the best integer pose can lie in the basin of a lesser
- * sub-cell peak. The refinement with the highest refined ln L is kept (ties:
- * the best integer pose's); on success its pose and covariance replace
- * eq. 6's. */
-static void refine_result(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
-                          const trn_window_t *win, const double *ll_grid, trn_refine_t *cand,
-                          trn_loc_result_t *out)
+/* The refinement from the voxel search's integer pose (map->cfg.refine):
+ * on success its pose and covariance replace eq. 6's. */
+static void refine_voxel(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
+                         trn_loc_result_t *out)
 {
     trn_refine_cfg_t rc;
-    int32_t found, k;
     trn_loc_refine_cfg_(map, out, &rc);
     out->refined = 0;
     out->misfit = 0;
-    found = trn_refine_pose(&map->heights, local, rx, ry, out->ix, out->iy, &rc,
-                            &out->refinement) == TRN_OK;
-    for (k = 0; k < 9 && cand != NULL; ++k) {
-        int32_t sx = out->ix + k % 3 - 1, sy = out->iy + k / 3 - 1;
-        if (k == 4 || !refine_start(win, ll_grid, out->ll_best, sx, sy)) {
-            continue;
-        }
-        if (trn_refine_pose(&map->heights, local, rx, ry, sx, sy, &rc, cand) == TRN_OK &&
-            (!found || cand->ll > out->refinement.ll)) {
-            out->refinement = *cand;
-            found = 1;
-        }
+    if (trn_refine_pose(&map->heights, local, rx, ry, out->ix, out->iy, &rc, &out->refinement) ==
+        TRN_OK) {
+        trn_loc_take_refinement_(map, out);
     }
-    if (!found) {
-        return;
-    }
-    trn_loc_take_refinement_(map, out);
-}
-
-/* 1 (out->noise_scale set) if the residuals at the answer reject the noise
- * model rc (trn_loc_noise_rejected_), else 0. The answer is the refinement,
- * or where it failed the search's best integer pose with its offset and
- * model variance (at an integer pose the mix does not enter); tmp is
- * scratch for that. */
-static int rescale_noise(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
-                         const trn_refine_cfg_t *rc, const trn_height_best_t *best,
-                         trn_refine_t *tmp, trn_loc_result_t *out)
-{
-    const trn_refine_t *at = &out->refinement;
-    if (!out->refined) {
-        *tmp = out->refinement;
-        tmp->x = (double)best->x;
-        tmp->y = (double)best->y;
-        tmp->dz_m = best->dz_m;
-        tmp->model_m = best->model_m;
-        tmp->interp_mix = TRN_REFINE_MIX_MEAN;
-        at = tmp;
-    }
-    return trn_loc_noise_rejected_(map, local, rx, ry, at, 0.0, rc, &out->noise_scale);
-}
-
-/* One search of the window with the noise model rc: every pose scored
- * (hbws the scratch), or the bounded search in hbws (*hb its state), the
- * best pose's neighbours scored too (the second starts read them). */
-static trn_status_t search_window(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
-                                  int32_t ry, const trn_window_t *win, const trn_refine_cfg_t *rc,
-                                  double *ll_grid, void *hbws, uint64_t *work, trn_hb_t **hb,
-                                  trn_height_best_t *best)
-{
-    trn_status_t st;
-    int32_t k;
-    if (map->cfg.search == TRN_SEARCH_EXHAUSTIVE) {
-        const uint64_t poses = (uint64_t)(win->x1 - win->x0 + 1) *
-                               (uint64_t)(win->y1 - win->y0 + 1);
-        if (map->cfg.node_budget != 0u && *work + poses > (uint64_t)map->cfg.node_budget) {
-            return TRN_E_BUDGET; /* before the pass: its cost is its poses */
-        }
-        *work += poses;
-        return trn_height_search_ws_(&map->heights, local, rx, ry, win, NULL, rc,
-                                     map->cfg.inlier_prob, 1.0, ll_grid, hbws, best);
-    }
-    if ((st = trn_hb_init(hb, hbws, &map->heights, local, rx, ry, win, rc, map->cfg.inlier_prob,
-                          ll_grid, work, (uint64_t)map->cfg.node_budget)) != TRN_OK ||
-        (st = trn_hb_best(*hb, NULL, best)) != TRN_OK) {
-        return st;
-    }
-    for (k = 0; k < 9; ++k) {
-        const int32_t sx = best->x + k % 3 - 1, sy = best->y + k / 3 - 1;
-        if (sx >= win->x0 && sx <= win->x1 && sy >= win->y0 && sy <= win->y1 &&
-            (st = trn_hb_eval(*hb, sx, sy)) != TRN_OK) {
-            return st;
-        }
-    }
-    best->poses = (*hb)->evals;
-    return TRN_OK;
-}
-
-/* The bounded search's far basins: the zone around the answer's start and
- * every pose that could be one of the exhaustive search's (the
- * TRN_REFINE_BASINS highest local maxima of the grid outside the zone, at
- * any level: a basin's refined ln L is not bounded by its grid ln L) scored,
- * then trn_loc_find_basins_ on the grid; their zones scored. */
-static trn_status_t bounded_basins(trn_hb_t *hb, const trn_window_t *win, int32_t radius,
-                                   const double *ll_grid, const trn_loc_result_t *out,
-                                   trn_loc_basins_t *bs)
-{
-    trn_status_t st;
-    int32_t i;
-    if ((st = trn_hb_eval_zone(hb, out->ix, out->iy, radius)) != TRN_OK ||
-        (st = trn_hb_basins(hb, -(double)INFINITY, out->ix, out->iy, radius, TRN_REFINE_BASINS)) !=
-            TRN_OK) {
-        return st;
-    }
-    trn_loc_find_basins_(ll_grid, win, radius, out, bs);
-    for (i = 0; i < bs->n; ++i) {
-        if ((st = trn_hb_eval_zone(hb, bs->x[i], bs->y[i], radius)) != TRN_OK) {
-            return st;
-        }
-    }
-    return TRN_OK;
-}
-
-/* The competitor and the masses (trn_height_mass's) of the bounded search:
- * the zone ex scored, the best pose outside it found exactly, the masses
- * within *err. */
-static trn_status_t bounded_mass(trn_hb_t *hb, const trn_exclusion_t *ex, double infl,
-                                 trn_height_best_t *second, double *err)
-{
-    trn_status_t st;
-    double lse_all, lse_out;
-    if ((st = trn_hb_eval_zone(hb, ex->cx, ex->cy, ex->radius)) != TRN_OK ||
-        (st = trn_hb_best(hb, ex, second)) != TRN_OK ||
-        (st = trn_hb_mass(hb, ex, infl, TRN_BOUND_EPS, &lse_all, &lse_out, err)) != TRN_OK) {
-        return st;
-    }
-    second->lse_all = lse_all;
-    second->lse_out = lse_out;
-    return TRN_OK;
-}
-
-/* TRN_MATCH_HEIGHTS: height search, refinement, competing hypothesis; the
- * search exhaustive or bounded (map->cfg.search), its workspace in hbws. */
-static trn_status_t localize_heights(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
-                                     int32_t ry, const trn_window_t *win, double *ll_grid,
-                                     trn_refine_t *cand, trn_loc_basins_t *bs, void *hbws,
-                                     trn_loc_result_t *out)
-{
-    trn_status_t st;
-    trn_height_best_t best; /* the search's best, then the competitor (one frame slot:
-                               the stack limit of docs/architecture.md) */
-    trn_refine_cfg_t rc;
-    trn_exclusion_t ex;
-    trn_hb_t *hb = NULL;
-    uint64_t work = 0u;
-    double infl = 1.0, err = 0.0;
-    int32_t radius = map->cfg.min_exclusion_cells, pass;
-
-    out->noise_scale = 1.0;
-    out->failure_prob_bound = 0.0;
-    out->search = map->cfg.search;
-    pass = 0;
-    do {
-        /* the configured noise model; once more, rescaled, if the residuals
-         * at the answer reject it (docs/method.md 9, "the sensor's noise
-         * from the data") */
-        trn_loc_refine_cfg_(map, out, &rc);
-        if ((st = search_window(map, local, rx, ry, win, &rc, ll_grid, hbws, &work, &hb, &best)) !=
-            TRN_OK) {
-            return st;
-        }
-        out->ix = best.x;
-        out->iy = best.y;
-        out->ll_best = best.ll;
-        out->n_points = 0u;
-        out->stats.poses_scored = best.poses;
-        out->stats.blocks_bounded = 0u;
-        out->on_window_edge = trn_loc_on_edge_(win, best.x, best.y);
-        out->x = (double)best.x;
-        out->y = (double)best.y;
-        out->sigma_x_m = out->sigma_y_m = (double)INFINITY;
-        out->rho = 0.0;
-        out->cov_m2[0] = out->cov_m2[1] = (double)INFINITY;
-        out->cov_m2[2] = 0.0;
-        refine_result(map, local, rx, ry, win, ll_grid, cand, out);
-        pass += 1;
-    } while (pass == 1 && map->cfg.noise_auto != 0 &&
-             rescale_noise(map, local, rx, ry, &rc, &best, cand, out) != 0);
-    if (out->refined) {
-        if (hb != NULL) {
-            if ((st = bounded_basins(hb, win, radius, ll_grid, out, bs)) != TRN_OK) {
-                return st;
-            }
-        } else {
-            trn_loc_find_basins_(ll_grid, win, radius, out, bs);
-        }
-        trn_loc_refine_basins_(map, local, rx, ry, ll_grid, win, bs, cand, out);
-    }
-    out->n_points = (size_t)(out->refinement.n_seen > 0 ? out->refinement.n_seen : 0);
-    /* The zone is min_exclusion_cells, not 4 sigma as for eq. 6: the failure
-     * probability is the posterior mass of poses that far from the answer,
-     * so a broad peak (large sigma) shows as a large probability instead of
-     * hiding its competitors inside a wide zone. */
-    if (out->refined) {
-        infl = out->refinement.ll_inflation;
-        /* the final answer's ellipse: ln L's fall at 2 sds, not only its
-         * peak's curvature (docs/method.md 9, "The shoulders") */
-        trn_loc_shoulders_(map, local, rx, ry, out);
-    }
-    ex.cx = out->ix; /* the answer's start (refine_basins may move it) */
-    ex.cy = out->iy;
-    ex.radius = radius;
-    out->exclusion_cells = radius;
-    if (hb != NULL) {
-        /* the bounded search: the competitor exactly, the masses within err */
-        st = bounded_mass(hb, &ex, infl, &best, &err);
-        out->stats.poses_scored = hb->evals;
-        out->stats.blocks_bounded = hb->bounds;
-        /* ... and the sums' rounding (another order than the grid's, of
-         * ln L values up to 1e4 and more: a few ulps of those) */
-        out->failure_prob_bound = err + 1e-9;
-    } else {
-        /* every pose was scored once: the competitor and the masses come
-         * from the stored grid */
-        st = trn_height_mass(ll_grid, win, &ex, infl, &best);
-    }
-    if (st == TRN_OK) {
-        /* The posterior mass outside the zone around the peak (uniform prior
-         * over the window), not only the best competitor: many near-ties far
-         * away add up. ln L is divided by the block sandwich's ratio first
-         * (ll_inflation, ungated): correlated residuals make ln L differences
-         * too large by about that factor (a composite likelihood's
-         * adjustment). */
-        double pf = fmax(exp(best.lse_out - best.lse_all),
-                         out->refined ? trn_loc_basins_failure_(bs, infl, out) : 0.0);
-        if (out->refined) {
-            /* ... and the answer's own peak's: mass along its major axis
-             * that the integer grid misses, and its covariance's tail
-             * beyond the failure radius (docs/method.md 9, "the valley") */
-            pf = fmax(pf, trn_loc_peak_failure_(map, local, rx, ry, win, infl, out));
-        }
-        out->has_second = 1;
-        out->second_x = best.x;
-        out->second_y = best.y;
-        out->ll_second = best.ll;
-        out->failure_probability = pf < 0.0 ? 0.0 : pf > 1.0 ? 1.0 : pf;
-    } else if (st == TRN_E_NODATA) {
-        no_competitor(out);
-    } else {
-        return st;
-    }
-    /* an answer on the window's edge is no fix: the likelihood may rise beyond
-     * the window, where neither the search nor the failure probability looks
-     * (a prior that missed the truth; docs/method.md 9, "the window's edge") */
-    return out->refined && !out->misfit && !out->on_window_edge ? TRN_OK : TRN_E_ILLCOND;
 }
 
 /* The acceptance test: an answer otherwise good whose failure probability
@@ -814,10 +547,10 @@ static trn_status_t accept(const trn_map_t *map, trn_status_t st, const trn_loc_
     return st;
 }
 
-trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_dem,
-                              int32_t rover_x, int32_t rover_y, size_t max_points,
-                              const trn_window_t *win, void *ws, size_t ws_bytes,
-                              trn_loc_result_t *out)
+trn_status_t trn_loc_voxel_dem_(const trn_map_t *map, const trn_grid_f32_t *local_dem,
+                                int32_t rover_x, int32_t rover_y, size_t max_points,
+                                const trn_window_t *win, void *ws, size_t ws_bytes,
+                                trn_loc_result_t *out)
 {
     trn_status_t st;
     loc_layout_t lay;
@@ -826,33 +559,13 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
     trn_point_t *pts;
     size_t n = 0;
 
-    if (map == NULL || local_dem == NULL || win == NULL || ws == NULL || out == NULL) {
-        return TRN_E_NULL;
-    }
-    if ((st = trn_grid_f32_check(local_dem)) != TRN_OK) {
-        return st;
-    }
-    if (!trn_loc_map_ok_(map)) {
-        return TRN_E_ARG;
-    }
-    if (max_points == 0u || max_points > (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM) {
-        return TRN_E_ARG;
-    }
-    if (!trn_loc_window_ok_(map, win) ||
-        !loc_layout(map, local_dem->width, local_dem->height, max_points, win, &lay)) {
+    if (!loc_layout(map, local_dem->width, local_dem->height, max_points, win, &lay)) {
         return TRN_E_RANGE;
     }
     if ((st = trn_ws_check(ws, ws_bytes, lay.total)) != TRN_OK) {
         return st;
     }
     out->noise_scale = 1.0;
-    if (map->cfg.match == TRN_MATCH_HEIGHTS) {
-        st = localize_heights(
-            map, local_dem, rover_x, rover_y, win, (double *)(void *)(b + lay.llgrid),
-            (trn_refine_t *)(void *)(b + lay.cand), (trn_loc_basins_t *)(void *)(b + lay.basins),
-            (void *)(b + lay.hb), out);
-        return accept(map, st, out);
-    }
     pts = (trn_point_t *)(void *)(b + lay.pts);
     if ((st = trn_grid_f32_init(&hp, (float *)(void *)(b + lay.hp),
                                 (size_t)local_dem->width * (size_t)local_dem->height,
@@ -889,7 +602,7 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
     }
     if ((st == TRN_OK || st == TRN_E_ILLCOND) && map->cfg.refine != 0) {
         out->noise_scale = 1.0;
-        refine_result(map, local_dem, rover_x, rover_y, win, NULL, NULL, out);
+        refine_voxel(map, local_dem, rover_x, rover_y, out);
         /* No consistent height match around the voxel optimum: flag it. */
         st = out->refined && !out->misfit ? TRN_OK : TRN_E_ILLCOND;
     }

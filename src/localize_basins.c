@@ -8,8 +8,6 @@
 
 #include "refine_int.h"
 
-size_t trn_loc_basins_bytes_(void) { return sizeof(trn_loc_basins_t); }
-
 static double grid_at(const double *g, const trn_window_t *win, int32_t x, int32_t y)
 {
     return g[(size_t)(y - win->y0) * (size_t)(win->x1 - win->x0 + 1) + (size_t)(x - win->x0)];
@@ -32,41 +30,6 @@ int trn_loc_grid_peak_(const double *g, const trn_window_t *win, int32_t x, int3
     return 1;
 }
 
-static void far_basins(const double *g, const trn_window_t *win, int32_t bx, int32_t by,
-                       int32_t radius, trn_loc_basins_t *b)
-{
-    int32_t x, y;
-    b->n = 0;
-    b->moved = 0;
-    for (y = win->y0; y <= win->y1; ++y) {
-        for (x = win->x0; x <= win->x1; ++x) {
-            double v = grid_at(g, win, x, y);
-            int32_t k, pos = 0, last;
-            if (!isfinite(v) || (abs(x - bx) <= radius && abs(y - by) <= radius) ||
-                (b->n == TRN_REFINE_BASINS && v <= b->ll[TRN_REFINE_BASINS - 1]) ||
-                !trn_loc_grid_peak_(g, win, x, y, v)) {
-                continue;
-            }
-            /* keep them highest first: v goes after every one at least as high */
-            last = b->n < TRN_REFINE_BASINS ? b->n++ : TRN_REFINE_BASINS - 1;
-            for (k = 0; k < last; ++k) {
-                if (b->ll[k] >= v) {
-                    pos = k + 1;
-                }
-            }
-            for (k = last; k > pos; --k) {
-                b->x[k] = b->x[k - 1];
-                b->y[k] = b->y[k - 1];
-                b->ll[k] = b->ll[k - 1];
-            }
-            b->x[pos] = x;
-            b->y[pos] = y;
-            b->k[pos] = 0;
-            b->ll[pos] = v;
-        }
-    }
-}
-
 /* 1 if (cx, cy) is more than TRN_FAIL_RADIUS_CELLS from (ax, ay). */
 static int beyond_radius(double cx, double cy, double ax, double ay)
 {
@@ -83,40 +46,6 @@ int trn_loc_far_wins_(double cx, double cy, double cll, double ax, double ay, do
                       double infl)
 {
     return beyond_radius(cx, cy, ax, ay) && cll - all > TRN_REFINE_FAR_NATS * fmax(1.0, infl);
-}
-
-/* Refine from each far basin's start; the answer moves to one that wins
- * (trn_loc_far_wins_; the answer it replaced takes the basin's slot). */
-static void refine_basins(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
-                          const double *g, const trn_window_t *win, trn_loc_basins_t *b,
-                          trn_refine_t *cand, trn_loc_result_t *out)
-{
-    trn_refine_cfg_t rc;
-    int32_t i;
-    trn_loc_refine_cfg_(map, out, &rc);
-    for (i = 0; i < b->n; ++i) {
-        b->ok[i] = trn_refine_pose(&map->heights, local, rx, ry, b->x[i], b->y[i], &rc, cand) ==
-                   TRN_OK;
-        b->px[i] = cand->x;
-        b->py[i] = cand->y;
-        b->rll[i] = cand->ll;
-        if (b->ok[i] &&
-            trn_loc_far_wins_(cand->x, cand->y, cand->ll, out->refinement.x, out->refinement.y,
-                              out->refinement.ll, out->refinement.ll_inflation)) {
-            const int32_t sx = b->x[i], sy = b->y[i];
-            b->x[i] = out->ix;
-            b->y[i] = out->iy;
-            b->px[i] = out->refinement.x;
-            b->py[i] = out->refinement.y;
-            b->rll[i] = out->refinement.ll;
-            out->refinement = *cand;
-            out->ix = sx;
-            out->iy = sy;
-            out->ll_best = grid_at(g, win, out->ix, out->iy);
-            out->on_window_edge = trn_loc_on_edge_(win, out->ix, out->iy);
-            trn_loc_take_refinement_(map, out);
-        }
-    }
 }
 
 /* The refined far basins' share of the failure probability: each one
@@ -136,19 +65,6 @@ double trn_loc_basins_failure_(const trn_loc_basins_t *b, double infl, const trn
         }
     }
     return sum / (1.0 + sum);
-}
-
-void trn_loc_find_basins_(const double *ll_grid, const trn_window_t *win, int32_t radius,
-                          const trn_loc_result_t *out, trn_loc_basins_t *b)
-{
-    far_basins(ll_grid, win, out->ix, out->iy, radius, b);
-}
-
-void trn_loc_refine_basins_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
-                            int32_t ry, const double *ll_grid, const trn_window_t *win,
-                            trn_loc_basins_t *b, trn_refine_t *cand, trn_loc_result_t *out)
-{
-    refine_basins(map, local, rx, ry, ll_grid, win, b, cand, out);
 }
 
 /* 1 if (x, y, slice s) is a local maximum of the 3-D grid: no neighbour
@@ -247,26 +163,4 @@ double trn_loc_tail_failure_(const double cov_cells[3])
         tail = 1.0; /* a covariance that bounds nothing */
     }
     return tail;
-}
-
-void trn_loc_shoulders_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
-                        trn_loc_result_t *out)
-{
-    trn_refine_cfg_t rc;
-    trn_loc_refine_cfg_(map, out, &rc);
-    trn_refine_shoulders_(&map->heights, local, rx, ry, &rc, 0.0, &out->refinement, NULL);
-    trn_loc_take_refinement_(map, out);
-}
-
-double trn_loc_peak_failure_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
-                             int32_t ry, const trn_window_t *win, double infl,
-                             const trn_loc_result_t *out)
-{
-    const double lo[2] = {(double)win->x0, (double)win->y0};
-    const double hi[2] = {(double)win->x1, (double)win->y1};
-    trn_refine_cfg_t rc;
-    trn_loc_refine_cfg_(map, out, &rc);
-    return fmax(trn_loc_tail_failure_(out->refinement.cov_cells),
-                trn_refine_valley_fail_(&map->heights, local, rx, ry, &rc, &out->refinement, 0.0,
-                                        infl, lo, hi));
 }

@@ -1,9 +1,9 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* localize_common.c - the height matcher's functions shared by its (x, y) path
- * (src/localize.c), its (x, y, heading) path (src/height_heading.c) and the
- * far basins (src/localize_basins.c): the refinement's noise model, the
- * refinement taken as the answer, the test of the noise model at the
- * answer. Below all three, so that their calls go one way
+/* localize_common.c - the functions shared by the height matcher's
+ * localization (src/localize_heights.c) and the voxel path's refinement
+ * (src/localize.c): the refinement's noise model, the refinement taken as
+ * the answer, the test of the noise model at the answer. Below both, so
+ * that their calls go one way
  * (docs/architecture.md, "The localization stack"). */
 #include "trn/localize.h"
 

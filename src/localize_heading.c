@@ -2,11 +2,10 @@
 /* localize_heading.c - the entry of localization over heading from a local
  * DEM (trn_localize_dem_heading and its workspace sizes, see
  * trn/localize.h, trn/heading.h and trn/height_heading.h): the checks, then
- * one of three paths, each in a file below this one (docs/architecture.md,
+ * one of two paths, each in a file below this one (docs/architecture.md,
  * "The localization stack"): the voxel search over heading
- * (src/heading.c), the height matcher over heading (src/height_heading.c),
- * and W = 0 at centre 0 with a height map, which is trn_localize_dem itself
- * (src/localize.c). */
+ * (src/heading.c) or the height matcher's one path (src/localize_heights.c,
+ * trn_localize_dem's too: with W = 0 at centre 0 the answer is its). */
 #include "trn/heading.h"
 #include "trn/height_heading.h"
 #include "trn/localize.h"
@@ -133,9 +132,8 @@ trn_status_t trn_localize_dem_heading_checked_(const trn_map_t *map,
         return TRN_E_ARG;
     }
     out->loc.noise_scale = 1.0;                /* the voxel path keeps the configured model */
-    if (map->cfg.match == TRN_MATCH_HEIGHTS) { /* src/height_heading.c */
-        return trn_localize_heights3_(map, local_dem, rover_x, rover_y, win, cfg, ws, ws_bytes,
-                                      out);
+    if (map->cfg.match == TRN_MATCH_HEIGHTS) { /* src/localize_heights.c */
+        return trn_loc_heights_(map, local_dem, rover_x, rover_y, win, cfg, ws, ws_bytes, out);
     }
     return trn_localize_dem_heading_voxel_(map, local_dem, rover_x, rover_y, max_points, win, cfg,
                                            ws, ws_bytes, out);
@@ -146,14 +144,6 @@ trn_status_t trn_localize_dem_heading(const trn_map_t *map, const trn_grid_f32_t
                                       const trn_window_t *win, const trn_heading_cfg_t *cfg,
                                       void *ws, size_t ws_bytes, trn_heading_result_t *out)
 {
-    /* Two paths, each a tail call so that neither's stack carries the
-     * other's frame: a height map with W = 0 at centre 0 is trn_localize_dem
-     * itself (src/height_heading.c); everything else is checked here. */
-    if (map != NULL && cfg != NULL && map->cfg.match == TRN_MATCH_HEIGHTS &&
-        cfg->window_rad == 0.0 && cfg->center_rad == 0.0) {
-        return trn_localize_heights2d_(map, local_dem, rover_x, rover_y, max_points, win, cfg, ws,
-                                       ws_bytes, out);
-    }
     return trn_localize_dem_heading_checked_(map, local_dem, rover_x, rover_y, max_points, win, cfg,
                                              ws, ws_bytes, out);
 }
@@ -164,7 +154,8 @@ size_t trn_localize_dem_heading_workspace_bytes_cfg(const trn_map_t *map,
                                                     size_t max_points, const trn_window_t *win,
                                                     const trn_heading_cfg_t *cfg)
 {
-    size_t dem;
+    double step;
+    int32_t kk;
     if (map == NULL || local_dem == NULL || win == NULL || cfg == NULL ||
         trn_grid_f32_check(local_dem) != TRN_OK) {
         return 0u;
@@ -173,38 +164,10 @@ size_t trn_localize_dem_heading_workspace_bytes_cfg(const trn_map_t *map,
         return trn_localize_dem_heading_workspace_bytes(map, local_dem->width, local_dem->height,
                                                         max_points, win);
     }
-    dem = trn_localize_dem_workspace_bytes(map, local_dem->width, local_dem->height, max_points,
-                                           win);
-    if (dem == 0u) {
+    if (!trn_loc_map_ok_(map) || max_points == 0u ||
+        max_points > (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM ||
+        trn_height_heading_steps(local_dem, rover_x, rover_y, cfg, &step, &kk) != TRN_OK) {
         return 0u;
     }
-    return trn_localize_heights3_bytes_(map, local_dem, rover_x, rover_y, win, cfg, dem);
-}
-
-trn_status_t trn_localize_heights2d_(const trn_map_t *map, const trn_grid_f32_t *local,
-                                     int32_t rover_x, int32_t rover_y, size_t max_points,
-                                     const trn_window_t *win, const trn_heading_cfg_t *cfg,
-                                     void *ws, size_t ws_bytes, trn_heading_result_t *out)
-{
-    trn_status_t st;
-    int32_t p;
-    if (out == NULL) { /* trn_localize_dem checks the rest */
-        return TRN_E_NULL;
-    }
-    if (!(cfg->step_rad >= 0.0 && cfg->step_rad <= TRN_HEADING_MAX_WINDOW_RAD)) {
-        return TRN_E_ARG; /* centre and window are 0 here */
-    }
-    st = trn_localize_dem(map, local, rover_x, rover_y, max_points, win, ws, ws_bytes, &out->loc);
-    for (p = 0; p < 9; ++p) {
-        out->cov3[p] = 0.0;
-    }
-    out->cov3[0] = out->loc.cov_m2[0];
-    out->cov3[4] = out->loc.cov_m2[1];
-    out->cov3[1] = out->cov3[3] = out->loc.cov_m2[2];
-    out->heading_rad = 0.0;
-    out->sigma_heading_rad = 0.0;
-    out->step_rad = 0.0; /* no heading searched */
-    out->half_steps = 0;
-    out->best_step = 0;
-    return st;
+    return trn_loc_heights_bytes_(map, local_dem->width, local_dem->height, win, kk, cfg);
 }

@@ -1,11 +1,12 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* localize_int.h - internal to the localization stack (docs/architecture.md,
- * "The localization stack"): the height matcher's far basins
- * (src/localize_basins.c), its shared functions (src/localize_common.c) and
- * the parts of src/localize.c that the entry over heading
- * (src/localize_heading.c) uses. Separate files so that their frames do not
- * add to trn_localize_dem's (no inlining across files; the stack limit of
- * docs/architecture.md) and so that calls go one way. */
+ * "The localization stack"): the height matcher's localization
+ * (src/localize_heights.c), its far basins (src/localize_basins.c) and
+ * shared functions (src/localize_common.c), and the parts of src/localize.c
+ * that the entries (src/localize_dem.c, src/localize_heading.c) use.
+ * Separate files so that their frames do not add to the entries' (no
+ * inlining across files; the stack limit of docs/architecture.md) and so
+ * that calls go one way. */
 #ifndef TRN_LOCALIZE_INT_H
 #define TRN_LOCALIZE_INT_H
 
@@ -16,7 +17,7 @@
 
 /* Far basins (TRN_REFINE_BASINS): up to that many local maxima of the ln L
  * grid outside the best pose's zone, highest first (their starts and grid
- * ln L); after trn_loc_refine_basins_ each slot holds a refinement that is not
+ * ln L); once refined (src/localize_heights.c) each slot holds a refinement that is not
  * the answer: its pose and refined ln L (ok 0: it failed). It lives in the
  * workspace, not on the stack. */
 typedef struct {
@@ -61,24 +62,39 @@ int trn_loc_map_ok_(const trn_map_t *map);
 trn_status_t trn_loc_highpass_by_map_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
                                       int32_t ry, int32_t cx, int32_t cy, trn_grid_f32_t *out);
 
-/* The workspace bytes of trn_localize_dem_heading for a TRN_MATCH_HEIGHTS map
- * (trn_localize_dem_heading_workspace_bytes_cfg's part in
- * src/height_heading.c): dem (trn_localize_dem's bytes, not 0) when the
- * heading window is 0 at centre 0, the search over heading's layout
- * otherwise; 0 when the map has no heights, the window is not inside it or
- * the heading configuration is refused. */
-size_t trn_localize_heights3_bytes_(const trn_map_t *map, const trn_grid_f32_t *local_dem,
-                                    int32_t rover_x, int32_t rover_y, const trn_window_t *win,
-                                    const trn_heading_cfg_t *cfg, size_t dem);
+/* The height matcher's localization (src/localize_heights.c): the one
+ * path of trn_localize_dem (cfg: the heading known, 0) and of
+ * trn_localize_dem_heading with a height map. Search (over heading, or the
+ * bounded search at heading 0), refinement from the best pose and its
+ * neighbours, the noise model's rescale, far basins, shoulders, failure
+ * probability, acceptance; statuses as trn_localize_dem_heading's, plus
+ * TRN_E_ARG for the bounded search with a heading window or an off-zero
+ * centre. The map and max_points are checked by the caller. */
+trn_status_t trn_loc_heights_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rover_x,
+                              int32_t rover_y, const trn_window_t *win,
+                              const trn_heading_cfg_t *cfg, void *ws, size_t ws_bytes,
+                              trn_heading_result_t *out);
+/* Its workspace bytes for a width x height local DEM and half_steps
+ * headings either side (trn_height_heading_steps's K); 0 when the map has
+ * no heights, the window is not inside it, or the search is refused. */
+size_t trn_loc_heights_bytes_(const trn_map_t *map, int32_t width, int32_t height,
+                              const trn_window_t *win, int32_t half_steps,
+                              const trn_heading_cfg_t *cfg);
+
+/* trn_localize_dem's voxel path after its argument checks
+ * (src/localize.c), and its workspace bytes (0 if refused). */
+trn_status_t trn_loc_voxel_dem_(const trn_map_t *map, const trn_grid_f32_t *local_dem,
+                                int32_t rover_x, int32_t rover_y, size_t max_points,
+                                const trn_window_t *win, void *ws, size_t ws_bytes,
+                                trn_loc_result_t *out);
+size_t trn_loc_voxel_dem_bytes_(const trn_map_t *map, int32_t width, int32_t height,
+                                size_t max_points, const trn_window_t *win);
 
 /* 1 if pose (x, y), ln L v, of the ln L grid g over win is a local maximum:
  * no neighbour in the window higher, and none equal before it in scan order
  * (one pose per plateau). The far basins' rule, here and in the bounded
  * search (src/height_bound.c, whose unscored poses hold -inf). */
 int trn_loc_grid_peak_(const double *g, const trn_window_t *win, int32_t x, int32_t y, double v);
-
-/* Bytes of a trn_loc_basins_t (the workspace's share). */
-size_t trn_loc_basins_bytes_(void);
 
 /* The refinement in out->refinement becomes the answer: pose, covariance,
  * sigmas and the misfit flag (src/localize_common.c). */
@@ -101,36 +117,8 @@ void trn_loc_refine_cfg_(const trn_map_t *map, const trn_loc_result_t *out, trn_
 /* The refined answer's covariance's mass beyond TRN_FAIL_RADIUS_CELLS
  * (trn_prob_beyond on cov_cells; 1 if it is not a covariance). */
 double trn_loc_tail_failure_(const double cov_cells[3]);
-/* The refined answer's covariance widened where ln L's shoulders are
- * flatter than its peak (trn_refine_shoulders_ with the answer's noise
- * model; docs/method.md 9, "The shoulders"), taken into out. */
-void trn_loc_shoulders_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx, int32_t ry,
-                        trn_loc_result_t *out);
-/* The failure probability of the refined answer's own peak: the larger of
- * its valley's (trn_refine_valley_fail_ with the answer's noise model, over
- * the window win, ln L over infl) and its covariance's tail
- * (trn_loc_tail_failure_);
- * here, not in localize.c, so that its frame is not under
- * trn_localize_dem's on the stack. */
-double trn_loc_peak_failure_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
-                             int32_t ry, const trn_window_t *win, double infl,
-                             const trn_loc_result_t *out);
-
-/* Find the far basins of the ln L grid ll_grid over win (outside radius of
- * the answer's start out->ix, out->iy); then, in a second call (so that the
- * search's frame is not under the refinement's on the stack), refine from
- * each (cand: a trn_refine_t of the workspace) and move the answer to each
- * in turn that trn_loc_far_wins_ prefers (the answer it replaced takes
- * that basin's slot). */
-void trn_loc_find_basins_(const double *ll_grid, const trn_window_t *win, int32_t radius,
-                          const trn_loc_result_t *out, trn_loc_basins_t *b);
-void trn_loc_refine_basins_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
-                            int32_t ry, const double *ll_grid, const trn_window_t *win,
-                            trn_loc_basins_t *b, trn_refine_t *cand, trn_loc_result_t *out);
-
-/* trn_loc_find_basins_'s search over (x, y, heading), for the height matcher
- * over heading (src/height_heading.c, which refines them itself, so that
- * this frame is not under the refinement's on the stack): the local maxima
+/* The far basins (src/localize_heights.c refines them, so that this frame
+ * is not under the refinement's on the stack): the local maxima
  * of the ln L grid, (2 half_steps + 1) slices over win (26 neighbours),
  * outside the position zone (radius) of (bx, by) at any heading; k holds
  * the slice. */

@@ -9,7 +9,6 @@
 #include <math.h>
 #include <stdlib.h>
 
-#include "height_score.h"
 #include "refine_int.h"
 
 /* cos and sin of an angle (finite), by the Taylor series after reduction to
@@ -495,17 +494,6 @@ trn_status_t trn_height_search(const trn_grid_f32_t *global, const trn_grid_f32_
                                float inlier_prob, double ll_scale, double *ll_grid,
                                trn_height_best_t *best)
 {
-    return trn_height_search_ws_(global, local, rover_x, rover_y, win, ex, cfg, inlier_prob,
-                                 ll_scale, ll_grid, NULL, best);
-}
-
-trn_status_t trn_height_search_ws_(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
-                                   int32_t rover_x, int32_t rover_y, const trn_window_t *win,
-                                   const trn_exclusion_t *ex, const trn_refine_cfg_t *cfg,
-                                   float inlier_prob, double ll_scale, double *ll_grid,
-                                   void *scratch, trn_height_best_t *best)
-{
-    trn_hs_t hs;
     trn_status_t st;
     int32_t x, y, n_seen = 0;
     double spread, k, floor_m;
@@ -531,9 +519,6 @@ trn_status_t trn_height_search_ws_(const trn_grid_f32_t *global, const trn_grid_
     }
     floor_m = (double)cfg->noise_m;
     k = 1.0 / (10.0 * (spread > floor_m ? spread : floor_m));
-    if (scratch != NULL) { /* the seen cells gathered once (height_score.c) */
-        (void)trn_hs_init(&hs, scratch, global, local, rover_x, rover_y, cfg, (double)inlier_prob);
-    }
     best->poses = 0u;
     best->lse_all = best->lse_out = -(double)INFINITY;
     for (y = win->y0; y <= win->y1; ++y) {
@@ -541,9 +526,8 @@ trn_status_t trn_height_search_ws_(const trn_grid_f32_t *global, const trn_grid_
             double ll, dz, m, q;
             int inside = ex != NULL && abs(x - ex->cx) <= ex->radius &&
                          abs(y - ex->cy) <= ex->radius;
-            ll = scratch != NULL ? trn_hs_ll(&hs, x, y, &dz, &m)
-                                 : pose_ll(global, local, rover_x, rover_y, x, y, cfg,
-                                           (double)inlier_prob, k, &dz, &m);
+            ll = pose_ll(global, local, rover_x, rover_y, x, y, cfg, (double)inlier_prob, k, &dz,
+                         &m);
             if (ll_grid != NULL) {
                 ll_grid[(size_t)(y - win->y0) * (size_t)(win->x1 - win->x0 + 1) +
                         (size_t)(x - win->x0)] = ll;

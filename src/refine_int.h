@@ -56,14 +56,6 @@ double trn_refine_weight_(const trn_grid_f32_t *g, double x, double y, double re
  * none), and their count (trn_height_search's K is 1 / (10 x it)). */
 double trn_refine_local_spread_(const trn_grid_f32_t *local, int32_t *n_seen);
 
-/* trn_height_search with scratch: NULL (the reference, scored straight from
- * the grids), or trn_hs_bytes of the local grid, where height_score.c's
- * scorer keeps the seen cells (the same model within rounding, faster). */
-trn_status_t trn_height_search_ws_(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
-                                   int32_t rover_x, int32_t rover_y, const trn_window_t *win,
-                                   const trn_exclusion_t *ex, const trn_refine_cfg_t *cfg,
-                                   float inlier_prob, double ll_scale, double *ll_grid,
-                                   void *scratch, trn_height_best_t *best);
 /* The noise model's variance of local cell (x, y), rover cell (rx, ry): the
  * sd noise_m + noise_k_per_m r^2 at r metres from the rover, squared. The
  * one copy for refine.c, refine_pose.c, height_score.c and
@@ -157,13 +149,10 @@ double trn_refine_excess_(double ratio, double rel_sd);
  * and its stack (src/refine.c; within 1e-14 for |a| <= 4 pi). */
 void trn_heading_trig_(double a, double *c, double *s);
 
-/* trn_localize_dem_heading's parts, after its argument checks (up to the
- * map and max_points), each out of line so that no path's stack carries
- * another's frame: the voxel path (src/localize_heading.c: its
- * preparation, then the search of src/heading.c); the height matcher
- * over heading with a window or an off-zero centre (src/height_heading.c);
- * the rest of the checks (src/localize_heading.c); W = 0 at centre 0 with a
- * height map, trn_localize_dem (src/localize_heading.c). */
+/* trn_localize_dem_heading's parts (src/localize_heading.c), each out of
+ * line so that no path's stack carries another's frame: the voxel path's
+ * preparation, then its search (src/heading.c); the checks, then the voxel
+ * path or the height matcher's (src/localize_heights.c). */
 trn_status_t trn_localize_dem_heading_prep_(const trn_map_t *map, const trn_grid_f32_t *local_dem,
                                             int32_t rover_x, int32_t rover_y, size_t max_points,
                                             const trn_window_t *win, void *ws, size_t ws_bytes,
@@ -172,20 +161,12 @@ trn_status_t trn_localize_dem_heading_voxel_(const trn_map_t *map, const trn_gri
                                              int32_t rover_x, int32_t rover_y, size_t max_points,
                                              const trn_window_t *win, const trn_heading_cfg_t *cfg,
                                              void *ws, size_t ws_bytes, trn_heading_result_t *out);
-trn_status_t trn_localize_heights3_(const trn_map_t *map, const trn_grid_f32_t *local,
-                                    int32_t rover_x, int32_t rover_y, const trn_window_t *win,
-                                    const trn_heading_cfg_t *cfg, void *ws, size_t ws_bytes,
-                                    trn_heading_result_t *out);
 trn_status_t trn_localize_dem_heading_checked_(const trn_map_t *map,
                                                const trn_grid_f32_t *local_dem, int32_t rover_x,
                                                int32_t rover_y, size_t max_points,
                                                const trn_window_t *win,
                                                const trn_heading_cfg_t *cfg, void *ws,
                                                size_t ws_bytes, trn_heading_result_t *out);
-trn_status_t trn_localize_heights2d_(const trn_map_t *map, const trn_grid_f32_t *local,
-                                     int32_t rover_x, int32_t rover_y, size_t max_points,
-                                     const trn_window_t *win, const trn_heading_cfg_t *cfg,
-                                     void *ws, size_t ws_bytes, trn_heading_result_t *out);
 
 /* The noise model's variance factor that the differences of neighbouring
  * residuals at `at` ask for: the mean of (r_a - r_b)^2 / (s_a^2 + s_b^2)

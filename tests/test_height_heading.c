@@ -447,6 +447,44 @@ static void test_node_budget_heading(void **state)
     g_w.map.cfg.noise_auto = 1;
 }
 
+/* The bounded search is over (x, y) at heading 0: with a heading window or
+ * an off-zero centre trn_localize_dem_heading refuses it (TRN_E_ARG, no
+ * workspace size); with W = 0 at centre 0 it runs it, trn_localize_dem's
+ * answer bit for bit (one path, src/localize_heights.c). */
+static void test_bounded_heading(void **state)
+{
+    const trn_window_t win = window_at(60, 60, 4);
+    trn_heading_cfg_t cw = {0.0, 5.0 * DEG, 0.0}, cc = {2.0 * DEG, 0.0, 0.0};
+    trn_heading_cfg_t c0 = {0.0, 0.0, 0.0};
+    trn_heading_result_t res;
+    trn_loc_result_t ref;
+    trn_status_t st;
+    size_t wb;
+    (void)state;
+    world_build(13, 0);
+    local_dem(60.4, 59.8, 0.0, 0.1, 1);
+    g_w.map.cfg.search = TRN_SEARCH_BOUNDED;
+    assert_int_equal(
+        trn_localize_dem_heading_workspace_bytes_cfg(&g_w.map, &g_lg, LR, LR, MAXPTS, &win, &cw),
+        0u);
+    assert_int_equal(trn_localize_dem_heading(&g_w.map, &g_lg, LR, LR, MAXPTS, &win, &cw, g_ws,
+                                              sizeof g_ws, &res),
+                     TRN_E_ARG);
+    assert_int_equal(trn_localize_dem_heading(&g_w.map, &g_lg, LR, LR, MAXPTS, &win, &cc, g_ws,
+                                              sizeof g_ws, &res),
+                     TRN_E_ARG);
+    st = loc3(&win, &c0, &res);
+    assert_true(st == TRN_OK || st == TRN_E_AMBIGUOUS);
+    wb = trn_localize_dem_workspace_bytes(&g_w.map, LW, LW, MAXPTS, &win);
+    assert_true(wb > 0u && wb <= sizeof g_ws2);
+    memset(&ref, 0, sizeof ref);
+    assert_int_equal(trn_localize_dem(&g_w.map, &g_lg, LR, LR, MAXPTS, &win, g_ws2, wb, &ref), st);
+    assert_memory_equal(&res.loc, &ref, sizeof ref);
+    assert_int_equal(ref.search, TRN_SEARCH_BOUNDED);
+    assert_true(ref.stats.blocks_bounded > 0u);
+    g_w.map.cfg.search = TRN_SEARCH_EXHAUSTIVE;
+}
+
 /* The noise model's scale from the data over heading (noise_auto, as
  * trn_localize_dem's): local maps with 3 times the configured noise, turned
  * by up to 6 degrees; the scale comes back within 20 % of 3 in at least 16
@@ -1148,10 +1186,10 @@ int main(void)
         cmocka_unit_test(test_w0_bit_equal),        cmocka_unit_test(test_grid_vs_slow),
         cmocka_unit_test(test_refine_turned),       cmocka_unit_test(test_recovers_heading),
         cmocka_unit_test(test_calibration),         cmocka_unit_test(test_noise_scale_heading),
-        cmocka_unit_test(test_node_budget_heading), cmocka_unit_test(test_bad_search),
-        cmocka_unit_test(test_bad_refine),          cmocka_unit_test(test_bad_localize),
-        cmocka_unit_test(test_edges_search),        cmocka_unit_test(test_edges_refine),
-        cmocka_unit_test(test_edges_localize),
+        cmocka_unit_test(test_node_budget_heading), cmocka_unit_test(test_bounded_heading),
+        cmocka_unit_test(test_bad_search),          cmocka_unit_test(test_bad_refine),
+        cmocka_unit_test(test_bad_localize),        cmocka_unit_test(test_edges_search),
+        cmocka_unit_test(test_edges_refine),        cmocka_unit_test(test_edges_localize),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -129,7 +129,9 @@ size_t trn_localize_dem_heading_workspace_bytes(const trn_map_t *map, int32_t wi
  * 0 that is trn_localize_dem itself (heading 0, sigma_heading 0, cov3 its
  * position covariance). The voxel matcher with refinement is refused.
  * @retval as trn_localize_points_heading, plus TRN_E_ARG (a voxel map that
- *         refines), TRN_E_CAPACITY (more than max_points occupied voxels),
+ *         refines, or a height map whose search is TRN_SEARCH_BOUNDED with
+ *         a heading window or an off-zero centre: the bounded search is
+ *         over (x, y) at heading 0), TRN_E_CAPACITY (more than max_points occupied voxels),
  *         TRN_E_NODATA (local DEM all missing) and, with a height map,
  *         TRN_E_AMBIGUOUS and TRN_E_ILLCOND as trn_localize_dem's (the
  *         window's edge including a refined heading beyond centre +- W),

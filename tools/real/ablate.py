@@ -45,28 +45,28 @@ VARIANTS = {
     "all": ("nothing: the height matcher as shipped", [], []),
     "no_second_starts": (
         "the refinement from the best pose's neighbours within 30 nats",
-        [("src/localize.c", "for (k = 0; k < 9 && cand != NULL; ++k) {",
-          "for (k = 0; k < 0 && cand != NULL; ++k) {")], []),
+        [("src/localize_heights.c", "    for (k = 0; k < 9; ++k) {\n        const int32_t sx = b->x + k % 3 - 1",
+          "    for (k = 0; k < 0; ++k) {\n        const int32_t sx = b->x + k % 3 - 1")], []),
     "no_far_basins": (
         "the far basins (refinement from the 4 highest other local maxima, their moves and share)",
-        [("src/localize.c", "        } else {\n            trn_loc_find_basins_(ll_grid, win, radius, out, bs);",
-          "        } else {\n            bs->n = 0;\n            bs->moved = 0;")], []),
+        [("src/localize_heights.c", "    trn_loc_find_basins3_(s->grid, win, s->kk, radius, b->x, b->y, far);",
+          "    far->n = 0;\n    far->moved = 0;")], []),
     "no_basin_share": (
         "the refined far basins' share of the failure probability",
-        [("src/localize.c", "out->refined ? trn_loc_basins_failure_(bs, infl, out) : 0.0);",
-          "out->refined ? 0.0 * trn_loc_basins_failure_(bs, infl, out) : 0.0);")], []),
+        [("src/localize_heights.c", "    double pf = fmax(trn_loc_basins_failure_(&s->far, infl, loc),",
+          "    double pf = fmax(0.0 * trn_loc_basins_failure_(&s->far, infl, loc),")], []),
     "no_valley": (
         "the valley's share of the failure probability (ln L along the major axis)",
-        [("src/localize_basins.c", "        trn_refine_valley_fail_(&map->heights",
-          "        0.0 * trn_refine_valley_fail_(&map->heights")], []),
+        [("src/localize_heights.c", "    return fmax(pf, trn_refine_valley_fail_(&map->heights",
+          "    return fmax(pf, 0.0 * trn_refine_valley_fail_(&map->heights")], []),
     "no_tail": (
         "the ellipse's tail beyond 1.5 cells as a floor of the failure probability",
-        [("src/localize_basins.c", "        trn_loc_tail_failure_(out->refinement.cov_cells),",
-          "        0.0 * trn_loc_tail_failure_(out->refinement.cov_cells),")], []),
+        [("src/localize_heights.c", "                     trn_loc_tail_failure_(s->ref.pos.cov_cells));",
+          "                     0.0 * trn_loc_tail_failure_(s->ref.pos.cov_cells));")], []),
     "no_shoulders": (
         "the ellipse widened where ln L's fall at 2 sds is flatter than at half an sd",
-        [("src/localize.c", "        trn_loc_shoulders_(map, local, rx, ry, out);",
-          "        (void)rx;")], []),
+        [("src/localize_heights.c", "        trn_refine_shoulders_(&map->heights, local, rover_x, rover_y, &s->rc,",
+          "        if (0) trn_refine_shoulders_(&map->heights, local, rover_x, rover_y, &s->rc,")], []),
     "no_sys_term": (
         "the systematic term (the interpolants' disagreement in the covariance)",
         [("src/refine.c", "    return TRN_REFINE_SYS * m2s / (m2s + noise2 / q);",
