@@ -463,6 +463,48 @@ static void test_hb_edges(void **state)
     free(ws);
 }
 
+/* The node budget is a hard bound wherever the work runs out: the least
+ * budget that is enough (the status is monotone in the budget) gives the
+ * unbudgeted answer, and every budget below it, spread over the stages
+ * that count (the search, the best pose's neighbours, the far basins and
+ * their zones, the answer's zone and the masses), TRN_E_BUDGET. */
+static void budget_sweep(int kind, uint32_t seed)
+{
+    trn_rng_t r;
+    trn_grid_f32_t g, l;
+    world_t w;
+    trn_loc_result_t a, b;
+    const trn_window_t win = {24, 22, 40, 38};
+    trn_status_t st;
+    uint32_t lo = 1u, hi, k;
+    trn_rng_seed(&r, seed);
+    make_map(kind, 21u);
+    make_local(31.3, 29.8, 0.01, 0, &r, &l);
+    build(&w, &g, 1);
+    st = run(&w, TRN_SEARCH_BOUNDED, 0u, &l, LR, LR, &win, &a);
+    hi = (uint32_t)(4u * (a.stats.poses_scored + a.stats.blocks_bounded) + 100u);
+    assert_int_equal(run(&w, TRN_SEARCH_BOUNDED, hi, &l, LR, LR, &win, &b), st);
+    assert_int_equal(run(&w, TRN_SEARCH_BOUNDED, lo, &l, LR, LR, &win, &b), TRN_E_BUDGET);
+    while (hi - lo > 1u) {
+        const uint32_t mid = lo + (hi - lo) / 2u;
+        if (run(&w, TRN_SEARCH_BOUNDED, mid, &l, LR, LR, &win, &b) == TRN_E_BUDGET) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    assert_int_equal(run(&w, TRN_SEARCH_BOUNDED, hi, &l, LR, LR, &win, &b), st);
+    assert_true(b.x == a.x && b.y == a.y && b.failure_probability == a.failure_probability &&
+                b.sigma_x_m == a.sigma_x_m && b.stats.poses_scored == a.stats.poses_scored &&
+                b.stats.blocks_bounded == a.stats.blocks_bounded);
+    for (k = 0u; k <= 64u; ++k) {
+        assert_int_equal(
+            run(&w, TRN_SEARCH_BOUNDED, 1u + (hi - 2u) * k / 64u, &l, LR, LR, &win, &b),
+            TRN_E_BUDGET);
+    }
+    free(w.buf);
+}
+
 static void test_node_budget(void **state)
 {
     trn_rng_t r;
@@ -486,8 +528,11 @@ static void test_node_budget(void **state)
     assert_int_equal(
         run(&w, TRN_SEARCH_BOUNDED, (uint32_t)(4u * work + 100u), &l, LR, LR, &win, &b), TRN_OK);
     assert_true(b.x == a.x && b.y == a.y && b.failure_probability == a.failure_probability);
-    assert_string_equal(trn_strerror(TRN_E_BUDGET), "search node budget exhausted");
     free(w.buf);
+    budget_sweep(K_ROUGH, 21u);
+    budget_sweep(K_PERIODIC, 21u);
+    budget_sweep(K_DECOY, 5u);
+    assert_string_equal(trn_strerror(TRN_E_BUDGET), "search node budget exhausted");
 }
 
 static void test_bad_search(void **state)
