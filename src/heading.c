@@ -457,6 +457,7 @@ trn_status_t trn_localize_points_heading(const trn_map_t *map, const trn_point_t
     bk = fit->kp.best_k;
     out->loc.refined = 0;
     out->loc.misfit = 0;
+    out->loc.relief_z = (double)INFINITY;
     out->loc.ix = best.x;
     out->loc.iy = best.y;
     out->loc.ll_best = (double)best.score / (double)TRN_LNP_SCALE;

@@ -379,6 +379,7 @@ trn_status_t trn_localize_points(const trn_map_t *map, const trn_point_t *pts, s
     }
     out->refined = 0;
     out->misfit = 0;
+    out->relief_z = (double)INFINITY;
     out->ix = best.x;
     out->iy = best.y;
     out->ll_best = nats(best.score);

@@ -118,6 +118,7 @@ static void search_result(const trn_height_best3_t *b, const trn_window_t *win,
     out->loc.cov_m2[2] = 0.0;
     out->loc.refined = 0;
     out->loc.misfit = 0;
+    out->loc.relief_z = (double)INFINITY;
     /* W = 0: no heading searched, the heading taken as known */
     out->step_rad = cfg->window_rad > 0.0 ? b->step_rad : 0.0;
     out->half_steps = b->half_steps;
@@ -460,6 +461,13 @@ trn_status_t trn_loc_heights_(const trn_map_t *map, const trn_grid_f32_t *local,
         trn_refine_shoulders_(&map->heights, local, rover_x, rover_y, &s->rc, s->ref.heading_rad,
                               &s->ref.pos, s->ref.cov3);
         refine_result(map, s, cfg, out);
+        /* the relief test: a pose beside the truth (a prior that missed it)
+         * takes a weaker copy of the map's relief (docs/method.md 9.4) */
+        out->loc.relief_z = trn_refine_relief_z_(&map->heights, local, rover_x, rover_y,
+                                                 &s->ref.pos, s->ref.heading_rad, &s->rc);
+        if (out->loc.relief_z < -TRN_RELIEF_Z) {
+            out->loc.misfit = 1;
+        }
     } else {
         out->loc.refinement = s->ref.pos;
     }

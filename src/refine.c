@@ -359,6 +359,94 @@ trn_status_t trn_refine_noise_scale(const trn_grid_f32_t *global, const trn_grid
     return TRN_OK;
 }
 
+/* The relief test's sums: the normal equations of local = a + b x + c y +
+ * g M (packed A[4][4] full, rhs v) over the cells within the clip. */
+static int32_t relief_pass(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
+                           int32_t ry, const trn_refine_t *at, const double cs_sn[2],
+                           const trn_refine_cfg_t *cfg, double a[4][4], double v[4])
+{
+    const double m2 = at->model_m * at->model_m;
+    double ref = 0.0;
+    int32_t i, j, p, q, cnt = 0;
+    for (p = 0; p < 4; ++p) {
+        v[p] = 0.0;
+        for (q = 0; q < 4; ++q) {
+            a[p][q] = 0.0;
+        }
+    }
+    for (j = 0; j < local->height; ++j) {
+        for (i = 0; i < local->width; ++i) {
+            const double h = (double)TRN_GRID_AT(local, i, j);
+            const double ox = (double)(i - rx), oy = (double)(j - ry);
+            /* the offset turned by the heading, as trn_refine_pose_heading's */
+            const double gx = at->x + ox * cs_sn[0] + oy * cs_sn[1];
+            const double gy = at->y - ox * cs_sn[1] + oy * cs_sn[0];
+            double s3[3], b3[3], dcb, s2, r, w, x[4];
+            if (!isfinite(h) || !trn_refine_sample_mix_(global, gx, gy, at->interp_mix, s3, &dcb) ||
+                !trn_refine_sample_bilinear_(global, gx, gy, b3)) {
+                continue;
+            }
+            s2 = trn_refine_noise_var_(cfg, i, j, rx, ry);
+            r = h - at->dz_m - s3[0];
+            if (!(r * r <= TRN_REFINE_CLIP * TRN_REFINE_CLIP * (s2 + m2))) {
+                continue;
+            }
+            if (cnt == 0) {
+                ref = b3[0]; /* heights about the first: no cancellation */
+            }
+            w = 1.0 / (s2 + m2);
+            x[0] = 1.0;
+            x[1] = ox;
+            x[2] = oy;
+            x[3] = b3[0] - ref;
+            for (p = 0; p < 4; ++p) {
+                v[p] += w * x[p] * (h - at->dz_m - ref);
+                for (q = p; q < 4; ++q) {
+                    a[p][q] += w * x[p] * x[q];
+                }
+            }
+            cnt += 1;
+        }
+    }
+    return cnt;
+}
+
+double trn_refine_relief_z_(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
+                            int32_t ry, const trn_refine_t *at, double heading_rad,
+                            const trn_refine_cfg_t *cfg)
+{
+    double cs_sn[2], a[4][4], v[4], l[4][4], y[4];
+    int32_t p, q, k;
+    trn_heading_trig_(heading_rad, &cs_sn[0], &cs_sn[1]);
+    if (relief_pass(global, local, rx, ry, at, cs_sn, cfg, a, v) < 8) {
+        return (double)INFINITY;
+    }
+    /* Cholesky of the normal matrix, g last: g = y3 / L33 and sd(g) =
+     * 1 / L33, so (g - 1) / sd(g) = y3 - L33 */
+    for (p = 0; p < 4; ++p) {
+        for (q = p; q < 4; ++q) {
+            double s = a[p][q];
+            for (k = 0; k < p; ++k) {
+                s -= l[q][k] * l[p][k];
+            }
+            if (q == p) {
+                if (!(s > 1e-12 * a[p][p])) {
+                    return (double)INFINITY; /* no relief (or no plane) to fit */
+                }
+                l[p][p] = sqrt(s);
+            } else {
+                l[q][p] = s / l[p][p];
+            }
+        }
+        y[p] = v[p];
+        for (k = 0; k < p; ++k) {
+            y[p] -= l[p][k] * y[k];
+        }
+        y[p] /= l[p][p];
+    }
+    return y[3] - l[3][3];
+}
+
 /* Spread of the seen local heights (standard deviation about their mean), and
  * their count. */
 static double local_spread(const trn_grid_f32_t *local, int32_t *n_seen)

@@ -52,6 +52,18 @@ static inline int trn_refine_sample_mix_(const trn_grid_f32_t *g, double x, doub
 double trn_refine_weight_(const trn_grid_f32_t *g, double x, double y, double res, double sd,
                           double clip);
 
+/* The relief test at `at` (the local map turned by heading_rad; cfg the
+ * noise model, checked by the caller): the seen local cells within
+ * TRN_REFINE_CLIP sds (noise and model variance) of the answer's model are
+ * fitted as local = a + b x + c y + g M, M the map's bilinear height under
+ * the cell, x, y the cell's offsets, weights 1 / (s^2 + m^2) (the noise
+ * model's variance and the answer's model variance); returns
+ * (g - 1) / sd(g), sd(g) from those weights. +inf with fewer than 8 cells
+ * or no relief to fit (nothing to test). */
+double trn_refine_relief_z_(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
+                            int32_t ry, const trn_refine_t *at, double heading_rad,
+                            const trn_refine_cfg_t *cfg);
+
 /* Standard deviation of the seen local heights about their mean (0 for
  * none), and their count (trn_height_search's K is 1 / (10 x it)). */
 double trn_refine_local_spread_(const trn_grid_f32_t *local, int32_t *n_seen);

@@ -140,7 +140,8 @@ typedef struct {
                                            trn_refine_pose, not from eq. 6 */
     trn_refine_t refinement;          /**< its details (valid when cfg.refine) */
     int32_t misfit;                   /**< 1: the refined model error exceeds
-                                           TRN_MISFIT_ROUGHNESS x the map's roughness:
+                                           TRN_MISFIT_ROUGHNESS x the map's roughness, or
+                                           the relief test fails (relief_z):
                                            the local heights match nowhere in the window
                                            as well as the map can be matched (status
                                            TRN_E_ILLCOND) */
@@ -157,6 +158,14 @@ typedef struct {
                                            0 when every pose was scored */
     int32_t search;                   /**< trn_search_t that ran (the search over heading:
                                            TRN_SEARCH_EXHAUSTIVE) */
+    double relief_z;                  /**< the height matcher's relief test at the refined
+                                           answer: (g - 1) / sd(g), g the local heights'
+                                           gain on the map's relief there (local = a + plane
+                                           + g x map), sd(g) from the noise model and the
+                                           answer's model variance; below
+                                           -TRN_RELIEF_Z the answer misfits (misfit 1).
+                                           +inf where not tested (the voxel path, no
+                                           refinement) */
 } trn_loc_result_t;
 
 /** Inlier probability a of trn_map_cfg_default (the paper's). */
@@ -173,6 +182,15 @@ typedef struct {
  *  m / roughness <= 1.8 on three real DEMs; a local map from outside the
  *  window 5-50 (docs/method.md section 9). */
 #define TRN_MISFIT_ROUGHNESS 3.0
+/** A refined match whose local heights reproduce the map's relief at the
+ *  answer with a gain g more than this many of its sds (under the noise
+ *  model and the answer's model variance) below 1 is flagged (misfit;
+ *  relief_z): at the truth g is 1, and a
+ *  map smoother than the ground only raises it; a pose beside the truth
+ *  matches the relief in part, and the fit takes a weaker copy of it
+ *  (docs/method.md 9.4, "The relief test"). One-sided, about 0.1 % of
+ *  right matches under the model. */
+#define TRN_RELIEF_Z 3.0
 /** The height matcher refines from the best integer pose and from each of
  *  its 8 neighbours whose ln L is within this many nats of the best, and
  *  keeps the refinement with the highest refined ln L (docs/method.md 9). */

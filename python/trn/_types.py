@@ -62,7 +62,7 @@ class MapConfig(TypedDict):
     max_failure_prob: float
 
 
-class Refinement(TypedDict):
+class _RefinementRequired(TypedDict):
     """The refinement's own figures (docs/method.md 9), grid frame."""
     model_m: float
     chi2_dof: float
@@ -75,6 +75,14 @@ class Refinement(TypedDict):
     points_used: int
     iterations: int
     log_likelihood: float
+
+
+class Refinement(_RefinementRequired, total=False):
+    """The refinement's own figures (docs/method.md 9), grid frame; with the
+    height matcher also its relief test (docs/method.md 9.4): relief_z (None
+    where not tested) and misfit, the answer's misfit flag."""
+    relief_z: Optional[float]
+    misfit: bool
 
 
 class GlobalError(TypedDict):

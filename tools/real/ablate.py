@@ -67,6 +67,10 @@ VARIANTS = {
         "the ellipse widened where ln L's fall at 2 sds is flatter than at half an sd",
         [("src/localize_heights.c", "        trn_refine_shoulders_(&map->heights, local, rover_x, rover_y, &s->rc,",
           "        if (0) trn_refine_shoulders_(&map->heights, local, rover_x, rover_y, &s->rc,")], []),
+    "no_relief_test": (
+        "the relief test (an answer whose local heights take a weaker copy of the map's relief misfits)",
+        [("src/localize_heights.c", "        if (out->loc.relief_z < -TRN_RELIEF_Z) {",
+          "        if (0 && out->loc.relief_z < -TRN_RELIEF_Z) {")], []),
     "no_sys_term": (
         "the systematic term (the interpolants' disagreement in the covariance)",
         [("src/refine.c", "    return TRN_REFINE_SYS * m2s / (m2s + noise2 / q);",

@@ -280,6 +280,11 @@ void cmd_localize_report_json(FILE *out, const cmd_localize_ctx_t *c, const char
         json_int(&j, "points_used", (long long)rf->n_used);
         json_int(&j, "iterations", (long long)rf->iterations);
         json_num(&j, "log_likelihood", rf->ll);
+        if (c->cfg.match == TRN_MATCH_HEIGHTS) {
+            /* the relief test (misfit below -TRN_RELIEF_Z; null: not tested) */
+            json_num(&j, "relief_z", o->res.relief_z);
+            json_bool(&j, "misfit", o->res.misfit != 0);
+        }
         json_obj_end(&j);
     }
     json_obj(&j, "prior");
