@@ -1,5 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* localize.c - prepared maps and end-to-end localization (see trn/localize.h). */
+/* localize.c - prepared maps, the voxel matcher's localization
+ * (trn_localize_points) and its path from a local DEM (see trn/localize.h;
+ * trn_localize_dem's entry is src/localize_dem.c, the height matcher's path
+ * src/localize_heights.c). */
 #include "trn/localize.h"
 #include "trn/heading.h"
 
@@ -7,8 +10,6 @@
 #include <math.h>
 #include <stdlib.h>
 
-#include "height_bound.h"
-#include "height_score.h"
 #include "localize_int.h"
 #include "refine_int.h"
 #include "ws.h"
@@ -435,9 +436,6 @@ trn_status_t trn_localize_points(const trn_map_t *map, const trn_point_t *pts, s
     }
     return fit_st == TRN_OK ? TRN_OK : TRN_E_ILLCOND;
 }
-
-/* Layout of trn_localize_dem's workspace: [hp grid | highpass ws | points | search ws | ln L grid
- * (TRN_MATCH_HEIGHTS only)]. */
 
 /* Layout of the voxel path's workspace: [hp grid | highpass ws | points |
  * trn_localize_points' workspace]. */
