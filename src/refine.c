@@ -381,13 +381,15 @@ static int32_t relief_pass(const trn_grid_f32_t *global, const trn_grid_f32_t *l
             /* the offset turned by the heading, as trn_refine_pose_heading's */
             const double gx = at->x + ox * cs_sn[0] + oy * cs_sn[1];
             const double gy = at->y - ox * cs_sn[1] + oy * cs_sn[0];
-            double s3[3], b3[3], dcb, s2, r, w, x[4];
-            if (!isfinite(h) || !trn_refine_sample_mix_(global, gx, gy, at->interp_mix, s3, &dcb) ||
-                !trn_refine_sample_bilinear_(global, gx, gy, b3)) {
+            double s3[3], b3[3], s2, r, w, x[4];
+            if (!isfinite(h) || !trn_refine_sample_bilinear_(global, gx, gy, b3)) {
                 continue;
             }
+            /* the model's mixed height (trn_refine_sample_mix_'s, from the
+             * same two samples) for the clip; the bilinear one for the fit */
+            (void)trn_refine_sample_(global, gx, gy, s3);
             s2 = trn_refine_noise_var_(cfg, i, j, rx, ry);
-            r = h - at->dz_m - s3[0];
+            r = h - at->dz_m - (b3[0] + at->interp_mix * (s3[0] - b3[0]));
             if (!(r * r <= TRN_REFINE_CLIP * TRN_REFINE_CLIP * (s2 + m2))) {
                 continue;
             }
