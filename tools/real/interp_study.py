@@ -156,7 +156,7 @@ def bilinear_fine(fine, r, c):
 
 
 def study(fine, k, radius, cases, seed, local, maptype, interps):
-    """The statistics above for one fine DEM (2-D array, finite); a dict per interpolant."""
+    """The statistics above for one fine DEM (2-D array, NaN unknown); a dict per interpolant."""
     if k < 1 or radius < 2 or cases < 4:
         raise InputError("need K >= 1, R >= 2 and at least 4 cases")
     known = np.isfinite(fine)
