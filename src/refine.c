@@ -360,7 +360,8 @@ trn_status_t trn_refine_noise_scale(const trn_grid_f32_t *global, const trn_grid
 }
 
 /* The relief test's sums: the normal equations of local = a + b x + c y +
- * g M (packed A[4][4] full, rhs v) over the cells within the clip. */
+ * g M (the upper triangle of a[4][4], the right-hand side v) over the cells
+ * within the clip; their count. */
 static int32_t relief_pass(const trn_grid_f32_t *global, const trn_grid_f32_t *local, int32_t rx,
                            int32_t ry, const trn_refine_t *at, const double cs_sn[2],
                            const trn_refine_cfg_t *cfg, double a[4][4], double v[4])
