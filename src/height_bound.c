@@ -3,13 +3,15 @@
  * (height_bound.h; docs/method.md 9.3, "The bounded search").
  *
  * The bound. A pose's ln L is a sum over the seen local cells i of
- * ln(a N(r_i - dz; v_i + m2) + c), r_i = h_i - g_i(pose), with one offset dz
- * and one model variance m2 >= 0 fitted per pose. Over a block of poses, g_i
+ * ln(a N(r_i - dz; k2 v_i + m2) + c), r_i = h_i - g_i(pose), with one offset
+ * dz, one model variance m2 >= 0 and (trn_refine_cfg_t.fit_noise) one noise
+ * scale k2 fitted per pose. Over a block of poses, g_i
  * lies between the map's least and greatest height over the block's square
  * shifted by cell i, so r_i lies in [lo_i, hi_i]. For a given dz and a class
  * [m_lo, m_hi] of m2, term i is at most F(d_i), d_i the distance of dz from
  * [lo_i, hi_i], F(d) = ln(a max_v N(d; v) + c) over v in
- * [v_i + m_lo, v_i + m_hi], which falls with d. F is bounded by a staircase
+ * [k_lo v_i + m_lo, k_hi v_i + m_hi] (k the noise scale, fitted or 1), which
+ * falls with d. F is bounded by a staircase
  * over steps t_j (in units of the cell's noise sd), and the number of cells
  * within t_j sds of any offset of a range of offset bins is read from
  * cumulative counts of the cells' low and high ends, so a bound over a range
@@ -155,11 +157,12 @@ static int32_t bin_of(const trn_hb_t *hb, double z)
 }
 
 /* The staircase's value at distance d for noise class sds [s, s_hi] and m2
- * in [m_lo, m_hi]: ln(a max_v N(d; v) + c), v in [s^2 + m_lo, s_hi^2 + m_hi]. */
+ * in [m_lo, m_hi]: ln(a max_v N(d; v) + c), v in [klo s^2 + m_lo, khi s_hi^2
+ * + m_hi] (the noise scales the score may fit). */
 static double f_step(const trn_hb_t *hb, double d, double s, double s_hi, double m_lo, double m_hi)
 {
     const double two_pi = 6.283185307179586;
-    const double vlo = s * s + m_lo, vhi = s_hi * s_hi + m_hi;
+    const double vlo = hb->klo * s * s + m_lo, vhi = hb->khi * s_hi * s_hi + m_hi;
     double v = d * d;
     v = v < vlo ? vlo : v > vhi ? vhi : v;
     return log(hb->a * exp(-0.5 * d * d / v) / sqrt(two_pi * v) + (1.0 - hb->a) * hb->k);
@@ -743,6 +746,8 @@ trn_status_t trn_hb_init(trn_hb_t **out, void *ws, const trn_grid_f32_t *global,
     hb->win = *win;
     hb->cfg = *cfg;
     hb->a = (double)inlier_prob;
+    hb->klo = cfg->fit_noise != 0 ? TRN_NOISE_SCALE2_MIN : 1.0;
+    hb->khi = cfg->fit_noise != 0 ? TRN_NOISE_SCALE2_MAX : 1.0;
     hb->ww = lay.ww;
     hb->wh = lay.wh;
     hb->levels = lay.levels;

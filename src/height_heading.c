@@ -15,7 +15,8 @@
 static int rcfg_ok(const trn_refine_cfg_t *cfg)
 {
     return cfg->cell_m > 0.0f && cfg->cell_m <= 1000.0f && cfg->noise_m > 0.0f &&
-           cfg->noise_m <= 1000.0f && cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f;
+           cfg->noise_m <= 1000.0f && cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f &&
+           (cfg->fit_noise == 0 || cfg->fit_noise == 1);
 }
 
 static int rover_ok(const trn_grid_f32_t *l, int32_t rx, int32_t ry)

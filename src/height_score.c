@@ -166,6 +166,8 @@ size_t trn_hs_init(trn_hs_t *s, void *ws, const trn_grid_f32_t *global, const tr
     s->k = 1.0 / (10.0 * (spread > (double)cfg->noise_m ? spread : (double)cfg->noise_m));
     s->b = (1.0 - s->a) * s->k;
     s->lout = log(s->b);
+    s->fitk = cfg->fit_noise != 0 ? 1 : 0;
+    s->k2 = 1.0;
     trn_hs_turn(s, 1.0, 0.0);
     return s->n;
 }
@@ -211,39 +213,40 @@ static void residuals(trn_hs_t *s, int32_t px, int32_t py)
     }
 }
 
-/* The weighted moments' fit at model variance *m2 over the residuals within
- * clip sds of *dz (clip < 0: all of them): per noise class the count, sum
- * and sum of squares of the residuals (relative to ref) it keeps, weighted
- * by w = 1 / (v + m2) for the offset and by w^2 for the model variance (the
- * weighted mean squared residual about the offset less the weighted mean
- * noise variance, never negative). Their count (0: dz and m2 untouched). */
-static int32_t fit(const trn_hs_t *s, double ref, double clip, double *dz, double *m2)
+/* The weighted moments' fit at the variances (*k2, *m2) over the residuals
+ * within clip sds of *dz (clip < 0: all of them): per noise class the count,
+ * sum and sum of squares of the residuals (relative to ref) it keeps,
+ * weighted by w = 1 / (k2 v + m2) for the offset and by w^2 for the
+ * variances (trn_var_fit_: the model variance, and with s->fitk the noise
+ * scale). Their count (0: dz, k2 and m2 untouched). */
+static int32_t fit(const trn_hs_t *s, double ref, double clip, double *dz, double *k2, double *m2)
 {
-    double sw = 0.0, swr = 0.0, sq = 0.0, sqr = 0.0, sqrr = 0.0, sqv = 0.0, d, v;
-    const double c2 = clip < 0.0 ? (double)INFINITY : clip * clip, z = *dz, mm = *m2;
+    double sw = 0.0, swr = 0.0, sq = 0.0, sqr = 0.0, sqrr = 0.0, sqv = 0.0, sqvv = 0.0;
+    double sqvr = 0.0, sqvrr = 0.0, d;
+    const double c2 = clip < 0.0 ? (double)INFINITY : clip * clip, z = *dz, kk = *k2, mm = *m2;
     int32_t c, n = 0;
     for (c = 0; c < s->nc; ++c) {
-        const double vm = s->cv[c] + mm, w = 1.0 / vm, q = w * w, lim = c2 * vm;
+        const double v = s->cv[c], vm = kk * v + mm, w = 1.0 / vm, q = w * w, lim = c2 * vm;
         /* two running sums, even and odd cells: half the additions' chain */
         double s1 = 0.0, s2 = 0.0, t1 = 0.0, t2 = 0.0, k;
-        int32_t i, kk = 0;
+        int32_t i, kn = 0;
         for (i = s->cs[c]; i < s->cs[c + 1]; i += 2) {
             const double r = s->r[i], e = r - z;
             if (isfinite(r) && e * e <= lim) {
-                ++kk;
+                ++kn;
                 s1 += r - ref;
                 s2 += (r - ref) * (r - ref);
             }
             if (i + 1 < s->cs[c + 1]) {
                 const double r1 = s->r[i + 1], e1 = r1 - z;
                 if (isfinite(r1) && e1 * e1 <= lim) {
-                    ++kk;
+                    ++kn;
                     t1 += r1 - ref;
                     t2 += (r1 - ref) * (r1 - ref);
                 }
             }
         }
-        k = (double)kk;
+        k = (double)kn;
         s1 += t1;
         s2 += t2;
         sw += w * k;
@@ -251,16 +254,19 @@ static int32_t fit(const trn_hs_t *s, double ref, double clip, double *dz, doubl
         sq += q * k;
         sqr += q * s1;
         sqrr += q * s2;
-        sqv += q * s->cv[c] * k;
-        n += kk;
+        sqv += q * v * k;
+        sqvv += q * v * v * k;
+        sqvr += q * v * s1;
+        sqvrr += q * v * s2;
+        n += kn;
     }
     if (n == 0) {
         return 0;
     }
     d = swr / sw;
-    v = (sqrr - 2.0 * d * sqr + d * d * sq - sqv) / sq;
+    trn_var_fit_(sqrr - 2.0 * d * sqr + d * d * sq, sqvrr - 2.0 * d * sqvr + d * d * sqv, sq, sqv,
+                 sqvv, s->fitk, k2, m2);
     *dz = d + ref;
-    *m2 = v > 0.0 ? v : 0.0;
     return n;
 }
 
@@ -276,19 +282,19 @@ static double first_residual(const trn_hs_t *s)
     return 0.0;
 }
 
-/* ln L at the fitted (dz, m2). The sum of logs as the log of products, one
+/* ln L at the fitted (dz, k2, m2). The sum of logs as the log of products, one
  * log per many cells: a term lies within [b, a / sqrt(2 pi v) + b], b above
  * 1e-47 (a float inlier probability below 1, float heights' spread) and the
  * top below 1e45 (a float noise sd above 0), so a product kept within
  * 1e+-150 takes one more and stays a normal number (its rounding: 1e-16
  * relative a term, 1e-12 nats over 4,096 cells). */
-static double mixture_ll(const trn_hs_t *s, double dz, double m2)
+static double mixture_ll(const trn_hs_t *s, double dz, double k2, double m2)
 {
     const double inv_two_pi = 0.15915494309189535;
     double ll = 0.0, prod = 1.0;
     int32_t c;
     for (c = 0; c < s->nc; ++c) {
-        const double iv = 1.0 / (s->cv[c] + m2), peak = s->a * sqrt(iv * inv_two_pi);
+        const double iv = 1.0 / (k2 * s->cv[c] + m2), peak = s->a * sqrt(iv * inv_two_pi);
         const double half = -0.5 * iv;
         int32_t i;
         for (i = s->cs[c]; i < s->cs[c + 1]; ++i) {
@@ -309,22 +315,23 @@ static double mixture_ll(const trn_hs_t *s, double dz, double m2)
 
 double trn_hs_ll(trn_hs_t *s, int32_t px, int32_t py, double *dz_out, double *model_m)
 {
-    double dz = 0.0, m2 = 0.0, ref;
+    double dz = 0.0, k2 = 1.0, m2 = 0.0, ref;
     int32_t n_all;
     residuals(s, px, py);
     ref = first_residual(s);
-    n_all = fit(s, ref, -1.0, &dz, &m2); /* every point at m2 = 0 */
-    if (n_all > 0 && fit(s, ref, -1.0, &dz, &m2) > 0) {
+    n_all = fit(s, ref, -1.0, &dz, &k2, &m2); /* every point at the model's variances */
+    if (n_all > 0 && fit(s, ref, -1.0, &dz, &k2, &m2) > 0) {
         /* then within the clip of the last fit, again while that drops
          * points (trn_clip_again_) */
-        double dz1 = dz, m21 = m2;
+        double dz1 = dz, k21 = k2, m21 = m2;
         int32_t n_prev = n_all, n, again;
         for (again = 0; again <= TRN_CLIP_AGAIN; ++again) {
-            n = fit(s, ref, TRN_REFINE_CLIP, &dz1, &m21);
+            n = fit(s, ref, TRN_REFINE_CLIP, &dz1, &k21, &m21);
             if (n <= 0) {
                 break;
             }
             dz = dz1;
+            k2 = k21;
             m2 = m21;
             if (!trn_clip_again_(n_all, n_prev, n)) {
                 break;
@@ -332,7 +339,8 @@ double trn_hs_ll(trn_hs_t *s, int32_t px, int32_t py, double *dz_out, double *mo
             n_prev = n;
         }
     }
+    s->k2 = k2;
     *dz_out = dz;
     *model_m = sqrt(m2);
-    return mixture_ll(s, dz, m2);
+    return mixture_ll(s, dz, k2, m2);
 }

@@ -6,10 +6,12 @@
  * Internal (docs/method.md 9.3, "The pose score").
  *
  * The model is trn_height_search's (trn/refine.h): over the seen local cells
- * i, ln L = sum ln(a N(r_i - dz; v_i + m2) + (1 - a) k), r_i = h_i - g_i the
- * local height less the map's under it, dz and m2 >= 0 fitted by weighted
- * moments (all points at m2 = 0, all points at that m2, then within
- * TRN_REFINE_CLIP sds while a pass drops more than 1 % of them), a cell off
+ * i, ln L = sum ln(a N(r_i - dz; k2 v_i + m2) + (1 - a) k), r_i = h_i - g_i
+ * the local height less the map's under it, dz, m2 >= 0 and (with the
+ * configuration's fit_noise, else k2 = 1) the noise scale k2 fitted by
+ * weighted moments (all points at k2 = 1, m2 = 0, all points at that fit,
+ * then within TRN_REFINE_CLIP sds while a pass drops more than 1 % of them;
+ * trn_var_fit_ in refine_int.h), a cell off
  * the map or over a missing map cell scoring ln((1 - a) k). trn_height_search,
  * which has no workspace, scores the same model straight from the grids: it is
  * the obvious reference the tests hold this to (within rounding).
@@ -45,6 +47,8 @@ typedef struct {
     size_t n;                /* seen cells */
     int32_t x0, x1, y0, y1;  /* extent of (tx, ty) */
     double a, k, b, lout;    /* inlier probability, outlier density, (1 - a) k, ln b */
+    double k2;               /* the noise scale (variance factor) of the last pose scored */
+    int32_t fitk;            /* 1: the score fits the noise scale (trn_refine_cfg_t.fit_noise) */
 } trn_hs_t;
 
 /* Workspace bytes for a local map of lw x lh cells (1..TRN_MAX_DIM each;
@@ -65,7 +69,8 @@ size_t trn_hs_init(trn_hs_t *s, void *ws, const trn_grid_f32_t *global, const tr
 void trn_hs_turn(trn_hs_t *s, double c, double sn);
 
 /* ln L of integer pose (px, py) (the rover cell on map cell (px, py)), its
- * fitted offset dz (metres) and model sd (metres). */
+ * fitted offset dz (metres) and model sd (metres); its noise scale in
+ * s->k2. */
 double trn_hs_ll(trn_hs_t *s, int32_t px, int32_t py, double *dz, double *model_m);
 
 #endif

@@ -39,6 +39,7 @@ void trn_loc_refine_cfg_(const trn_map_t *map, const trn_loc_result_t *out, trn_
     rc->noise_m = (float)((double)map->cfg.noise_m * out->noise_scale);
     rc->noise_k_per_m = (float)((double)map->cfg.noise_k_per_m * out->noise_scale);
     rc->inlier_prob = map->cfg.inlier_prob;
+    rc->fit_noise = map->cfg.noise_auto != 0 ? 1 : 0; /* the search's pose score */
 }
 
 int trn_loc_noise_rejected_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,

@@ -20,7 +20,7 @@
 /* One localization's state, in the workspace (not on the stack: the limit
  * of docs/architecture.md). */
 typedef struct {
-    trn_refine_cfg_t rc;     /* the noise model of the pass */
+    trn_refine_cfg_t rc;     /* the noise model: the configured one, then the rescaled */
     trn_height_best3_t best; /* the search's best (pose, heading) */
     trn_refine3_t ref;       /* the refinement taken as the answer */
     trn_refine3_t cand;      /* a candidate refinement (second starts, far basins) */
@@ -133,7 +133,7 @@ static void search_result(const trn_height_best3_t *b, const trn_window_t *win,
     }
 }
 
-/* One pass of the search with the noise model s->rc: every (pose, heading)
+/* The search with the noise model s->rc: every (pose, heading)
  * scored, within the node budget; or the bounded search, the best pose's
  * neighbours scored too (the second starts read them). */
 static trn_status_t search(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rx,
@@ -409,7 +409,7 @@ trn_status_t trn_loc_heights_(const trn_map_t *map, const trn_grid_f32_t *local,
     uint8_t *b = (uint8_t *)ws;
     lh_t *s;
     double step, max_turn;
-    int32_t kk, pass;
+    int32_t kk;
 
     if (!window_in(map, win)) {
         return TRN_E_RANGE;
@@ -435,19 +435,20 @@ trn_status_t trn_loc_heights_(const trn_map_t *map, const trn_grid_f32_t *local,
     out->loc.noise_scale = 1.0;
     out->loc.failure_prob_bound = 0.0;
     out->loc.search = bounded(map, cfg) ? TRN_SEARCH_BOUNDED : TRN_SEARCH_EXHAUSTIVE;
-    pass = 0;
-    do {
-        /* the configured noise model; once more, rescaled, if the residuals
-         * at the answer reject it (docs/method.md 9.2) */
+    /* the search, its pose score fitting the noise model's scale per pose
+     * (noise_auto); the refinement under the configured model, and once more
+     * under the model rescaled if the residuals at the answer reject it
+     * (docs/method.md 9.2) */
+    trn_loc_refine_cfg_(map, &out->loc, &s->rc);
+    if ((st = search(map, local, rover_x, rover_y, win, cfg, s)) != TRN_OK) {
+        return st;
+    }
+    search_result(&s->best, win, cfg, out);
+    refine_starts(map, local, rover_x, rover_y, win, out->heading_rad, max_turn, s);
+    if (map->cfg.noise_auto != 0 && rescale_noise(map, local, rover_x, rover_y, s, out) != 0) {
         trn_loc_refine_cfg_(map, &out->loc, &s->rc);
-        if ((st = search(map, local, rover_x, rover_y, win, cfg, s)) != TRN_OK) {
-            return st;
-        }
-        search_result(&s->best, win, cfg, out);
         refine_starts(map, local, rover_x, rover_y, win, out->heading_rad, max_turn, s);
-        pass += 1;
-    } while (pass == 1 && map->cfg.noise_auto != 0 &&
-             rescale_noise(map, local, rover_x, rover_y, s, out) != 0);
+    }
     s->far.n = 0;
     s->far.moved = 0;
     if (s->found) {

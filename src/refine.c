@@ -8,6 +8,7 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "refine_int.h"
 
@@ -206,7 +207,8 @@ static trn_status_t common_args(const trn_grid_f32_t *global, const trn_grid_f32
     }
     if (!(cfg->cell_m > 0.0f && cfg->cell_m <= 1000.0f) ||
         !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
-        !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f) || rover_x < -TRN_MAX_DIM ||
+        !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f) ||
+        (cfg->fit_noise != 0 && cfg->fit_noise != 1) || rover_x < -TRN_MAX_DIM ||
         rover_y < -TRN_MAX_DIM || rover_x > local->width - 1 + TRN_MAX_DIM ||
         rover_y > local->height - 1 + TRN_MAX_DIM) {
         return TRN_E_ARG;
@@ -488,15 +490,17 @@ static double global_at(const trn_grid_f32_t *g, int32_t px, int32_t py, int32_t
     return (double)TRN_GRID_AT(g, (int32_t)gx, (int32_t)gy);
 }
 
-/* Weighted offset and model variance of the residuals at pose (px, py),
- * over the points within clip standard deviations of (dz, m2) (clip < 0:
- * every point). Returns the number of points used. */
+/* Weighted offset and variances (the noise scale k2 with cfg->fit_noise,
+ * the model variance m2) of the residuals at pose (px, py), over the points
+ * within clip standard deviations of (dz, k2, m2) (clip < 0: every point).
+ * Returns the number of points used. */
 static int32_t pose_fit(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_t rx, int32_t ry,
                         int32_t px, int32_t py, const trn_refine_cfg_t *cfg, double clip,
-                        double *dz, double *m2)
+                        double *dz, double *k2, double *m2)
 {
     int32_t x, y;
-    trn_pose_mom_t a = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0};
+    trn_pose_mom_t a;
+    (void)memset(&a, 0, sizeof(a));
     for (y = 0; y < l->height; ++y) {
         for (x = 0; x < l->width; ++x) {
             double h = (double)TRN_GRID_AT(l, x, y), gv, r, v;
@@ -509,13 +513,13 @@ static int32_t pose_fit(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_
             }
             r = h - gv;
             v = trn_refine_noise_var_(cfg, x, y, rx, ry);
-            if (clip >= 0.0 && fabs(r - *dz) > clip * sqrt(v + *m2)) {
+            if (clip >= 0.0 && fabs(r - *dz) > clip * sqrt(*k2 * v + *m2)) {
                 continue;
             }
-            trn_pose_mom_add_(&a, r, v, *m2);
+            trn_pose_mom_add_(&a, r, v, *k2, *m2);
         }
     }
-    return trn_pose_mom_end_(&a, dz, m2);
+    return trn_pose_mom_end_(&a, cfg->fit_noise, dz, k2, m2);
 }
 
 /* Log-likelihood of pose (px, py), nats: the model of height_score.c read
@@ -526,21 +530,22 @@ static double pose_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_t 
 {
     const double two_pi = 6.283185307179586;
     int32_t x, y, n_all;
-    double dz = 0.0, m2 = 0.0, ll = 0.0, lout = log((1.0 - a) * k);
-    /* dz and m2: over every point (m2 = 0 weights, then those of the first
-     * m2), then over the points within the clip of that fit */
-    n_all = pose_fit(g, l, rx, ry, px, py, cfg, -1.0, &dz, &m2);
-    if (n_all > 0 && pose_fit(g, l, rx, ry, px, py, cfg, -1.0, &dz, &m2) > 0) {
+    double dz = 0.0, k2 = 1.0, m2 = 0.0, ll = 0.0, lout = log((1.0 - a) * k);
+    /* dz, k2 and m2: over every point (the model's weights, then those of
+     * the first fit), then over the points within the clip of that fit */
+    n_all = pose_fit(g, l, rx, ry, px, py, cfg, -1.0, &dz, &k2, &m2);
+    if (n_all > 0 && pose_fit(g, l, rx, ry, px, py, cfg, -1.0, &dz, &k2, &m2) > 0) {
         /* then within the clip of the last fit, again while that drops
          * points (trn_clip_again_) */
-        double dz1 = dz, m21 = m2;
+        double dz1 = dz, k21 = k2, m21 = m2;
         int32_t n_prev = n_all, n, again;
         for (again = 0; again <= TRN_CLIP_AGAIN; ++again) {
-            n = pose_fit(g, l, rx, ry, px, py, cfg, TRN_REFINE_CLIP, &dz1, &m21);
+            n = pose_fit(g, l, rx, ry, px, py, cfg, TRN_REFINE_CLIP, &dz1, &k21, &m21);
             if (n <= 0) {
                 break;
             }
             dz = dz1;
+            k2 = k21;
             m2 = m21;
             if (!trn_clip_again_(n_all, n_prev, n)) {
                 break;
@@ -559,7 +564,7 @@ static double pose_ll(const trn_grid_f32_t *g, const trn_grid_f32_t *l, int32_t 
                 ll += lout;
                 continue;
             }
-            v = trn_refine_noise_var_(cfg, x, y, rx, ry) + m2;
+            v = k2 * trn_refine_noise_var_(cfg, x, y, rx, ry) + m2;
             u = h - dz - gv;
             ll += log(a * exp(-0.5 * u * u / v) / sqrt(two_pi * v) + (1.0 - a) * k);
         }

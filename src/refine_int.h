@@ -90,46 +90,77 @@ trn_status_t trn_refine_args_(const trn_grid_f32_t *global, const trn_grid_f32_t
                               int32_t rover_x, int32_t rover_y, const trn_refine_cfg_t *cfg,
                               const void *out);
 
-/* The pose fit's weighted moments (trn_height_search's and the search over
- * heading's pose_fit): residuals r taken relative to the first one, weights
- * 1 / (v + m2) for the offset and their squares for the model variance. */
+/* The variances of a pose fit from its weighted moments: residuals e_i
+ * about the offset, noise variances v_i, weights q_i = 1 / (k2 v_i + m2)^2
+ * at the previous fit; a0 = sum q e^2, a1 = sum q v e^2, sq = sum q,
+ * sqv = sum q v, sqvv = sum q v^2. The model variance m2 >= 0 by the
+ * weighted moment equation e^2 = k2 v + m2; with fitk the noise variance
+ * factor k2 too (its least squares with m2, or alone where m2 would be
+ * negative or the two cannot be told apart, in [TRN_NOISE_SCALE2_MIN,
+ * TRN_NOISE_SCALE2_MAX]), else k2 = 1 (docs/method.md 9.2). */
+static inline void trn_var_fit_(double a0, double a1, double sq, double sqv, double sqvv, int fitk,
+                                double *k2, double *m2)
+{
+    double k = 1.0, m;
+    if (fitk) {
+        const double det = sqvv * sq - sqv * sqv;
+        k = a1 / sqvv;
+        if (det > 1e-9 * sqvv * sq && sqvv * a0 - sqv * a1 >= 0.0) {
+            k = (a1 * sq - sqv * a0) / det;
+        }
+        k = k < TRN_NOISE_SCALE2_MIN   ? TRN_NOISE_SCALE2_MIN
+            : k > TRN_NOISE_SCALE2_MAX ? TRN_NOISE_SCALE2_MAX
+                                       : k;
+    }
+    m = (a0 - k * sqv) / sq;
+    *k2 = k;
+    *m2 = m > 0.0 ? m : 0.0;
+}
+
+/* The pose fit's weighted moments (trn_height_search's pose_fit):
+ * residuals r taken relative to the first one, weights 1 / (k2 v + m2) for
+ * the offset and their squares for the variances. */
 typedef struct {
-    double sw, swr, sq, sqr, sqrr, sqv, ref;
+    double sw, swr, sq, sqr, sqrr, sqv, sqvv, sqvr, sqvrr, ref;
     int32_t n;
 } trn_pose_mom_t;
 
-/* Adds residual r of noise variance v at the model variance m2 (inline: the
- * searches score every point of every pose with it). */
-static inline void trn_pose_mom_add_(trn_pose_mom_t *a, double r, double v, double m2)
+/* Adds residual r of noise variance v at the variances (k2, m2) (inline:
+ * the reference search scores every point of every pose with it). */
+static inline void trn_pose_mom_add_(trn_pose_mom_t *a, double r, double v, double k2, double m2)
 {
-    double q, d;
+    const double t = k2 * v + m2, q = 1.0 / (t * t);
+    double d;
     if (a->n == 0) {
         a->ref = r;
     }
     d = r - a->ref;
-    a->sw += 1.0 / (v + m2);
-    a->swr += d / (v + m2);
-    q = 1.0 / ((v + m2) * (v + m2));
+    a->sw += 1.0 / t;
+    a->swr += d / t;
     a->sq += q;
     a->sqr += q * d;
     a->sqrr += q * d * d;
     a->sqv += q * v;
+    a->sqvv += q * v * v;
+    a->sqvr += q * v * d;
+    a->sqvrr += q * v * d * d;
     a->n += 1;
 }
 
-/* The weighted offset and the model variance (the weighted mean squared
- * residual about it less the weighted mean noise variance, never negative)
- * into dz and m2; the number of points (0: dz and m2 untouched). */
-static inline int32_t trn_pose_mom_end_(const trn_pose_mom_t *a, double *dz, double *m2)
+/* The weighted offset and the variances (trn_var_fit_) into dz, k2 and m2;
+ * the number of points (0: all three untouched). */
+static inline int32_t trn_pose_mom_end_(const trn_pose_mom_t *a, int fitk, double *dz, double *k2,
+                                        double *m2)
 {
-    double d, m;
+    double d;
     if (a->n == 0) {
         return 0;
     }
     d = a->swr / a->sw;
-    m = (a->sqrr - 2.0 * d * a->sqr + d * d * a->sq - a->sqv) / a->sq;
+    trn_var_fit_(a->sqrr - 2.0 * d * a->sqr + d * d * a->sq,
+                 a->sqvrr - 2.0 * d * a->sqvr + d * d * a->sqv, a->sq, a->sqv, a->sqvv, fitk, k2,
+                 m2);
     *dz = d + a->ref;
-    *m2 = m > 0.0 ? m : 0.0;
     return a->n;
 }
 

@@ -138,6 +138,7 @@ static trn_refine_cfg_t rcfg(void)
     r.noise_m = g_w.cfg.noise_m;
     r.noise_k_per_m = g_w.cfg.noise_k_per_m;
     r.inlier_prob = g_w.cfg.inlier_prob;
+    r.fit_noise = g_w.cfg.noise_auto;
     return r;
 }
 
@@ -293,6 +294,7 @@ static void test_grid_vs_slow(void **state)
     double mean = 0.0, s2 = 0.0, kd, best = -INFINITY;
     int i, j;
     (void)state;
+    rc.fit_noise = 0; /* slow_ll's model: the noise scale fitted is test_height_score's */
     world_build(6, 0);
     local_dem(14.3, 69.6, 3.0 * DEG, -0.2, 1);
     assert_int_equal(trn_height_search_heading(
@@ -414,35 +416,40 @@ static void test_recovers_heading(void **state)
 
 /* The node budget over heading: a pass scores every (pose, heading) of the
  * window, and the search checks that count against the map's node_budget
- * before each pass; a budget of one pass less one gives TRN_E_BUDGET, of one
- * pass (the noise rescale off) the unbudgeted answer. */
+ * before its one pass; a budget of one pass less one gives TRN_E_BUDGET, of
+ * one pass the unbudgeted answer, with the noise model as given and with its
+ * scale fitted (noise_auto: the search is not run again where the
+ * refinement rescales the model, as this local map's noise asks). */
 static void test_node_budget_heading(void **state)
 {
     const trn_window_t win = window_at(60, 60, 3);
     trn_heading_cfg_t c = {0.0, 5.0 * DEG, 0.0};
     trn_heading_result_t res, ref;
     double step = 0.0;
-    int32_t kk = 0;
+    int32_t kk = 0, na;
     uint32_t pass;
     (void)state;
     world_build(13, 0);
-    local_dem(60.4, 59.8, 2.0 * DEG, 0.1, 1);
+    local_dem(60.4, 59.8, 2.0 * DEG, 0.1, 0); /* no noise: a rescale acts */
     assert_int_equal(trn_height_heading_steps(&g_lg, LR, LR, &c, &step, &kk), TRN_OK);
     pass = (uint32_t)((win.x1 - win.x0 + 1) * (win.y1 - win.y0 + 1) * (2 * kk + 1));
-    g_w.map.cfg.noise_auto = 0;
-    g_w.map.cfg.node_budget = 0u;
-    assert_int_equal(loc3(&win, &c, &ref), TRN_OK);
-    g_w.map.cfg.node_budget = pass - 1u;
-    assert_int_equal(loc3(&win, &c, &res), TRN_E_BUDGET);
-    g_w.map.cfg.node_budget = 1u;
-    assert_int_equal(trn_localize_dem_heading(&g_w.map, &g_lg, LR, LR, MAXPTS, &win, &c, g_ws,
-                                              sizeof g_ws, &res),
-                     TRN_E_BUDGET);
-    g_w.map.cfg.node_budget = pass;
-    assert_int_equal(loc3(&win, &c, &res), TRN_OK);
-    assert_true(res.loc.x == ref.loc.x && res.loc.y == ref.loc.y &&
-                res.heading_rad == ref.heading_rad &&
-                res.loc.failure_probability == ref.loc.failure_probability);
+    for (na = 0; na < 2; ++na) {
+        g_w.map.cfg.noise_auto = na;
+        g_w.map.cfg.node_budget = 0u;
+        assert_int_equal(loc3(&win, &c, &ref), TRN_OK);
+        g_w.map.cfg.node_budget = pass - 1u;
+        assert_int_equal(loc3(&win, &c, &res), TRN_E_BUDGET);
+        g_w.map.cfg.node_budget = 1u;
+        assert_int_equal(trn_localize_dem_heading(&g_w.map, &g_lg, LR, LR, MAXPTS, &win, &c, g_ws,
+                                                  sizeof g_ws, &res),
+                         TRN_E_BUDGET);
+        g_w.map.cfg.node_budget = pass;
+        assert_int_equal(loc3(&win, &c, &res), TRN_OK);
+        assert_true(res.loc.x == ref.loc.x && res.loc.y == ref.loc.y &&
+                    res.heading_rad == ref.heading_rad &&
+                    res.loc.failure_probability == ref.loc.failure_probability);
+        assert_true(na == 0 ? res.loc.noise_scale == 1.0 : res.loc.noise_scale != 1.0);
+    }
     g_w.map.cfg.node_budget = 0u;
     g_w.map.cfg.noise_auto = 1;
 }
@@ -897,7 +904,7 @@ static void test_edges_search(void **state)
         {60, 64, 62, 60}, {-1, 56, 4, 62}, {56, -1, 62, 4}, {56, 122, 62, N}};
     const trn_window_t corner[2] = {{1, 1, 6, 6}, {120, 120, 126, 126}};
     trn_heading_cfg_t c = {0.0, 3.0 * DEG, 0.0};
-    trn_refine_cfg_t rc, bad[6];
+    trn_refine_cfg_t rc, bad[8];
     trn_height_best3_t b;
     trn_refine3_t o;
     const int32_t rovers[4][2] = {{LR, -TRN_MAX_DIM - 1},
@@ -911,7 +918,7 @@ static void test_edges_search(void **state)
     world_build(14, 0);
     rc = rcfg();
     local_dem(60.0, 60.0, 0.0, 0.0, 0);
-    for (i = 0; i < 6; ++i) {
+    for (i = 0; i < 8; ++i) {
         bad[i] = rc;
     }
     bad[0].cell_m = 0.0f;
@@ -920,7 +927,9 @@ static void test_edges_search(void **state)
     bad[3].noise_m = 2000.0f;
     bad[4].noise_k_per_m = -1.0f;
     bad[5].noise_k_per_m = 2000.0f;
-    for (i = 0; i < 6; ++i) {
+    bad[6].fit_noise = 2; /* 0 or 1 */
+    bad[7].fit_noise = -1;
+    for (i = 0; i < 8; ++i) {
         assert_int_equal(trn_height_search_heading(&g_w.map.heights, &g_lg, LR, LR, &win, &c,
                                                    &bad[i], 0.9f, g_ws, wb, NULL, &b),
                          TRN_E_ARG);

@@ -1648,6 +1648,7 @@ static trn_refine_cfg_t rcfg(float k)
     c.noise_m = 0.01f;
     c.noise_k_per_m = k;
     c.inlier_prob = 0.95f;
+    c.fit_noise = 0;
     return c;
 }
 

@@ -97,6 +97,7 @@ static trn_refine_cfg_t cfg_of(void)
     c.noise_m = 0.01f;
     c.noise_k_per_m = 0.004f;
     c.inlier_prob = 0.95f;
+    c.fit_noise = 0;
     return c;
 }
 

@@ -63,6 +63,7 @@ static trn_refine_cfg_t rcfg(void)
     c.noise_m = 0.01f;
     c.noise_k_per_m = 0.0004f;
     c.inlier_prob = 0.95f;
+    c.fit_noise = 0;
     return c;
 }
 

@@ -52,8 +52,8 @@ typedef enum {
 
 /** How the height matcher searches the window (TRN_MATCH_HEIGHTS). */
 typedef enum {
-    /** Every pose of the window scored: a fixed cost of the window's poses
-     *  (twice when the noise model is rescaled). The default. */
+    /** Every pose of the window scored once: a fixed cost of the window's
+     *  poses. The default. */
     TRN_SEARCH_EXHAUSTIVE = 0,
     /** Branch and bound over blocks of poses (src/height_bound.c): the
      *  exhaustive search's best pose, far basins and competitor, its failure
@@ -86,11 +86,13 @@ typedef struct {
                                       failure probability is above it; 1 (the default):
                                       never. trn_map_cfg_auto sets
                                       TRN_MAP_MAX_FAILURE_PROB_AUTO */
-    int32_t noise_auto;          /**< 1: the height matcher estimates the noise model's scale
-                                      from the residuals at its answer
-                                      (trn_refine_noise_scale) and, where they reject the
-                                      model by more than TRN_NOISE_SCALE_Z sds, searches
-                                      and refines again with it (trn_loc_result_t.noise_scale);
+    int32_t noise_auto;          /**< 1: the height matcher's search fits the noise model's
+                                      scale per pose (trn_refine_cfg_t.fit_noise), and the
+                                      scale from the residuals at its answer
+                                      (trn_refine_noise_scale), where they reject the
+                                      model by more than TRN_NOISE_SCALE_Z sds, is the
+                                      refinement's, which runs again with it
+                                      (trn_loc_result_t.noise_scale);
                                       0: noise_m and noise_k_per_m as given.
                                       trn_map_cfg_auto sets 1, trn_map_cfg_default 0 */
     int32_t search;              /**< trn_search_t: the height matcher's search over (x, y)
@@ -149,9 +151,9 @@ typedef struct {
                                            noise model's sd (noise_m and noise_k_per_m)
                                            because the residuals rejected it by more than
                                            TRN_NOISE_SCALE_Z sds (trn_refine_noise_scale;
-                                           the search and refinement then ran again with
-                                           it; over heading the same with the local map
-                                           turned); 1 otherwise, and on the voxel path */
+                                           the refinement then ran again with it; over
+                                           heading the same with the local map turned);
+                                           1 otherwise, and on the voxel path */
     double failure_prob_bound;        /**< the bounded search: failure_probability is within
                                            this of the exhaustive search's (the unscored
                                            poses' mass, bounded: at most TRN_BOUND_EPS);

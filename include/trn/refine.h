@@ -106,6 +106,10 @@ typedef struct {
     float noise_m;       /**< constant part, metres, (0, 1000] */
     float noise_k_per_m; /**< range-squared part, 1/m, [0, 1000] */
     float inlier_prob;   /**< a of the mixture ln L (trn_refine_t.ll), (0, 1) */
+    int32_t fit_noise;   /**< 1: the searches' pose score fits the noise model's scale per pose
+                              (a variance factor in [TRN_NOISE_SCALE2_MIN, TRN_NOISE_SCALE2_MAX]
+                              beside the offset and the model variance: docs/method.md 9.2);
+                              0: the model as given. The refinements ignore it. 0 or 1. */
 } trn_refine_cfg_t;
 
 /** Best integer pose of trn_height_search. */
@@ -181,8 +185,11 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
  *  1 - 2 x 3 phi(3) / (2 Phi(3) - 1). Residuals kept within the clip have
  *  this fraction of their variance as their mean square. */
 #define TRN_CLIP_MEAN_SQUARE 0.973343
-/** Smallest noise scale (variance factor) trn_refine_noise_scale reports. */
+/** Smallest noise scale (variance factor) trn_refine_noise_scale reports,
+ *  and the least the searches' pose score fits (trn_refine_cfg_t.fit_noise). */
 #define TRN_NOISE_SCALE2_MIN 1e-4
+/** Largest noise scale (variance factor) the searches' pose score fits. */
+#define TRN_NOISE_SCALE2_MAX 1e4
 
 /**
  * @brief The noise scale the residuals at a refined pose ask for: the local

@@ -35,9 +35,9 @@
  *                       exclusion zone) + trn_prob_beyond (the refined
  *                       covariance's tail beyond TRN_FAIL_RADIUS_CELLS)
  *   height_rest         height_localize minus the three parts above: the
- *                       second refinement starts, the noise rescale (a
- *                       second search when the residuals reject the
- *                       noise model), far basins, shoulders, valley and
+ *                       second refinement starts, the noise rescale (the
+ *                       refinement again when the residuals at the answer
+ *                       reject the noise model), far basins, shoulders, valley and
  *                       the input checks. Not run: time median = whole's
  *                       median - the parts' medians, max = whole's max -
  *                       the parts' medians; instructions = whole's - the
@@ -626,6 +626,7 @@ static int world_map(world_t *w, char *err, size_t err_len)
     w->hrc.noise_m = w->hcfg.noise_m;
     w->hrc.noise_k_per_m = w->hcfg.noise_k_per_m;
     w->hrc.inlier_prob = w->hcfg.inlier_prob;
+    w->hrc.fit_noise = w->hcfg.noise_auto;
     return 0;
 }
 
@@ -1300,7 +1301,7 @@ static void profile_report_text(const profile_params_t *p, const profile_result_
            p->dem_path != NULL ? p->dem_path : "", p->dem_path != NULL ? ", seed " : "seed ",
            (unsigned long long)p->seed, p->runs);
     printf("heights   the default localizer (trn_map_cfg_auto, %d bins): %s, error %.2f cells, "
-           "failure probability %.3g, noise scale %.3g (not 1: searched twice)\n",
+           "failure probability %.3g, noise scale %.3g (not 1: refined twice)\n",
            (int)r->w.hcfg.terrain.nz, trn_strerror(r->w.hres_st),
            hypot(r->w.hres.x - r->w.truth_x, r->w.hres.y - r->w.truth_y),
            r->w.hres.failure_probability, r->w.hres.noise_scale);

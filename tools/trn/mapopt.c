@@ -56,8 +56,8 @@ void mapopt_cli(mapopt_t *m, cli_opt_t *o)
         {"--refine", CLI_LONG, &m->refine, 0, 1, 0, "0|1",
          "refine the pose over heights (default 1 with auto, 0 with paper)", 0},
         {"--noise-auto", CLI_LONG, &m->noise_auto, 0, 1, 0, "0|1",
-         "height matcher: rescale the noise model when the residuals reject it (default 1 with "
-         "auto, 0 with paper)",
+         "height matcher: fit the noise model's scale per pose in the search, and refine with "
+         "it rescaled when the residuals reject it (default 1 with auto, 0 with paper)",
          0},
         {"--match", CLI_STRING, &m->match, 0, 0, 0, "voxel|heights",
          "the matcher (localized with, or predicted): voxel occupancy (paper) or heights (auto) "
