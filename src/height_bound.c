@@ -158,11 +158,14 @@ static int32_t bin_of(const trn_hb_t *hb, double z)
 
 /* The staircase's value at distance d for noise class sds [s, s_hi] and m2
  * in [m_lo, m_hi]: ln(a max_v N(d; v) + c), v in [klo s^2 + m_lo, khi s_hi^2
- * + m_hi] (the noise scales the score may fit). */
+ * + m_hi], [klo, khi] the noise scales the score may fit (1 without
+ * fit_noise). */
 static double f_step(const trn_hb_t *hb, double d, double s, double s_hi, double m_lo, double m_hi)
 {
     const double two_pi = 6.283185307179586;
-    const double vlo = hb->klo * s * s + m_lo, vhi = hb->khi * s_hi * s_hi + m_hi;
+    const double klo = hb->cfg.fit_noise != 0 ? TRN_NOISE_SCALE2_MIN : 1.0;
+    const double khi = hb->cfg.fit_noise != 0 ? TRN_NOISE_SCALE2_MAX : 1.0;
+    const double vlo = klo * s * s + m_lo, vhi = khi * s_hi * s_hi + m_hi;
     double v = d * d;
     v = v < vlo ? vlo : v > vhi ? vhi : v;
     return log(hb->a * exp(-0.5 * d * d / v) / sqrt(two_pi * v) + (1.0 - hb->a) * hb->k);
@@ -746,8 +749,6 @@ trn_status_t trn_hb_init(trn_hb_t **out, void *ws, const trn_grid_f32_t *global,
     hb->win = *win;
     hb->cfg = *cfg;
     hb->a = (double)inlier_prob;
-    hb->klo = cfg->fit_noise != 0 ? TRN_NOISE_SCALE2_MIN : 1.0;
-    hb->khi = cfg->fit_noise != 0 ? TRN_NOISE_SCALE2_MAX : 1.0;
     hb->ww = lay.ww;
     hb->wh = lay.wh;
     hb->levels = lay.levels;

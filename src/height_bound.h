@@ -36,13 +36,12 @@ typedef struct {
     trn_window_t win;
     trn_refine_cfg_t cfg;
     double a, k, lout, tol;
-    double klo, khi;  /* the noise scales the score may fit: [1, 1], or the range of fit_noise */
-    int32_t ww, wh;   /* window size, poses */
-    int32_t levels;   /* tree levels 0..levels-1; 2^(levels-1) >= ww, wh */
-    int32_t rw, rh;   /* region of map anchors: 2^(levels-1) + local size */
-    double *ll;       /* ww x wh: exact ln L where done, -inf elsewhere */
-    double *dz, *msd; /* ww x wh: the pose fit's offset and model sd where done */
-    uint8_t *done;    /* ww x wh: 1 scored */
+    int32_t ww, wh;                /* window size, poses */
+    int32_t levels;                /* tree levels 0..levels-1; 2^(levels-1) >= ww, wh */
+    int32_t rw, rh;                /* region of map anchors: 2^(levels-1) + local size */
+    double *ll;                    /* ww x wh: exact ln L where done, -inf elsewhere */
+    double *dz, *msd;              /* ww x wh: the pose fit's offset and model sd where done */
+    uint8_t *done;                 /* ww x wh: 1 scored */
     double *ub[TRN_HB_MAX_LEVELS]; /* per level: block bounds, NaN = not computed */
     float *mn[TRN_HB_MAX_LEVELS];  /* per level: the map's least height over the square */
     float *mx[TRN_HB_MAX_LEVELS];  /* ... and its greatest (mn > mx: none finite) */

@@ -273,9 +273,10 @@ static void test_bound_holds(void **state)
 {
     static const double k_drops[5] = {10.0, 50.0, 210.0, 850.0, 3410.0};
     double worst = 0.0;
-    int kind, k, fit;
+    int t, k;
     (void)state;
-    for (fit = 0, kind = 0; fit < 2; kind = kind + 1 < K_KINDS ? kind + 1 : 0, fit += kind == 0) {
+    for (t = 0; t < 2 * K_KINDS; ++t) {
+        const int fit = t / K_KINDS, kind = t % K_KINDS;
         trn_rng_t r;
         trn_grid_f32_t g, l;
         trn_refine_cfg_t rc;
