@@ -357,7 +357,9 @@ static double block_var(const acc4_t *acc, const double g[4], const double u[4])
  * averaging out. The model covariance is a lower bound: the block estimate
  * is noisy, and independent errors must not shrink it, nor raise it by
  * chance (docs/method.md 9, "the floors"). Returns the inflation
- * factor of the model covariance inv x chi2, the larger of its variance
+ * factor of the model covariance already in pos (and full: inv meat inv
+ * with the cells' fitted variances, steep_pass; inv x the gated reduced
+ * chi-square with TRN_REFINE_STEEP 0), the larger of its variance
  * ratios over x, y (and the heading when fitted), each where beyond
  * TRN_REFINE_SYS_Z of its sampling sds under the noise model (h0: the
  * variance each block's term would have under the noise model alone, its
@@ -368,7 +370,8 @@ static double block_var(const acc4_t *acc, const double g[4], const double u[4])
  * block, so no meat matrix is kept. acc is the caller's (the stack stays
  * small). */
 static double sandwich(const rctx_t *c, const double p[5], double model2, const double inv[16],
-                       const double g[4], double chi2, double chi2_raw, acc4_t *acc, double *ll_f)
+                       const double g[4], const trn_refine_t *pos, const trn_refine3_t *full,
+                       double chi2_raw, acc4_t *acc, double *ll_f)
 {
     double f = 1.0, fg = 1.0, sw[3] = {0.0, 0.0, 0.0}, h0[3] = {0.0, 0.0, 0.0};
     const int32_t nq = c->fit_h ? 3 : 2;
@@ -393,8 +396,9 @@ static double sandwich(const rctx_t *c, const double p[5], double model2, const 
     for (q = 0; q < nq; ++q) {
         /* ln L's ratio against the model times max(1, chi2), as before the gate */
         const double ratio = sw[q] / (inv[q + 4 * q] * (chi2_raw > 1.0 ? chi2_raw : 1.0));
-        const double gated = trn_refine_excess_(sw[q] / (inv[q + 4 * q] * chi2),
-                                                sqrt(2.0 * h0[q]) / inv[q + 4 * q]);
+        /* the model's variance: x, y from pos, the heading (fitted: full is set) from full */
+        const double den = (q == 2 && full != NULL) ? full->cov3[8] : pos->cov_cells[q % 2];
+        const double gated = trn_refine_excess_(sw[q] / den, sqrt(2.0 * h0[q]) / inv[q + 4 * q]);
         f = ratio > f ? ratio : f;
         fg = gated > fg ? gated : fg;
     }
@@ -551,8 +555,118 @@ static int iterate(const rctx_t *c, double x0, double y0, double th0, double max
     return 1;
 }
 
+#if TRN_REFINE_STEEP
+/* The cells' variances at the estimate p (docs/method.md 9.5): the noise
+ * model's s^2, a model variance m^2 and the steep cells' sp2 |grad|^2, the
+ * height error of a horizontal misplacement of variance sp2 (cells^2) on
+ * the map's gradient under the cell: where the map cannot follow what a
+ * cell averages (edges sharper than a cell) its error grows with the
+ * slope, and the slope is where the pose's information is. var NULL: the
+ * moments of y = r^2 / (1 - h) - s^2 on (1, |grad|^2) into acc's scalars
+ * (no fields of their own: acc is on the deepest stack; q the weights' sum,
+ * noise2 and vv those of q |grad|^2 and q |grad|^4, rr and ss those of q y
+ * and q |grad|^2 y; weights
+ * 1 / (s^2 + model2)^2, every inlier, those the relief rule down-weights
+ * too, where the steep cells' residuals are; h the cell's
+ * leverage w Jt^T inv Jt, the share of its residual the fit takes: the
+ * steep cells are also those the pose leans on). var = (m^2, sp2): the
+ * meat sum w^2 (s^2 + m^2 + sp2 |grad|^2) Jt Jt^T over the inliers into
+ * acc->a (Jt the Jacobian with the mix profiled out, J - g dcb; w the
+ * refinement's weight), so the covariance is inv meat inv. acc is the
+ * caller's (dead by now). */
+static void steep_pass(const rctx_t *c, const double p[5], double model2, const double inv[16],
+                       const double g[4], const double *var, acc4_t *acc)
+{
+    double cs, sn;
+    int32_t i, j, a, b;
+    acc_clear(acc);
+    trn_heading_trig_(p[2], &cs, &sn);
+    for (j = 0; j < c->l->height; ++j) {
+        for (i = 0; i < c->l->width; ++i) {
+            double h = (double)TRN_GRID_AT(c->l, i, j), s3[3], tx, ty, s2, res, hw, jt[4], dcb, w,
+                   lev = 0.0, gg;
+            if (!isfinite(h)) {
+                continue;
+            }
+            tx = (double)(i - c->rx) * cs + (double)(j - c->ry) * sn;
+            ty = -(double)(i - c->rx) * sn + (double)(j - c->ry) * cs;
+            if (!trn_refine_sample_mix_(c->g, p[0] + tx, p[1] + ty, p[4], s3, &dcb)) {
+                continue;
+            }
+            s2 = trn_refine_noise_var_(c->cfg, i, j, c->rx, c->ry);
+            res = h - p[3] - s3[0];
+            hw = trn_refine_weight_(c->g, p[0] + tx, p[1] + ty, res, sqrt(s2 + model2),
+                                    TRN_REFINE_CLIP_RELIEF);
+            if (!(hw > 0.0)) {
+                continue;
+            }
+            jacobian(c, s3, tx, ty, jt);
+            gg = jt[0] * jt[0] + jt[1] * jt[1];
+            for (a = 0; a < 4; ++a) {
+                jt[a] -= g[a] * dcb;
+            }
+            w = hw / (s2 + model2);
+            if (var != NULL) {
+                acc_add(acc, jt, w * w * (s2 + var[0] + var[1] * gg), 0.0);
+                continue;
+            }
+            for (a = 0; a < 4; ++a) {
+                for (b = 0; b < 4; ++b) {
+                    lev += jt[a] * inv[a * 4 + b] * jt[b];
+                }
+            }
+            lev *= w;
+            if (lev < 1.0) {
+                const double q = 1.0 / ((s2 + model2) * (s2 + model2));
+                const double y = res * res / (1.0 - lev) - s2;
+                acc->q += q;
+                acc->noise2 += q * gg;
+                acc->vv += q * gg * gg;
+                acc->rr += q * y;
+                acc->ss += q * gg * y;
+            }
+        }
+    }
+}
+
+/* (m^2, sp2) from steep_pass's moments: the weighted least squares of y on
+ * (1, |grad|^2), each at least 0 (the better one-term fit where the pair
+ * has one negative). */
+static void steep_fit(const acc4_t *acc, double var[2])
+{
+    const double qg = acc->noise2, qgg = acc->vv, rg = acc->ss; /* steep_pass's moments */
+    const double det = acc->q * qgg - qg * qg;
+    const double m0 = acc->q > 0.0 && acc->rr > 0.0 ? acc->rr / acc->q : 0.0;
+    const double s0 = qgg > 0.0 && rg > 0.0 ? rg / qgg : 0.0;
+    var[0] = det > 1e-12 * acc->q * qgg ? (qgg * acc->rr - qg * rg) / det : -1.0;
+    var[1] = det > 1e-12 * acc->q * qgg ? (acc->q * rg - qg * acc->rr) / det : -1.0;
+    if (!(var[0] >= 0.0 && var[1] >= 0.0)) {
+        /* the one-term fits' sums of squares, less the common constant */
+        const double e_m = acc->q * m0 * m0 - 2.0 * m0 * acc->rr;
+        const double e_s = qgg * s0 * s0 - 2.0 * s0 * rg;
+        var[0] = e_m <= e_s ? m0 : 0.0;
+        var[1] = e_m <= e_s ? 0.0 : s0;
+    }
+}
+
+/* (inv meat inv)[q][r], the meat in acc->a (sym4). */
+static double sandwich_qr(const double inv[16], const acc4_t *acc, int32_t q, int32_t r)
+{
+    double t = 0.0;
+    int32_t k, l;
+    for (k = 0; k < 4; ++k) {
+        for (l = 0; l < 4; ++l) {
+            t += inv[q * 4 + k] * acc->a[sym4(k, l)] * inv[l * 4 + r];
+        }
+    }
+    return t;
+}
+#endif
+
 /* The covariance at the converged estimate p: the mix folded
- * out (the marginal of the four), the block sandwich's inflation, and the
+ * out (the marginal of the four), inv meat inv with the cells' fitted
+ * variances (steep_pass; inv x the gated reduced chi-square with
+ * TRN_REFINE_STEEP 0), the block sandwich's inflation, and the
  * interpolants' shift weighted by the misfit's share of the residuals'
  * variance, sys_weight = TRN_REFINE_SYS m_s^2 / (m_s^2 + the
  * precision-squared weighted mean noise variance), m_s^2 the misfit beyond
@@ -561,7 +675,10 @@ static int iterate(const rctx_t *c, double x0, double y0, double th0, double max
 static int covariance(const rctx_t *c, const double p[5], double model2, acc4_t *acc,
                       double inv[16], double g[4], trn_refine_t *pos, trn_refine3_t *full)
 {
-    double chi2, f, sh[4], w;
+    double f, sh[4], w;
+#if !TRN_REFINE_STEEP
+    double chi2;
+#endif
     int32_t q, r;
     accumulate_all(c, p, TRN_REFINE_CLIP_RELIEF, model2, acc);
     (void)fold_mix(acc, p[4], g);
@@ -570,20 +687,35 @@ static int covariance(const rctx_t *c, const double p[5], double model2, acc4_t 
         return 0;
     }
     /* four parameters and the mix (three with the heading held) */
-    chi2 = acc->ss / (double)(acc->n_in - (c->fit_h ? 5 : 4));
-    pos->chi2_dof = chi2;
-    chi2 = trn_refine_excess_(chi2, sqrt(2.0 / (double)(acc->n_in - (c->fit_h ? 5 : 4))));
+    pos->chi2_dof = acc->ss / (double)(acc->n_in - (c->fit_h ? 5 : 4));
+#if !TRN_REFINE_STEEP
+    chi2 = trn_refine_excess_(pos->chi2_dof, sqrt(2.0 / (double)(acc->n_in - (c->fit_h ? 5 : 4))));
+#endif
     /* q > 0: at least 8 inliers, each noise variance > 0 */
     w = trn_refine_sys_weight_(acc->rr, acc->noise2, acc->q, acc->vv);
     /* acc is dead after w */
-    f = sandwich(c, p, model2, inv, g, chi2, pos->chi2_dof, acc, &pos->ll_inflation);
-    pos->inflation = f;
+#if TRN_REFINE_STEEP
+    {
+        double var[2];
+        steep_pass(c, p, model2, inv, g, NULL, acc);
+        steep_fit(acc, var);
+        steep_pass(c, p, model2, inv, g, var, acc);
+    }
+#endif
+    /* the model's covariance into the outputs, then the sandwich's factor
+     * against it (no 3 x 3 copy: the frame is on the deepest stack) */
     for (q = 0; q < 3; ++q) {
         for (r = 0; r < 3; ++r) {
             /* the elimination's inverse is symmetric to rounding: its mean */
+#if TRN_REFINE_STEEP
             const double v = (c->fit_h || (q < 2 && r < 2))
-                                 ? 0.5 * (inv[q * 4 + r] + inv[r * 4 + q]) * chi2 * f
+                                 ? 0.5 * (sandwich_qr(inv, acc, q, r) + sandwich_qr(inv, acc, r, q))
                                  : 0.0;
+#else
+            const double v = (c->fit_h || (q < 2 && r < 2))
+                                 ? 0.5 * (inv[q * 4 + r] + inv[r * 4 + q]) * chi2
+                                 : 0.0;
+#endif
             if (full != NULL) {
                 full->cov3[q * 3 + r] = v;
             }
@@ -591,6 +723,14 @@ static int covariance(const rctx_t *c, const double p[5], double model2, acc4_t 
                 pos->cov_cells[q == r ? q : 2] = v; /* xx, yy, xy */
             }
         }
+    }
+    f = sandwich(c, p, model2, inv, g, pos, full, pos->chi2_dof, acc, &pos->ll_inflation);
+    pos->inflation = f;
+    for (q = 0; q < 9 && full != NULL; ++q) {
+        full->cov3[q] *= f;
+    }
+    for (q = 0; q < 3; ++q) {
+        pos->cov_cells[q] *= f;
     }
     interp_shift(c, p, model2, acc, inv, sh);
     for (q = 0; q < 3 && full != NULL; ++q) {

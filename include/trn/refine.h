@@ -19,10 +19,13 @@
  * its 4 x 4 support is incomplete), the mix estimated from the data under a
  * weak prior (TRN_REFINE_MIX_MEAN, TRN_REFINE_MIX_SD); residuals beyond
  * TRN_REFINE_CLIP standard deviations are outliers (re-decided every step).
- * Covariance of (px, py), the mix marginalized: (J^T W J)^-1 x the
- * reduced chi-square x the block-sandwich inflation (TRN_REFINE_BLOCK),
- * each only where above 1 by more than TRN_REFINE_SYS_Z of its sampling
- * sds under the noise model (else 1), plus sys_weight x the outer product
+ * Covariance of (px, py), the mix marginalized: (J^T W J)^-1 M (J^T W J)^-1,
+ * M the sum of w^2 J J^T times each inlier's variance fitted at the answer
+ * (the noise model's, a model variance and the steep cells' sp2 |grad|^2,
+ * by leverage-corrected moments; TRN_REFINE_STEEP), x the block-sandwich
+ * inflation (TRN_REFINE_BLOCK), only where above 1 by more than
+ * TRN_REFINE_SYS_Z of its sampling sds under the noise model (else 1),
+ * plus sys_weight x the outer product
  * of the shift bilinear heights would cause (the interpolants'
  * disagreement), sys_weight = TRN_REFINE_SYS x the
  * share in the residual variance of the misfit beyond its sampling noise
@@ -62,6 +65,12 @@ extern "C" {
  *  of their sampling standard deviations under the noise model (the
  *  systematic weight did too before 2026-12-05: TRN_REFINE_SYS_TERM_Z). */
 #define TRN_REFINE_SYS_Z 1.0
+#endif
+#ifndef TRN_REFINE_STEEP
+/** 1: the covariance holds the steep cells' variance, sp2 |grad|^2 a cell
+ *  beyond the model, sp2 fitted from the residuals (docs/method.md 9.5); 0
+ *  leaves it out (the ablation's switch). */
+#define TRN_REFINE_STEEP 1
 #endif
 #ifndef TRN_REFINE_SYS_TERM_Z
 /** The misfit that weights the interpolants' disagreement counts only beyond
@@ -130,8 +139,9 @@ typedef struct {
     double dz_m;            /**< vertical offset local - global, metres */
     double model_m;         /**< model error estimated beside the noise, metres */
     double cov_cells[3];    /**< var_x, var_y, cov_xy in cells^2 */
-    double chi2_dof;        /**< reduced chi-square of the inliers (the covariance takes it
-                                 where beyond TRN_REFINE_SYS_Z sds, sqrt(2 / dof), of 1) */
+    double chi2_dof;        /**< reduced chi-square of the inliers (built with
+                                 TRN_REFINE_STEEP 0 the covariance takes it where beyond
+                                 TRN_REFINE_SYS_Z sds, sqrt(2 / dof), of 1) */
     double inflation;       /**< factor (>= 1) the block sandwich put on the model covariance:
                                  its larger position variance ratio where beyond
                                  TRN_REFINE_SYS_Z sampling sds of 1, else 1 */
