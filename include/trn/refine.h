@@ -60,10 +60,11 @@ extern "C" {
 #define TRN_REFINE_SYS 1.0
 #endif
 #ifndef TRN_REFINE_SYS_Z
-/** The covariance's reduced chi-square and block-sandwich ratio
- *  (trn_refine_t.inflation) count only where above 1 by more than this many
- *  of their sampling standard deviations under the noise model (the
- *  systematic weight did too before 2026-12-05: TRN_REFINE_SYS_TERM_Z). */
+/** The covariance's block-sandwich ratio (trn_refine_t.inflation; and the
+ *  reduced chi-square, built with TRN_REFINE_STEEP 0) count only where above
+ *  1 by more than this many of their sampling standard deviations under the
+ *  noise model (the systematic weight did too before 2026-12-05:
+ *  TRN_REFINE_SYS_TERM_Z). */
 #define TRN_REFINE_SYS_Z 1.0
 #endif
 #ifndef TRN_REFINE_STEEP
