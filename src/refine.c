@@ -178,11 +178,9 @@ double trn_refine_model2_(double rr, double noise2, double q)
     return m > 0.0 ? m : 0.0;
 }
 
-double trn_refine_sys_weight_(double rr, double noise2, double q, double vv)
+double trn_refine_sys_weight_(double rr, double noise2, double vv)
 {
-    double m2s = (rr - noise2 - TRN_REFINE_SYS_TERM_Z * sqrt(vv)) / q;
-    m2s = m2s > 0.0 ? m2s : 0.0;
-    return TRN_REFINE_SYS * m2s / (m2s + noise2 / q);
+    return rr - noise2 - TRN_REFINE_SYS_TERM_Z * sqrt(vv) > 0.0 ? TRN_REFINE_SYS : 0.0;
 }
 
 double trn_refine_excess_(double ratio, double rel_sd)

@@ -177,11 +177,11 @@ static inline int trn_clip_again_(int32_t n_all, int32_t n_prev, int32_t n)
 
 /* The refinements' model variance from their precision-squared weighted
  * sums (rr of q r^2, noise2 of q s^2, q), never negative; and the weight of
- * the interpolants' disagreement, TRN_REFINE_SYS x m_s^2 / (m_s^2 + noise2
- * / q), m_s^2 the same less TRN_REFINE_SYS_TERM_Z sampling sds (vv, the sum of
- * q^2 2 s^4) of what the noise alone gives (src/refine.c). */
+ * the interpolants' disagreement: TRN_REFINE_SYS where the misfit rr -
+ * noise2 is beyond TRN_REFINE_SYS_TERM_Z sampling sds (vv, the sum of q^2 2
+ * s^4) of what the noise alone gives, else 0 (src/refine.c). */
 double trn_refine_model2_(double rr, double noise2, double q);
-double trn_refine_sys_weight_(double rr, double noise2, double q, double vv);
+double trn_refine_sys_weight_(double rr, double noise2, double vv);
 
 /* A variance ratio (the reduced chi-square, the block sandwich's) that
  * counts only where beyond TRN_REFINE_SYS_Z of its sampling sds (rel_sd,

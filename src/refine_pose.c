@@ -667,10 +667,9 @@ static double sandwich_qr(const double inv[16], const acc4_t *acc, int32_t q, in
  * out (the marginal of the four), inv meat inv with the cells' fitted
  * variances (steep_pass; inv x the gated reduced chi-square with
  * TRN_REFINE_STEEP 0), the block sandwich's inflation, and the
- * interpolants' shift weighted by the misfit's share of the residuals'
- * variance, sys_weight = TRN_REFINE_SYS m_s^2 / (m_s^2 + the
- * precision-squared weighted mean noise variance), m_s^2 the misfit beyond
- * TRN_REFINE_SYS_TERM_Z sampling sds. 0 when the normal matrix
+ * interpolants' shift's outer product times sys_weight = TRN_REFINE_SYS
+ * where the misfit is beyond TRN_REFINE_SYS_TERM_Z sampling sds of the
+ * noise's (else 0). 0 when the normal matrix
  * is singular or under half the points are inliers. */
 static int covariance(const rctx_t *c, const double p[5], double model2, acc4_t *acc,
                       double inv[16], double g[4], trn_refine_t *pos, trn_refine3_t *full)
@@ -691,8 +690,8 @@ static int covariance(const rctx_t *c, const double p[5], double model2, acc4_t 
 #if !TRN_REFINE_STEEP
     chi2 = trn_refine_excess_(pos->chi2_dof, sqrt(2.0 / (double)(acc->n_in - (c->fit_h ? 5 : 4))));
 #endif
-    /* q > 0: at least 8 inliers, each noise variance > 0 */
-    w = trn_refine_sys_weight_(acc->rr, acc->noise2, acc->q, acc->vv);
+    /* the misfit test of the systematic term (at least 8 inliers) */
+    w = trn_refine_sys_weight_(acc->rr, acc->noise2, acc->vv);
     /* acc is dead after w */
 #if TRN_REFINE_STEEP
     {

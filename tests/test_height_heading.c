@@ -590,8 +590,10 @@ static void test_calibration(void **state)
      * rule (docs/method.md 9, "the clip") 38.0 / 86.5 / 98.5 % on these 200
      * (39.5 / 88.8 / 99.2 % over 1000); with the steep cells' variance in
      * the covariance (docs/method.md 9.5) 43.5 / 86.5 / 99.0 % (heading
-     * 68.5 / 94.5 / 99.5 %): within 5 points of the target at 1 sigma, at
-     * most 6 under at 2 and 3 */
+     * 68.5 / 94.5 / 99.5 %); with the systematic term's weight 1/3 where its
+     * test fires (2026-12-07) 46.5 / 86.5 / 98.5 % (heading 69.0 / 94.5 /
+     * 99.5; over 1000: 43.9 / 88.5 / 99.4 → 45.1 / 89.4 / 99.3 %): at most
+     * 11 points over the target at 1 sigma, at most 6 under at 2 and 3 */
     assert_true(cp[0] >= 0.30 * n && cp[0] <= 0.50 * n);
     assert_true(cp[1] >= 0.80 * n && cp[2] >= 0.93 * n);
 }

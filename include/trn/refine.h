@@ -27,9 +27,9 @@
  * TRN_REFINE_SYS_Z of its sampling sds under the noise model (else 1),
  * plus sys_weight x the outer product
  * of the shift bilinear heights would cause (the interpolants'
- * disagreement), sys_weight = TRN_REFINE_SYS x the
- * share in the residual variance of the misfit beyond its sampling noise
- * (TRN_REFINE_SYS_TERM_Z). docs/modules/refine.md.
+ * disagreement), sys_weight = TRN_REFINE_SYS where the residuals show a
+ * misfit beyond its sampling noise (TRN_REFINE_SYS_TERM_Z), else 0.
+ * docs/modules/refine.md.
  */
 #ifndef TRN_REFINE_H
 #define TRN_REFINE_H
@@ -55,9 +55,11 @@ extern "C" {
  *  correlated by the covariance (cluster-robust sandwich). */
 #define TRN_REFINE_BLOCK 4
 #ifndef TRN_REFINE_SYS
-/** Weight of the interpolants' disagreement in the covariance, before the
- *  model variance's share scales it (trn_refine_t.sys_weight). */
-#define TRN_REFINE_SYS 1.0
+/** Weight of the interpolants' disagreement in the covariance where the map
+ *  misfits (trn_refine_t.sys_weight): the second moment, about one end, of
+ *  a position spread evenly across the bracket the two interpolants' poses
+ *  span, in units of its width squared (docs/method.md 9.5). */
+#define TRN_REFINE_SYS (1.0 / 3.0)
 #endif
 #ifndef TRN_REFINE_SYS_Z
 /** The covariance's block-sandwich ratio (trn_refine_t.inflation; and the
@@ -152,8 +154,8 @@ typedef struct {
     double interp_shift[2]; /**< shift of (x, y) had the DEM been bilinear instead of
                                  bicubic, cells; sys_weight times its outer product is
                                  in the covariance */
-    double sys_weight;      /**< TRN_REFINE_SYS x m_s^2 / (m_s^2 + the mean noise variance), m_s^2
-                                 the misfit beyond TRN_REFINE_SYS_TERM_Z sampling sds */
+    double sys_weight;      /**< TRN_REFINE_SYS where the misfit is beyond TRN_REFINE_SYS_TERM_Z
+                                 sampling sds of the noise's, else 0 */
     double shoulders;       /**< factor (>= 1) trn_localize_dem put on the (x, y)
                                  covariance along an axis where ln L's fall at
                                  TRN_SHOULDER_FAR_SD sds is flatter than at

@@ -73,8 +73,8 @@ VARIANTS = {
           "        if (0 && out->loc.relief_z < -TRN_RELIEF_Z) {")], []),
     "no_sys_term": (
         "the systematic term (the interpolants' disagreement in the covariance)",
-        [("src/refine.c", "    return TRN_REFINE_SYS * m2s / (m2s + noise2 / q);",
-          "    return 0.0 * m2s / (m2s + noise2 / q);")], []),
+        [("src/refine.c", "    return rr - noise2 - TRN_REFINE_SYS_TERM_Z * sqrt(vv) > 0.0 ? TRN_REFINE_SYS : 0.0;",
+          "    return rr - noise2 - TRN_REFINE_SYS_TERM_Z * sqrt(vv) > 0.0 ? 0.0 : 0.0;")], []),
     "no_clip_again": (
         "the search's repeated clip (one clipped pass only)",
         [("src/refine.c", "        for (again = 0; again <= TRN_CLIP_AGAIN; ++again) {\n            n = pose_fit(",
