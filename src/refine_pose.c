@@ -364,14 +364,14 @@ static double block_var(const acc4_t *acc, const double g[4], const double u[4])
  * TRN_REFINE_SYS_Z of its sampling sds under the noise model (h0: the
  * variance each block's term would have under the noise model alone, its
  * own normal matrix with the mix profiled out), else 1; *ll_f the larger ratio ungated, against the model
- * times max(1, chi2_raw), at least 1 (ln L's divisor, as before the gate).
+ * times max(1, pos->chi2_dof), at least 1 (ln L's divisor, as before the gate).
  * Each block's score has the mix profiled out (b - g bl); (inv
  * meat inv)[q][q] is summed as the squares of (inv score)[q] block by
  * block, so no meat matrix is kept. acc is the caller's (the stack stays
  * small). */
 static double sandwich(const rctx_t *c, const double p[5], double model2, const double inv[16],
                        const double g[4], const trn_refine_t *pos, const trn_refine3_t *full,
-                       double chi2_raw, acc4_t *acc, double *ll_f)
+                       acc4_t *acc, double *ll_f)
 {
     double f = 1.0, fg = 1.0, sw[3] = {0.0, 0.0, 0.0}, h0[3] = {0.0, 0.0, 0.0};
     const int32_t nq = c->fit_h ? 3 : 2;
@@ -395,7 +395,7 @@ static double sandwich(const rctx_t *c, const double p[5], double model2, const 
     }
     for (q = 0; q < nq; ++q) {
         /* ln L's ratio against the model times max(1, chi2), as before the gate */
-        const double ratio = sw[q] / (inv[q + 4 * q] * (chi2_raw > 1.0 ? chi2_raw : 1.0));
+        const double ratio = sw[q] / (inv[q + 4 * q] * (pos->chi2_dof > 1.0 ? pos->chi2_dof : 1.0));
         /* the model's variance: x, y from pos, the heading (fitted: full is set) from full */
         const double den = (q == 2 && full != NULL) ? full->cov3[8] : pos->cov_cells[q % 2];
         const double gated = trn_refine_excess_(sw[q] / den, sqrt(2.0 * h0[q]) / inv[q + 4 * q]);
@@ -723,7 +723,7 @@ static int covariance(const rctx_t *c, const double p[5], double model2, acc4_t 
             }
         }
     }
-    f = sandwich(c, p, model2, inv, g, pos, full, pos->chi2_dof, acc, &pos->ll_inflation);
+    f = sandwich(c, p, model2, inv, g, pos, full, acc, &pos->ll_inflation);
     pos->inflation = f;
     for (q = 0; q < 9 && full != NULL; ++q) {
         full->cov3[q] *= f;

@@ -347,13 +347,31 @@ static void test_mix(void **state)
  * TRN_REFINE_SYS in nearly all (the misfit's share of the residual
  * variance, the weight before 2026-12-07, fell below 0.8 of its value in
  * 199 of 200, and this test failed with it). */
+static double sys_weight_at(const trn_grid_f32_t *g, const trn_grid_f32_t *l, double tx, double ty,
+                            const trn_refine_cfg_t *c)
+{
+    trn_refine_t out;
+    assert_int_equal(
+        trn_refine_pose(g, l, LW / 2, LW / 2, (int)floor(tx + 0.5), (int)floor(ty + 0.5), c, &out),
+        TRN_OK);
+    return out.sys_weight;
+}
+
+/* An extra error of 5 cm sd on every cell of the local map in l_data. */
+static void add_misfit(trn_rng_t *r)
+{
+    int k;
+    for (k = 0; k < LW * LW; ++k) {
+        l_data[k] += (float)(0.05 * trn_rng_gauss(r));
+    }
+}
+
 static void test_sys_weight(void **state)
 {
     trn_grid_f32_t g, l;
     trn_refine_cfg_t c = cfg_of(), c2 = cfg_of();
-    trn_refine_t out;
     trn_rng_t r;
-    int i, k, zero = 0, large = 0, noisy = 0, n = 200;
+    int i, zero = 0, large = 0, noisy = 0, n = 200;
     (void)state;
     c2.noise_m = 2.0f * c.noise_m;
     c2.noise_k_per_m = 2.0f * c.noise_k_per_m;
@@ -362,25 +380,12 @@ static void test_sys_weight(void **state)
     for (i = 0; i < n; ++i) {
         double tx = 24.0 + 12.0 * trn_rng_unit(&r), ty = 24.0 + 12.0 * trn_rng_unit(&r);
         make_local(&l, tx, ty, 1.0, 1.0, &c, &r);
-        assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, (int)floor(tx + 0.5),
-                                         (int)floor(ty + 0.5), &c, &out),
-                         TRN_OK);
-        zero += out.sys_weight == 0.0;
-        for (k = 0; k < LW * LW; ++k) {
-            l_data[k] += (float)(0.05 * trn_rng_gauss(&r));
-        }
-        assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, (int)floor(tx + 0.5),
-                                         (int)floor(ty + 0.5), &c, &out),
-                         TRN_OK);
-        large += out.sys_weight == TRN_REFINE_SYS;
+        zero += sys_weight_at(&g, &l, tx, ty, &c) == 0.0;
+        add_misfit(&r);
+        large += sys_weight_at(&g, &l, tx, ty, &c) == TRN_REFINE_SYS;
         make_local(&l, tx, ty, 1.0, 1.0, &c2, &r);
-        for (k = 0; k < LW * LW; ++k) {
-            l_data[k] += (float)(0.05 * trn_rng_gauss(&r));
-        }
-        assert_int_equal(trn_refine_pose(&g, &l, LW / 2, LW / 2, (int)floor(tx + 0.5),
-                                         (int)floor(ty + 0.5), &c2, &out),
-                         TRN_OK);
-        noisy += out.sys_weight == TRN_REFINE_SYS;
+        add_misfit(&r);
+        noisy += sys_weight_at(&g, &l, tx, ty, &c2) == TRN_REFINE_SYS;
     }
     printf("sys_weight: 0 in %d of %d noise-only maps; the full weight in %d with a 5 cm misfit, "
            "in %d with it under twice the noise\n",
