@@ -3,6 +3,7 @@
  * (height_score.h). */
 #include "height_score.h"
 
+#include <float.h>
 #include <math.h>
 
 #include "refine_int.h"
@@ -20,12 +21,15 @@ static size_t carve(int32_t lw, int32_t lh, void *base, trn_hs_t *s)
     s->h = (double *)trn_ws_take(&w, n * sizeof(double));
     s->r = (double *)trn_ws_take(&w, n * sizeof(double));
     s->cv = (double *)trn_ws_take(&w, n * sizeof(double));
+    s->c1 = (double *)trn_ws_take(&w, n * sizeof(double));
+    s->c2 = (double *)trn_ws_take(&w, n * sizeof(double));
     s->off = (int64_t *)trn_ws_take(&w, n * sizeof(int64_t));
     s->ox = (int32_t *)trn_ws_take(&w, n * sizeof(int32_t));
     s->oy = (int32_t *)trn_ws_take(&w, n * sizeof(int32_t));
     s->tx = (int32_t *)trn_ws_take(&w, n * sizeof(int32_t));
     s->ty = (int32_t *)trn_ws_take(&w, n * sizeof(int32_t));
     s->cs = (int32_t *)trn_ws_take(&w, (n + 1u) * sizeof(int32_t));
+    s->ck = (int32_t *)trn_ws_take(&w, n * sizeof(int32_t));
     return w.total;
 }
 
@@ -213,42 +217,65 @@ static void residuals(trn_hs_t *s, int32_t px, int32_t py)
     }
 }
 
-/* The weighted moments' fit at the variances (*k2, *m2) over the residuals
- * within clip sds of *dz (clip < 0: all of them): per noise class the count,
- * sum and sum of squares of the residuals (relative to ref) it keeps,
- * weighted by w = 1 / (k2 v + m2) for the offset and by w^2 for the
- * variances (trn_var_fit_: the model variance, and with s->fitk the noise
- * scale). Their count (0: dz, k2 and m2 untouched). */
-static int32_t fit(const trn_hs_t *s, double ref, double clip, double *dz, double *k2, double *m2)
+/* Per noise class c, over its residuals r_i with (r_i - z)^2 <= c2 (kk v_c
+ * + mm) (c2 = INFINITY: every finite one), their count into s->ck[c] and
+ * the sum and the sum of squares of r_i - ref into s->c1[c], s->c2[c], in
+ * two running sums, even and odd cells (half the additions' chain). Their
+ * total count. The limit is held to DBL_MAX, so that the one comparison
+ * keeps out NaN (a cell off the map or over a missing map height) and an
+ * infinite residual, and no finite one that the limit keeps: from float
+ * heights |r_i - z| stays below 1e40, its square below 1e80. */
+static int32_t class_sums(trn_hs_t *s, double ref, double z, double c2, double kk, double mm)
+{
+    int32_t c, n = 0;
+    for (c = 0; c < s->nc; ++c) {
+        const double l = c2 * (kk * s->cv[c] + mm), lim = l < DBL_MAX ? l : DBL_MAX;
+        const int32_t end = s->cs[c + 1];
+        double a1 = 0.0, a2 = 0.0, t1 = 0.0, t2 = 0.0;
+        int32_t i, kn = 0;
+        for (i = s->cs[c]; i + 1 < end; i += 2) {
+            const double r = s->r[i], e = r - z, r1 = s->r[i + 1], e1 = r1 - z;
+            if (e * e <= lim) {
+                ++kn;
+                a1 += r - ref;
+                a2 += (r - ref) * (r - ref);
+            }
+            if (e1 * e1 <= lim) {
+                ++kn;
+                t1 += r1 - ref;
+                t2 += (r1 - ref) * (r1 - ref);
+            }
+        }
+        if (i < end) {
+            const double r = s->r[i], e = r - z;
+            if (e * e <= lim) {
+                ++kn;
+                a1 += r - ref;
+                a2 += (r - ref) * (r - ref);
+            }
+        }
+        s->ck[c] = kn;
+        s->c1[c] = a1 + t1;
+        s->c2[c] = a2 + t2;
+        n += kn;
+    }
+    return n;
+}
+
+/* The weighted moments' fit at the variances (*k2, *m2) from class_sums'
+ * sums: per class weighted by w = 1 / (k2 v + m2) for the offset and by w^2
+ * for the variances (trn_var_fit_: the model variance, and with s->fitk the
+ * noise scale) into dz, k2 and m2. The points' count (0: dz, k2 and m2
+ * untouched). */
+static int32_t fit_sums(const trn_hs_t *s, double ref, double *dz, double *k2, double *m2)
 {
     double sw = 0.0, swr = 0.0, sq = 0.0, sqr = 0.0, sqrr = 0.0, sqv = 0.0, sqvv = 0.0;
     double sqvr = 0.0, sqvrr = 0.0, d;
-    const double c2 = clip < 0.0 ? (double)INFINITY : clip * clip, z = *dz, kk = *k2, mm = *m2;
+    const double kk = *k2, mm = *m2;
     int32_t c, n = 0;
     for (c = 0; c < s->nc; ++c) {
-        const double v = s->cv[c], vm = kk * v + mm, w = 1.0 / vm, q = w * w, lim = c2 * vm;
-        /* two running sums, even and odd cells: half the additions' chain */
-        double s1 = 0.0, s2 = 0.0, t1 = 0.0, t2 = 0.0, k;
-        int32_t i, kn = 0;
-        for (i = s->cs[c]; i < s->cs[c + 1]; i += 2) {
-            const double r = s->r[i], e = r - z;
-            if (isfinite(r) && e * e <= lim) {
-                ++kn;
-                s1 += r - ref;
-                s2 += (r - ref) * (r - ref);
-            }
-            if (i + 1 < s->cs[c + 1]) {
-                const double r1 = s->r[i + 1], e1 = r1 - z;
-                if (isfinite(r1) && e1 * e1 <= lim) {
-                    ++kn;
-                    t1 += r1 - ref;
-                    t2 += (r1 - ref) * (r1 - ref);
-                }
-            }
-        }
-        k = (double)kn;
-        s1 += t1;
-        s2 += t2;
+        const double v = s->cv[c], w = 1.0 / (kk * v + mm), q = w * w, k = (double)s->ck[c];
+        const double s1 = s->c1[c], s2 = s->c2[c];
         sw += w * k;
         swr += w * s1;
         sq += q * k;
@@ -258,7 +285,7 @@ static int32_t fit(const trn_hs_t *s, double ref, double clip, double *dz, doubl
         sqvv += q * v * v * k;
         sqvr += q * v * s1;
         sqvrr += q * v * s2;
-        n += kn;
+        n += s->ck[c];
     }
     if (n == 0) {
         return 0;
@@ -268,6 +295,14 @@ static int32_t fit(const trn_hs_t *s, double ref, double clip, double *dz, doubl
                  sqvv, s->fitk, k2, m2);
     *dz = d + ref;
     return n;
+}
+
+/* The fit within clip sds of *dz at the variances (*k2, *m2): class_sums,
+ * then fit_sums. */
+static int32_t fit(trn_hs_t *s, double ref, double clip, double *dz, double *k2, double *m2)
+{
+    (void)class_sums(s, ref, *dz, clip * clip, *k2, *m2);
+    return fit_sums(s, ref, dz, k2, m2);
 }
 
 /* The first residual on the map (the moments' reference), 0 if none. */
@@ -319,8 +354,12 @@ double trn_hs_ll(trn_hs_t *s, int32_t px, int32_t py, double *dz_out, double *mo
     int32_t n_all;
     residuals(s, px, py);
     ref = first_residual(s);
-    n_all = fit(s, ref, -1.0, &dz, &k2, &m2); /* every point at the model's variances */
-    if (n_all > 0 && fit(s, ref, -1.0, &dz, &k2, &m2) > 0) {
+    /* every point at the model's variances, then at that fit's: the
+     * variances change the weights, not which points count, so one pass
+     * over the points serves both */
+    (void)class_sums(s, ref, 0.0, (double)INFINITY, 1.0, 0.0);
+    n_all = fit_sums(s, ref, &dz, &k2, &m2);
+    if (n_all > 0 && fit_sums(s, ref, &dz, &k2, &m2) > 0) {
         /* then within the clip of the last fit, again while that drops
          * points (trn_clip_again_) */
         double dz1 = dz, k21 = k2, m21 = m2;

@@ -19,12 +19,15 @@
  * What makes this one fast: the seen cells are gathered once per search and
  * ordered by their distance from the rover, so that the cells of one
  * distance, which share one noise variance (a noise class: 457 for a 64 x 64
- * local map), are one run; each pass then takes one division a class, sums
- * counts, residuals and squares a cell, and compares squares in the clip (no
- * square root); ln L takes one exp a cell and one log per some hundred cells
- * (the log of running products). The map's heights under the cells are read
- * once per pose into one array of residuals, without bounds checks where the
- * whole local map lies on the map. */
+ * local map), are one run; a pass over the cells sums per class a count,
+ * the residuals and their squares, comparing squares in the clip (no
+ * square root; one comparison keeps out the cells off the map), and a fit
+ * from those sums takes one division a class; the two fits over every
+ * point share one pass, since their variances change the weights, not
+ * which points count; ln L takes one exp a cell and one log per some
+ * hundred cells (the log of running products). The map's heights under the
+ * cells are read once per pose into one array of residuals, without bounds
+ * checks where the whole local map lies on the map. */
 #ifndef TRN_HEIGHT_SCORE_H
 #define TRN_HEIGHT_SCORE_H
 
@@ -42,6 +45,9 @@ typedef struct {
     int32_t *tx, *ty;        /* the offsets turned to the heading scored */
     int64_t *off;            /* ty * stride + tx */
     double *cv;              /* per noise class (one distance from the rover): variance */
+    double *c1, *c2;         /* per class, the last pass: the kept residuals' sum less the
+                              * first residual, and the sum of their squares */
+    int32_t *ck;             /* ... and their count */
     int32_t *cs;             /* class c's cells: cs[c] .. cs[c + 1] - 1 */
     int32_t nc;              /* noise classes */
     size_t n;                /* seen cells */

@@ -27,7 +27,7 @@
 
 static float g_map[GW * GW];
 static float g_loc[LW * LW];
-static unsigned char g_ws[LW * LW * 64];
+static unsigned char g_ws[LW * LW * 96];
 
 /* The variances, plainly: least squares of e^2 = k2 v + m2 over the cells,
  * weights q; k2 = 1 unless fitted; m2 < 0 or the two not separable: k2
