@@ -113,10 +113,10 @@ def main():
           == n * n * 4 + n * n * nz, f"highpass_occupancy bytes {st['highpass_occupancy']}")
     check(st["peak_fit"]["workspace_bytes"] == 0, "peak_fit needs no workspace")
     # the height search's output is the ln L grid, one double per pose; its scratch the pose
-    # score's (src/height_score.c: 52 bytes a local cell, 32 x 32 here, and the carve's rounding)
+    # score's (src/height_score.c: 72 bytes a local cell, 32 x 32 here, and the carve's rounding)
     hs = st["height_search"]
     check(hs["workspace_bytes"] - hs["scratch_bytes"] == 21 * 21 * 8
-          and 32 * 32 * 52 <= hs["scratch_bytes"] <= 32 * 32 * 52 + 256,
+          and 32 * 32 * 72 <= hs["scratch_bytes"] <= 32 * 32 * 72 + 256,
           f"height_search bytes {hs}")
     check(st["height_localize"]["scratch_bytes"] > st["height_search"]["workspace_bytes"],
           f"height_localize scratch {st['height_localize']}")
