@@ -334,19 +334,8 @@ static void test_mix(void **state)
     }
 }
 
-/* The systematic term's weight follows a misfit only beyond its sampling
- * noise: on local maps that are the model plus the documented noise the
- * moment estimate of m^2 is positive by chance in 61 of these 200 cases
- * (measured with the test's level at 0 sds; 19 at 1, the level before
- * 2026-12-05; 2 at TRN_REFINE_SYS_TERM_Z, 2), so the weight must stay 0 in
- * at least 190 (the level of 1 fails that); with an extra error of 5 cm on
- * every cell (a misfit five times the nearest cells' noise) it must be
- * TRN_REFINE_SYS in nearly all (200 of 200 at 2). The interpolants' bracket
- * does not narrow when the sensor is noisier, so neither may the weight:
- * with the same misfit under twice the noise (model and data) it must stay
- * TRN_REFINE_SYS in nearly all (the misfit's share of the residual
- * variance, the weight before 2026-12-07, fell below 0.8 of its value in
- * 199 of 200, and this test failed with it). */
+/* The systematic term's weight of trn_refine_pose from the integer pose
+ * nearest (tx, ty). */
 static double sys_weight_at(const trn_grid_f32_t *g, const trn_grid_f32_t *l, double tx, double ty,
                             const trn_refine_cfg_t *c)
 {
@@ -366,6 +355,19 @@ static void add_misfit(trn_rng_t *r)
     }
 }
 
+/* The systematic term's weight follows a misfit only beyond its sampling
+ * noise: on local maps that are the model plus the documented noise the
+ * moment estimate of m^2 is positive by chance in 61 of these 200 cases
+ * (measured with the test's level at 0 sds; 19 at 1, the level before
+ * 2026-12-05; 2 at TRN_REFINE_SYS_TERM_Z, 2), so the weight must stay 0 in
+ * at least 190 (the level of 1 fails that); with an extra error of 5 cm on
+ * every cell (a misfit five times the nearest cells' noise) it must be
+ * TRN_REFINE_SYS in nearly all (200 of 200 at 2). The interpolants' bracket
+ * does not narrow when the sensor is noisier, so neither may the weight:
+ * with the same misfit under twice the noise (model and data) it must stay
+ * TRN_REFINE_SYS in nearly all (the misfit's share of the residual
+ * variance, the weight before 2026-12-07, fell below 0.8 of its value in
+ * 199 of 200, and this test failed with it). */
 static void test_sys_weight(void **state)
 {
     trn_grid_f32_t g, l;
