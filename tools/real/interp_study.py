@@ -4,7 +4,7 @@
 
     /usr/bin/python3 tools/real/interp_study.py [--dem ID ...] [--k K] [--radius R]
         [--cases N] [--seed S] [--local mean|point] [--map mean|point]
-        [--interp NAME ...] [--json PATH]
+        [--interp NAME ...] [--bias-ref NAME ...] [--json PATH]
 
 No trn run, no noise. The map is the K x K block mean (--map mean) or the point samples every
 K cells (--map point) of a DEM; the rover's local cells, at a random sub-cell position within
@@ -24,7 +24,12 @@ Per DEM and interpolant it prints, per axis, in map cells:
 * shift and corr: the RMS of the interpolants' shift (the step that I - bilinear makes, the
   refinement's interp_shift) and its correlation with dp;
 * lock: the amplitude A of the fit dp = A sin(2 pi f) + B cos(2 pi f), f the truth's sub-cell
-  position along the axis: the part of the error that only the sub-cell position decides.
+  position along the axis: the part of the error that only the sub-cell position decides;
+* with --bias-ref REF (repeatable): the error predicted from the map alone, the step
+  (J^T J)^-1 J^T (REF - I) that the reference interpolant's heights make at the local cells
+  (what dp would be were REF the truth): its RMS (pred), its correlation with dp, the slope
+  of dp on it through 0, and the RMS of dp less the prediction (resid; below err where the
+  prediction could remove the error).
 
 Interpolants (--interp, repeatable; default keys spline3): bilinear, keys (cubic
 convolution, a = -1/2: the refinement's), spline3 and spline5 (the interpolating cubic and
@@ -155,8 +160,9 @@ def bilinear_fine(fine, r, c):
             fr * ((1 - fc) * fine[r0 + 1, c0] + fc * fine[r0 + 1, c0 + 1]))
 
 
-def study(fine, k, radius, cases, seed, local, maptype, interps):
-    """The statistics above for one fine DEM (2-D array, NaN unknown); a dict per interpolant."""
+def study(fine, k, radius, cases, seed, local, maptype, interps, refs=()):
+    """The statistics above for one fine DEM (2-D array, NaN unknown); a dict per interpolant.
+    refs: the reference interpolants of the predicted error (--bias-ref)."""
     if k < 1 or radius < 2 or cases < 4:
         raise InputError("need K >= 1, R >= 2 and at least 4 cases")
     known = np.isfinite(fine)
@@ -174,7 +180,7 @@ def study(fine, k, radius, cases, seed, local, maptype, interps):
     fill = float(np.mean(m[ok]))
     m = np.where(ok, m, fill)
     fine = np.where(known, fine, float(np.mean(fine[known])))
-    surf = {n: Surface(m, n) for n in interps}
+    surf = {n: Surface(m, n) for n in list(interps) + [r for r in refs if r not in interps]}
     bil = Surface(m, "bilinear")
     a, b = np.mgrid[-radius:radius + 1, -radius:radius + 1]
     rng = np.random.default_rng(seed)
@@ -221,8 +227,12 @@ def study(fine, k, radius, cases, seed, local, maptype, interps):
             J4 = np.c_[J, mixcol]
             dp4 = np.linalg.lstsq(J4, e, rcond=None)[0]
             shift = -(H @ (J.T @ mixcol))  # the step from this interpolant to the bilinear one
+            pred = []
+            for ref in refs:  # the step were the reference the truth
+                bp = H @ (J.T @ (surf[ref](rr, cc) - val))
+                pred += [bp[0], bp[1]]
             rows[n].append((tr % 1.0, tc % 1.0, dp[0], dp[1], dp4[0], dp4[1], indep[0, 0],
-                            indep[1, 1], block[0, 0], block[1, 1], shift[0], shift[1]))
+                            indep[1, 1], block[0, 0], block[1, 1], shift[0], shift[1], *pred))
     out = {}
     for n in interps:
         x = np.array(rows[n])
@@ -240,6 +250,15 @@ def study(fine, k, radius, cases, seed, local, maptype, interps):
                 "corr": float(np.corrcoef(dp, sh)[0, 1]) if np.std(sh) > 0 and np.std(dp) > 0 else 0.0,
                 "lock": float(fit[0]),
             }
+            for i, ref in enumerate(refs):
+                p = x[:, 12 + 2 * i + ax]
+                res[name]["pred_" + ref] = {
+                    "pred": float(np.sqrt(np.mean(p ** 2))),
+                    "corr": float(np.corrcoef(dp, p)[0, 1]) if np.std(p) > 0 and np.std(dp) > 0
+                    else 0.0,
+                    "slope": float(np.sum(p * dp) / np.sum(p * p)) if np.any(p != 0) else 0.0,
+                    "resid": float(np.sqrt(np.mean((dp - p) ** 2))),
+                }
         out[n] = res
     return out
 
@@ -257,6 +276,8 @@ def parse_args(argv):
     ap.add_argument("--map", choices=("mean", "point"), default="mean")
     ap.add_argument("--interp", action="append", help=f"one of {', '.join(INTERPS)} (repeatable; "
                     "default keys spline3)")
+    ap.add_argument("--bias-ref", action="append", default=[], help="a reference interpolant "
+                    "whose heights predict the error (repeatable; none by default)")
     ap.add_argument("--json", help="write the statistics here")
     return ap.parse_args(argv)
 
@@ -265,7 +286,7 @@ def main(argv):
     a = parse_args(argv)
     interps = a.interp or ["keys", "spline3"]
     try:
-        for n in interps:
+        for n in interps + a.bias_ref:
             if n not in INTERPS:
                 raise InputError(f"unknown interpolant {n!r} (one of {', '.join(INTERPS)})")
         import cases as cm
@@ -277,14 +298,18 @@ def main(argv):
             except Exception as e:  # a recipe failed or an unknown id: name it
                 raise InputError(f"DEM {d}: {e}")
             fine = cm.read_dem(path).z.astype(float)
-            res = study(fine, a.k, a.radius, a.cases, a.seed, a.local, a.map, interps)
+            res = study(fine, a.k, a.radius, a.cases, a.seed, a.local, a.map, interps, a.bias_ref)
             allres[d] = res
             for n in interps:
                 for ax in ("row", "col"):
                     r = res[n][ax]
                     print(f"{d} {a.local}/{a.map} K={a.k} R={a.radius} {n:8s} {ax}: err {r['err']:.4f} "
                           f"err+mix {r['err_mix']:.4f} indep {r['indep']:.4f} block4 {r['block4']:.4f} "
-                          f"shift {r['shift']:.4f} corr {r['corr']:+.2f} lock {r['lock']:+.4f}")
+                          f"shift {r['shift']:.4f} corr {r['corr']:+.2f} lock {r['lock']:+.4f}" +
+                          "".join(f" | {ref}: pred {r['pred_' + ref]['pred']:.4f} corr "
+                                  f"{r['pred_' + ref]['corr']:+.2f} slope "
+                                  f"{r['pred_' + ref]['slope']:.2f} resid "
+                                  f"{r['pred_' + ref]['resid']:.4f}" for ref in a.bias_ref))
         if a.json:
             with open(a.json, "w") as f:
                 json.dump({"args": vars(a), "results": allres}, f, indent=1)
