@@ -41,6 +41,14 @@
 #define HB_M2_RATIO 4.0
 /* Nodes of this level or finer are scored pose by pose, not bounded. */
 #define HB_LEAF 2
+/* ... and so are nodes whose poses take fewer pose-cell visits than this to
+ * score (the leaf level: 2 from 64 seen cells up, 3 from 16, else 4). A
+ * bound's work beside the cells (its offset ranges, the counts' tables) is
+ * fixed, about 1 us here, so on a local map of a few cells a bound that
+ * prunes nothing costs more than its poses' scores could save (trn_bench's
+ * 5 x 5 worst case: 70 nodes bounded where the fixed leaf bounded 239,
+ * bounded / exhaustive 1.14x against 1.24x; docs/benchmarks.md). */
+#define HB_LEAF_WORK 1024.0
 
 /* 2^l for the tree's levels (multiplications and divisions, not shifts of
  * signed values). */
@@ -490,7 +498,7 @@ static trn_status_t walk(trn_hb_t *hb, double t, const trn_exclusion_t *ex, int 
         if (node_in_zone(hb, ex, l, bx, by) || node_ub(hb, l, bx, by, thr) < thr) {
             continue;
         }
-        if (l <= HB_LEAF) {
+        if (l <= hb->leaf) {
             const int32_t x0 = hb->win.x0 + bx * k_pow2[l], y0 = hb->win.y0 + by * k_pow2[l];
             int32_t x, y;
             for (y = y0; y < y0 + k_pow2[l] && y <= hb->win.y1; ++y) {
@@ -791,6 +799,11 @@ trn_status_t trn_hb_init(trn_hb_t **out, void *ws, const trn_grid_f32_t *global,
     spread = trn_refine_local_spread_(local, &n_seen);
     if (n_seen < 8) {
         return TRN_E_NODATA;
+    }
+    hb->leaf = HB_LEAF;
+    while (hb->leaf < lay.levels - 1 &&
+           (double)k_pow2[hb->leaf] * (double)k_pow2[hb->leaf] * (double)n_seen < HB_LEAF_WORK) {
+        hb->leaf += 1;
     }
     hb->k = 1.0 / (10.0 * (spread > (double)cfg->noise_m ? spread : (double)cfg->noise_m));
     hb->lout = log((1.0 - hb->a) * hb->k);

@@ -38,6 +38,7 @@ typedef struct {
     double a, k, lout, tol;
     int32_t ww, wh;                /* window size, poses */
     int32_t levels;                /* tree levels 0..levels-1; 2^(levels-1) >= ww, wh */
+    int32_t leaf;                  /* nodes of this level or finer: scored pose by pose */
     int32_t rw, rh;                /* region of map anchors: 2^(levels-1) + local size */
     double *ll;                    /* ww x wh: exact ln L where done, -inf elsewhere */
     double *dz, *msd;              /* ww x wh: the pose fit's offset and model sd where done */

@@ -200,8 +200,10 @@ static void bh_note(char *note, size_t len, const bh_call_t *c, double tx, doubl
             *wrong = 1;
         }
     }
-    snprintf(note, len, "%s; error %.2f cells; %llu poses scored%s%s", trn_strerror(c->st),
-             hypot(c->res.x - tx, c->res.y - ty), (unsigned long long)c->res.stats.poses_scored,
+    snprintf(note, len, "%s; error %.2f cells; %llu poses scored, %llu blocks bounded%s%s",
+             trn_strerror(c->st), hypot(c->res.x - tx, c->res.y - ty),
+             (unsigned long long)c->res.stats.poses_scored,
+             (unsigned long long)c->res.stats.blocks_bounded,
              exh == NULL ? "" : "; = exhaustive pose, status: ",
              exh == NULL ? ""
              : same      ? "yes"
