@@ -220,14 +220,14 @@ static void residuals(trn_hs_t *s, int32_t px, int32_t py)
 /* Per noise class c, over its residuals r_i with (r_i - z)^2 <= c2 (kk v_c
  * + mm) (c2 = INFINITY: every finite one), their count into s->ck[c] and
  * the sum and the sum of squares of r_i - ref into s->c1[c], s->c2[c], in
- * two running sums, even and odd cells (half the additions' chain). Their
- * total count. The limit is held to DBL_MAX, so that the one comparison
+ * two running sums, even and odd cells (half the additions' chain). The
+ * limit is held to DBL_MAX, so that the one comparison
  * keeps out NaN (a cell off the map or over a missing map height) and an
  * infinite residual, and no finite one that the limit keeps: from float
  * heights |r_i - z| stays below 1e40, its square below 1e80. */
-static int32_t class_sums(trn_hs_t *s, double ref, double z, double c2, double kk, double mm)
+static void class_sums(trn_hs_t *s, double ref, double z, double c2, double kk, double mm)
 {
-    int32_t c, n = 0;
+    int32_t c;
     for (c = 0; c < s->nc; ++c) {
         const double l = c2 * (kk * s->cv[c] + mm), lim = l < DBL_MAX ? l : DBL_MAX;
         const int32_t end = s->cs[c + 1];
@@ -257,9 +257,7 @@ static int32_t class_sums(trn_hs_t *s, double ref, double z, double c2, double k
         s->ck[c] = kn;
         s->c1[c] = a1 + t1;
         s->c2[c] = a2 + t2;
-        n += kn;
     }
-    return n;
 }
 
 /* The weighted moments' fit at the variances (*k2, *m2) from class_sums'
@@ -301,7 +299,7 @@ static int32_t fit_sums(const trn_hs_t *s, double ref, double *dz, double *k2, d
  * then fit_sums. */
 static int32_t fit(trn_hs_t *s, double ref, double clip, double *dz, double *k2, double *m2)
 {
-    (void)class_sums(s, ref, *dz, clip * clip, *k2, *m2);
+    class_sums(s, ref, *dz, clip * clip, *k2, *m2);
     return fit_sums(s, ref, dz, k2, m2);
 }
 
@@ -357,7 +355,7 @@ double trn_hs_ll(trn_hs_t *s, int32_t px, int32_t py, double *dz_out, double *mo
     /* every point at the model's variances, then at that fit's: the
      * variances change the weights, not which points count, so one pass
      * over the points serves both */
-    (void)class_sums(s, ref, 0.0, (double)INFINITY, 1.0, 0.0);
+    class_sums(s, ref, 0.0, (double)INFINITY, 1.0, 0.0);
     n_all = fit_sums(s, ref, &dz, &k2, &m2);
     if (n_all > 0 && fit_sums(s, ref, &dz, &k2, &m2) > 0) {
         /* then within the clip of the last fit, again while that drops
