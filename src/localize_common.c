@@ -23,8 +23,10 @@ void trn_loc_take_refinement_(const trn_map_t *map, trn_loc_result_t *out)
                                                              : (double)map->cfg.noise_m;
     out->refined = 1;
     out->misfit = out->refinement.model_m > TRN_MISFIT_ROUGHNESS * lim ? 1 : 0;
-    out->x = out->refinement.x;
-    out->y = out->refinement.y;
+    /* the answer: the refinement's estimate and its spline step
+     * (docs/method.md 9.4) */
+    out->x = out->refinement.x + out->refinement.spline_step[0];
+    out->y = out->refinement.y + out->refinement.spline_step[1];
     out->cov_m2[0] = out->refinement.cov_cells[0] * cell * cell;
     out->cov_m2[1] = out->refinement.cov_cells[1] * cell * cell;
     out->cov_m2[2] = out->refinement.cov_cells[2] * cell * cell;

@@ -322,7 +322,7 @@ static void refine_result(const trn_map_t *map, const lh_t *s, const trn_heading
     out->cov3[0] = out->loc.cov_m2[0];
     out->cov3[4] = out->loc.cov_m2[1];
     out->cov3[1] = out->cov3[3] = out->loc.cov_m2[2];
-    out->heading_rad = s->ref.heading_rad;
+    out->heading_rad = s->ref.heading_rad + s->ref.spline_step_heading_rad;
     out->sigma_heading_rad = cfg->window_rad > 0.0 ? sqrt(out->cov3[8]) : 0.0;
 }
 

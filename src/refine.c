@@ -172,15 +172,81 @@ static int sample(const trn_grid_f32_t *g, double x, double y, double out[3])
     return 1;
 }
 
+/* The interpolating cubic B-spline's weights (its cardinal function eta)
+ * at the TRN_SPLINE_TAPS taps k0 + t of fractional position x along an
+ * axis of n samples, k0 = floor(x) - TRN_SPLINE_HALF + 1:
+ * eta(f + n) = sum over m = -1..2 of c_{n+m} beta3(f - m), f = x - floor(x),
+ * c_k = sqrt(3) z^|k| (z = sqrt(3) - 2, the pole of the sampled B-spline's
+ * inverse filter), normalised to sum 1, so that a constant is exact (the
+ * taps cut eta where it is below 3e-5 of its peak). 0 where the taps leave
+ * the axis. */
+#define TRN_SPLINE_HALF 8
+#define TRN_SPLINE_TAPS (2 * TRN_SPLINE_HALF)
+static int spline_weights(double x, int32_t n, int32_t *k0, double w[TRN_SPLINE_TAPS])
+{
+    const double z = -0.2679491924311227;
+    double b[4], c[TRN_SPLINE_HALF + 2], sum = 0.0, f, e;
+    int32_t t, m, fl;
+    /* floor(x) by truncation: x is checked non-negative first (no libm call
+     * on the deepest stack) */
+    if (!(x >= (double)(TRN_SPLINE_HALF - 1) && x < (double)n - (double)(TRN_SPLINE_HALF))) {
+        return 0;
+    }
+    fl = (int32_t)x;
+    f = x - (double)fl;
+    e = 1.0 - f;
+    *k0 = fl - (TRN_SPLINE_HALF - 1);
+    b[0] = e * e * e / 6.0; /* beta3(f + 1), beta3(f), beta3(f - 1), beta3(f - 2) */
+    b[1] = 2.0 / 3.0 - f * f + 0.5 * f * f * f;
+    b[2] = 2.0 / 3.0 - e * e + 0.5 * e * e * e;
+    b[3] = f * f * f / 6.0;
+    c[0] = 1.7320508075688772;
+    for (t = 1; t < TRN_SPLINE_HALF + 2; ++t) {
+        c[t] = c[t - 1] * z;
+    }
+    for (t = 0; t < TRN_SPLINE_TAPS; ++t) {
+        /* tap k0 + t is at offset a = t - (TRN_SPLINE_HALF - 1) from floor(x): eta(f - a) */
+        const int32_t a = t - (TRN_SPLINE_HALF - 1);
+        double v = 0.0;
+        for (m = 0; m < 4; ++m) {
+            const int32_t k = m - 1 - a;
+            v += c[k < 0 ? -k : k] * b[m];
+        }
+        w[t] = v;
+        sum += v;
+    }
+    for (t = 0; t < TRN_SPLINE_TAPS; ++t) {
+        w[t] /= sum;
+    }
+    return 1;
+}
+
+int trn_refine_spline_(const trn_grid_f32_t *g, double x, double y, double *h)
+{
+    double wx[TRN_SPLINE_TAPS], wy[TRN_SPLINE_TAPS], s = 0.0;
+    int32_t i0, j0, i, j;
+    if (!spline_weights(x, g->width, &i0, wx) || !spline_weights(y, g->height, &j0, wy)) {
+        return 0;
+    }
+    for (j = 0; j < TRN_SPLINE_TAPS; ++j) {
+        double r = 0.0;
+        for (i = 0; i < TRN_SPLINE_TAPS; ++i) {
+            const double v = (double)TRN_GRID_AT(g, i0 + i, j0 + j);
+            if (!isfinite(v)) {
+                return 0;
+            }
+            r += wx[i] * v;
+        }
+        s += wy[j] * r;
+    }
+    *h = s;
+    return 1;
+}
+
 double trn_refine_model2_(double rr, double noise2, double q)
 {
     double m = (rr - noise2) / q;
     return m > 0.0 ? m : 0.0;
-}
-
-double trn_refine_sys_weight_(double rr, double noise2, double vv)
-{
-    return rr - noise2 - TRN_REFINE_SYS_TERM_Z * sqrt(vv) > 0.0 ? TRN_REFINE_SYS : 0.0;
 }
 
 double trn_refine_excess_(double ratio, double rel_sd)

@@ -175,13 +175,17 @@ static inline int trn_clip_again_(int32_t n_all, int32_t n_prev, int32_t n)
     return n > 0 && 100 * (int64_t)(n_prev - n) > (int64_t)n_all;
 }
 
+/* The interpolating cubic B-spline of the map's heights at fractional cell
+ * (x, y) into *h (the spline step, docs/method.md 9.4): its cardinal
+ * function cut to TRN_SPLINE_TAPS taps per axis and normalised to sum 1,
+ * summed over the map's heights; 0 where the taps leave the map or meet a
+ * cell without a height. Out of line: the refinement's frame is on the
+ * deepest stack. */
+int trn_refine_spline_(const trn_grid_f32_t *g, double x, double y, double *h);
+
 /* The refinements' model variance from their precision-squared weighted
- * sums (rr of q r^2, noise2 of q s^2, q), never negative; and the weight of
- * the interpolants' disagreement: TRN_REFINE_SYS where the misfit rr -
- * noise2 is beyond TRN_REFINE_SYS_TERM_Z sampling sds (vv, the sum of q^2 2
- * s^4) of what the noise alone gives, else 0 (src/refine.c). */
+ * sums (rr of q r^2, noise2 of q s^2, q), never negative (src/refine.c). */
 double trn_refine_model2_(double rr, double noise2, double q);
-double trn_refine_sys_weight_(double rr, double noise2, double vv);
 
 /* A variance ratio (the reduced chi-square, the block sandwich's) that
  * counts only where beyond TRN_REFINE_SYS_Z of its sampling sds (rel_sd,

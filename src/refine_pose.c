@@ -9,7 +9,6 @@
 #include "trn/height_heading.h"
 #include "trn/refine.h"
 
-#include <float.h>
 #include <math.h>
 
 #include "refine_int.h"
@@ -22,7 +21,7 @@
 typedef struct {
     double a[10], b[4]; /* the normal matrix (sym4) and right-hand side */
     double ss, rr, noise2, q;
-    double vv;             /* sum of q^2 2 s^4: the variance of rr - noise2 if m were 0 */
+    double vv;             /* steep_pass's sum of q |grad|^4 */
     double al[4], all, bl; /* the mix: cross terms, own term, right-hand side */
     int32_t n_in, n_all;
 } acc4_t;
@@ -121,7 +120,6 @@ static void accumulate(const rctx_t *c, const double pose[5], double clip, doubl
                 acc->noise2 += qw * v;
                 acc->rr += qw * res * res;
                 acc->q += qw;
-                acc->vv += 2.0 * qw * qw * v * v;
             }
             jacobian(c, s3, tx, ty, jv);
             w = hw / (sd * sd);
@@ -230,106 +228,73 @@ static double fold_mix(acc4_t *acc, double lam, double g[4])
     return bl / all;
 }
 
-/* One pass of the bilinear surface at bp onto the bicubic model's heights at
- * the estimate p, over the estimate's inliers, weights 1 / (noise + model
- * variance); no local height enters but through the inlier test, so the
- * shift it leads to is the model's, free of the data's noise:
- * returns the weighted sum of squares at bp with the best offset (closed
- * form), the inliers' count and, in acc, the normal equations. */
-static double model_pass(const rctx_t *c, const double p[5], const double bp[4], double model2,
-                         acc4_t *acc, int32_t *n_in)
+/* The spline step (docs/method.md 9.4): the pose error the model's
+ * interpolant makes where the ground runs as the interpolating cubic
+ * B-spline of the map's samples, one Gauss-Newton step of the estimate p
+ * with the spline's heights in place of the model's, over the estimate's
+ * inliers (the relief rule) whose spline taps are all on the map; the mix's
+ * column in the normal equations with its prior's information but no pull
+ * (the step moves the pose, not the mix). d: the step of (x, y, heading,
+ * dz), 0 for no step (fewer than half the inliers have the spline, or the
+ * normal matrix is singular). acc and inv are the caller's (dead by now). */
+static void spline_step(const rctx_t *c, const double p[5], double model2, acc4_t *acc,
+                        double inv[16], double d[4])
 {
-    double cs, sn, bc, bs, sw = 0.0, swr = 0.0, swrr = 0.0;
-    int32_t i, j;
+    const double pw = 1.0 / (TRN_REFINE_MIX_SD * TRN_REFINE_MIX_SD);
+    double cs, sn, all;
+    int32_t i, j, q, n_in = 0, n_sp = 0;
     trn_heading_trig_(p[2], &cs, &sn);
-    trn_heading_trig_(bp[2], &bc, &bs);
     acc_clear(acc);
-    *n_in = 0;
+    for (q = 0; q < 4; ++q) {
+        d[q] = 0.0;
+    }
     for (j = 0; j < c->l->height; ++j) {
         for (i = 0; i < c->l->width; ++i) {
-            double h = (double)TRN_GRID_AT(c->l, i, j), s3[3], b3[3], ox, oy, v, w, res, jv[4];
-            double btx, bty, gx, gy;
+            double h = (double)TRN_GRID_AT(c->l, i, j), s3[3], ox, oy, tx, ty, v, w, sp, dcb;
+            double jv[4];
             if (!isfinite(h)) {
                 continue;
             }
             ox = (double)(i - c->rx);
             oy = (double)(j - c->ry);
-            btx = ox * bc + oy * bs;
-            bty = -ox * bs + oy * bc;
-            gx = p[0] + ox * cs + oy * sn; /* the estimate's point */
-            gy = p[1] - ox * sn + oy * cs;
-            if (!trn_refine_sample_(c->g, gx, gy, s3) ||
-                !trn_refine_sample_bilinear_(c->g, bp[0] + btx, bp[1] + bty, b3)) {
+            tx = ox * cs + oy * sn;
+            ty = -ox * sn + oy * cs;
+            if (!trn_refine_sample_mix_(c->g, p[0] + tx, p[1] + ty, p[4], s3, &dcb)) {
                 continue;
             }
             v = trn_refine_noise_var_(c->cfg, i, j, c->rx, c->ry) + model2;
-            w = trn_refine_weight_(c->g, gx, gy, h - p[3] - s3[0], sqrt(v),
+            w = trn_refine_weight_(c->g, p[0] + tx, p[1] + ty, h - p[3] - s3[0], sqrt(v),
                                    TRN_REFINE_CLIP_RELIEF) /
                 v;
             if (!(w > 0.0)) {
                 continue;
             }
-            res = (p[3] + s3[0]) - b3[0];
-            sw += w;
-            swr += w * res;
-            swrr += w * res * res;
-            jacobian(c, b3, btx, bty, jv);
-            acc_add(acc, jv, w, res - bp[3]);
-            *n_in += 1;
-        }
-    }
-    return swrr - swr * swr / fmax(sw, DBL_MIN); /* 0 without inliers */
-}
-
-/* The interpolants' shift: how far the estimate would move had the map's
- * heights been bilinear instead of bicubic between its cells. The two
- * interpolants bracket how the DEM runs between its samples; their
- * disagreement is a systematic error of the model, common to all points,
- * that no residual statistic sees. Gauss-Newton of the bilinear surface
- * onto the bicubic model's own heights at p; the bilinear surface has kinks
- * at cell edges, where a plain step can overshoot and cycle, so each step
- * is halved until the sum of squares drops over the same points, and the
- * search stops when no halving does (or the normal matrix is singular). acc and bi
- * are the caller's (dead by now); each trial step's pass makes its normal
- * equations in acc (the direction d is taken before), so the step taken
- * leaves acc ready for the next iteration without another pass. */
-static void interp_shift(const rctx_t *c, const double p[5], double model2, acc4_t *acc,
-                         double bi[16], double shift[4])
-{
-    /* shift holds the bilinear pose until the end (no array of its own:
-     * the frame is on the deepest stack) */
-    double tp[4], d[4], ss, ss_t;
-    int32_t it, h, q, n, n_t;
-    for (q = 0; q < 4; ++q) {
-        shift[q] = p[q];
-    }
-    ss = model_pass(c, p, shift, model2, acc, &n);
-    for (it = 0; it < TRN_REFINE_MAX_ITER && inv4(acc->a, c->fit_h, bi); ++it) {
-        double step = 1.0;
-        solve(bi, acc->b, d);
-        for (h = 0; h < TRN_REFINE_HALVINGS; ++h) {
+            n_in += 1;
+            if (!trn_refine_spline_(c->g, p[0] + tx, p[1] + ty, &sp)) {
+                continue;
+            }
+            n_sp += 1;
+            jacobian(c, s3, tx, ty, jv);
+            acc_add(acc, jv, w, sp - s3[0]);
             for (q = 0; q < 4; ++q) {
-                tp[q] = shift[q] + step * d[q];
+                acc->al[q] += w * jv[q] * dcb;
             }
-            ss_t = model_pass(c, p, tp, model2, acc, &n_t);
-            if (n_t == n && ss_t < ss) {
-                break;
-            }
-            step *= 0.5;
+            acc->all += w * dcb * dcb;
+            acc->bl += w * dcb * (sp - s3[0]);
         }
-        if (h == TRN_REFINE_HALVINGS) {
-            break;
-        }
-        for (q = 0; q < 4; ++q) {
-            shift[q] = tp[q];
-        }
-        if (fabs(step * d[0]) < 1e-4 && fabs(step * d[1]) < 1e-4) {
-            break;
-        }
-        ss = ss_t; /* acc holds the step's normal equations (n_t == n) */
     }
-    for (q = 0; q < 4; ++q) {
-        shift[q] -= p[q];
+    if (n_sp < 8 || 2 * n_sp < n_in) {
+        return;
+    }
+    all = acc->all + pw;
+    for (i = 0; i < 4; ++i) {
+        for (j = i; j < 4; ++j) {
+            acc->a[sym4(i, j)] -= acc->al[i] * acc->al[j] / all;
+        }
+        acc->b[i] -= acc->al[i] * acc->bl / all;
+    }
+    if (inv4(acc->a, c->fit_h, inv)) {
+        solve(inv, acc->b, d);
     }
 }
 
@@ -449,14 +414,13 @@ static void set_fail(trn_refine_t *pos, trn_refine3_t *full, int32_t ix, int32_t
     pos->cov_cells[0] = pos->cov_cells[1] = (double)INFINITY;
     pos->cov_cells[2] = 0.0;
     pos->inflation = pos->ll_inflation = 1.0;
-    pos->interp_shift[0] = pos->interp_shift[1] = 0.0;
+    pos->spline_step[0] = pos->spline_step[1] = 0.0;
     pos->interp_mix = TRN_REFINE_MIX_MEAN;
-    pos->sys_weight = 0.0;
     pos->shoulders = 1.0;
     pos->ll = -(double)INFINITY;
     if (full != NULL) {
         full->heading_rad = th;
-        full->interp_shift_heading_rad = 0.0;
+        full->spline_step_heading_rad = 0.0;
         for (p = 0; p < 9; ++p) {
             full->cov3[p] = (p % 4 == 0) ? (double)INFINITY : 0.0;
         }
@@ -666,15 +630,12 @@ static double sandwich_qr(const double inv[16], const acc4_t *acc, int32_t q, in
 /* The covariance at the converged estimate p: the mix folded
  * out (the marginal of the four), inv meat inv with the cells' fitted
  * variances (steep_pass; inv x the gated reduced chi-square with
- * TRN_REFINE_STEEP 0), the block sandwich's inflation, and the
- * interpolants' shift's outer product times sys_weight = TRN_REFINE_SYS
- * where the misfit is beyond TRN_REFINE_SYS_TERM_Z sampling sds of the
- * noise's (else 0). 0 when the normal matrix
- * is singular or under half the points are inliers. */
+ * TRN_REFINE_STEEP 0) and the block sandwich's inflation. 0 when the
+ * normal matrix is singular or under half the points are inliers. */
 static int covariance(const rctx_t *c, const double p[5], double model2, acc4_t *acc,
                       double inv[16], double g[4], trn_refine_t *pos, trn_refine3_t *full)
 {
-    double f, sh[4], w;
+    double f;
 #if !TRN_REFINE_STEEP
     double chi2;
 #endif
@@ -690,9 +651,6 @@ static int covariance(const rctx_t *c, const double p[5], double model2, acc4_t 
 #if !TRN_REFINE_STEEP
     chi2 = trn_refine_excess_(pos->chi2_dof, sqrt(2.0 / (double)(acc->n_in - (c->fit_h ? 5 : 4))));
 #endif
-    /* the misfit test of the systematic term (at least 8 inliers) */
-    w = trn_refine_sys_weight_(acc->rr, acc->noise2, acc->vv);
-    /* acc is dead after w */
 #if TRN_REFINE_STEEP
     {
         double var[2];
@@ -730,21 +688,6 @@ static int covariance(const rctx_t *c, const double p[5], double model2, acc4_t 
     }
     for (q = 0; q < 3; ++q) {
         pos->cov_cells[q] *= f;
-    }
-    interp_shift(c, p, model2, acc, inv, sh);
-    for (q = 0; q < 3 && full != NULL; ++q) {
-        for (r = 0; r < 3; ++r) {
-            full->cov3[q * 3 + r] += w * sh[q] * sh[r];
-        }
-    }
-    pos->cov_cells[0] += w * sh[0] * sh[0];
-    pos->cov_cells[1] += w * sh[1] * sh[1];
-    pos->cov_cells[2] += w * sh[0] * sh[1];
-    pos->sys_weight = w;
-    pos->interp_shift[0] = sh[0];
-    pos->interp_shift[1] = sh[1];
-    if (full != NULL) {
-        full->interp_shift_heading_rad = sh[2];
     }
     return 1;
 }
@@ -815,8 +758,17 @@ static trn_status_t refine(const trn_grid_f32_t *global, const trn_grid_f32_t *l
     pos->model_m = sqrt(model2);
     pos->interp_mix = p[4];
     pos->ll = refined_ll(&c, p, model2);
-    if (full != NULL) {
-        full->heading_rad = p[2];
+    /* the spline step times the mix held to [0, 1]: none where the data
+     * say bilinear, the whole step where they say bicubic or smoother */
+    spline_step(&c, p, model2, &acc, inv, g);
+    {
+        const double lam = p[4] < 0.0 ? 0.0 : p[4] > 1.0 ? 1.0 : p[4];
+        pos->spline_step[0] = -lam * g[0];
+        pos->spline_step[1] = -lam * g[1];
+        if (full != NULL) {
+            full->heading_rad = p[2];
+            full->spline_step_heading_rad = -lam * g[2];
+        }
     }
     return TRN_OK;
 }

@@ -358,7 +358,7 @@ static void test_refine_turned(void **state)
         trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, 59, delta, 0.0, &rc, &o),
         TRN_OK);
     assert_true(o.heading_rad == delta && o.cov3[8] == 0.0 && o.cov3[2] == 0.0 &&
-                o.interp_shift_heading_rad == 0.0);
+                o.spline_step_heading_rad == 0.0);
     assert_true(fabs(o.pos.x - 60.3) < 0.2 && fabs(o.pos.y - 58.7) < 0.2);
 }
 
@@ -764,7 +764,7 @@ static void test_bad_refine(void **state)
         trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, 60, 0.0, 0.1, &rc, &o),
         TRN_E_ILLCOND);
     assert_true(o.pos.x == 60.0 && o.pos.y == 60.0 && isinf(o.cov3[0]) && isinf(o.cov3[8]));
-    assert_true(o.pos.interp_mix == TRN_REFINE_MIX_MEAN && o.pos.sys_weight == 0.0 &&
+    assert_true(o.pos.interp_mix == TRN_REFINE_MIX_MEAN && o.pos.spline_step[0] == 0.0 &&
                 isinf(o.pos.ll) && o.pos.ll < 0.0);
     /* a flat map: the normal matrix is singular */
     world_build(12, 1);
@@ -795,13 +795,14 @@ static void test_bad_localize(void **state)
         TRN_OK);
     assert_true(fabs(res.heading_rad - 2.0 * DEG) < 0.5 * DEG && res.loc.refined == 1);
     /* the refinement's details are the heading refinement's, every field set:
-     * the mix estimated within two prior sds, the systematic term's weight
-     * in [0, TRN_REFINE_SYS], the refined ln L */
-    assert_true(
-        fabs(res.loc.refinement.interp_mix - TRN_REFINE_MIX_MEAN) <= 2.0 * TRN_REFINE_MIX_SD &&
-        res.loc.refinement.sys_weight >= 0.0 && res.loc.refinement.sys_weight <= TRN_REFINE_SYS &&
-        isfinite(res.loc.refinement.ll) && res.loc.refinement.x == res.loc.x &&
-        res.loc.refinement.n_used > 0);
+     * the mix estimated within two prior sds, the refined ln L, the answer
+     * the refinement's estimate plus its spline step */
+    assert_true(fabs(res.loc.refinement.interp_mix - TRN_REFINE_MIX_MEAN) <=
+                    2.0 * TRN_REFINE_MIX_SD &&
+                isfinite(res.loc.refinement.ll) &&
+                res.loc.refinement.x + res.loc.refinement.spline_step[0] == res.loc.x &&
+                res.loc.refinement.y + res.loc.refinement.spline_step[1] == res.loc.y &&
+                res.loc.refinement.n_used > 0);
     /* the voxel function has no size for a height map; the _cfg one refuses */
     assert_int_equal(trn_localize_dem_heading_workspace_bytes(&g_w.map, LW, LW, MAXPTS, &win), 0u);
     assert_int_equal(

@@ -250,7 +250,8 @@ static void wedges(const trn_map_cfg_t *cfg, const trn_grid_f32_t *g, const char
         assert_true(fabs(res.x - tx) < 0.05 && fabs(res.y - ty) < 0.05);
         assert_true(fabs(res.refinement.dz_m + 37.5) < 0.01);
         assert_int_equal(res.refinement.n_seen, seen);
-        assert_true(res.x == res.refinement.x && res.y == res.refinement.y);
+        assert_true(res.x == res.refinement.x + res.refinement.spline_step[0] &&
+                    res.y == res.refinement.y + res.refinement.spline_step[1]);
         assert_true(res.failure_probability >= 0.0 && res.failure_probability < 0.01);
         check_cov(&res);
     }

@@ -311,8 +311,8 @@ static void test_shoulders_rough(void **state)
 {
     int widened;
     (void)state;
-    run(1, 12, 7, &widened);
-    printf("rough: %d axes of 24 widened by more than 10 %%\n", widened);
+    run(1, 36, 7, &widened);
+    printf("rough: %d axes of 72 widened by more than 10 %%\n", widened);
     assert_true(widened >= 1);
 }
 

@@ -52,14 +52,14 @@ typedef struct {
 
 /** Result of trn_refine_pose_heading. */
 typedef struct {
-    trn_refine_t pos;                /**< as trn_refine_pose: pose, dz, model error, cov_cells (the
-                              position block of cov3), chi2, inflation, interp_shift
-                              (x, y), sys_weight, interp_mix, ll (at the refined
+    trn_refine_t pos;               /**< as trn_refine_pose: pose, dz, model error, cov_cells (the
+                              position block of cov3), chi2, inflation, spline_step
+                              (x, y), interp_mix, ll (at the refined
                               heading), counts */
-    double heading_rad;              /**< refined heading (the start when held fixed) */
-    double cov3[9];                  /**< covariance of (x cells, y cells, heading rad), row-major;
+    double heading_rad;             /**< refined heading (the start when held fixed) */
+    double cov3[9];                 /**< covariance of (x cells, y cells, heading rad), row-major;
                               heading row and column 0 when held fixed */
-    double interp_shift_heading_rad; /**< heading part of the interpolants' shift */
+    double spline_step_heading_rad; /**< heading part of the spline step, rad */
 } trn_refine3_t;
 
 /**

@@ -25,10 +25,9 @@
  * by leverage-corrected moments; TRN_REFINE_STEEP), x the block-sandwich
  * inflation (TRN_REFINE_BLOCK), only where above 1 by more than
  * TRN_REFINE_SYS_Z of its sampling sds under the noise model (else 1),
- * plus sys_weight x the outer product
- * of the shift bilinear heights would cause (the interpolants'
- * disagreement), sys_weight = TRN_REFINE_SYS where the residuals show a
- * misfit beyond its sampling noise (TRN_REFINE_SYS_TERM_Z), else 0.
+ * Then the spline step: the estimate less the mix (held to [0, 1]) times
+ * the pose error the interpolant would make were the ground the map's
+ * interpolating cubic B-spline (trn_refine_t.spline_step).
  * docs/modules/refine.md.
  */
 #ifndef TRN_REFINE_H
@@ -54,19 +53,11 @@ extern "C" {
 /** Side of the blocks of local cells whose residuals are taken as
  *  correlated by the covariance (cluster-robust sandwich). */
 #define TRN_REFINE_BLOCK 4
-#ifndef TRN_REFINE_SYS
-/** Weight of the interpolants' disagreement in the covariance where the map
- *  misfits (trn_refine_t.sys_weight): the second moment, about one end, of
- *  a position spread evenly across the bracket the two interpolants' poses
- *  span, in units of its width squared (docs/method.md 9.5). */
-#define TRN_REFINE_SYS (1.0 / 3.0)
-#endif
 #ifndef TRN_REFINE_SYS_Z
 /** The covariance's block-sandwich ratio (trn_refine_t.inflation; and the
  *  reduced chi-square, built with TRN_REFINE_STEEP 0) count only where above
  *  1 by more than this many of their sampling standard deviations under the
- *  noise model (the systematic weight did too before 2026-12-05:
- *  TRN_REFINE_SYS_TERM_Z). */
+ *  noise model. */
 #define TRN_REFINE_SYS_Z 1.0
 #endif
 #ifndef TRN_REFINE_STEEP
@@ -74,16 +65,6 @@ extern "C" {
  *  beyond the model, sp2 fitted from the residuals (docs/method.md 9.5); 0
  *  leaves it out (the ablation's switch). */
 #define TRN_REFINE_STEEP 1
-#endif
-#ifndef TRN_REFINE_SYS_TERM_Z
-/** The misfit that weights the interpolants' disagreement counts only beyond
- *  this many sampling standard deviations of what the noise alone would
- *  give (sys_weight): with no misfit at all, the moment estimate of m^2 is
- *  positive in about a third of the cases (tests/test_refine.c). Two, not
- *  the factors' one: a false alarm here adds the whole disagreement, on a
- *  smooth DEM many times the statistical variance, where a factor's adds
- *  its ratio (docs/method.md 9, "The systematic term's test"). */
-#define TRN_REFINE_SYS_TERM_Z 2.0
 #endif
 /** The covariance's shoulders (trn_localize_dem's height matcher, x-y only;
  *  docs/method.md 9, "The shoulders"): along each axis of the refined (x, y)
@@ -109,8 +90,6 @@ extern "C" {
 /** Largest Gauss-Newton iterations of each of the refinement's two phases
  *  (the plain clip, then the relief rule: docs/method.md 9, "the clip"). */
 #define TRN_REFINE_MAX_ITER 12
-/** Step halvings tried per iteration of the interpolants' shift. */
-#define TRN_REFINE_HALVINGS 8
 
 /** Height-noise model of the local map: s(r) = noise_m + noise_k_per_m r^2. */
 typedef struct {
@@ -138,36 +117,35 @@ typedef struct {
 
 /** Result of trn_refine_pose. Pose in global cells (x = column, y = row). */
 typedef struct {
-    double x, y;            /**< refined pose of the local rover cell */
-    double dz_m;            /**< vertical offset local - global, metres */
-    double model_m;         /**< model error estimated beside the noise, metres */
-    double cov_cells[3];    /**< var_x, var_y, cov_xy in cells^2 */
-    double chi2_dof;        /**< reduced chi-square of the inliers (built with
+    double x, y;           /**< refined pose of the local rover cell */
+    double dz_m;           /**< vertical offset local - global, metres */
+    double model_m;        /**< model error estimated beside the noise, metres */
+    double cov_cells[3];   /**< var_x, var_y, cov_xy in cells^2 */
+    double chi2_dof;       /**< reduced chi-square of the inliers (built with
                                  TRN_REFINE_STEEP 0 the covariance takes it where beyond
                                  TRN_REFINE_SYS_Z sds, sqrt(2 / dof), of 1) */
-    double inflation;       /**< factor (>= 1) the block sandwich put on the model covariance:
+    double inflation;      /**< factor (>= 1) the block sandwich put on the model covariance:
                                  its larger position variance ratio where beyond
                                  TRN_REFINE_SYS_Z sampling sds of 1, else 1 */
-    double ll_inflation;    /**< the ratio ungated, against the model times max(1, chi2_dof)
+    double ll_inflation;   /**< the ratio ungated, against the model times max(1, chi2_dof)
                                  (>= 1; the factor before 2026-12-04): ln L's divisor in the
                                  failure probability (trn_localize_dem) */
-    double interp_shift[2]; /**< shift of (x, y) had the DEM been bilinear instead of
-                                 bicubic, cells; sys_weight times its outer product is
-                                 in the covariance */
-    double sys_weight;      /**< TRN_REFINE_SYS where the misfit is beyond TRN_REFINE_SYS_TERM_Z
-                                 sampling sds of the noise's, else 0 */
-    double shoulders;       /**< factor (>= 1) trn_localize_dem put on the (x, y)
+    double spline_step[2]; /**< the spline step applied to (x, y), cells: the mix held to
+                                 [0, 1] times minus the pose error the model's interpolant
+                                 makes where the ground runs as the map's interpolating
+                                 cubic B-spline (docs/method.md 9.4); 0 where not taken */
+    double shoulders;      /**< factor (>= 1) trn_localize_dem put on the (x, y)
                                  covariance along an axis where ln L's fall at
                                  TRN_SHOULDER_FAR_SD sds is flatter than at
                                  TRN_SHOULDER_NEAR_SD (the larger axis's); 1 from
                                  trn_refine_pose, over heading and where not applied */
-    double interp_mix;      /**< the estimated mix of the interpolants: 0 bilinear,
+    double interp_mix;     /**< the estimated mix of the interpolants: 0 bilinear,
                                  1 bicubic (beyond [0, 1]: sharper or smoother) */
-    double ll;              /**< trn_height_search's mixture ln L at the refined pose
+    double ll;             /**< trn_height_search's mixture ln L at the refined pose
                                  (the mixed interpolant; compares refinements) */
-    int32_t n_used;         /**< inlier points of the last iteration */
-    int32_t n_seen;         /**< seen local points with a global height under them */
-    int32_t iterations;     /**< Gauss-Newton steps taken, both phases */
+    int32_t n_used;        /**< inlier points of the last iteration */
+    int32_t n_seen;        /**< seen local points with a global height under them */
+    int32_t iterations;    /**< Gauss-Newton steps taken, both phases */
 } trn_refine_t;
 
 /**

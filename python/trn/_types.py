@@ -69,9 +69,8 @@ class _RefinementRequired(TypedDict):
     inflation: float
     ll_inflation: float
     interp_mix: float
-    sys_weight: float
     shoulders: float
-    interp_shift_cells: List[float]
+    spline_step_cells: List[float]
     points_used: int
     iterations: int
     log_likelihood: float

@@ -192,13 +192,13 @@ def expect_fix(label, want, *args, tol=0.03):
         if r.get("refined"):
             rf = r.get("refinement", {})
             check(all(k in rf for k in ("model_m", "chi2_dof", "inflation", "ll_inflation", "interp_mix",
-                                           "sys_weight", "interp_shift_cells", "points_used",
+                                           "spline_step_cells", "points_used",
                                            "log_likelihood")),
                   f"localize {label}: refinement fields {sorted(rf)}")
             check(rf.get("inflation", 0) >= 1 and rf.get("ll_inflation", 0) >= 1
                   and rf.get("points_used", 0) > 0
-                  and -1.5 <= rf.get("interp_mix", 9) <= 2.5 and 0 <= rf.get("sys_weight", -1) <= 1
-                  and len(rf.get("interp_shift_cells", [])) == 2, f"localize {label}: refinement {rf}")
+                  and -1.5 <= rf.get("interp_mix", 9) <= 2.5
+                  and len(rf.get("spline_step_cells", [])) == 2, f"localize {label}: refinement {rf}")
     return r
 
 

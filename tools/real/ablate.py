@@ -71,10 +71,13 @@ VARIANTS = {
         "the relief test (an answer whose local heights take a weaker copy of the map's relief misfits)",
         [("src/localize_heights.c", "        if (out->loc.relief_z < -TRN_RELIEF_Z) {",
           "        if (0 && out->loc.relief_z < -TRN_RELIEF_Z) {")], []),
-    "no_sys_term": (
-        "the systematic term (the interpolants' disagreement in the covariance)",
-        [("src/refine.c", "    return rr - noise2 - TRN_REFINE_SYS_TERM_Z * sqrt(vv) > 0.0 ? TRN_REFINE_SYS : 0.0;",
-          "    return rr - noise2 - TRN_REFINE_SYS_TERM_Z * sqrt(vv) > 0.0 ? 0.0 : 0.0;")], []),
+    "no_spline_step": (
+        "the spline step (the answer is the refinement's own estimate)",
+        [("src/localize_common.c", "    out->x = out->refinement.x + out->refinement.spline_step[0];\n"
+          "    out->y = out->refinement.y + out->refinement.spline_step[1];",
+          "    out->x = out->refinement.x;\n    out->y = out->refinement.y;"),
+         ("src/localize_heights.c", "    out->heading_rad = s->ref.heading_rad + s->ref.spline_step_heading_rad;",
+          "    out->heading_rad = s->ref.heading_rad;")], []),
     "no_clip_again": (
         "the search's repeated clip (one clipped pass only)",
         [("src/refine.c", "        for (again = 0; again <= TRN_CLIP_AGAIN; ++again) {\n            n = pose_fit(",

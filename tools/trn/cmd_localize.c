@@ -271,11 +271,10 @@ void cmd_localize_report_json(FILE *out, const cmd_localize_ctx_t *c, const char
         json_num(&j, "inflation", rf->inflation);
         json_num(&j, "ll_inflation", rf->ll_inflation);
         json_num(&j, "interp_mix", rf->interp_mix);
-        json_num(&j, "sys_weight", rf->sys_weight);
         json_num(&j, "shoulders", rf->shoulders);
-        json_arr(&j, "interp_shift_cells");
-        json_num(&j, NULL, rf->interp_shift[0]);
-        json_num(&j, NULL, rf->interp_shift[1]);
+        json_arr(&j, "spline_step_cells");
+        json_num(&j, NULL, rf->spline_step[0]);
+        json_num(&j, NULL, rf->spline_step[1]);
         json_arr_end(&j);
         json_int(&j, "points_used", (long long)rf->n_used);
         json_int(&j, "iterations", (long long)rf->iterations);
