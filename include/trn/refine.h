@@ -24,11 +24,11 @@
  * (the noise model's, a model variance and the steep cells' sp2 |grad|^2,
  * by leverage-corrected moments; TRN_REFINE_STEEP), x the block-sandwich
  * inflation (TRN_REFINE_BLOCK), only where above 1 by more than
- * TRN_REFINE_SYS_Z of its sampling sds under the noise model (else 1),
- * Then the spline step: the estimate less the mix (held to [0, 1]) times
- * the pose error the interpolant would make were the ground the map's
- * interpolating cubic B-spline (trn_refine_t.spline_step).
- * docs/modules/refine.md.
+ * TRN_REFINE_SYS_Z of its sampling sds under the noise model (else 1).
+ * Beside the estimate, the spline step (trn_refine_t.spline_step): minus
+ * the mix (held to [0, 1]) times the pose error the interpolant would make
+ * were the ground the map's interpolating cubic B-spline; trn_localize_dem
+ * adds it to its answer. docs/modules/refine.md.
  */
 #ifndef TRN_REFINE_H
 #define TRN_REFINE_H
