@@ -240,8 +240,7 @@ static double fold_mix(acc4_t *acc, double lam, double g[4])
 static void spline_step(const rctx_t *c, const double p[5], double model2, acc4_t *acc,
                         double inv[16], double d[4])
 {
-    const double pw = 1.0 / (TRN_REFINE_MIX_SD * TRN_REFINE_MIX_SD);
-    double cs, sn, all;
+    double cs, sn;
     int32_t i, j, q, n_in = 0, n_sp = 0;
     trn_heading_trig_(p[2], &cs, &sn);
     acc_clear(acc);
@@ -286,15 +285,15 @@ static void spline_step(const rctx_t *c, const double p[5], double model2, acc4_
     if (n_sp < 8 || 2 * n_sp < n_in) {
         return;
     }
-    all = acc->all + pw;
-    for (i = 0; i < 4; ++i) {
-        for (j = i; j < 4; ++j) {
-            acc->a[sym4(i, j)] -= acc->al[i] * acc->al[j] / all;
-        }
-        acc->b[i] -= acc->al[i] * acc->bl / all;
-    }
+    /* the mix folded out with its prior's information; taken at the prior's
+     * mean, the prior pulls nothing (d is scratch until the solve) */
+    (void)fold_mix(acc, TRN_REFINE_MIX_MEAN, d);
     if (inv4(acc->a, c->fit_h, inv)) {
         solve(inv, acc->b, d);
+    } else {
+        for (q = 0; q < 4; ++q) {
+            d[q] = 0.0;
+        }
     }
 }
 
