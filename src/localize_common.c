@@ -35,8 +35,11 @@ void trn_loc_take_refinement_(const trn_map_t *map, trn_loc_result_t *out)
     out->rho = out->cov_m2[2] / (out->sigma_x_m * out->sigma_y_m);
 }
 
-void trn_loc_refine_cfg_(const trn_map_t *map, const trn_loc_result_t *out, trn_refine_cfg_t *rc)
+void trn_loc_refine_cfg_(const trn_map_t *map, const trn_loc_result_t *out,
+                         const float *const centroid[2], trn_refine_cfg_t *rc)
 {
+    rc->centroid_x = centroid != NULL ? centroid[0] : NULL;
+    rc->centroid_y = centroid != NULL ? centroid[1] : NULL;
     rc->cell_m = map->cfg.terrain.cell_m;
     rc->noise_m = (float)((double)map->cfg.noise_m * out->noise_scale);
     rc->noise_k_per_m = (float)((double)map->cfg.noise_k_per_m * out->noise_scale);

@@ -133,7 +133,8 @@ trn_status_t trn_localize_dem_heading_checked_(const trn_map_t *map,
     }
     out->loc.noise_scale = 1.0;                /* the voxel path keeps the configured model */
     if (map->cfg.match == TRN_MATCH_HEIGHTS) { /* src/localize_heights.c */
-        return trn_loc_heights_(map, local_dem, rover_x, rover_y, win, cfg, ws, ws_bytes, out);
+        return trn_loc_heights_(map, local_dem, NULL, rover_x, rover_y, win, cfg, ws, ws_bytes,
+                                out);
     }
     return trn_localize_dem_heading_voxel_(map, local_dem, rover_x, rover_y, max_points, win, cfg,
                                            ws, ws_bytes, out);

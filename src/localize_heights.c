@@ -194,8 +194,8 @@ static void refine_starts(const trn_map_t *map, const trn_grid_f32_t *local, int
     const trn_height_best3_t *b = &s->best;
     const double *slice = s->grid + (size_t)(b->k + b->half_steps) * wx * wy;
     int32_t k;
-    s->found = trn_refine_pose_heading(&map->heights, local, rx, ry, b->x, b->y, heading, max_turn,
-                                       &s->rc, &s->ref) == TRN_OK;
+    s->found = trn_refine_run_(&map->heights, local, rx, ry, b->x, b->y, heading, max_turn, &s->rc,
+                               &s->ref.pos, &s->ref) == TRN_OK;
     for (k = 0; k < 9; ++k) {
         const int32_t sx = b->x + k % 3 - 1, sy = b->y + k / 3 - 1;
         if (k == 4 || sx < win->x0 || sx > win->x1 || sy < win->y0 || sy > win->y1 ||
@@ -203,8 +203,8 @@ static void refine_starts(const trn_map_t *map, const trn_grid_f32_t *local, int
               b->ll - TRN_REFINE_START_NATS)) {
             continue;
         }
-        if (trn_refine_pose_heading(&map->heights, local, rx, ry, sx, sy, heading, max_turn, &s->rc,
-                                    &s->cand) == TRN_OK &&
+        if (trn_refine_run_(&map->heights, local, rx, ry, sx, sy, heading, max_turn, &s->rc,
+                            &s->cand.pos, &s->cand) == TRN_OK &&
             (!s->found || s->cand.pos.ll > s->ref.pos.ll)) {
             s->ref = s->cand;
             s->found = 1;
@@ -264,10 +264,10 @@ static trn_status_t far_basins(const trn_map_t *map, const trn_grid_f32_t *local
     }
     for (k = 0; k < far->n; ++k) {
         int32_t ax, ay;
-        far->ok[k] = trn_refine_pose_heading(&map->heights, local, rx, ry, far->x[k], far->y[k],
-                                             heading + (double)(far->k[k] - b->half_steps - b->k) *
-                                                           b->step_rad,
-                                             max_turn, &s->rc, &s->cand) == TRN_OK;
+        far->ok[k] = trn_refine_run_(&map->heights, local, rx, ry, far->x[k], far->y[k],
+                                     heading +
+                                         (double)(far->k[k] - b->half_steps - b->k) * b->step_rad,
+                                     max_turn, &s->rc, &s->cand.pos, &s->cand) == TRN_OK;
         far->px[k] = s->cand.pos.x;
         far->py[k] = s->cand.pos.y;
         far->rll[k] = s->cand.pos.ll;
@@ -399,10 +399,10 @@ static double peak_failure(const trn_map_t *map, const trn_grid_f32_t *local, in
                                             s->ref.heading_rad, infl, lo, hi));
 }
 
-trn_status_t trn_loc_heights_(const trn_map_t *map, const trn_grid_f32_t *local, int32_t rover_x,
-                              int32_t rover_y, const trn_window_t *win,
-                              const trn_heading_cfg_t *cfg, void *ws, size_t ws_bytes,
-                              trn_heading_result_t *out)
+trn_status_t trn_loc_heights_(const trn_map_t *map, const trn_grid_f32_t *local,
+                              const float *const centroid[2], int32_t rover_x, int32_t rover_y,
+                              const trn_window_t *win, const trn_heading_cfg_t *cfg, void *ws,
+                              size_t ws_bytes, trn_heading_result_t *out)
 {
     trn_status_t st;
     lh_layout_t lay;
@@ -439,14 +439,14 @@ trn_status_t trn_loc_heights_(const trn_map_t *map, const trn_grid_f32_t *local,
      * (noise_auto); the refinement under the configured model, and once more
      * under the model rescaled if the residuals at the answer reject it
      * (docs/method.md 9.2) */
-    trn_loc_refine_cfg_(map, &out->loc, &s->rc);
+    trn_loc_refine_cfg_(map, &out->loc, centroid, &s->rc);
     if ((st = search(map, local, rover_x, rover_y, win, cfg, s)) != TRN_OK) {
         return st;
     }
     search_result(&s->best, win, cfg, out);
     refine_starts(map, local, rover_x, rover_y, win, out->heading_rad, max_turn, s);
     if (map->cfg.noise_auto != 0 && rescale_noise(map, local, rover_x, rover_y, s, out) != 0) {
-        trn_loc_refine_cfg_(map, &out->loc, &s->rc);
+        trn_loc_refine_cfg_(map, &out->loc, centroid, &s->rc);
         refine_starts(map, local, rover_x, rover_y, win, out->heading_rad, max_turn, s);
     }
     s->far.n = 0;

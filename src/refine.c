@@ -178,15 +178,15 @@ static int sample(const trn_grid_f32_t *g, double x, double y, double out[3])
  * eta(f + n) = sum over m = -1..2 of c_{n+m} beta3(f - m), f = x - floor(x),
  * c_k = sqrt(3) z^|k| (z = sqrt(3) - 2, the pole of the sampled B-spline's
  * inverse filter), normalised to sum 1, so that a constant is exact (the
- * taps cut eta where it is below 3e-5 of its peak). 0 where the taps leave
- * the axis. */
+ * taps cut eta where it is below 3e-5 of its peak). spline_axis gives k0
+ * and the four beta3 values (0 where the taps leave the axis), spline_tap
+ * tap t's weight before the normalisation. */
 #define TRN_SPLINE_HALF 8
 #define TRN_SPLINE_TAPS (2 * TRN_SPLINE_HALF)
-static int spline_weights(double x, int32_t n, int32_t *k0, double w[TRN_SPLINE_TAPS])
+static int spline_axis(double x, int32_t n, int32_t *k0, double b[4])
 {
-    const double z = -0.2679491924311227;
-    double b[4], c[TRN_SPLINE_HALF + 2], sum = 0.0, f, e;
-    int32_t t, m, fl;
+    double f, e;
+    int32_t fl;
     /* floor(x) by truncation: x is checked non-negative first (no libm call
      * on the deepest stack) */
     if (!(x >= (double)(TRN_SPLINE_HALF - 1) && x < (double)n - (double)(TRN_SPLINE_HALF))) {
@@ -200,46 +200,59 @@ static int spline_weights(double x, int32_t n, int32_t *k0, double w[TRN_SPLINE_
     b[1] = 2.0 / 3.0 - f * f + 0.5 * f * f * f;
     b[2] = 2.0 / 3.0 - e * e + 0.5 * e * e * e;
     b[3] = f * f * f / 6.0;
-    c[0] = 1.7320508075688772;
-    for (t = 1; t < TRN_SPLINE_HALF + 2; ++t) {
-        c[t] = c[t - 1] * z;
-    }
-    for (t = 0; t < TRN_SPLINE_TAPS; ++t) {
-        /* tap k0 + t is at offset a = t - (TRN_SPLINE_HALF - 1) from floor(x): eta(f - a) */
-        const int32_t a = t - (TRN_SPLINE_HALF - 1);
-        double v = 0.0;
-        for (m = 0; m < 4; ++m) {
-            const int32_t k = m - 1 - a;
-            v += c[k < 0 ? -k : k] * b[m];
-        }
-        w[t] = v;
-        sum += v;
-    }
-    for (t = 0; t < TRN_SPLINE_TAPS; ++t) {
-        w[t] /= sum;
-    }
     return 1;
+}
+
+static double spline_tap(const double b[4], int32_t t)
+{
+    static const double k_spline_c[TRN_SPLINE_HALF + 2] = {
+        1.7320508075688772,     -0.4641016151377547,     0.12435565298214114,
+        -0.033320996790809666,  0.008928334181097486,    -0.0023923399335802615,
+        0.000641025553223557,   -0.00017176227931396584, 4.602356403230609e-05,
+        -1.2331976815258487e-05}; /* sqrt(3) z^k */
+    /* tap k0 + t is at offset a = t - (TRN_SPLINE_HALF - 1) from floor(x): eta(f - a) */
+    const int32_t a = t - (TRN_SPLINE_HALF - 1);
+    double v = 0.0;
+    int32_t m;
+    for (m = 0; m < 4; ++m) {
+        const int32_t k = m - 1 - a;
+        v += k_spline_c[k < 0 ? -k : k] * b[m];
+    }
+    return v;
 }
 
 int trn_refine_spline_(const trn_grid_f32_t *g, double x, double y, double *h)
 {
-    double wx[TRN_SPLINE_TAPS], wy[TRN_SPLINE_TAPS], s = 0.0;
+    /* the x weights kept in float, the y weights one row at a time, the
+     * heights taken about the first tap's and the sum divided by the
+     * weights' own: a constant is exact, and the frame, which is on the
+     * deepest stack (the covariance's fit reads the spline under every
+     * cell), keeps 64 bytes of weights */
+    float wx[TRN_SPLINE_TAPS];
+    double bx[4], by[4], s = 0.0, sx = 0.0, sy = 0.0, ref;
     int32_t i0, j0, i, j;
-    if (!spline_weights(x, g->width, &i0, wx) || !spline_weights(y, g->height, &j0, wy)) {
+    if (!spline_axis(x, g->width, &i0, bx) || !spline_axis(y, g->height, &j0, by)) {
         return 0;
     }
+    for (i = 0; i < TRN_SPLINE_TAPS; ++i) {
+        wx[i] = (float)spline_tap(bx, i);
+        sx += (double)wx[i];
+    }
+    ref = (double)TRN_GRID_AT(g, i0, j0);
     for (j = 0; j < TRN_SPLINE_TAPS; ++j) {
+        const double wy = spline_tap(by, j);
         double r = 0.0;
         for (i = 0; i < TRN_SPLINE_TAPS; ++i) {
             const double v = (double)TRN_GRID_AT(g, i0 + i, j0 + j);
             if (!isfinite(v)) {
                 return 0;
             }
-            r += wx[i] * v;
+            r += (double)wx[i] * (v - ref);
         }
-        s += wy[j] * r;
+        s += wy * r;
+        sy += wy;
     }
-    *h = s;
+    *h = ref + s / (sx * sy);
     return 1;
 }
 
@@ -259,6 +272,24 @@ static double local_spread(const trn_grid_f32_t *local, int32_t *n_seen);
 /* The checks trn_height_search and the refinements share: the grids, the
  * noise model and the rover cell (each caller checks its own inlier
  * probability). */
+int trn_refine_centroids_ok_(const trn_grid_f32_t *local, const float *cx, const float *cy)
+{
+    int32_t i, j;
+    if (cx == NULL || cy == NULL) {
+        return cx == cy;
+    }
+    for (j = 0; j < local->height; ++j) {
+        for (i = 0; i < local->width; ++i) {
+            const size_t k = (size_t)j * (size_t)local->stride + (size_t)i;
+            if (isfinite(local->data[k]) && !(fabsf(cx[k]) <= (float)TRN_CENTROID_MAX &&
+                                              fabsf(cy[k]) <= (float)TRN_CENTROID_MAX)) {
+                return 0;
+            }
+        }
+    }
+    return 1;
+}
+
 static trn_status_t common_args(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
                                 int32_t rover_x, int32_t rover_y, const trn_refine_cfg_t *cfg)
 {
@@ -269,6 +300,9 @@ static trn_status_t common_args(const trn_grid_f32_t *global, const trn_grid_f32
     if ((st = trn_grid_f32_check(global)) != TRN_OK || (st = trn_grid_f32_check(local)) != TRN_OK) {
         return st;
     }
+    if ((cfg->centroid_x == NULL) != (cfg->centroid_y == NULL)) {
+        return TRN_E_NULL;
+    }
     if (!(cfg->cell_m > 0.0f && cfg->cell_m <= 1000.0f) ||
         !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
         !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f) ||
@@ -277,7 +311,7 @@ static trn_status_t common_args(const trn_grid_f32_t *global, const trn_grid_f32
         rover_y > local->height - 1 + TRN_MAX_DIM) {
         return TRN_E_ARG;
     }
-    return TRN_OK;
+    return trn_refine_centroids_ok_(local, cfg->centroid_x, cfg->centroid_y) ? TRN_OK : TRN_E_ARG;
 }
 
 /* One pass of trn_refine_noise_scale at variance factor k2 and model
@@ -292,13 +326,15 @@ static int32_t noise_pass(const trn_grid_f32_t *global, const trn_grid_f32_t *lo
     n[0] = n[1] = n[2] = n[3] = n[4] = 0.0;
     for (j = 0; j < local->height; ++j) {
         for (i = 0; i < local->width; ++i) {
-            double h = (double)TRN_GRID_AT(local, i, j), s3[3], dcb, s2, v, r2, q;
-            const double ox = (double)(i - rx), oy = (double)(j - ry);
+            double h = (double)TRN_GRID_AT(local, i, j), s3[3], dcb, s2, v, r2, q, o[2];
+            if (!isfinite(h)) {
+                continue;
+            }
+            trn_refine_offset_(cfg, local, i, j, rx, ry, o);
             /* the offset turned by the heading, as trn_refine_pose_heading's */
-            if (!isfinite(h) ||
-                !trn_refine_sample_mix_(global, at->x + ox * cs_sn[0] + oy * cs_sn[1],
-                                        at->y - ox * cs_sn[1] + oy * cs_sn[0], at->interp_mix, s3,
-                                        &dcb)) {
+            if (!trn_refine_sample_mix_(global, at->x + o[0] * cs_sn[0] + o[1] * cs_sn[1],
+                                        at->y - o[0] * cs_sn[1] + o[1] * cs_sn[0], at->interp_mix,
+                                        s3, &dcb)) {
                 continue;
             }
             s2 = trn_refine_noise_var_(cfg, i, j, rx, ry);
@@ -329,15 +365,18 @@ static double resid_in_clip(const trn_grid_f32_t *global, const trn_grid_f32_t *
                             const trn_refine_cfg_t *cfg, double k2, double m2, int32_t i, int32_t j,
                             double *s2)
 {
-    double h, s3[3], dcb, r;
-    const double ox = (double)(i - rx), oy = (double)(j - ry);
+    double h, s3[3], dcb, r, o[2];
     if (i >= local->width || j >= local->height) {
         return (double)NAN;
     }
     h = (double)TRN_GRID_AT(local, i, j);
-    if (!isfinite(h) ||
-        !trn_refine_sample_mix_(global, at->x + ox * cs_sn[0] + oy * cs_sn[1],
-                                at->y - ox * cs_sn[1] + oy * cs_sn[0], at->interp_mix, s3, &dcb)) {
+    if (!isfinite(h)) {
+        return (double)NAN;
+    }
+    trn_refine_offset_(cfg, local, i, j, rx, ry, o);
+    if (!trn_refine_sample_mix_(global, at->x + o[0] * cs_sn[0] + o[1] * cs_sn[1],
+                                at->y - o[0] * cs_sn[1] + o[1] * cs_sn[0], at->interp_mix, s3,
+                                &dcb)) {
         return (double)NAN;
     }
     r = h - at->dz_m - s3[0];
@@ -444,12 +483,15 @@ static int32_t relief_pass(const trn_grid_f32_t *global, const trn_grid_f32_t *l
     for (j = 0; j < local->height; ++j) {
         for (i = 0; i < local->width; ++i) {
             const double h = (double)TRN_GRID_AT(local, i, j);
-            const double ox = (double)(i - rx), oy = (double)(j - ry);
+            double s3[3], b3[3], s2, r, w, x[4], o[2], gx, gy;
+            if (!isfinite(h)) {
+                continue;
+            }
+            trn_refine_offset_(cfg, local, i, j, rx, ry, o);
             /* the offset turned by the heading, as trn_refine_pose_heading's */
-            const double gx = at->x + ox * cs_sn[0] + oy * cs_sn[1];
-            const double gy = at->y - ox * cs_sn[1] + oy * cs_sn[0];
-            double s3[3], b3[3], s2, r, w, x[4];
-            if (!isfinite(h) || !trn_refine_sample_bilinear_(global, gx, gy, b3)) {
+            gx = at->x + o[0] * cs_sn[0] + o[1] * cs_sn[1];
+            gy = at->y - o[0] * cs_sn[1] + o[1] * cs_sn[0];
+            if (!trn_refine_sample_bilinear_(global, gx, gy, b3)) {
                 continue;
             }
             /* the model's mixed height (trn_refine_sample_mix_'s, from the
@@ -465,8 +507,8 @@ static int32_t relief_pass(const trn_grid_f32_t *global, const trn_grid_f32_t *l
             }
             w = 1.0 / (s2 + m2);
             x[0] = 1.0;
-            x[1] = ox;
-            x[2] = oy;
+            x[1] = o[0];
+            x[2] = o[1];
             x[3] = b3[0] - ref;
             for (p = 0; p < 4; ++p) {
                 v[p] += w * x[p] * (h - at->dz_m - ref);

@@ -82,10 +82,46 @@ static inline double trn_refine_noise_var_(const trn_refine_cfg_t *cfg, int32_t 
     return sd * sd;
 }
 
+/* Local cell (i, j)'s offset from the rover's cell (rx, ry), cells, into
+ * o[0] (east) and o[1] (south): the cell's centre, plus where the
+ * configuration gives them (trn_refine_cfg_t.centroid_x, centroid_y) the
+ * centroid of what the cell's height was measured from. The one copy for
+ * every refinement pass that reads the model under a local cell (inline:
+ * they call it for every cell). */
+static inline void trn_refine_offset_(const trn_refine_cfg_t *cfg, const trn_grid_f32_t *l,
+                                      int32_t i, int32_t j, int32_t rx, int32_t ry, double o[2])
+{
+    o[0] = (double)(i - rx);
+    o[1] = (double)(j - ry);
+    if (cfg->centroid_x != NULL) {
+        const size_t k = (size_t)j * (size_t)l->stride + (size_t)i;
+        o[0] += (double)cfg->centroid_x[k];
+        o[1] += (double)cfg->centroid_y[k];
+    }
+}
+
+/* 1 if cx and cy are both NULL, or both given and every seen cell of local
+ * (a finite height) has a finite centroid within TRN_CENTROID_MAX of its
+ * centre in each (the local grid's layout); 0 otherwise. */
+int trn_refine_centroids_ok_(const trn_grid_f32_t *local, const float *cx, const float *cy);
+
+/* trn_refine_pose_heading without its argument checks (out's pos into pos,
+ * the rest into full; full NULL holds the heading: trn_refine_pose): for
+ * the localizations, whose grids, noise model, centroids and rover cell
+ * are checked once at their entry, so that no check scans the local map
+ * again at every start and no wrapper's frame sits on the deepest stack
+ * (src/refine_pose.c). */
+trn_status_t trn_refine_run_(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
+                             int32_t rover_x, int32_t rover_y, int32_t ix, int32_t iy,
+                             double heading_rad, double max_turn_rad, const trn_refine_cfg_t *cfg,
+                             trn_refine_t *pos, trn_refine3_t *full);
+
 /* The argument checks of trn_refine_pose and trn_refine_pose_heading (the
- * latter adds its heading's): TRN_E_NULL (global, local, cfg, out), the
- * grids' status, TRN_E_ARG (cfg out of range or NaN, the rover cell
- * farther than TRN_MAX_DIM from the local grid); TRN_OK. */
+ * latter adds its heading's): TRN_E_NULL (global, local, cfg, out, one
+ * centroid pointer without the other), the grids' status, TRN_E_ARG (cfg
+ * out of range or NaN, a seen cell's centroid not finite or beyond
+ * TRN_CENTROID_MAX, the rover cell farther than TRN_MAX_DIM from the local
+ * grid); TRN_OK. */
 trn_status_t trn_refine_args_(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
                               int32_t rover_x, int32_t rover_y, const trn_refine_cfg_t *cfg,
                               const void *out);

@@ -92,14 +92,15 @@ static void accumulate(const rctx_t *c, const double pose[5], double clip, doubl
     for (j = j0; j < j1; ++j) {
         for (i = i0; i < i1; ++i) {
             double h = (double)TRN_GRID_AT(c->l, i, j), s3[3], ox, oy, tx, ty, v, sd, res, u, qw,
-                   hw;
+                   hw, o[2];
             double jv[4], dcb, w;
             int32_t p;
             if (!isfinite(h)) {
                 continue;
             }
-            ox = (double)(i - c->rx);
-            oy = (double)(j - c->ry);
+            trn_refine_offset_(c->cfg, c->l, i, j, c->rx, c->ry, o);
+            ox = o[0];
+            oy = o[1];
             tx = ox * cs + oy * sn;
             ty = -ox * sn + oy * cs;
             if (!trn_refine_sample_mix_(c->g, pose[0] + tx, pose[1] + ty, pose[4], s3, &dcb)) {
@@ -249,13 +250,14 @@ static void spline_step(const rctx_t *c, const double p[5], double model2, acc4_
     }
     for (j = 0; j < c->l->height; ++j) {
         for (i = 0; i < c->l->width; ++i) {
-            double h = (double)TRN_GRID_AT(c->l, i, j), s3[3], ox, oy, tx, ty, v, w, sp, dcb;
+            double h = (double)TRN_GRID_AT(c->l, i, j), s3[3], ox, oy, tx, ty, v, w, sp, dcb, o[2];
             double jv[4];
             if (!isfinite(h)) {
                 continue;
             }
-            ox = (double)(i - c->rx);
-            oy = (double)(j - c->ry);
+            trn_refine_offset_(c->cfg, c->l, i, j, c->rx, c->ry, o);
+            ox = o[0];
+            oy = o[1];
             tx = ox * cs + oy * sn;
             ty = -ox * sn + oy * cs;
             if (!trn_refine_sample_mix_(c->g, p[0] + tx, p[1] + ty, p[4], s3, &dcb)) {
@@ -385,12 +387,13 @@ static double refined_ll(const rctx_t *c, const double p[5], double model2)
     trn_heading_trig_(p[2], &cs, &sn);
     for (j = 0; j < c->l->height; ++j) {
         for (i = 0; i < c->l->width; ++i) {
-            double h = (double)TRN_GRID_AT(c->l, i, j), s3[3], dcb, ox, oy, v, u;
+            double h = (double)TRN_GRID_AT(c->l, i, j), s3[3], dcb, ox, oy, v, u, o[2];
             if (!isfinite(h)) {
                 continue;
             }
-            ox = (double)(i - c->rx);
-            oy = (double)(j - c->ry);
+            trn_refine_offset_(c->cfg, c->l, i, j, c->rx, c->ry, o);
+            ox = o[0];
+            oy = o[1];
             if (!trn_refine_sample_mix_(c->g, p[0] + ox * cs + oy * sn, p[1] - ox * sn + oy * cs,
                                         p[4], s3, &dcb)) {
                 ll += lout;
@@ -535,11 +538,21 @@ static int iterate(const rctx_t *c, double x0, double y0, double th0, double max
  * steep cells are also those the pose leans on). var = (m^2, sp2): the
  * meat sum w^2 (s^2 + m^2 + sp2 |grad|^2) Jt Jt^T over the inliers into
  * acc->a (Jt the Jacobian with the mix profiled out, J - g dcb; w the
- * refinement's weight), so the covariance is inv meat inv. acc is the
+ * refinement's weight), so the covariance is inv meat inv. The moments
+ * are those of the surface that fits the cells better: the model's
+ * residual r, or the answer's, the answer being p plus the spline step
+ * (lam sd, lam the mix held to [0, 1]) and its surface the model plus lam
+ * (S - M), so r - lam (S - M - J . sd) (J . sd the part of S - M the step
+ * moves the pose by; a cell without the spline keeps r). Where the step
+ * removes an error the model's residuals still hold it; where the ground
+ * is the bilinear surface and the mix small but not 0, the answer's
+ * surface misfits. The smaller weighted sum of y is taken (docs/method.md
+ * 9.5; the answer's sums in b[0], b[1], free in this pass). acc is the
  * caller's (dead by now). */
 static void steep_pass(const rctx_t *c, const double p[5], double model2, const double inv[16],
-                       const double g[4], const double *var, acc4_t *acc)
+                       const double g[4], const double sd[4], const double *var, acc4_t *acc)
 {
+    const double lam = p[4] < 0.0 ? 0.0 : p[4] > 1.0 ? 1.0 : p[4];
     double cs, sn;
     int32_t i, j, a, b;
     acc_clear(acc);
@@ -547,12 +560,13 @@ static void steep_pass(const rctx_t *c, const double p[5], double model2, const 
     for (j = 0; j < c->l->height; ++j) {
         for (i = 0; i < c->l->width; ++i) {
             double h = (double)TRN_GRID_AT(c->l, i, j), s3[3], tx, ty, s2, res, hw, jt[4], dcb, w,
-                   lev = 0.0, gg;
+                   lev = 0.0, gg, o[2], sp;
             if (!isfinite(h)) {
                 continue;
             }
-            tx = (double)(i - c->rx) * cs + (double)(j - c->ry) * sn;
-            ty = -(double)(i - c->rx) * sn + (double)(j - c->ry) * cs;
+            trn_refine_offset_(c->cfg, c->l, i, j, c->rx, c->ry, o);
+            tx = o[0] * cs + o[1] * sn;
+            ty = -o[0] * sn + o[1] * cs;
             if (!trn_refine_sample_mix_(c->g, p[0] + tx, p[1] + ty, p[4], s3, &dcb)) {
                 continue;
             }
@@ -587,8 +601,22 @@ static void steep_pass(const rctx_t *c, const double p[5], double model2, const 
                 acc->vv += q * gg * gg;
                 acc->rr += q * y;
                 acc->ss += q * gg * y;
+                /* the answer's residual */
+                if (lam > 0.0 && trn_refine_spline_(c->g, p[0] + tx, p[1] + ty, &sp)) {
+                    jacobian(c, s3, tx, ty, jt);
+                    res -= lam *
+                           (sp - s3[0] - (jt[0] * sd[0] + jt[1] * sd[1] + jt[2] * sd[2] + sd[3]));
+                }
+                sp = res * res / (1.0 - lev) - s2;
+                acc->b[0] += q * sp;
+                acc->b[1] += q * gg * sp;
             }
         }
+    }
+    if (var == NULL && acc->b[0] < acc->rr) {
+        /* the answer's surface fits the cells better than the model's */
+        acc->rr = acc->b[0];
+        acc->ss = acc->b[1];
     }
 }
 
@@ -631,14 +659,18 @@ static double sandwich_qr(const double inv[16], const acc4_t *acc, int32_t q, in
  * variances (steep_pass; inv x the gated reduced chi-square with
  * TRN_REFINE_STEEP 0) and the block sandwich's inflation. 0 when the
  * normal matrix is singular or under half the points are inliers. */
-static int covariance(const rctx_t *c, const double p[5], double model2, acc4_t *acc,
-                      double inv[16], double g[4], trn_refine_t *pos, trn_refine3_t *full)
+static int covariance(const rctx_t *c, const double p[5], double model2, const double sd[4],
+                      acc4_t *acc, double inv[16], double g[4], trn_refine_t *pos,
+                      trn_refine3_t *full)
 {
     double f;
 #if !TRN_REFINE_STEEP
     double chi2;
 #endif
     int32_t q, r;
+#if !TRN_REFINE_STEEP
+    (void)sd; /* the answer's residuals feed the steep cells' fit only */
+#endif
     accumulate_all(c, p, TRN_REFINE_CLIP_RELIEF, model2, acc);
     (void)fold_mix(acc, p[4], g);
     pos->n_used = acc->n_in;
@@ -653,9 +685,9 @@ static int covariance(const rctx_t *c, const double p[5], double model2, acc4_t 
 #if TRN_REFINE_STEEP
     {
         double var[2];
-        steep_pass(c, p, model2, inv, g, NULL, acc);
+        steep_pass(c, p, model2, inv, g, sd, NULL, acc);
         steep_fit(acc, var);
-        steep_pass(c, p, model2, inv, g, var, acc);
+        steep_pass(c, p, model2, inv, g, sd, var, acc);
     }
 #endif
     /* the model's covariance into the outputs, then the sandwich's factor
@@ -709,16 +741,17 @@ static void ctx_level(rctx_t *c, const trn_grid_f32_t *global, const trn_grid_f3
  * full (whose pos is pos) the heading, cov3 and the heading's part of the
  * shift; full NULL with the heading held (trn_refine_pose). No struct of
  * outputs is built on the way: the (x, y) path is the deepest stack of
- * trn_localize_dem. */
-static trn_status_t refine(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
-                           int32_t rover_x, int32_t rover_y, int32_t ix, int32_t iy,
-                           double heading_rad, double max_turn_rad, const trn_refine_cfg_t *cfg,
-                           trn_refine_t *pos, trn_refine3_t *full)
+ * trn_localize_dem, whose refinements call it directly (refine_int.h). */
+trn_status_t trn_refine_run_(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
+                             int32_t rover_x, int32_t rover_y, int32_t ix, int32_t iy,
+                             double heading_rad, double max_turn_rad, const trn_refine_cfg_t *cfg,
+                             trn_refine_t *pos, trn_refine3_t *full)
 {
     rctx_t c;
     acc4_t acc;
-    double p[5], model2 = 0.0, inv[16], g[4];
+    double p[5], model2 = 0.0, inv[16], g[4], sd[4] = {0.0, 0.0, 0.0, 0.0};
     int32_t q;
+    int ok;
 
     if (!(fabs(heading_rad) <= TRN_HEADING_MAX_WINDOW_RAD) ||
         !(max_turn_rad >= 0.0 && max_turn_rad <= TRN_HEADING_MAX_WINDOW_RAD)) {
@@ -743,9 +776,14 @@ static trn_status_t refine(const trn_grid_f32_t *global, const trn_grid_f32_t *l
     if (pos->n_seen < 8) {
         return TRN_E_NODATA;
     }
-    if (!iterate(&c, (double)ix, (double)iy, heading_rad, max_turn_rad, p, &model2, &acc, inv, g,
-                 pos) ||
-        !covariance(&c, p, model2, &acc, inv, g, pos, full)) {
+    ok = iterate(&c, (double)ix, (double)iy, heading_rad, max_turn_rad, p, &model2, &acc, inv, g,
+                 pos);
+    /* the spline step first: the covariance's variances may be the
+     * residuals of the answer it makes */
+    if (ok) {
+        spline_step(&c, p, model2, &acc, inv, sd);
+    }
+    if (!ok || !covariance(&c, p, model2, sd, &acc, inv, g, pos, full)) {
         q = pos->n_used;
         set_fail(pos, full, ix, iy, heading_rad);
         pos->n_used = q;
@@ -759,14 +797,13 @@ static trn_status_t refine(const trn_grid_f32_t *global, const trn_grid_f32_t *l
     pos->ll = refined_ll(&c, p, model2);
     /* the spline step times the mix held to [0, 1]: none where the data
      * say bilinear, the whole step where they say bicubic or smoother */
-    spline_step(&c, p, model2, &acc, inv, g);
     {
         const double lam = p[4] < 0.0 ? 0.0 : p[4] > 1.0 ? 1.0 : p[4];
-        pos->spline_step[0] = -lam * g[0];
-        pos->spline_step[1] = -lam * g[1];
+        pos->spline_step[0] = -lam * sd[0];
+        pos->spline_step[1] = -lam * sd[1];
         if (full != NULL) {
             full->heading_rad = p[2];
-            full->spline_step_heading_rad = -lam * g[2];
+            full->spline_step_heading_rad = -lam * sd[2];
         }
     }
     return TRN_OK;
@@ -781,8 +818,8 @@ trn_status_t trn_refine_pose_heading(const trn_grid_f32_t *global, const trn_gri
     if ((st = trn_refine_args_(global, local, rover_x, rover_y, cfg, out)) != TRN_OK) {
         return st;
     }
-    return refine(global, local, rover_x, rover_y, ix, iy, heading_rad, max_turn_rad, cfg,
-                  &out->pos, out);
+    return trn_refine_run_(global, local, rover_x, rover_y, ix, iy, heading_rad, max_turn_rad, cfg,
+                           &out->pos, out);
 }
 
 /* The same refinement with the heading held at 0: one path. */
@@ -795,7 +832,7 @@ trn_status_t trn_refine_pose(const trn_grid_f32_t *global, const trn_grid_f32_t 
     if ((st = trn_refine_args_(global, local, rover_x, rover_y, cfg, out)) != TRN_OK) {
         return st;
     }
-    return refine(global, local, rover_x, rover_y, ix, iy, 0.0, 0.0, cfg, out, NULL);
+    return trn_refine_run_(global, local, rover_x, rover_y, ix, iy, 0.0, 0.0, cfg, out, NULL);
 }
 
 /* ln L on the line through (px, py) across the valley: the pose (px, py) +

@@ -139,6 +139,8 @@ static trn_refine_cfg_t rcfg(void)
     r.noise_k_per_m = g_w.cfg.noise_k_per_m;
     r.inlier_prob = g_w.cfg.inlier_prob;
     r.fit_noise = g_w.cfg.noise_auto;
+    r.centroid_x = NULL; /* the cells' centres */
+    r.centroid_y = NULL;
     return r;
 }
 

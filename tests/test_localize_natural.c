@@ -128,6 +128,10 @@ typedef struct {
     size_t wb;
 } nat_t;
 
+/* Zero centroids: the cells' centres (trn_localize_dem_centroids gives
+ * trn_localize_dem's answer and status). */
+static const float g_zero_c[LW * LW];
+
 static void nat_build(nat_t *w, const trn_map_cfg_t *cfg, const trn_grid_f32_t *g)
 {
     size_t mb = trn_map_bytes(cfg, g->width, g->height);
@@ -809,6 +813,9 @@ static void test_refine_failure_is_illcond(void **state)
         assert_int_equal(nat_localize(&w, &l, LR, LR, &win, &a), TRN_E_ILLCOND);
         assert_int_equal(a.refined, 0);
         assert_true(isinf(a.refinement.cov_cells[0]));
+        assert_int_equal(trn_localize_dem_centroids(&w.map, &l, g_zero_c, g_zero_c, LR, LR, MAXPTS,
+                                                    &win, w.ws, w.wb, &a),
+                         TRN_E_ILLCOND);
     }
     nat_free(&w);
 }
@@ -944,6 +951,9 @@ static void test_ambiguous_acceptance(void **state)
     assert_true(cfg.max_failure_prob == (float)TRN_MAP_MAX_FAILURE_PROB_AUTO);
     nat_build(&w, &cfg, &g);
     assert_int_equal(nat_localize(&w, &l, LR, LR, &win, &amb), TRN_E_AMBIGUOUS);
+    assert_int_equal(trn_localize_dem_centroids(&w.map, &l, g_zero_c, g_zero_c, LR, LR, MAXPTS,
+                                                &win, w.ws, w.wb, &amb),
+                     TRN_E_AMBIGUOUS);
     nat_free(&w);
     printf("periodic DEM: answer (%.3f, %.3f), failure probability %.3f\n", amb.x, amb.y,
            amb.failure_probability);
@@ -1633,12 +1643,131 @@ static void test_localize_dem_statuses(void **state)
     assert_int_equal(trn_localize_dem(&w.map, &l, LR, LR, MAXPTS, &win, ws, wb - 1u, &res),
                      TRN_E_WORKSPACE);
     assert_int_equal(trn_localize_dem(&w.map, &l, LR, LR, 10, &win, ws, wb, &res), TRN_E_CAPACITY);
+    /* the same through trn_localize_dem_centroids (zero centroids: the centres) */
+    assert_int_equal(trn_localize_dem_centroids(&w.map, &big, g_zero_c, g_zero_c, LR, LR, MAXPTS,
+                                                &win, ws, wb, &res),
+                     TRN_E_SIZE);
+    assert_int_equal(trn_localize_dem_centroids(&w.map, &l, g_zero_c, g_zero_c, LR, LR, MAXPTS,
+                                                &off, ws, wb, &res),
+                     TRN_E_RANGE);
+    assert_int_equal(trn_localize_dem_centroids(&w.map, &l, g_zero_c, g_zero_c, LR, LR, MAXPTS,
+                                                &win, ws, wb - 1u, &res),
+                     TRN_E_WORKSPACE);
+    assert_int_equal(
+        trn_localize_dem_centroids(&w.map, &l, g_zero_c, g_zero_c, LR, LR, 10, &win, ws, wb, &res),
+        TRN_E_CAPACITY);
+    assert_int_equal(trn_localize_dem_centroids(&w.map, &l, g_zero_c, g_zero_c, LR, LR, MAXPTS,
+                                                &win, ws, wb, &res),
+                     TRN_OK);
     for (i = 0; i < LW * LW; ++i) {
         l_data[i] = NAN;
     }
     assert_int_equal(trn_localize_dem(&w.map, &l, LR, LR, MAXPTS, &win, ws, wb, &res),
                      TRN_E_NODATA);
+    assert_int_equal(trn_localize_dem_centroids(&w.map, &l, g_zero_c, g_zero_c, LR, LR, MAXPTS,
+                                                &win, ws, wb, &res),
+                     TRN_E_NODATA);
     /* TRN_E_ILLCOND: test_refine_failure_is_illcond */
+    nat_free(&w);
+}
+
+/* A binned local map: the wedge of make_wedge with each seen cell the
+ * analytic ground at its points' centroid, a common (0.25, -0.15) cells
+ * plus up to 0.1 more per cell; cx, cy those centroids. */
+static void make_binned(trn_grid_f32_t *l, float *cx, float *cy, double tx, double ty, trn_rng_t *r)
+{
+    int i;
+    (void)make_wedge(l, tx, ty, 3.0, 0.4);
+    for (i = 0; i < LW * LW; ++i) {
+        cx[i] = (float)(0.25 + 0.2 * (trn_rng_unit(r) - 0.5));
+        cy[i] = (float)(-0.15 + 0.2 * (trn_rng_unit(r) - 0.5));
+        if (isfinite(l_data[i])) {
+            l_data[i] = (float)(surface(tx + (i % LW) - LR + cx[i], ty + (i / LW) - LR + cy[i]) +
+                                3.0);
+        } else {
+            cx[i] = cy[i] = NAN; /* unseen: not read */
+        }
+    }
+}
+
+/* trn_localize_dem_centroids: on a binned local map the answer given the
+ * centroids is the truth's within the interpolant's error, where without
+ * them it is moved by their common offset (0.29 cells), on both matchers
+ * (the voxel matcher's refinement reads them too); zero centroids are
+ * trn_localize_dem's answer bit for bit; and its argument checks. */
+static void test_localize_dem_centroids(void **state)
+{
+    static float cx[LW * LW], cy[LW * LW], zero[LW * LW];
+    trn_grid_f32_t g, l;
+    trn_map_cfg_t cfg;
+    nat_t w;
+    trn_loc_result_t with, without, a, b;
+    trn_window_t win = window_at(48, 47, 3);
+    trn_rng_t r;
+    double sh, e_with[2] = {0.0, 0.0}, e_without[2] = {1.0, 1.0};
+    int m, k;
+    (void)state;
+    trn_rng_seed(&r, 31);
+    make_global(&g);
+    for (m = 0; m < 2; ++m) { /* the height matcher, then the voxel matcher refined */
+        if (m == 0) {
+            auto_cfg(&cfg, &g, &sh);
+            assert_int_equal(cfg.match, TRN_MATCH_HEIGHTS);
+        } else {
+            voxel_cfg(&cfg, &g, &sh);
+        }
+        nat_build(&w, &cfg, &g);
+        for (k = 0; k < 4; ++k) {
+            const double tx = 47.6 + 0.25 * k, ty = 47.3 + 0.2 * k;
+            make_binned(&l, cx, cy, tx, ty, &r);
+            (void)nat_localize(&w, &l, LR, LR, &win, &a); /* sizes the workspace */
+            assert_int_equal(trn_localize_dem_centroids(&w.map, &l, cx, cy, LR, LR, MAXPTS, &win,
+                                                        w.ws, w.wb, &with),
+                             TRN_OK);
+            assert_int_equal(
+                trn_localize_dem(&w.map, &l, LR, LR, MAXPTS, &win, w.ws, w.wb, &without), TRN_OK);
+            e_with[m] = fmax(e_with[m], hypot(with.x - tx, with.y - ty));
+            e_without[m] = fmin(e_without[m], hypot(without.x - tx, without.y - ty));
+        }
+        printf("centroids (%s): worst error %.4f cells given them, least %.4f without\n",
+               m == 0 ? "heights" : "voxel, refined", e_with[m], e_without[m]);
+        assert_true(e_with[m] < 0.05);
+        assert_true(e_without[m] > 0.2);
+        nat_free(&w);
+    }
+    /* zero centroids: trn_localize_dem's answer, bit for bit */
+    auto_cfg(&cfg, &g, &sh);
+    nat_build(&w, &cfg, &g);
+    (void)make_wedge(&l, 48.3, 47.4, 1.0, 0.4);
+    assert_int_equal(nat_localize(&w, &l, LR, LR, &win, &a), TRN_OK);
+    memset(&b, 0, sizeof b);
+    assert_int_equal(
+        trn_localize_dem_centroids(&w.map, &l, zero, zero, LR, LR, MAXPTS, &win, w.ws, w.wb, &b),
+        TRN_OK);
+    assert_memory_equal(&a, &b, sizeof a);
+    /* the checks: both or neither; seen cells finite and within half a cell */
+    make_binned(&l, cx, cy, 48.0, 47.0, &r);
+    assert_int_equal(
+        trn_localize_dem_centroids(&w.map, &l, cx, NULL, LR, LR, MAXPTS, &win, w.ws, w.wb, &b),
+        TRN_E_NULL);
+    assert_int_equal(
+        trn_localize_dem_centroids(&w.map, &l, NULL, cy, LR, LR, MAXPTS, &win, w.ws, w.wb, &b),
+        TRN_E_NULL);
+    k = LR * LW + LR + 5; /* 5 cells east of the rover: in the wedge (heading 0.4 rad) */
+    assert_true(isfinite(l_data[k]));
+    cx[k] = NAN;
+    assert_int_equal(
+        trn_localize_dem_centroids(&w.map, &l, cx, cy, LR, LR, MAXPTS, &win, w.ws, w.wb, &b),
+        TRN_E_ARG);
+    cx[k] = 0.0f;
+    cy[k] = -0.6f;
+    assert_int_equal(
+        trn_localize_dem_centroids(&w.map, &l, cx, cy, LR, LR, MAXPTS, &win, w.ws, w.wb, &b),
+        TRN_E_ARG);
+    cy[k] = 0.5f;
+    assert_int_equal(
+        trn_localize_dem_centroids(&w.map, &l, cx, cy, LR, LR, MAXPTS, &win, w.ws, w.wb, &b),
+        TRN_OK);
     nat_free(&w);
 }
 
@@ -1650,6 +1779,8 @@ static trn_refine_cfg_t rcfg(float k)
     c.noise_k_per_m = k;
     c.inlier_prob = 0.95f;
     c.fit_noise = 0;
+    c.centroid_x = NULL; /* the cells' centres */
+    c.centroid_y = NULL;
     return c;
 }
 
@@ -1924,6 +2055,7 @@ int main(void)
         cmocka_unit_test(test_map_build_heights),
         cmocka_unit_test(test_corrupt_heights),
         cmocka_unit_test(test_localize_dem_statuses),
+        cmocka_unit_test(test_localize_dem_centroids),
         cmocka_unit_test(test_ambiguous_acceptance),
         cmocka_unit_test(test_valley_failure),
         cmocka_unit_test(test_prob_beyond),

@@ -20,6 +20,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "trn/refine.h"
 #include "trn/height_heading.h"
@@ -107,6 +108,8 @@ static trn_refine_cfg_t cfg_of(void)
     c.noise_k_per_m = 0.0004f;
     c.inlier_prob = 0.95f;
     c.fit_noise = 0;
+    c.centroid_x = NULL; /* the cells' centres */
+    c.centroid_y = NULL;
     return c;
 }
 
@@ -208,13 +211,13 @@ static double spline(double x, double y)
  * local maps here have no outlier), weights 1 / (s^2 + m^2), the mix's
  * prior information on its own diagonal; the step that trn_refine_pose
  * reports (trn_localize_dem adds it to the answer): minus the mix held to
- * [0, 1] times its (x, y). */
-static void slow_spline_step(const trn_refine_cfg_t *c, const trn_refine_t *out, double step[2])
+ * [0, 1] times its (x, y) (slow_spline_step); d the solve's (x, y, dz,
+ * mix). */
+static void slow_spline_solve(const trn_refine_cfg_t *c, const trn_refine_t *out, double d[4])
 {
     const double hd = 1e-5, pw = 1.0 / (TRN_REFINE_MIX_SD * TRN_REFINE_MIX_SD);
     const double px = out->x, py = out->y;
     const double mix = out->interp_mix, m2 = out->model_m * out->model_m;
-    const double lam = mix < 0.0 ? 0.0 : mix > 1.0 ? 1.0 : mix;
     double a[4][5] = {{0.0}};
     int i, j, p, q, m = LW / 2;
     for (j = 0; j < LW; ++j) {
@@ -257,8 +260,166 @@ static void slow_spline_step(const trn_refine_cfg_t *c, const trn_refine_t *out,
             }
         }
     }
-    step[0] = -lam * a[0][4] / a[0][0];
-    step[1] = -lam * a[1][4] / a[1][1];
+    for (p = 0; p < 4; ++p) {
+        d[p] = a[p][4] / a[p][p]; /* x, y, dz, mix */
+    }
+}
+
+static void slow_spline_step(const trn_refine_cfg_t *c, const trn_refine_t *out, double step[2])
+{
+    const double mix = out->interp_mix, lam = mix < 0.0 ? 0.0 : mix > 1.0 ? 1.0 : mix;
+    double d[4];
+    slow_spline_solve(c, out, d);
+    step[0] = -lam * d[0];
+    step[1] = -lam * d[1];
+}
+
+/* The model's height at (x, y) with the mix, its gradient (central
+ * differences) and C - B. */
+static double slow_model(double x, double y, double mix, double jv[3], double *dcb)
+{
+    const double hd = 1e-5;
+#define SLOW_M(u, v) (lin(u, v) + mix * (bilin(u, v) - lin(u, v)))
+    jv[0] = (SLOW_M(x + hd, y) - SLOW_M(x - hd, y)) / (2.0 * hd);
+    jv[1] = (SLOW_M(x, y + hd) - SLOW_M(x, y - hd)) / (2.0 * hd);
+    jv[2] = 1.0;
+    *dcb = bilin(x, y) - lin(x, y);
+    return SLOW_M(x, y);
+#undef SLOW_M
+}
+
+/* 3 x 3 inverse by the adjugate. */
+static void inv3(double a[3][3], double r[3][3])
+{
+    const double det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
+                       a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+                       a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+    int i, j;
+    for (i = 0; i < 3; ++i) {
+        for (j = 0; j < 3; ++j) {
+            const int i1 = (j + 1) % 3, i2 = (j + 2) % 3, j1 = (i + 1) % 3, j2 = (i + 2) % 3;
+            r[i][j] = (a[i1][j1] * a[i2][j2] - a[i1][j2] * a[i2][j1]) / det;
+        }
+    }
+}
+
+/* The covariance of trn_refine_pose's estimate, written out (docs/method.md
+ * 9.5; every seen cell an inlier of weight 1 / (s^2 + m^2), the block
+ * sandwich's factor 1): the normal matrix of (x, y, dz) with the mix folded
+ * out (its prior's information added), g its coupling; each cell's
+ * leverage h, the model's residual r and the answer's r - lam (S - M -
+ * J . d), d the spline step's solve of (x, y, dz); the weighted least
+ * squares of r^2 / (1 - h) - s^2 on (1, |grad|^2) (answer 0: the model's
+ * residuals; 1: the answer's; 2: whichever has the smaller weighted sum of
+ * r^2 / (1 - h) - s^2, the library's rule), each at least 0 (the better
+ * one-term fit otherwise); inv meat inv. */
+static void slow_cov(const trn_refine_cfg_t *c, const trn_refine_t *out, int answer, double cov[3])
+{
+    const double pw = 1.0 / (TRN_REFINE_MIX_SD * TRN_REFINE_MIX_SD);
+    const double px = out->x, py = out->y, mix = out->interp_mix, m2 = out->model_m * out->model_m;
+    const double lam = mix < 0.0 ? 0.0 : mix > 1.0 ? 1.0 : mix;
+    double a[3][3] = {{0.0}}, al[3] = {0.0, 0.0, 0.0}, all = pw, g[3], inv[3][3],
+           mt[3][3] = {{0.0}};
+    double d[4], q = 0.0, qg = 0.0, qgg = 0.0, rr = 0.0, rg = 0.0, v0 = 0.0, v1 = 0.0, det;
+    double rra = 0.0, rga = 0.0;
+    int pass, i, j, p, k, m = LW / 2;
+    slow_spline_solve(c, out, d);
+    for (pass = 0; pass < 3; ++pass) {
+        if (pass == 1) {
+            for (p = 0; p < 3; ++p) {
+                g[p] = al[p] / all;
+                for (k = 0; k < 3; ++k) {
+                    a[p][k] -= al[p] * al[k] / all;
+                }
+            }
+            inv3(a, inv);
+        }
+        for (j = 0; j < LW; ++j) {
+            for (i = 0; i < LW; ++i) {
+                const double x = px + i - m, y = py + j - m, h = l_data[j * LW + i];
+                const double rm = c->cell_m * sqrt((double)((i - m) * (i - m) + (j - m) * (j - m)));
+                const double sn = c->noise_m + c->noise_k_per_m * rm * rm, s2 = sn * sn;
+                const double w = 1.0 / (s2 + m2);
+                double jv[3], jt[3], dcb, mm, res, lev = 0.0, gg, y2, qq;
+                if (!isfinite(h)) {
+                    continue;
+                }
+                mm = slow_model(x, y, mix, jv, &dcb);
+                res = h - out->dz_m - mm;
+                gg = jv[0] * jv[0] + jv[1] * jv[1];
+                for (p = 0; p < 3; ++p) {
+                    jt[p] = pass == 0 ? jv[p] : jv[p] - g[p] * dcb;
+                }
+                if (pass == 0) {
+                    for (p = 0; p < 3; ++p) {
+                        for (k = 0; k < 3; ++k) {
+                            a[p][k] += w * jv[p] * jv[k];
+                        }
+                        al[p] += w * jv[p] * dcb;
+                    }
+                    all += w * dcb * dcb;
+                    continue;
+                }
+                if (pass == 2) {
+                    for (p = 0; p < 3; ++p) {
+                        for (k = 0; k < 3; ++k) {
+                            mt[p][k] += w * w * (s2 + v0 + v1 * gg) * jt[p] * jt[k];
+                        }
+                    }
+                    continue;
+                }
+                for (p = 0; p < 3; ++p) {
+                    for (k = 0; k < 3; ++k) {
+                        lev += jt[p] * inv[p][k] * jt[k];
+                    }
+                }
+                lev *= w;
+                y2 = res * res / (1.0 - lev) - s2;
+                qq = 1.0 / ((s2 + m2) * (s2 + m2));
+                q += qq;
+                qg += qq * gg;
+                qgg += qq * gg * gg;
+                rr += qq * y2;
+                rg += qq * gg * y2;
+                res -= lam * (spline(x, y) - mm - (jv[0] * d[0] + jv[1] * d[1] + d[2]));
+                y2 = res * res / (1.0 - lev) - s2;
+                rra += qq * y2;
+                rga += qq * gg * y2;
+            }
+        }
+        if (pass == 1) {
+            if (answer == 1 || (answer == 2 && rra < rr)) {
+                rr = rra;
+                rg = rga;
+            }
+            det = q * qgg - qg * qg;
+            v0 = (qgg * rr - qg * rg) / det;
+            v1 = (q * rg - qg * rr) / det;
+            if (!(v0 >= 0.0 && v1 >= 0.0)) {
+                const double m0 = rr > 0.0 ? rr / q : 0.0, s0 = rg > 0.0 ? rg / qgg : 0.0;
+                const double e_m = q * m0 * m0 - 2.0 * m0 * rr, e_s = qgg * s0 * s0 - 2.0 * s0 * rg;
+                v0 = e_m <= e_s ? m0 : 0.0;
+                v1 = e_m <= e_s ? 0.0 : s0;
+            }
+        }
+    }
+    for (p = 0; p < 3; ++p) { /* (inv meat inv) for (x, y) */
+        double t[3] = {0.0, 0.0, 0.0};
+        for (k = 0; k < 3; ++k) {
+            for (i = 0; i < 3; ++i) {
+                t[k] += inv[p][i] * mt[i][k];
+            }
+        }
+        for (j = 0; j < 2 && p < 2; ++j) {
+            double v = 0.0;
+            for (k = 0; k < 3; ++k) {
+                v += t[k] * inv[k][j];
+            }
+            if (p <= j) {
+                cov[p == j ? p : 2] = v;
+            }
+        }
+    }
 }
 
 /* The spline step against the written-out one, on 10 poses of the smooth
@@ -930,6 +1091,130 @@ static void test_noise_scale_errors(void **state)
     assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &out, 0.0, &c, &k2, &sd), TRN_E_NODATA);
 }
 
+/* The covariance's cell variances are fitted from the residuals of the
+ * better fitting of the model's surface and the answer's (docs/method.md
+ * 9.5): the refinement's covariance against slow_cov, on a map with some
+ * roughness (0.3 m a cell at random on the smooth surface) whose spline is
+ * the ground, the noise model's noise on it, the poses where the block
+ * sandwich's factor is 1 (the covariance is then inv meat inv alone). There
+ * the answer's surface fits better, and the model's residuals (what the fit
+ * read before) give another covariance: the test tells the two apart. */
+static void test_answer_variances(void **state)
+{
+    trn_grid_f32_t g, l;
+    trn_refine_cfg_t c = cfg_of();
+    trn_refine_t out;
+    trn_rng_t r;
+    int k, x, y, m = LW / 2, n = 0;
+    double worst = 0.0, apart = 0.0;
+    (void)state;
+    trn_rng_seed(&r, 41);
+    make_global(&g);
+    for (y = 0; y < GW * GW; ++y) {
+        g_data[y] += (float)(0.3 * trn_rng_gauss(&r));
+    }
+    spline_coef();
+    for (k = 0; k < 80; ++k) {
+        const double tx = 24.0 + 12.0 * trn_rng_unit(&r), ty = 24.0 + 12.0 * trn_rng_unit(&r);
+        double want[3], model[3];
+        int q;
+        for (y = 0; y < LW; ++y) {
+            for (x = 0; x < LW; ++x) {
+                const double rm = c.cell_m * hypot(x - m, y - m);
+                const double sd = c.noise_m + c.noise_k_per_m * rm * rm;
+                l_data[y * LW + x] = (float)(spline(tx + x - m, ty + y - m) + 3.0 +
+                                             sd * trn_rng_gauss(&r));
+            }
+        }
+        l_data[m * LW + m] = NAN;
+        assert_int_equal(trn_grid_f32_init(&l, l_data, LW * LW, LW, LW), TRN_OK);
+        assert_int_equal(
+            trn_refine_pose(&g, &l, m, m, (int)floor(tx + 0.5), (int)floor(ty + 0.5), &c, &out),
+            TRN_OK);
+        if (out.inflation != 1.0 || out.n_used != LW * LW - 1) {
+            continue;
+        }
+        slow_cov(&c, &out, 2, want);
+        slow_cov(&c, &out, 0, model);
+        for (q = 0; q < 3; ++q) {
+            const double scale = sqrt(want[0] * want[1]);
+            worst = fmax(worst, fabs(out.cov_cells[q] - want[q]) / scale);
+            apart = fmax(apart, fabs(model[q] - want[q]) / scale);
+        }
+        n += 1;
+    }
+    printf("answer's variances: %d poses, worst difference from the written-out covariance %.1e "
+           "(relative), the model's residuals' up to %.2f from it\n",
+           n, worst, apart);
+    assert_true(n >= 8);
+    /* the core's spline is cut at 16 taps, the written-out one solves the
+     * whole map (test_spline_step): measured 7e-4 */
+    assert_true(worst < 5e-3);
+    assert_true(apart > 0.1);
+}
+
+/* A binned local map: each cell's height is the ground (the model's
+ * interpolant, mix 1) at its points' centroid, a common offset (0.3, -0.2)
+ * cells plus up to 0.15 more per cell. Given the centroids, the refinement
+ * reads the model where the heights were measured and finds the pose as on
+ * the cells' centres (test_exact_model); without them the whole map seems
+ * moved by the common offset, and so is the answer. A centroid of zero is
+ * the cell's centre, bit for bit. */
+static void test_centroids(void **state)
+{
+    static float cx[LW * LW], cy[LW * LW];
+    trn_grid_f32_t g, l;
+    trn_refine_cfg_t c = cfg_of(), z = cfg_of();
+    trn_refine_t with, without, none, zero;
+    trn_rng_t r;
+    int i, x, y, k = LW / 2;
+    double worst = 0.0, least = 1.0;
+    (void)state;
+    trn_rng_seed(&r, 23);
+    make_global(&g);
+    for (i = 0; i < 20; ++i) {
+        const double tx = 24.0 + 12.0 * trn_rng_unit(&r), ty = 24.0 + 12.0 * trn_rng_unit(&r);
+        for (y = 0; y < LW; ++y) {
+            for (x = 0; x < LW; ++x) {
+                cx[y * LW + x] = (float)(0.3 + 0.3 * (trn_rng_unit(&r) - 0.5));
+                cy[y * LW + x] = (float)(-0.2 + 0.3 * (trn_rng_unit(&r) - 0.5));
+                l_data[y * LW + x] =
+                    (float)(bilin(tx + x - k + cx[y * LW + x], ty + y - k + cy[y * LW + x]) - 5.0);
+            }
+        }
+        l_data[k * LW + k] = NAN;
+        cx[k * LW + k] = cy[k * LW + k] = NAN; /* unseen: not read */
+        assert_int_equal(trn_grid_f32_init(&l, l_data, LW * LW, LW, LW), TRN_OK);
+        c.centroid_x = cx;
+        c.centroid_y = cy;
+        assert_int_equal(
+            trn_refine_pose(&g, &l, k, k, (int)floor(tx + 0.5), (int)floor(ty + 0.5), &c, &with),
+            TRN_OK);
+        assert_int_equal(
+            trn_refine_pose(&g, &l, k, k, (int)floor(tx + 0.5), (int)floor(ty + 0.5), &z, &without),
+            TRN_OK);
+        worst = fmax(worst, fmax(fabs(with.x - tx), fabs(with.y - ty)));
+        least = fmin(least, hypot(without.x - tx - 0.3, without.y - ty + 0.2) < 0.1
+                                ? hypot(without.x - tx, without.y - ty)
+                                : 0.0);
+    }
+    printf("centroids: worst pose error %.2e cells given them, least %.3f without\n", worst, least);
+    assert_true(worst < 1e-3);
+    assert_true(least > 0.3); /* without: the common offset, 0.36 cells, every time */
+    /* zero centroids: the cells' centres, bit for bit */
+    make_local(&l, 30.3, 29.6, 1.0, 1.0, &z, &r);
+    for (i = 0; i < LW * LW; ++i) {
+        cx[i] = cy[i] = 0.0f;
+    }
+    c.centroid_x = cx;
+    c.centroid_y = cy;
+    memset(&none, 0, sizeof none); /* the padding too */
+    memset(&zero, 0, sizeof zero);
+    assert_int_equal(trn_refine_pose(&g, &l, k, k, 30, 30, &z, &none), TRN_OK);
+    assert_int_equal(trn_refine_pose(&g, &l, k, k, 30, 30, &c, &zero), TRN_OK);
+    assert_memory_equal(&none, &zero, sizeof none);
+}
+
 static void test_errors(void **state)
 {
     trn_grid_f32_t g, l, flat;
@@ -955,6 +1240,34 @@ static void test_errors(void **state)
     bad = c;
     bad.cell_m = -1.0f;
     assert_int_equal(trn_refine_pose(&g, &l, 15, 15, 30, 30, &bad, &out), TRN_E_ARG);
+    {
+        /* centroids: both or neither; a seen cell's finite and within half a
+         * cell; an unseen cell's not read */
+        static float cx[LW * LW], cy[LW * LW];
+        double k2 = 0.0, k2_sd = 0.0;
+        for (i = 0; i < LW * LW; ++i) {
+            cx[i] = cy[i] = 0.25f;
+        }
+        bad = c;
+        bad.centroid_x = cx;
+        assert_int_equal(trn_refine_pose(&g, &l, 15, 15, 30, 30, &bad, &out), TRN_E_NULL);
+        bad = c;
+        bad.centroid_y = cy;
+        assert_int_equal(trn_refine_pose(&g, &l, 15, 15, 30, 30, &bad, &out), TRN_E_NULL);
+        bad.centroid_x = cx;
+        assert_int_equal(trn_refine_pose(&g, &l, 15, 15, 30, 30, &bad, &out), TRN_OK);
+        cx[7] = NAN;
+        assert_int_equal(trn_refine_pose(&g, &l, 15, 15, 30, 30, &bad, &out), TRN_E_ARG);
+        cx[7] = 0.0f;
+        cy[40] = 0.51f;
+        assert_int_equal(trn_refine_pose(&g, &l, 15, 15, 30, 30, &bad, &out), TRN_E_ARG);
+        cy[40] = -0.5f;
+        cx[15 * LW + 15] = INFINITY; /* the rover's cell: unseen */
+        assert_int_equal(trn_refine_pose(&g, &l, 15, 15, 30, 30, &bad, &out), TRN_OK);
+        cy[40] = NAN;
+        assert_int_equal(trn_refine_noise_scale(&g, &l, 15, 15, &out, 0.0, &bad, &k2, &k2_sd),
+                         TRN_E_ARG);
+    }
     assert_int_equal(trn_refine_pose(&g, &l, -TRN_MAX_DIM - 1, 15, 30, 30, &c, &out), TRN_E_ARG);
     assert_int_equal(trn_refine_pose(&g, &l, 15, 15, GW, 30, &c, &out), TRN_E_RANGE);
     assert_int_equal(trn_refine_pose(&g, &l, 15, 15, 30, -1, &c, &out), TRN_E_RANGE);
@@ -1298,6 +1611,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_exact_model),     cmocka_unit_test(test_spline_step),
+        cmocka_unit_test(test_centroids),       cmocka_unit_test(test_answer_variances),
         cmocka_unit_test(test_noise_coverage),  cmocka_unit_test(test_steep_cells),
         cmocka_unit_test(test_outliers),        cmocka_unit_test(test_errors),
         cmocka_unit_test(test_cfg_auto),        cmocka_unit_test(test_height_search),

@@ -135,6 +135,8 @@ static trn_refine_cfg_t cfg_of(void)
     c.noise_k_per_m = 0.0f;
     c.inlier_prob = 0.95f;
     c.fit_noise = 0;
+    c.centroid_x = NULL; /* the cells' centres */
+    c.centroid_y = NULL;
     return c;
 }
 

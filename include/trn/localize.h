@@ -340,6 +340,32 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
                               const trn_window_t *win, void *ws, size_t ws_bytes,
                               trn_loc_result_t *out);
 
+/**
+ * @brief trn_localize_dem for a local map whose cells were not measured at
+ * their centres: a rover that bins its stereo points into cells knows, for
+ * each cell, the centroid of the points whose mean its height is. Every
+ * refinement pass reads the map's model at each cell's centroid instead of
+ * its centre (trn_refine_cfg_t.centroid_x, centroid_y); the searches over
+ * integer poses and the voxel occupancy are as trn_localize_dem's. Where
+ * the points are spread unevenly over a cell (a few points each: a map
+ * cell of about 4 of them or fewer), their centroid's offset is a position
+ * error of the cell that no residual shows; given, it is no error
+ * (docs/method.md 9.10, "The centroids").
+ * @param[in] centroid_x, centroid_y per local cell, in local_dem's layout
+ *            (its stride): the centroid's offset from the cell's centre,
+ *            cells east (x) and south (y, the grid's rows); for every seen
+ *            cell finite and within TRN_CENTROID_MAX. Both NULL: the cells'
+ *            centres (trn_localize_dem, bit for bit).
+ * @retval as trn_localize_dem, plus TRN_E_NULL (one of the two NULL) and
+ *         TRN_E_ARG (a seen cell's centroid not finite or beyond
+ *         TRN_CENTROID_MAX). Its workspace is trn_localize_dem_workspace_bytes.
+ */
+trn_status_t trn_localize_dem_centroids(const trn_map_t *map, const trn_grid_f32_t *local_dem,
+                                        const float *centroid_x, const float *centroid_y,
+                                        int32_t rover_x, int32_t rover_y, size_t max_points,
+                                        const trn_window_t *win, void *ws, size_t ws_bytes,
+                                        trn_loc_result_t *out);
+
 #ifdef __cplusplus
 }
 #endif

@@ -91,16 +91,33 @@ extern "C" {
  *  (the plain clip, then the relief rule: docs/method.md 9, "the clip"). */
 #define TRN_REFINE_MAX_ITER 12
 
-/** Height-noise model of the local map: s(r) = noise_m + noise_k_per_m r^2. */
+/** Largest |centroid| a seen local cell may give (trn_refine_cfg_t.centroid_x,
+ *  centroid_y), cells: a point binned into a cell lies within half a cell of
+ *  its centre. */
+#define TRN_CENTROID_MAX 0.5
+
+/** Height-noise model of the local map, s(r) = noise_m + noise_k_per_m r^2,
+ *  and where the local cells were measured. Zero the struct (or set both
+ *  centroid pointers NULL) before filling it in. */
 typedef struct {
-    float cell_m;        /**< cell of both grids, metres, (0, 1000] */
-    float noise_m;       /**< constant part, metres, (0, 1000] */
-    float noise_k_per_m; /**< range-squared part, 1/m, [0, 1000] */
-    float inlier_prob;   /**< a of the mixture ln L (trn_refine_t.ll), (0, 1) */
-    int32_t fit_noise;   /**< 1: the searches' pose score fits the noise model's scale per pose
+    float cell_m;            /**< cell of both grids, metres, (0, 1000] */
+    float noise_m;           /**< constant part, metres, (0, 1000] */
+    float noise_k_per_m;     /**< range-squared part, 1/m, [0, 1000] */
+    float inlier_prob;       /**< a of the mixture ln L (trn_refine_t.ll), (0, 1) */
+    int32_t fit_noise;       /**< 1: the searches' pose score fits the noise model's scale per pose
                               (a variance factor in [TRN_NOISE_SCALE2_MIN, TRN_NOISE_SCALE2_MAX]
                               beside the offset and the model variance: docs/method.md 9.2);
                               0: the model as given. The refinements ignore it. 0 or 1. */
+    const float *centroid_x; /**< NULL (both NULL): each local cell's height is the ground at
+                                  the cell's centre. Otherwise, per local cell in the local
+                                  grid's layout (its stride), where in the cell its height
+                                  was measured, cells east of its centre: for a cell that is
+                                  the mean of binned stereo points, their centroid. Every
+                                  refinement pass reads the model there (the searches at
+                                  integer poses do not). Seen cells: finite, within
+                                  [-TRN_CENTROID_MAX, TRN_CENTROID_MAX]; unseen cells are not
+                                  read (docs/method.md 9.10, "The centroids") */
+    const float *centroid_y; /**< the same, cells south of the centre (the grid's rows) */
 } trn_refine_cfg_t;
 
 /** Best integer pose of trn_height_search. */

@@ -22,6 +22,11 @@ through `trn select` and `trn localize`:
 - An unknown height unit and a DEM over TRN_MAX_DIM (4096) cells a side are
   refused with one line naming the unit / the size, the limit and the
   gdal_translate hint.
+- A binned local map's centroid bands (--centroid-bands): given, the answer
+  is the truth where without them it moves with their common offset; zero
+  centroids give the one-band file's answer; a seen cell's centroid missing
+  or beyond half a cell, a band that is not there and a heading search are
+  refused with one line.
 Maps are small (96 x 96 cells, 40 x 40 local) so the ASan build stays quick.
 """
 import math
@@ -330,5 +335,73 @@ expect_error(1, "gdal_translate -srcwin XOFF YOFF XSIZE YSIZE IN.tif OUT.tif", "
 expect_error(1, "is 8 x 4097 cells; the maximum side is 4096 cells", "localize", "--dem", base,
              "--local", p("tall.tif"), *LOC)
 expect_error(1, "gdalwarp -tr", "localize", "--dem", p("tall.tif"), "--local", p("local.tif"), *LOC)
+
+
+# ---- 6. a binned local map's centroids (--centroid-bands) -----------------------------
+def write_bands(path, bands, gt):
+    """A float32 GeoTIFF of several bands, no CRS, no-data NaN."""
+    mem = gdal.GetDriverByName("MEM").Create("", bands[0].shape[1], bands[0].shape[0], len(bands),
+                                             gdal.GDT_Float32)
+    mem.SetGeoTransform(gt)
+    for k, v in enumerate(bands):
+        mem.GetRasterBand(k + 1).SetNoDataValue(float("nan"))
+        mem.GetRasterBand(k + 1).WriteArray(v.astype(np.float32))
+    gdal.GetDriverByName("GTiff").CreateCopy(path, mem)
+    mem = None
+
+
+def bilinear(z, rows, cols):
+    r0, c0 = np.floor(rows).astype(int), np.floor(cols).astype(int)
+    fr, fc = rows - r0, cols - c0
+    z = z.astype(np.float64)
+    return ((z[r0, c0] * (1 - fc) + z[r0, c0 + 1] * fc) * (1 - fr) +
+            (z[r0 + 1, c0] * (1 - fc) + z[r0 + 1, c0 + 1] * fc) * fr)
+
+
+# Each local cell the ground (the map's bilinear surface) at its points' centroid: a common
+# (0.3, -0.2) cells (east, south) plus up to 0.1 more per cell. Given the centroids, the
+# refinement reads the map there and finds the truth; without them the answer moves with the
+# common offset (0.036 m).
+rng = np.random.default_rng(3)
+cx = 0.3 + rng.uniform(-0.1, 0.1, crop.shape)
+cy = -0.2 + rng.uniform(-0.1, 0.1, crop.shape)
+jj, ii = np.meshgrid(np.arange(L), np.arange(L))
+binned = bilinear(G, LR0 + ii + cy, LC0 + jj + cx)
+write_bands(p("local_binned.tif"), [binned, cx, cy], rover_gt)
+write_bands(p("local_zero.tif"), [crop, 0.0 * crop, 0.0 * crop], rover_gt)
+r_with = run_json("localize", "--dem", base, "--local", p("local_binned.tif"), "--centroid-bands", "2",
+                  *LOC)
+r_without = run_json("localize", "--dem", base, "--local", p("local_binned.tif"), *LOC)
+if "x_m" in r_with and "x_m" in r_without:
+    e_with = math.hypot(r_with["x_m"] - truth[0], r_with["y_m"] - truth[1])
+    e_without = math.hypot(r_without["x_m"] - truth[0], r_without["y_m"] - truth[1])
+    print(f"localize binned: error {e_with:.4f} m given the centroids, {e_without:.4f} m without")
+    check(e_with < 0.005 and r_with["status"] == "ok" and r_with.get("centroids") is True,
+          f"localize binned, --centroid-bands 2: error {e_with:.4f} m, {r_with}")
+    check(e_without > 0.02 and r_without.get("centroids") is False,
+          f"localize binned without its centroids: error {e_without:.4f} m (the common offset, 0.036 m)")
+else:
+    check(False, f"localize binned: no position in {r_with} / {r_without}")
+# zero centroids: the cells' centres, the same answer as the one-band file's
+r_zero = run_json("localize", "--dem", base, "--local", p("local_zero.tif"), "--centroid-bands", "2", *LOC)
+r_one = run_json("localize", "--dem", base, "--local", p("local.tif"), *LOC)
+untimed = [{k: v for k, v in r.items() if "time" not in k and k != "centroids"} for r in (r_zero, r_one)]
+check(untimed[0] == untimed[1], f"localize: zero centroids = the cells' centres ({r_zero} vs {r_one})")
+# refused: a seen cell's centroid beyond half a cell or missing, a band that is not there,
+# and a heading search (the centroids are read at heading 0 only)
+far = cx.copy()
+far[7, 9] = 0.7
+write_bands(p("local_far.tif"), [binned, far, cy], rover_gt)
+expect_error(1, "local cell (9, 7) is seen but its centroid (0.7, ", "localize", "--dem", base, "--local",
+             p("local_far.tif"), "--centroid-bands", "2", *LOC)
+gap = cy.copy()
+gap[3, 4] = np.nan
+write_bands(p("local_gap.tif"), [binned, cx, gap], rover_gt)
+expect_error(1, "missing or more than 0.5 cells from its centre", "localize", "--dem", base, "--local",
+             p("local_gap.tif"), "--centroid-bands", "2", *LOC)
+expect_error(1, "--centroid-bands: ", "localize", "--dem", base, "--local", p("local_binned.tif"),
+             "--centroid-bands", "3", *LOC)
+expect_error(2, "--centroid-bands does not apply to a heading search", "localize", "--dem", base, "--local",
+             p("local_binned.tif"), "--centroid-bands", "2", "--heading-deg", "1", *LOC)
 
 sys.exit(H.finish("cli_dem"))

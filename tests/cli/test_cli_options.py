@@ -331,6 +331,8 @@ CASES = {
         # one-band files: a second band does not exist, and must be refused
         "--band": unseen("--band", "2", rc=1, needle="--dem", why="the DEM has one band"),
         "--local-band": unseen("--local-band", "2", rc=1, needle="band", why="the local DEM has one band"),
+        "--centroid-bands": unseen("--centroid-bands", "2", rc=1, needle="--centroid-bands",
+                                   why="the local DEM has one band (test_cli_dem.py: its effect)"),
         # its effect is the refusal of a larger local DEM
         "--max-local-cells": refused("--max-local-cells", "16", rc=1, needle="16"),
         "--heading-deg": effect("--heading-deg", "3"),

@@ -140,6 +140,9 @@ def parse_args(argv):
                          "(mean), or is the mean of the scattered stereo points of the DEM's surface that "
                          "fall in it, binned at the rover's sub-cell position, each point with the model's "
                          "noise (binned)")
+    ap.add_argument("--centroids", action="store_true",
+                    help="with --fine-local binned: each local GeoTIFF also holds its cells' points' "
+                         "centroids (bands 2 and 3), and trn reads the map there (--centroid-bands 2)")
     ap.add_argument("--mast-view", type=float, default=None, metavar="H",
                     help="only the local cells whose ground a mast H metres above the rover's ground "
                          "sees past the true surface's rises (default: every cell of the wedge)")
@@ -201,6 +204,11 @@ def parse_args(argv):
         raise Fail(f"--mast-view {a.mast_view}: must be a finite height > 0 metres")
     if a.fine_local != "point" and a.truth_fine is None:
         raise Fail(f"--fine-local {a.fine_local}: needs --truth-fine K")
+    if a.centroids and (a.fine_local != "binned" or a.truth_fine is None):
+        raise Fail("--centroids: needs --truth-fine K --fine-local binned (only binned cells have "
+                   "centroids)")
+    if a.centroids:
+        a.trn_extra = list(a.trn_extra) + ["--centroid-bands", "2"]
     a.mast_view = a.mast_view or 0.0
     if a.truth_fine is not None and a.truth_fine < 2:
         raise Fail(f"--truth-fine {a.truth_fine}: must be >= 2")
@@ -468,6 +476,7 @@ def bench_dem(a, dem_id, batch):
                            noise0_m=casemod.CaseParams.noise0_m * a.noise_scale,
                            noise_k=casemod.CaseParams.noise_k * a.noise_scale,
                            local=a.fine_local if a.truth_fine else "point", mast_m=a.mast_view,
+                           centroids=a.centroids,
                            outlier_frac=a.outliers, prior_miss=a.prior_miss, miss_max_cells=a.miss_max)
     tmp = tempfile.mkdtemp(prefix=f"bench_real_{dem_id}_")
     try:
@@ -512,7 +521,7 @@ def bench_dem(a, dem_id, batch):
                 "trn_mode": "batch" if batch else "single", "trn_wall_ms": trn_wall,
                 "opencv_mask": peers.mask_supported(), "truth_fine": a.truth_fine,
                 "fine_map": a.fine_map if a.truth_fine else None,
-                "fine_local": a.fine_local if a.truth_fine else None,
+                "fine_local": a.fine_local if a.truth_fine else None, "centroids": a.centroids,
                 "noise_scale": a.noise_scale, "outliers": a.outliers, "mast_view": a.mast_view,
                 "prior_miss": a.prior_miss, "miss_max": a.miss_max if a.prior_miss else None,
                 "fine_cell_m": fine.c if fine is not None else None,
@@ -558,7 +567,7 @@ def main(argv):
         batch = trn_has_batch(a.trn) if mode == "auto" else mode == "batch"
         res = {"config": {"cases": a.cases, "seed": a.seed, "radius": a.radius, "resample": a.resample,
                           "subcell": a.subcell, "truth_fine": a.truth_fine, "fine_map": a.fine_map,
-                          "fine_local": a.fine_local, "mast_view": a.mast_view, "noise_scale": a.noise_scale,
+                          "fine_local": a.fine_local, "centroids": a.centroids, "mast_view": a.mast_view, "noise_scale": a.noise_scale,
                           "outliers": a.outliers, "prior_miss": a.prior_miss,
                           "miss_max": a.miss_max if a.prior_miss else None,
                           "trn": a.trn, "trn_args": a.trn_extra, "success_cells": SUCCESS_CELLS},

@@ -150,15 +150,18 @@ def write_global(path, dem, like=None):
     return path
 
 
-def write_local(path, z, c):
-    """A rover-frame local DEM GeoTIFF: float32, no CRS, no-data NaN."""
+def write_local(path, z, c, centroids=None):
+    """A rover-frame local DEM GeoTIFF: float32, no CRS, no-data NaN. With centroids
+    (cx, cy), bands 2 and 3 hold them (trn localize --centroid-bands 2)."""
     n = z.shape[0]
     r = (n - 1) // 2
-    ds = gdal.GetDriverByName("GTiff").Create(path, z.shape[1], n, 1, gdal.GDT_Float32)
+    bands = [z] + ([] if centroids is None else list(centroids))
+    ds = gdal.GetDriverByName("GTiff").Create(path, z.shape[1], n, len(bands), gdal.GDT_Float32)
     ds.SetGeoTransform((-(r + 0.5) * c, c, 0.0, (r + 0.5) * c, 0.0, -c))
-    b = ds.GetRasterBand(1)
-    b.SetNoDataValue(float("nan"))
-    b.WriteArray(z.astype(np.float32))
+    for k, v in enumerate(bands):
+        b = ds.GetRasterBand(k + 1)
+        b.SetNoDataValue(float("nan"))
+        b.WriteArray(np.asarray(v).astype(np.float32))
     ds = None
 
 
@@ -209,6 +212,7 @@ class CaseParams:
     resample: str = "bilinear"
     min_valid: float = 0.95
     local: str = "point"  # with `fine`: "point" | "mean" | "binned" (see make_local)
+    centroids: bool = False  # "binned": each case's extra gets the cells' centroids (cx, cy)
     mast_m: float = 0.0  # > 0: a mast that high sees the cells (mast_visible); 0: every cell in the wedge
     outlier_frac: float = 0.0  # share of seen cells that are stereo blunders (see make_local)
     prior_miss: float = 0.0  # share of the cases whose prior misses (the truth outside the window)
@@ -343,7 +347,8 @@ def mast_visible(z, r0, c0, rows, cols, mast_m):
     return ~blocked.any(axis=1).reshape(rows.shape)
 
 
-def make_local(dem, truth, p, rng=None, azimuth_deg=0.0, offset_m=0.0, fine=None, turn_deg=0.0):
+def make_local(dem, truth, p, rng=None, azimuth_deg=0.0, offset_m=0.0, fine=None, turn_deg=0.0,
+               extra=None):
     """The local DEM (heights + offset + noise, NaN unseen) of a rover at truth: cells
     of dem's cell size, heights sampled from `fine` (the true surface) if given, else
     from dem itself. turn_deg: the rover's believed heading is off by this much, so
@@ -352,7 +357,9 @@ def make_local(dem, truth, p, rng=None, azimuth_deg=0.0, offset_m=0.0, fine=None
     +turn_deg as the correction). p.local: "point" (each cell the surface at its
     centre), "mean" (with `fine`: the mean of fine-spaced sub-samples over the cell),
     "binned" (with `fine`: binned_points, its own noise). p.mast_m > 0: only cells whose ground a mast
-    that high above the rover's ground sees through the true surface (mast_visible)."""
+    that high above the rover's ground sees through the true surface (mast_visible). With
+    "binned", p.centroids and a dict `extra`: extra["cx"], extra["cy"] are the cells' points'
+    centroids (local cells east and south of each cell's centre; NaN where unseen)."""
     R = p.radius
     src = dem if fine is None else fine
     scale = 1.0 if fine is None else dem.c / fine.c  # source cells per local cell
@@ -362,7 +369,10 @@ def make_local(dem, truth, p, rng=None, azimuth_deg=0.0, offset_m=0.0, fine=None
     binned = p.local == "binned" and fine is not None
     if binned:
         gen = points_generator(rng, p, sigma.shape)
-        h = binned_points(src, fr, fc, R, scale, turn_deg, p, dem.c, gen, p.noise and rng is not None).h
+        b = binned_points(src, fr, fc, R, scale, turn_deg, p, dem.c, gen, p.noise and rng is not None)
+        h = b.h
+        if p.centroids and extra is not None:
+            extra["cx"], extra["cy"] = b.cx, b.cy
     else:
         # sub-samples per local cell axis: one (its centre), or with "mean" and `fine`
         # the fine cells' count across it, spread evenly (a rover gridding dense stereo
@@ -390,6 +400,9 @@ def make_local(dem, truth, p, rng=None, azimuth_deg=0.0, offset_m=0.0, fine=None
         span = max(hi - lo, 1e-6)
         bad = seen & (rng.uniform(size=h.shape) < p.outlier_frac)
         h = np.where(bad, rng.uniform(lo - span, hi + span, size=h.shape), h)
+    if extra is not None and "cx" in extra:
+        extra["cx"] = np.where(seen, extra["cx"], np.nan)
+        extra["cy"] = np.where(seen, extra["cy"], np.nan)
     return np.where(seen, h, np.nan), seen
 
 
@@ -451,12 +464,14 @@ def generate(dem, n, seed, p, folder=None, fine=None):
         truth = draw_truth(dem, rng, p)
         az = float(rng.uniform(-180.0, 180.0))
         off = float(rng.uniform(-p.offset_m, p.offset_m))
-        local, seen = make_local(dem, truth, p, rng, az, off, fine)
+        extra = {}
+        local, seen = make_local(dem, truth, p, rng, az, off, fine, extra=extra)
         d = rng.uniform(-p.prior_cells, p.prior_cells, 2) * c
         if i in misses:
             d = miss_offset(gm, p) * c
         prior = (truth[0] + float(d[0]), truth[1] + float(d[1]))
-        cases.append(Case(i, truth, prior, p.window_cells * c, local, seen, az, off, prior_miss=i in misses))
+        cases.append(Case(i, truth, prior, p.window_cells * c, local, seen, az, off, extra=extra,
+                          prior_miss=i in misses))
     if folder is not None:
         write_cases(cases, c, folder)
     return cases
@@ -467,7 +482,8 @@ def write_cases(cases, c, folder):
     lines = []
     for cs in cases:
         cs.path = os.path.join(folder, f"local_{cs.index:05d}.tif")
-        write_local(cs.path, cs.local, c)
+        cen = (cs.extra["cx"], cs.extra["cy"]) if "cx" in cs.extra else None
+        write_local(cs.path, cs.local, c, cen)
         lines.append(f"{cs.path} {cs.prior[0]!r} {cs.prior[1]!r} {cs.window_m!r}\n")
     lst = os.path.join(folder, "cases.txt")
     with open(lst, "w") as f:

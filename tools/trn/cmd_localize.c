@@ -175,10 +175,50 @@ static void case_to_map(const cmd_localize_ctx_t *c, double dx_m, double dy_m,
     o->cov_en[2] = o->res.cov_m2[2] != 0.0 ? -o->res.cov_m2[2] : 0.0;
 }
 
+/* The centroid bands (--centroid-bands N) of the local DEM l read from
+ * path into cen[0] (east) and cen[1] (south): the same grid as l, and for
+ * every seen cell finite and within TRN_CENTROID_MAX. 0, or -1 with the
+ * reason (cen freed). */
+static int read_centroids(const cmd_localize_ctx_t *c, const char *path, const dem_t *l,
+                          dem_t cen[2], char *err, size_t err_len)
+{
+    char why[512];
+    int k;
+    size_t i, n = (size_t)l->width * (size_t)l->height;
+    for (k = 0; k < 2; ++k) {
+        if (dem_read(path, (int)c->centroid_band + k, TRN_MAX_DIM, &cen[k], why, sizeof why) != 0) {
+            snprintf(err, err_len, "--centroid-bands: %s", why);
+            goto bad;
+        }
+        if (cen[k].width != l->width || cen[k].height != l->height) {
+            snprintf(err, err_len,
+                     "--centroid-bands: band %ld is %d x %d cells, the heights %d x %d",
+                     c->centroid_band + k, cen[k].width, cen[k].height, l->width, l->height);
+            goto bad;
+        }
+    }
+    for (i = 0; i < n; ++i) {
+        if (isfinite(l->data[i]) && !(fabsf(cen[0].data[i]) <= (float)TRN_CENTROID_MAX &&
+                                      fabsf(cen[1].data[i]) <= (float)TRN_CENTROID_MAX)) {
+            snprintf(err, err_len,
+                     "--centroid-bands: local cell (%zu, %zu) is seen but its centroid (%g, %g) is "
+                     "missing or more than %g cells from its centre",
+                     i % (size_t)l->width, i / (size_t)l->width, (double)cen[0].data[i],
+                     (double)cen[1].data[i], TRN_CENTROID_MAX);
+            goto bad;
+        }
+    }
+    return 0;
+bad:
+    dem_free(&cen[0]);
+    dem_free(&cen[1]);
+    return -1;
+}
+
 int cmd_localize_run(const cmd_localize_ctx_t *c, const char *local_path, const double prior[2],
                      double window_m, cmd_localize_out_t *o, char *err, size_t err_len)
 {
-    dem_t l;
+    dem_t l, cen[2];
     double dx_m, dy_m, t0;
     int rx, ry, rc = CLI_BAD_INPUT;
     trn_grid_f32_t lg;
@@ -187,10 +227,12 @@ int cmd_localize_run(const cmd_localize_ctx_t *c, const char *local_path, const 
     void *wraw = NULL, *ws;
 
     memset(o, 0, sizeof *o);
+    memset(cen, 0, sizeof cen);
     if (dem_read(local_path, (int)c->local_band, TRN_MAX_DIM, &l, err, err_len) != 0) {
         return CLI_BAD_INPUT;
     }
     if (check_local(c, &l, err, err_len) != 0 ||
+        (c->centroid_band > 0 && read_centroids(c, local_path, &l, cen, err, err_len) != 0) ||
         case_window(c, &l, prior, window_m, &rx, &ry, &dx_m, &dy_m, &win, o, err, err_len) != 0) {
         goto done;
     }
@@ -210,7 +252,8 @@ int cmd_localize_run(const cmd_localize_ctx_t *c, const char *local_path, const 
     if (c->heading) {
         o->st = localize_heading(c, &lg, rx, ry, max_pts, &win, o);
     } else {
-        o->st = trn_localize_dem(&c->map, &lg, rx, ry, max_pts, &win, ws, wb, &o->res);
+        o->st = trn_localize_dem_centroids(&c->map, &lg, cen[0].data, cen[1].data, rx, ry, max_pts,
+                                           &win, ws, wb, &o->res);
     }
     o->time_ms = now_ms() - t0;
     if (o->st != TRN_OK && o->st != TRN_E_ILLCOND && o->st != TRN_E_AMBIGUOUS) {
@@ -222,6 +265,8 @@ int cmd_localize_run(const cmd_localize_ctx_t *c, const char *local_path, const 
 done:
     free(wraw);
     dem_free(&l);
+    dem_free(&cen[0]);
+    dem_free(&cen[1]);
     return rc;
 }
 
@@ -254,6 +299,7 @@ void cmd_localize_report_json(FILE *out, const cmd_localize_ctx_t *c, const char
     }
     json_str(&j, "status", status_word(o->st));
     json_bool(&j, "refined", o->res.refined != 0);
+    json_bool(&j, "centroids", c->centroid_band > 0);
     json_num(&j, "noise_scale", o->res.noise_scale);
     if (c->cfg.match == TRN_MATCH_HEIGHTS) {
         json_str(&j, "search",
@@ -408,7 +454,7 @@ static int localize_check_use(const cmd_localize_params_t *p)
 
 int cmd_localize_parse(int argc, char **argv, cmd_localize_params_t *p)
 {
-    cli_opt_t opts[12 + MAPOPT_N] = {
+    cli_opt_t opts[13 + MAPOPT_N] = {
         {"--dem", CLI_STRING, &p->dem_path, 0, 0, 1, "FILE",
          "global DEM (any GDAL raster; map frame)", 0},
         {"--local", CLI_STRING, &p->local_path, 0, 0, 0, "FILE",
@@ -423,6 +469,11 @@ int cmd_localize_parse(int argc, char **argv, cmd_localize_params_t *p)
          "prior uncertainty searched: +-R metres per axis", 0},
         {"--band", CLI_LONG, &p->band, 1, 65535, 0, "N", "band of --dem", 0},
         {"--local-band", CLI_LONG, &p->local_band, 1, 65535, 0, "N", "band of --local", 0},
+        {"--centroid-bands", CLI_LONG, &p->centroid_band, 1, 65534, 0, "N",
+         "bands N and N+1 of --local hold each cell's centroid (of the stereo points binned "
+         "into it), cells east and south of the cell's centre, |c| <= 0.5: the refinement "
+         "reads the map there (default: the cells' centres; not with a heading search)",
+         0},
         {"--max-local-cells", CLI_LONG, &p->max_local, 8, TRN_MAX_DIM, 0, "N",
          "largest local map side accepted, cells", 0},
         {"--heading-deg", CLI_DOUBLE, &p->heading_deg, -180.0, 180.0, 0, "H",
@@ -448,7 +499,7 @@ int cmd_localize_parse(int argc, char **argv, cmd_localize_params_t *p)
     cli_opt_t json_opt = {
         "--json", CLI_FLAG, &p->json, 0, 0, 0, NULL, "print one JSON object instead of the summary",
         0};
-    cli_opt_t all[13 + MAPOPT_N];
+    cli_opt_t all[14 + MAPOPT_N];
     const size_t n_all = sizeof all / sizeof all[0];
     cli_cmd_t cmd = {
         "localize",
@@ -466,9 +517,9 @@ int cmd_localize_parse(int argc, char **argv, cmd_localize_params_t *p)
         all, sizeof all / sizeof all[0]};
     int rc;
 
-    memcpy(all, opts, 12 * sizeof opts[0]);
-    mapopt_cli(&p->mo, all + 12);
-    all[12 + MAPOPT_N] = json_opt;
+    memcpy(all, opts, 13 * sizeof opts[0]);
+    mapopt_cli(&p->mo, all + 13);
+    all[13 + MAPOPT_N] = json_opt;
     rc = cli_parse(&cmd, argc, argv);
     if (rc != CLI_OK) {
         return rc;
@@ -486,6 +537,11 @@ int cmd_localize_parse(int argc, char **argv, cmd_localize_params_t *p)
                                       "one or the other (see --help)\n");
         return CLI_USAGE;
     }
+    if (p->centroid_band > 0 && p->heading) {
+        fprintf(cli_message_stream(), "trn localize: --centroid-bands does not apply to a heading "
+                                      "search or turn (--heading-deg, --heading-window-deg)\n");
+        return CLI_USAGE;
+    }
     return localize_check_use(p);
 }
 
@@ -500,6 +556,7 @@ int cmd_localize_prepare(const cmd_localize_params_t *p, cmd_localize_ctx_t *c, 
 
     memset(c, 0, sizeof *c);
     c->local_band = p->local_band;
+    c->centroid_band = p->centroid_band;
     c->max_local = p->max_local;
     c->heading = p->heading;
     c->heading_deg = p->heading_deg;

@@ -627,6 +627,8 @@ static int world_map(world_t *w, char *err, size_t err_len)
     w->hrc.noise_k_per_m = w->hcfg.noise_k_per_m;
     w->hrc.inlier_prob = w->hcfg.inlier_prob;
     w->hrc.fit_noise = w->hcfg.noise_auto;
+    w->hrc.centroid_x = NULL; /* the cells' centres */
+    w->hrc.centroid_y = NULL;
     return 0;
 }
 

@@ -131,8 +131,9 @@ typedef struct {
     double prior[2];                                /* map metres */
     double window_m;
     long band, local_band, max_local;
-    int have_prior; /* --prior given */
-    int heading;    /* search heading too (--heading-window-deg or --heading-deg given) */
+    long centroid_band; /* --centroid-bands N: bands N, N + 1 of --local; 0: none */
+    int have_prior;     /* --prior given */
+    int heading;        /* search heading too (--heading-window-deg or --heading-deg given) */
     double heading_deg, heading_win_deg; /* centre and half-window, degrees counterclockwise */
     const char *search; /* the height matcher's search: NULL (bounded), "bounded", "exhaustive" */
     long node_budget;   /* its node budget; 0 = none */
@@ -146,7 +147,7 @@ typedef struct {
     trn_map_cfg_t cfg;
     trn_map_t map;
     void *mraw;
-    long local_band, max_local;
+    long local_band, max_local, centroid_band;
     int heading;
     double heading_deg, heading_win_deg;
 } cmd_localize_ctx_t;
