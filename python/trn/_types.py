@@ -117,6 +117,7 @@ class _LocalizeRequired(TypedDict):
     failure_probability: float
     status: str
     refined: bool
+    centroids: bool  # --centroid-bands: the refinement read the map at each cell's centroid
     noise_scale: float
     prior: XY
     window_m: float
