@@ -4,7 +4,8 @@
 
     /usr/bin/python3 tools/real/bench_real.py [--dem ID ...] [--dem-file PATH ...] [--cases N] [--seed S]
         [--radius R] [--resample bilinear|cubic] [--truth-fine K] [--fine-map mean|point]
-        [--fine-local point|mean|binned] [--noise-scale F] [--outliers P] [--mast-view H]
+        [--fine-local point|mean|binned] [--centroids] [--points-draw D] [--noise-scale F]
+        [--outliers P] [--mast-view H]
         [--subcell axis|quad2d] [--prior-miss F] [--miss-max C]
         [--trn PATH] [--trn-mode auto|batch|single]
         [--out DIR] [--keep-cases] [--no-plot] [-- TRN_ARGS...]
@@ -63,8 +64,11 @@ Metrics per DEM and method: success (radial error <= 1.5 cells) rate, median err
 (cells) over all cases and over the successes, median time per localization (ms);
 trn also: confidently wrong (error > 1.5 cells, status ok, failure_probability < 0.5),
 calibration over the successful cases with a finite covariance (fraction inside the
-1, 2, 3-sigma ellipses of the reported 2x2 covariance; targets 39.3 / 86.5 / 98.9 %)
-and reliability (bins of failure_probability against the observed failure rate).
+1, 2, 3-sigma ellipses of the reported 2x2 covariance; targets 39.3 / 86.5 / 98.9 %),
+whether the covariance follows the error from case to case (`variance_by_fifth`: the
+successes sorted by the predicted variance's trace and cut into fifths, each fifth's sum of
+squared errors over its sum of traces, tightest first; 1 throughout when it does) and
+reliability (bins of failure_probability against the observed failure rate).
 With --prior-miss, trn's metrics also hold `prior_hit` (the same metrics over the cases whose
 prior does not miss) and `prior_miss` (over the missing ones: status counts, fixes = status ok,
 confidently wrong = status ok with failure_probability < 0.5 and error > 1.5 cells, the Brier
@@ -143,6 +147,11 @@ def parse_args(argv):
     ap.add_argument("--centroids", action="store_true",
                     help="with --fine-local binned: each local GeoTIFF also holds its cells' points' "
                          "centroids (bands 2 and 3), and trn reads the map there (--centroid-bands 2)")
+    ap.add_argument("--points-draw", type=int, default=0, metavar="D",
+                    help="with --fine-local binned: draw D of the stereo points and their noise (default "
+                         "0, the cases' own); the truths, priors, views and offsets stay those of draw 0, so "
+                         "draws 0..N-1 show how much of an answer's error and of its covariance comes from "
+                         "the points alone (tools/real/draw_study.py)")
     ap.add_argument("--mast-view", type=float, default=None, metavar="H",
                     help="only the local cells whose ground a mast H metres above the rover's ground "
                          "sees past the true surface's rises (default: every cell of the wedge)")
@@ -207,6 +216,10 @@ def parse_args(argv):
     if a.centroids and (a.fine_local != "binned" or a.truth_fine is None):
         raise Fail("--centroids: needs --truth-fine K --fine-local binned (only binned cells have "
                    "centroids)")
+    if a.points_draw != 0 and (a.fine_local != "binned" or a.truth_fine is None):
+        raise Fail("--points-draw: needs --truth-fine K --fine-local binned (only binned cells have points)")
+    if a.points_draw < 0:
+        raise Fail(f"--points-draw {a.points_draw}: must be >= 0")
     if a.centroids:
         a.trn_extra = list(a.trn_extra) + ["--centroid-bands", "2"]
     a.mast_view = a.mast_view or 0.0
@@ -315,6 +328,24 @@ def mahalanobis2(rec, truth):
     return float(e @ np.linalg.solve(C, e))
 
 
+def variance_by_fifth(pairs):
+    """Does the predicted covariance follow the error from case to case? pairs: (error (dx, dy),
+    cov_m2 (xx, yy, xy)) of the right answers. Sorted by the predicted variance's trace and cut
+    into fifths (tightest first), each fifth's sum of squared errors over its sum of traces. 1 in
+    every fifth: the prediction follows the errors. Above 1 in the tightest fifths and below in the
+    loosest: the predictions spread wider than the errors do (regression to the mean), which the
+    pooled coverage hides. None with fewer than 5 pairs."""
+    tr = sorted((c[0] + c[1], e[0] * e[0] + e[1] * e[1]) for e, c in pairs)
+    n = len(tr)
+    if n < 5:
+        return None
+    out = []
+    for f in range(5):
+        part = tr[f * n // 5:(f + 1) * n // 5]
+        out.append(sum(e for _, e in part) / sum(t for t, _ in part))
+    return out
+
+
 def med(v):
     v = [x for x in v if x is not None]
     return float(np.median(v)) if v else None
@@ -345,6 +376,10 @@ def metrics(records, method, split=True):
     m["calibration"] = {"n": len(d2), "target_pct": list(CAL_TARGET),
                         "inside_pct": [100.0 * sum(v <= k for v in d2) / len(d2) if d2 else None
                                        for k in CHI2_2D]}
+    pairs = [((x["x"] - r["truth"][0], x["y"] - r["truth"][1]), x["cov_m2"])
+             for r, x, s in zip(records, t, ok)
+             if s and x.get("mahalanobis2") is not None and x.get("cov_m2") is not None]
+    m["calibration"]["variance_by_fifth"] = variance_by_fifth(pairs)
     bins = []
     fp = [(x.get("failure_probability"), not s) for x, s in zip(t, ok)]
     fp = [(p, f) for p, f in fp if p is not None and math.isfinite(p)]
@@ -430,6 +465,9 @@ def print_table(dem_id, meta, ms):
     ins = " / ".join(fmt(v, ".1f") for v in cal["inside_pct"])
     print(f"  trn calibration (n = {cal['n']} successes): inside 1/2/3 sigma {ins} % "
           f"(target 39.3 / 86.5 / 98.9)")
+    if cal.get("variance_by_fifth") is not None:
+        print("  trn error^2 over predicted variance by fifth of the prediction (tightest first): "
+              + " ".join(f"{v:.2f}" for v in cal["variance_by_fifth"]))
     rel = "  ".join(f"[{b['lo']:g},{b['hi']:g}) {b['n']}: {fmt(b['observed'], '.2f')}"
                     for b in t["reliability"] if b["n"])
     print(f"  trn reliability (bin n: observed failure rate): {rel}")
@@ -476,7 +514,7 @@ def bench_dem(a, dem_id, batch):
                            noise0_m=casemod.CaseParams.noise0_m * a.noise_scale,
                            noise_k=casemod.CaseParams.noise_k * a.noise_scale,
                            local=a.fine_local if a.truth_fine else "point", mast_m=a.mast_view,
-                           centroids=a.centroids,
+                           centroids=a.centroids, points_draw=a.points_draw,
                            outlier_frac=a.outliers, prior_miss=a.prior_miss, miss_max_cells=a.miss_max)
     tmp = tempfile.mkdtemp(prefix=f"bench_real_{dem_id}_")
     try:
@@ -522,7 +560,8 @@ def bench_dem(a, dem_id, batch):
                 "opencv_mask": peers.mask_supported(), "truth_fine": a.truth_fine,
                 "fine_map": a.fine_map if a.truth_fine else None,
                 "fine_local": a.fine_local if a.truth_fine else None, "centroids": a.centroids,
-                "noise_scale": a.noise_scale, "outliers": a.outliers, "mast_view": a.mast_view,
+                "points_draw": a.points_draw, "noise_scale": a.noise_scale, "outliers": a.outliers,
+                "mast_view": a.mast_view,
                 "prior_miss": a.prior_miss, "miss_max": a.miss_max if a.prior_miss else None,
                 "fine_cell_m": fine.c if fine is not None else None,
                 "fine_path": fine.path if fine is not None else None}
@@ -567,7 +606,8 @@ def main(argv):
         batch = trn_has_batch(a.trn) if mode == "auto" else mode == "batch"
         res = {"config": {"cases": a.cases, "seed": a.seed, "radius": a.radius, "resample": a.resample,
                           "subcell": a.subcell, "truth_fine": a.truth_fine, "fine_map": a.fine_map,
-                          "fine_local": a.fine_local, "centroids": a.centroids, "mast_view": a.mast_view, "noise_scale": a.noise_scale,
+                          "fine_local": a.fine_local, "centroids": a.centroids, "points_draw": a.points_draw,
+                          "mast_view": a.mast_view, "noise_scale": a.noise_scale,
                           "outliers": a.outliers, "prior_miss": a.prior_miss,
                           "miss_max": a.miss_max if a.prior_miss else None,
                           "trn": a.trn, "trn_args": a.trn_extra, "success_cells": SUCCESS_CELLS},

@@ -213,6 +213,8 @@ class CaseParams:
     min_valid: float = 0.95
     local: str = "point"  # with `fine`: "point" | "mean" | "binned" (see make_local)
     centroids: bool = False  # "binned": each case's extra gets the cells' centroids (cx, cy)
+    points_draw: int = 0  # "binned": which draw of the points (0: the cases' own; k > 0 another
+    #                      draw of the points and their noise, the truths, priors and views kept)
     mast_m: float = 0.0  # > 0: a mast that high sees the cells (mast_visible); 0: every cell in the wedge
     outlier_frac: float = 0.0  # share of seen cells that are stereo blunders (see make_local)
     prior_miss: float = 0.0  # share of the cases whose prior misses (the truth outside the window)
@@ -319,10 +321,14 @@ def binned_points(src, fr, fc, R, scale, turn_deg, p, cell_m, gen, noisy=True):
 def points_generator(rng, p, shape):
     """The points' own generator: seeded from one normal per local cell drawn from the
     case's generator (what the other constructions draw for their noise), so that the
-    cases (truth, wedge, offset, prior) stay those of the other constructions."""
+    cases (truth, wedge, offset, prior) stay those of the other constructions. Draw
+    p.points_draw > 0 adds the draw to that seed: other points and noise, the same case."""
     if rng is None or not p.noise:
         return np.random.default_rng(0)
-    return np.random.default_rng(np.frombuffer(rng.standard_normal(shape).tobytes(), dtype=np.uint32))
+    seed = np.frombuffer(rng.standard_normal(shape).tobytes(), dtype=np.uint32)
+    if p.points_draw > 0:
+        seed = np.append(seed, np.uint32(p.points_draw))
+    return np.random.default_rng(seed)
 
 
 def mast_visible(z, r0, c0, rows, cols, mast_m):

@@ -34,6 +34,9 @@ On small synthetic DEMs with analytic surfaces (no download, ~10 s):
 * --fine-local binned: K^2 points a cell on average, their counts varying; on a plane each
   cell equals the plane at its points' centroid, which lies in the cell; the noise is the
   mean of the points' (residuals over sqrt(sum sd_i^2) / n of sd 1); the cases' draws kept;
+* --points-draw D: draw 0 gives the binned heights bit for bit; draws 1 and 2 the same next draw
+  of the case's generator and the same seen cells but those no point fell in, with heights that differ from draw 0's and
+  from each other; with other constructions, or negative, bench_real exits 1 with one line;
 * --mast-view: the ray cast (cases.mast_visible) sees every cell on flat and tilted ground;
   behind a wall of height W at distance d a mast of height H loses the cells up to
   d H / (H - W) (similar triangles); in a pit of depth D behind a rim at distance d, the
@@ -46,6 +49,13 @@ On small synthetic DEMs with analytic surfaces (no download, ~10 s):
   F = 0 the cases bit for bit; a missing case is never right in the metrics, even 0.5 cells
   off, and its failure counts 1 in the Brier score; bad values exit 1 with one line; end to
   end (when trn is built) the JSON's missing cases have their truth outside their window;
+* draw_study.analyse: a covariance free of noise gives CV 0 and the same coverage with each
+  draw's own covariance as with the case's mean; the points' and the case's parts of the true
+  trace exactly on draws b_i +- d; a covariance doubled and halved by turns gives its CV and,
+  divided by that factor as the inflation, the noise-free coverage; one draw is refused;
+* variance_by_fifth (does the covariance follow the error from case to case): errors at the
+  predicted variance give 1 in every fifth; one error over traces 1..10 gives 2 / (4k + 3) in
+  fifth k, in any order of the cases; through the metrics, over the right answers only;
 * --dem-file (a user's DEM): a missing or geographic file exits 1 with one line; a
   projected synthetic DEM runs end to end under its file name (when trn is built);
 * if build/host-release/trn exists: trn localize recovers the noiseless integer case
@@ -431,7 +441,10 @@ def test_cli():
                       (["--noise-scale", "nan"], "--noise-scale nan"), (["--fine-local", "median"], "--fine-local median"),
                       (["--outliers", "1"], "--outliers 1"), (["--outliers", "-0.1"], "--outliers -0.1"),
                       (["--mast-view", "0"], "--mast-view 0"), (["--mast-view", "inf"], "--mast-view inf"),
-                      (["--fine-local", "binned"], "--fine-local binned without --truth-fine")):
+                      (["--fine-local", "binned"], "--fine-local binned without --truth-fine"),
+                      (["--points-draw", "1"], "--points-draw without binned cells"),
+                      (["--truth-fine", "2", "--fine-local", "binned", "--points-draw", "-1"], "--points-draw -1"),
+                      (["--points-draw", "x"], "--points-draw x")):
         r = subprocess.run([sys.executable, b] + args, capture_output=True, text=True)
         check(r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1 and r.stdout == "",
               f"bench_real {what}: exit 1, one line ({r.stderr.strip()})")
@@ -510,6 +523,28 @@ def test_binned():
     cm.make_local(g, truth, pn, r1, 0.0, 0.0, fine)
     cm.make_local(g, truth, cm.CaseParams(radius=10, full_view=True, min_range_cells=0), r2, 0.0, 0.0, fine)
     check(r1.uniform() == r2.uniform(), "binned: the case generator's next draw as with --fine-local point")
+    # --points-draw: draw 0 the cases bit for bit; another draw the same truths, priors and
+    # seen cells (full view) with other points (other heights), the next draw unchanged
+    hills_fine = synth_dem(hills, n=240, c=cf)
+    hg = cm.block_average(hills_fine, 2)
+    runs = {}
+    for d in (0, 1, 2):
+        pd = cm.CaseParams(radius=8, full_view=True, min_range_cells=0, local="binned", points_draw=d)
+        rng = np.random.default_rng(3)
+        h, seen = cm.make_local(hg, truth, pd, rng, 0.0, 0.0, hills_fine)
+        runs[d] = (h, seen, rng.uniform())
+    ref_h, _ = cm.make_local(hg, truth, cm.CaseParams(radius=8, full_view=True, min_range_cells=0,
+                                                               local="binned"), np.random.default_rng(3),
+                                       0.0, 0.0, hills_fine)
+    check(np.array_equal(runs[0][0], ref_h, equal_nan=True), "--points-draw 0: the binned heights bit for bit")
+    # a cell no point fell in is unseen: at K = 2 about e^-4 of them, different ones each draw
+    flip = [float(np.mean(runs[d][1] != runs[0][1])) for d in (1, 2)]
+    same = all(runs[d][2] == runs[0][2] for d in (1, 2))
+    moved = [float(np.nanmax(np.abs(runs[d][0] - runs[0][0]))) for d in (1, 2)]
+    check(same and max(flip) < 0.06 and min(moved) > 1e-3
+          and not np.array_equal(runs[1][0], runs[2][0], equal_nan=True),
+          f"--points-draw 1, 2: the case generator's next draw kept, the seen cells but the empty ones "
+          f"({flip} differ), other heights (up to {[round(v, 2) for v in moved]} m apart)")
 
 
 def test_rover_map_error():
@@ -613,6 +648,86 @@ def test_outliers():
     m = float(np.mean(shares))
     # 20 maps of ~390 seen cells at p = 0.2: the mean share's sd is about 0.005
     check(abs(m - 0.2) < 0.025, f"--outliers 0.2: {100 * m:.1f} % of the seen cells changed (expected 20 %)")
+
+
+def test_draw_study():
+    import draw_study as ds
+    # every draw's covariance its case's: the own and the case-mean coverage agree, CV 0
+    rng = np.random.default_rng(11)
+    n, m = 40, 25
+    var = rng.uniform(0.5, 2.0, n)
+    err = rng.standard_normal((n, m, 2)) * np.sqrt(var)[:, None, None]
+    cov = np.zeros((n, m, 3))
+    cov[:, :, 0] = cov[:, :, 1] = var[:, None]
+    r = ds.analyse(err, cov, np.ones((n, m)))
+    check(r["cv_median"] == 0.0 and r["coverage_own"] == r["coverage_case_mean"]
+          and r["coverage_own"] == r["coverage_own_no_inflation"],
+          f"draw_study: a noise-free covariance: CV 0, own coverage = the case mean's ({r['coverage_own']})")
+    # the parts of the true trace, exactly: case i's draws are b_i + (+-d, 0) in pairs
+    b = rng.uniform(-1.0, 1.0, (n, 2))
+    d = 0.3
+    sign = np.where(np.arange(m - 1) % 2 == 0, 1.0, -1.0)
+    e2 = np.zeros((n, m - 1, 2))
+    e2[:, :, 0] = b[:, 0:1] + d * sign
+    e2[:, :, 1] = b[:, 1:2]
+    c2 = np.ones((n, m - 1, 3)) * np.array([1.0, 1.0, 0.0])
+    r = ds.analyse(e2, c2, np.ones((n, m - 1)))
+    k = m - 1  # even: the draws' mean is b exactly
+    want_pts = d * d * k / (k - 1)
+    want_case = float(((b ** 2).sum(axis=1)).mean()) - want_pts / k
+    check(abs(r["points_trace"] - want_pts) < 1e-12 and abs(r["case_trace"] - want_case) < 1e-12,
+          f"draw_study: the points' part {r['points_trace']:.6f} ({want_pts:.6f}), the case's "
+          f"{r['case_trace']:.6f} ({want_case:.6f})")
+    # a covariance that doubles and halves from draw to draw: CV 0.6 (sd of (2, 0.5) over their
+    # mean 1.25), its own coverage differs from the case mean's; the inflation divides out
+    c3 = cov.copy()
+    c3[:, 0::2, 0:2] *= 2.0
+    c3[:, 1::2, 0:2] *= 0.5
+    infl = np.where(np.arange(m) % 2 == 0, 2.0, 0.5)[None, :] * np.ones((n, 1))
+    r = ds.analyse(err, c3, infl)
+    r0 = ds.analyse(err, cov, np.ones((n, m)))
+    cv_want = float(np.std([2.0, 0.5] * 12 + [2.0]) / np.mean([2.0, 0.5] * 12 + [2.0]))
+    check(abs(r["cv_median"] - cv_want) < 1e-12 and r["coverage_own"] != r["coverage_case_mean"]
+          and r["coverage_own_no_inflation"] == r0["coverage_own"],
+          f"draw_study: a covariance x2 and x0.5 by turns: CV {r['cv_median']:.4f} ({cv_want:.4f}); "
+          f"without the inflation the noise-free coverage")
+    try:
+        ds.analyse(err[:, :1], cov[:, :1], np.ones((n, 1)))
+        check(False, "draw_study: one draw refused")
+    except ds.Fail:
+        check(True, "draw_study: one draw refused")
+    r = subprocess.run([sys.executable, os.path.join(HERE, "draw_study.py"), "--dem", "aletsch", "--draws", "1"],
+                       capture_output=True, text=True)
+    check(r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1,
+          f"draw_study --draws 1: exit 1, one line ({r.stderr.strip()})")
+
+
+def test_variance_by_fifth():
+    import bench_real as br
+    rng = np.random.default_rng(5)
+    tr = rng.uniform(1.0, 100.0, 50)
+    # errors exactly at the predicted variance: 1 in every fifth
+    v = br.variance_by_fifth([((math.sqrt(t), 0.0), (0.25 * t, 0.75 * t, 0.1 * t)) for t in tr])
+    check(v is not None and max(abs(x - 1.0) for x in v) < 1e-12,
+          f"variance_by_fifth: errors at the prediction give 1 in every fifth ({v})")
+    # one error for every case, traces 1..10: fifth k holds traces 2k+1, 2k+2 -> 2 / (4k + 3)
+    pairs = [((0.6, -0.8), (0.5 * t, 0.5 * t, 0.0)) for t in range(1, 11)]
+    want = [2.0 / (4 * k + 3) for k in range(5)]
+    v = br.variance_by_fifth(pairs)
+    v2 = br.variance_by_fifth([pairs[k] for k in rng.permutation(10)])
+    check(v is not None and max(abs(a - b) for a, b in zip(v, want)) < 1e-12 and v2 == v,
+          f"variance_by_fifth: a constant error over traces 1..10 gives 2 / (4k + 3) ({v}), in any order")
+    check(br.variance_by_fifth(pairs[:4]) is None, "variance_by_fifth: fewer than 5 right answers give None")
+    # through the metrics: a wrong answer (err > 1.5 cells) is not counted
+    recs = [{"truth": [100.0, 200.0], "trn": {"err_cells": 0.1, "status": "ok", "failure_probability": 0.0,
+                                              "mahalanobis2": 1.0, "x": 100.0 + e[0], "y": 200.0 + e[1],
+                                              "cov_m2": list(c), "time_ms": 1.0}} for e, c in pairs]
+    recs.append({"truth": [0.0, 0.0], "trn": {"err_cells": 3.0, "status": "ok", "failure_probability": 0.0,
+                                              "mahalanobis2": 1.0, "x": 1e3, "y": 0.0, "cov_m2": [1.0, 1.0, 0.0],
+                                              "time_ms": 1.0}})
+    got = br.metrics(recs, "trn")["calibration"]["variance_by_fifth"]
+    check(got is not None and max(abs(a - b) for a, b in zip(got, want)) < 1e-9,
+          f"metrics: variance_by_fifth over the right answers only ({got})")
 
 
 def test_prior_miss():
@@ -771,6 +886,8 @@ def main():
     test_binned()
     test_mast_view()
     test_rover_map_error()
+    test_variance_by_fifth()
+    test_draw_study()
     test_prior_miss()
     test_dem_file()
     if FAILS:
