@@ -68,8 +68,8 @@ int trn_py_field(trn_py_map_t *m, int argc, char **argv, const char *key,
 
 int trn_py_options(const char *cmd, char **json, char *err, size_t err_len);
 int trn_py_gdal(char *err, size_t err_len);
-int trn_py_raster_put(const float *data, int width, int height, const double *gt, int has_nodata,
-                      double nodata, const char *crs, const char *label, char *name,
+int trn_py_raster_put(const float *data, int width, int height, int bands, const double *gt,
+                      int has_nodata, double nodata, const char *crs, const char *label, char *name,
                       size_t name_len, char *err, size_t err_len);
 int trn_py_raster_name(char *name, size_t name_len);
 int trn_py_crs_wkt(const char *crs, char **wkt, char *err, size_t err_len);
@@ -332,12 +332,12 @@ int trn_py_options(const char *cmd, char **json, char *err, size_t err_len)
  * with the reason, which names the fix. */
 int trn_py_gdal(char *err, size_t err_len) { return trn_gdal_load(err, err_len) == 0 ? 0 : 1; }
 
-int trn_py_raster_put(const float *data, int width, int height, const double *gt, int has_nodata,
-                      double nodata, const char *crs, const char *label, char *name,
+int trn_py_raster_put(const float *data, int width, int height, int bands, const double *gt,
+                      int has_nodata, double nodata, const char *crs, const char *label, char *name,
                       size_t name_len, char *err, size_t err_len)
 {
-    return dem_mem_put(data, width, height, gt, has_nodata, nodata, crs, label, name, name_len, err,
-                       err_len) == 0
+    return dem_mem_put(data, width, height, bands, gt, has_nodata, nodata, crs, label, name,
+                       name_len, err, err_len) == 0
                ? CLI_OK
                : CLI_BAD_INPUT;
 }

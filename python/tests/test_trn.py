@@ -49,6 +49,48 @@ def test_localize_equals_cli(cli, dems, gmap):
     assert abs(want["x_m"] - dems["truth"][0]) < 0.05 and abs(want["y_m"] - dems["truth"][1]) < 0.05
 
 
+def test_localize_centroids(cli, dems, gmap, tmp_path):
+    """A binned local map's centroids given as arrays (centroids=(cx, cy)) equal the command
+    line's --centroid-bands 2 on a 3-band file, key for key, and move the answer; each bad
+    centroid input is refused."""
+    gdal = pytest.importorskip("osgeo.gdal")
+    a, gt, wkt = read(dems["local"])
+    rng = np.random.default_rng(4)
+    cx = rng.uniform(-0.4, 0.4, a.shape).astype(np.float32)
+    cy = rng.uniform(-0.4, 0.4, a.shape).astype(np.float32)
+    path = str(tmp_path / "local3.tif")
+    ds = gdal.GetDriverByName("GTiff").Create(path, a.shape[1], a.shape[0], 3, gdal.GDT_Float32)
+    ds.SetGeoTransform(gt)
+    for k, band in enumerate((a, cx, cy)):
+        ds.GetRasterBand(k + 1).WriteArray(band)
+    ds = None
+    want = cli.json("localize", "--dem", dems["global"], "--local", path, "--prior", "1002.9,2003.3",
+                    "--window-m", 0.5, "--centroid-bands", 2)
+    got = gmap.localize(a, prior=PRIOR, window_m=0.5, transform=gt, crs=wkt, centroids=(cx, cy))
+    same(got, want, skip=("time_ms",))
+    plain = gmap.localize(a, prior=PRIOR, window_m=0.5, transform=gt, crs=wkt)
+    assert got["centroids"] is True and plain["centroids"] is False
+    assert abs(got["x_m"] - plain["x_m"]) + abs(got["y_m"] - plain["y_m"]) > 1e-4
+    # the local array's no-data value is the heights' alone: a centroid equal to it stays a centroid
+    zero = np.zeros_like(cx)
+    assert gmap.localize(a, prior=PRIOR, window_m=0.5, transform=gt, crs=wkt, nodata=0.0,
+                         centroids=(zero, zero))["status"] == plain["status"]
+    bad = cx.copy()
+    bad[5, 7] = 0.7
+    for kw, why in (({"local": dems["local"], "centroids": (cx, cy)}, "for an array local map"),
+                    ({"centroids": (cx[:, :-1], cy)}, "band 2 is 31 x 32 cells"),
+                    ({"centroids": (cx, cy), "centroid_bands": 2}, "give one of them"),
+                    ({"centroids": cx}, "a pair of arrays"),
+                    ({"centroids": (bad, cy)}, "more than 0.5 cells from its centre"),
+                    ({"centroid_bands": 2}, "has 1 band, no band 2")):
+        args = {"local": a, "transform": gt, "crs": wkt, **kw}
+        if isinstance(args["local"], str):
+            args.pop("transform")
+            args.pop("crs")
+        with pytest.raises(trn.TrnError, match=why):
+            gmap.localize(prior=PRIOR, window_m=0.5, **args)
+
+
 class AffineLike:
     """What rasterio's affine.Affine offers: to_gdal()."""
 

@@ -223,10 +223,22 @@ class _MemRaster:
     """A 2-D array registered with the C side (trn_py_raster_put) under a
     name "trn-mem:N" the commands take in place of a path. The heights are
     handed by pointer (float32, C order: copied only when the array is not),
-    and kept alive here until the name is dropped (close, or collection)."""
+    and kept alive here until the name is dropped (close, or collection).
+    extra: more bands of the same shape after the heights (bands 2, 3, ...;
+    the no-data value is the heights' alone); the bands are then copied into
+    one (bands, rows, columns) array."""
 
-    def __init__(self, heights: Any, transform: Any, crs: CrsLike, nodata: Optional[float], label: str) -> None:
+    def __init__(self, heights: Any, transform: Any, crs: CrsLike, nodata: Optional[float], label: str,
+                 extra: Sequence[Any] = ()) -> None:
         a = _check_array(heights)
+        bands = 1 + len(extra)
+        if extra:
+            more = [_check_array(b) for b in extra]
+            for k, b in enumerate(more):
+                if b.shape != a.shape:
+                    raise TrnError("bad_input", f"{label}: band {k + 2} is {b.shape[1]} x {b.shape[0]} cells, "
+                                                f"the heights {a.shape[1]} x {a.shape[0]}")
+            a = np.ascontiguousarray(np.stack([a] + more), dtype=np.float32)
         gt = _geotransform(transform)
         text = _crs_text(crs)
         if nodata is not None:
@@ -239,7 +251,7 @@ class _MemRaster:
         gtc = (ctypes.c_double * 6)(*gt)
         name = ctypes.create_string_buffer(_L.NAME_LEN)
         err = ctypes.create_string_buffer(_L.ERR_LEN)
-        rc = _lib.trn_py_raster_put(a.ctypes.data_as(_L.F32P), a.shape[1], a.shape[0], gtc,
+        rc = _lib.trn_py_raster_put(a.ctypes.data_as(_L.F32P), a.shape[-1], a.shape[-2], bands, gtc,
                                     1 if nodata is not None else 0, nd, _cbuf(text), label.encode(), name,
                                     _L.NAME_LEN, err, _L.ERR_LEN)
         if rc != 0:
@@ -255,14 +267,15 @@ class _MemRaster:
 
 
 def _raster_source(src: Any, transform: Any, crs: CrsLike, nodata: Optional[float], what: str,
-                   label: str) -> Tuple[str, Optional[_MemRaster]]:
-    """(path or in-memory name, the registration to keep alive)."""
+                   label: str, extra: Sequence[Any] = ()) -> Tuple[str, Optional[_MemRaster]]:
+    """(path or in-memory name, the registration to keep alive); extra: more
+    bands for an array (_MemRaster)."""
     if isinstance(src, (str, os.PathLike)):
         if transform is not None or crs is not None:
             raise TrnError("bad_input", f"{what}: transform and crs are for arrays; a file carries its own")
         _need_gdal(f"{what} {os.fspath(src)!s}")
         return str(os.fspath(src)), None
-    r = _MemRaster(src, transform, crs, nodata, label)
+    r = _MemRaster(src, transform, crs, nodata, label, extra)
     return r.path, r
 
 
@@ -518,13 +531,31 @@ class Map:
 
     def localize(self, local: Source, prior: Tuple[float, float], window_m: Optional[float] = None,
                  transform: Any = None, crs: CrsLike = None, nodata: Optional[float] = None,
-                 **options: Any) -> LocalizeResult:
+                 centroids: Optional[Tuple[Any, Any]] = None, **options: Any) -> LocalizeResult:
         """The rover's position from its local DEM around prior (x, y map
         metres) within +-window_m metres (None: the command's default).
         local: a 2-D array in the rover frame (rover at 0,0; x east, y north)
-        with its transform (and crs, nodata), or a path. Returns the dict of
-        `trn localize --json` (LocalizeResult)."""
-        lpath, keep = _raster_source(local, transform, crs, nodata, "local", "local array")
+        with its transform (and crs, nodata), or a path. centroids: with an
+        array, (cx, cy), two arrays of its shape: where in each seen cell its
+        height was measured, cells east and south of the cell's centre
+        (binned stereo points: their centroid; within 0.5; NaN where unseen),
+        what `trn localize --centroid-bands` reads from a file's bands (for a
+        file, pass centroid_bands=N). Returns the dict of `trn localize
+        --json` (LocalizeResult)."""
+        extra: Sequence[Any] = ()
+        if centroids is not None:
+            if isinstance(local, (str, os.PathLike)):
+                raise TrnError("bad_input", "centroids: for an array local map; a file gives its centroids "
+                                            "as bands (centroid_bands=N)")
+            if options.get("centroid_bands") is not None:
+                raise TrnError("bad_input", "centroids and centroid_bands: give one of them")
+            try:
+                cx, cy = centroids
+            except (TypeError, ValueError) as e:
+                raise TrnError("bad_input", "centroids: want a pair of arrays (cx, cy)") from e
+            extra = (cx, cy)
+            options["centroid_bands"] = 2
+        lpath, keep = _raster_source(local, transform, crs, nodata, "local", "local array", extra)
         try:
             argv = _argv("localize", {"dem": self.path, "band": self.band, "local": lpath, "prior": prior,
                                       "window_m": window_m, **options})

@@ -463,9 +463,9 @@ static char *handed_wkt(OGRSpatialReferenceH srs, const char *wkt, OGRSpatialRef
 typedef struct mem_raster {
     struct mem_raster *next;
     unsigned long id;
-    const float *data; /* borrowed (input) */
+    const float *data; /* borrowed (input): `bands` planes of width x height */
     float *owned;      /* owned (output), else NULL */
-    int width, height;
+    int width, height, bands;
     double gt[6];
     int has_nodata;
     double nodata;
@@ -553,9 +553,9 @@ static const char *wkt_kind(const char *crs)
     return NULL;
 }
 
-int dem_mem_put(const float *data, int width, int height, const double gt[6], int has_nodata,
-                double nodata, const char *crs, const char *label, char *name, size_t name_len,
-                char *err, size_t err_len)
+int dem_mem_put(const float *data, int width, int height, int bands, const double gt[6],
+                int has_nodata, double nodata, const char *crs, const char *label, char *name,
+                size_t name_len, char *err, size_t err_len)
 {
     mem_raster_t *e;
     int i;
@@ -568,6 +568,11 @@ int dem_mem_put(const float *data, int width, int height, const double gt[6], in
     }
     if (width < 1 || height < 1) {
         set_err(err, err_len, "'%s' is %d x %d cells: it has no cells", label, width, height);
+        return -1;
+    }
+    if (bands < 1 || bands > DEM_MEM_MAX_BANDS) {
+        set_err(err, err_len, "'%s' has %d bands; an in-memory raster has 1 to %d", label, bands,
+                DEM_MEM_MAX_BANDS);
         return -1;
     }
     for (i = 0; i < 6; ++i) {
@@ -611,6 +616,7 @@ int dem_mem_put(const float *data, int width, int height, const double gt[6], in
     e->data = data;
     e->width = width;
     e->height = height;
+    e->bands = bands;
     memcpy(e->gt, gt, sizeof e->gt);
     e->has_nodata = has_nodata;
     e->nodata = nodata;
@@ -652,7 +658,7 @@ void dem_mem_drop(const char *name)
  * geotransform, no-data, CRS text (malloc'd or NULL) and label (malloc'd). */
 typedef struct {
     float *data;
-    int width, height;
+    int width, height, bands;
     double gt[6];
     int has_nodata;
     double nodata;
@@ -668,7 +674,8 @@ static void mem_copy_free(mem_copy_t *c)
     memset(c, 0, sizeof *c);
 }
 
-static int mem_copy(const char *path, mem_copy_t *c, char *err, size_t err_len)
+/* band (1-based) of it, or -1 with a reason when it has no such band. */
+static int mem_copy(const char *path, int band, mem_copy_t *c, char *err, size_t err_len)
 {
     mem_raster_t *e;
     size_t n;
@@ -678,6 +685,12 @@ static int mem_copy(const char *path, mem_copy_t *c, char *err, size_t err_len)
     if (e == NULL) {
         pthread_mutex_unlock(&mem_lock);
         set_err(err, err_len, "'%s' names no in-memory raster (freed, or never made)", path);
+        return -1;
+    }
+    if (band < 1 || band > e->bands) {
+        pthread_mutex_unlock(&mem_lock);
+        set_err(err, err_len, "'%s' has %d band%s, no band %d", e->label, e->bands,
+                e->bands == 1 ? "" : "s", band);
         return -1;
     }
     n = (size_t)e->width * (size_t)e->height;
@@ -690,8 +703,10 @@ static int mem_copy(const char *path, mem_copy_t *c, char *err, size_t err_len)
         mem_copy_free(c);
         return -1;
     }
-    memcpy(c->data, e->owned != NULL ? e->owned : e->data, n * sizeof *c->data);
+    memcpy(c->data, e->owned != NULL ? e->owned : e->data + (size_t)(band - 1) * n,
+           n * sizeof *c->data);
     c->width = e->width;
+    c->bands = e->bands;
     c->height = e->height;
     memcpy(c->gt, e->gt, sizeof c->gt);
     c->has_nodata = e->has_nodata;
@@ -713,10 +728,11 @@ static int mem_read(const char *path, int band, int max_dim, dem_t *dem, char *e
     double vert_to_m = 0.0, zunit = 1.0, cell;
     const char *kind;
 
-    if (mem_copy(path, &c, err, err_len) != 0) {
+    if (mem_copy(path, band, &c, err, err_len) != 0) {
         return -1;
     }
-    if (check_grid(c.label, band, 1, c.width, c.height, max_dim, 1, c.gt, err, err_len) != 0) {
+    if (check_grid(c.label, band, c.bands, c.width, c.height, max_dim, 1, c.gt, err, err_len) !=
+        0) {
         goto fail;
     }
     if (c.crs != NULL && gdal_ready(NULL, 0) == 0) {
@@ -748,8 +764,10 @@ static int mem_read(const char *path, int band, int max_dim, dem_t *dem, char *e
                 cell, fabs(c.gt[5]));
         goto fail;
     }
-    heights_to_m(c.data, (size_t)c.width * (size_t)c.height, c.has_nodata, c.nodata, 1.0, 0.0,
-                 zunit);
+    /* the no-data value and the vertical unit are the heights' (band 1); later
+     * bands are taken as stored (NaN and +-inf still "not seen") */
+    heights_to_m(c.data, (size_t)c.width * (size_t)c.height, band == 1 ? c.has_nodata : 0, c.nodata,
+                 1.0, 0.0, band == 1 ? zunit : 1.0);
     north_up(c.data, c.width, c.height, c.gt);
     if (srs != NULL) {
         char *wkt = NULL;
@@ -810,6 +828,7 @@ static int mem_write(const char *path, const float *data, int width, int height,
     e->id = id;
     e->width = width;
     e->height = height;
+    e->bands = 1;
     memcpy(e->gt, gt, sizeof e->gt);
     e->has_nodata = 0;
     pthread_mutex_lock(&mem_lock);
@@ -909,12 +928,7 @@ int dem_read_raw(const char *path, int band, dem_t *dem, char *err, size_t err_l
     }
     if (dem_is_mem(path)) {
         mem_copy_t c;
-        if (mem_copy(path, &c, err, err_len) != 0) {
-            return -1;
-        }
-        if (band != 1) {
-            set_err(err, err_len, "'%s' has 1 band, no band %d", c.label, band);
-            mem_copy_free(&c);
+        if (mem_copy(path, band, &c, err, err_len) != 0) {
             return -1;
         }
         dem->data = c.data;

@@ -91,8 +91,16 @@ char *dem_srs_to_wkt(const char *user, char *err, size_t err_len);
 /* 1 when path is an in-memory raster name (DEM_MEM_PREFIX...), else 0. */
 int dem_is_mem(const char *path);
 
-/* Register width x height heights (row-major, row 0 at gt[3]) as an input
- * raster and write its name into name. data is NOT copied: it must stay
+/* Most bands an in-memory input raster holds. */
+#define DEM_MEM_MAX_BANDS 8
+
+/* Register `bands` planes of width x height values (each row-major, row 0 at
+ * gt[3]; band k, 1-based, at data + (k - 1) width height) as an input raster
+ * and write its name into name: band 1 the heights, later bands what an
+ * option reads by band (trn localize --centroid-bands). Every band shares
+ * the geotransform and the CRS; the no-data value and the CRS's vertical
+ * unit apply to band 1 only, later bands are read as stored (NaN and +-inf
+ * still "not seen"). data is NOT copied: it must stay
  * valid and unchanged until dem_mem_drop(name); each dem_read copies it. gt
  * is the GDAL geotransform (finite; rotation and non-square cells are
  * refused when read, as a file's); has_nodata/nodata a value that means
@@ -106,9 +114,9 @@ int dem_is_mem(const char *path);
  * names a geographic or geocentric CRS is refused: the geotransform and the
  * heights are then taken as metres, whatever the text says.
  * Returns 0, or -1 with a reason. */
-int dem_mem_put(const float *data, int width, int height, const double gt[6], int has_nodata,
-                double nodata, const char *crs, const char *label, char *name, size_t name_len,
-                char *err, size_t err_len);
+int dem_mem_put(const float *data, int width, int height, int bands, const double gt[6],
+                int has_nodata, double nodata, const char *crs, const char *label, char *name,
+                size_t name_len, char *err, size_t err_len);
 
 /* A fresh in-memory name, for a command to write an output to. 0, or -1
  * when name_len is too short. */
