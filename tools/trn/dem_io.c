@@ -674,7 +674,8 @@ static void mem_copy_free(mem_copy_t *c)
     memset(c, 0, sizeof *c);
 }
 
-/* band (1-based) of it, or -1 with a reason when it has no such band. */
+/* c: a copy of band `band` (1-based) of the raster named path. 0, or -1 with
+ * a reason (no such raster or band, out of memory). */
 static int mem_copy(const char *path, int band, mem_copy_t *c, char *err, size_t err_len)
 {
     mem_raster_t *e;
