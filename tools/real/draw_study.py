@@ -41,8 +41,7 @@ import dems  # noqa: E402
 CHI2 = (1.0, 4.0, 9.0)
 
 
-class Fail(Exception):
-    pass
+Fail = bench_real.Fail  # one refusal type for the study and the benchmark it runs
 
 
 def mahalanobis2(e, c):
@@ -109,9 +108,12 @@ def parse_args(argv):
     return a
 
 
-def read_draw(path, cell):
-    d = json.load(open(path))["dems"]
-    cs = next(iter(d.values()))["cases"]
+def read_draw(path):
+    """One draw's bench.json: per case (error x, y, covariance xx, yy, xy, inflation times
+    shoulders) in cells, NaN where the answer is wrong or has no covariance."""
+    with open(path) as f:
+        dem = next(iter(json.load(f)["dems"].values()))
+    cell, cs = dem["meta"]["cell_m"], dem["cases"]
     rows = []
     for c in cs:
         t = c["trn"]
@@ -145,9 +147,7 @@ def main(argv):
             if rc != 0:
                 last = (log.getvalue().strip().splitlines() or [""])[-1]
                 raise Fail(f"draw {d}: {last}")
-            path = os.path.join(out, "bench.json")
-            cell = next(iter(json.load(open(path))["dems"].values()))["meta"]["cell_m"]
-            runs.append(read_draw(path, cell))
+            runs.append(read_draw(os.path.join(out, "bench.json")))
         x = np.stack(runs, axis=1)  # cases, draws, 6
         keep = np.isfinite(x).all(axis=(1, 2))
         x = x[keep]
