@@ -524,11 +524,11 @@ trn_status_t trn_loc_highpass_by_map_(const trn_map_t *map, const trn_grid_f32_t
 /* The refinement from the voxel search's integer pose (map->cfg.refine):
  * on success its pose and covariance replace eq. 6's. */
 static void refine_voxel(const trn_map_t *map, const trn_grid_f32_t *local,
-                         const float *const centroid[2], int32_t rx, int32_t ry,
+                         const trn_local_cells_t *cells, int32_t rx, int32_t ry,
                          trn_loc_result_t *out)
 {
     trn_refine_cfg_t rc;
-    trn_loc_refine_cfg_(map, out, centroid, &rc);
+    trn_loc_refine_cfg_(map, out, cells, &rc);
     out->refined = 0;
     out->misfit = 0;
     if (trn_refine_pose(&map->heights, local, rx, ry, out->ix, out->iy, &rc, &out->refinement) ==
@@ -548,7 +548,7 @@ static trn_status_t accept(const trn_map_t *map, trn_status_t st, const trn_loc_
 }
 
 trn_status_t trn_loc_voxel_dem_(const trn_map_t *map, const trn_grid_f32_t *local_dem,
-                                const float *const centroid[2], int32_t rover_x, int32_t rover_y,
+                                const trn_local_cells_t *cells, int32_t rover_x, int32_t rover_y,
                                 size_t max_points, const trn_window_t *win, void *ws,
                                 size_t ws_bytes, trn_loc_result_t *out)
 {
@@ -602,7 +602,7 @@ trn_status_t trn_loc_voxel_dem_(const trn_map_t *map, const trn_grid_f32_t *loca
     }
     if ((st == TRN_OK || st == TRN_E_ILLCOND) && map->cfg.refine != 0) {
         out->noise_scale = 1.0;
-        refine_voxel(map, local_dem, centroid, rover_x, rover_y, out);
+        refine_voxel(map, local_dem, cells, rover_x, rover_y, out);
         /* No consistent height match around the voxel optimum: flag it. */
         st = out->refined && !out->misfit ? TRN_OK : TRN_E_ILLCOND;
     }

@@ -36,10 +36,11 @@ void trn_loc_take_refinement_(const trn_map_t *map, trn_loc_result_t *out)
 }
 
 void trn_loc_refine_cfg_(const trn_map_t *map, const trn_loc_result_t *out,
-                         const float *const centroid[2], trn_refine_cfg_t *rc)
+                         const trn_local_cells_t *cells, trn_refine_cfg_t *rc)
 {
-    rc->centroid_x = centroid != NULL ? centroid[0] : NULL;
-    rc->centroid_y = centroid != NULL ? centroid[1] : NULL;
+    rc->centroid_x = cells != NULL ? cells->centroid_x : NULL;
+    rc->centroid_y = cells != NULL ? cells->centroid_y : NULL;
+    rc->point_count = cells != NULL ? cells->point_count : NULL;
     rc->cell_m = map->cfg.terrain.cell_m;
     rc->noise_m = (float)((double)map->cfg.noise_m * out->noise_scale);
     rc->noise_k_per_m = (float)((double)map->cfg.noise_k_per_m * out->noise_scale);

@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* localize_dem.c - the entry of localization from a local DEM
- * (trn_localize_dem, trn_localize_dem_centroids and their workspace size, see
+ * (trn_localize_dem, trn_localize_dem_centroids, trn_localize_dem_cells and
+ * their workspace size, see
  * trn/localize.h): the
  * checks, then one of two paths, each in a file below this one
  * (docs/architecture.md, "The localization stack"): the height matcher
@@ -48,27 +49,28 @@ size_t trn_localize_dem_workspace_bytes(const trn_map_t *map, int32_t width, int
     return trn_loc_voxel_dem_bytes_(map, width, height, max_points, win);
 }
 
-/* The two entries' one body (inline in each: a wrapper's frame would sit on
- * the deepest stack). */
+/* The three entries' one body (inline in each: a wrapper's frame would sit
+ * on the deepest stack). cells NULL: nothing known of the local cells. */
 static inline trn_status_t localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_dem,
-                                        const float *centroid_x, const float *centroid_y,
-                                        int32_t rover_x, int32_t rover_y, size_t max_points,
-                                        const trn_window_t *win, void *ws, size_t ws_bytes,
-                                        trn_loc_result_t *out)
+                                        const trn_local_cells_t *cells, int32_t rover_x,
+                                        int32_t rover_y, size_t max_points, const trn_window_t *win,
+                                        void *ws, size_t ws_bytes, trn_loc_result_t *out)
 {
     trn_status_t st;
     trn_heading_result_t *res;
     size_t at, total;
-    const float *cen[2];
 
     if (map == NULL || local_dem == NULL || win == NULL || ws == NULL || out == NULL ||
-        (centroid_x == NULL) != (centroid_y == NULL)) {
+        (cells != NULL && (cells->centroid_x == NULL) != (cells->centroid_y == NULL))) {
         return TRN_E_NULL;
     }
     if ((st = trn_grid_f32_check(local_dem)) != TRN_OK) {
         return st;
     }
-    if (!trn_loc_map_ok_(map) || !trn_refine_centroids_ok_(local_dem, centroid_x, centroid_y)) {
+    if (!trn_loc_map_ok_(map) ||
+        (cells != NULL &&
+         (!trn_refine_centroids_ok_(local_dem, cells->centroid_x, cells->centroid_y) ||
+          !trn_refine_counts_ok_(local_dem, cells->point_count)))) {
         return TRN_E_ARG;
     }
     if (max_points == 0u || max_points > (size_t)TRN_MAX_DIM * (size_t)TRN_MAX_DIM) {
@@ -77,11 +79,9 @@ static inline trn_status_t localize_dem(const trn_map_t *map, const trn_grid_f32
     if (!trn_loc_window_ok_(map, win)) {
         return TRN_E_RANGE;
     }
-    cen[0] = centroid_x;
-    cen[1] = centroid_y;
     if (map->cfg.match != TRN_MATCH_HEIGHTS) {
-        return trn_loc_voxel_dem_(map, local_dem, centroid_x != NULL ? cen : NULL, rover_x, rover_y,
-                                  max_points, win, ws, ws_bytes, out);
+        return trn_loc_voxel_dem_(map, local_dem, cells, rover_x, rover_y, max_points, win, ws,
+                                  ws_bytes, out);
     }
     total = heights_bytes(map, local_dem->width, local_dem->height, win, &at);
     if (total == 0u) {
@@ -92,8 +92,8 @@ static inline trn_status_t localize_dem(const trn_map_t *map, const trn_grid_f32
     }
     res = (trn_heading_result_t *)ws;
     (void)memset(res, 0, sizeof(*res));
-    st = trn_loc_heights_(map, local_dem, centroid_x != NULL ? cen : NULL, rover_x, rover_y, win,
-                          &k_known, (uint8_t *)ws + at, ws_bytes - at, res);
+    st = trn_loc_heights_(map, local_dem, cells, rover_x, rover_y, win, &k_known,
+                          (uint8_t *)ws + at, ws_bytes - at, res);
     (void)memcpy(out, &res->loc, sizeof(*out));
     return st;
 }
@@ -104,8 +104,12 @@ trn_status_t trn_localize_dem_centroids(const trn_map_t *map, const trn_grid_f32
                                         const trn_window_t *win, void *ws, size_t ws_bytes,
                                         trn_loc_result_t *out)
 {
-    return localize_dem(map, local_dem, centroid_x, centroid_y, rover_x, rover_y, max_points, win,
-                        ws, ws_bytes, out);
+    trn_local_cells_t cells;
+    cells.centroid_x = centroid_x;
+    cells.centroid_y = centroid_y;
+    cells.point_count = NULL;
+    return localize_dem(map, local_dem, &cells, rover_x, rover_y, max_points, win, ws, ws_bytes,
+                        out);
 }
 
 trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_dem,
@@ -113,6 +117,17 @@ trn_status_t trn_localize_dem(const trn_map_t *map, const trn_grid_f32_t *local_
                               const trn_window_t *win, void *ws, size_t ws_bytes,
                               trn_loc_result_t *out)
 {
-    return localize_dem(map, local_dem, NULL, NULL, rover_x, rover_y, max_points, win, ws, ws_bytes,
+    return localize_dem(map, local_dem, NULL, rover_x, rover_y, max_points, win, ws, ws_bytes, out);
+}
+
+trn_status_t trn_localize_dem_cells(const trn_map_t *map, const trn_grid_f32_t *local_dem,
+                                    const trn_local_cells_t *cells, int32_t rover_x,
+                                    int32_t rover_y, size_t max_points, const trn_window_t *win,
+                                    void *ws, size_t ws_bytes, trn_loc_result_t *out)
+{
+    if (cells == NULL) {
+        return TRN_E_NULL;
+    }
+    return localize_dem(map, local_dem, cells, rover_x, rover_y, max_points, win, ws, ws_bytes,
                         out);
 }

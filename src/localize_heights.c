@@ -400,7 +400,7 @@ static double peak_failure(const trn_map_t *map, const trn_grid_f32_t *local, in
 }
 
 trn_status_t trn_loc_heights_(const trn_map_t *map, const trn_grid_f32_t *local,
-                              const float *const centroid[2], int32_t rover_x, int32_t rover_y,
+                              const trn_local_cells_t *cells, int32_t rover_x, int32_t rover_y,
                               const trn_window_t *win, const trn_heading_cfg_t *cfg, void *ws,
                               size_t ws_bytes, trn_heading_result_t *out)
 {
@@ -439,14 +439,14 @@ trn_status_t trn_loc_heights_(const trn_map_t *map, const trn_grid_f32_t *local,
      * (noise_auto); the refinement under the configured model, and once more
      * under the model rescaled if the residuals at the answer reject it
      * (docs/method.md 9.2) */
-    trn_loc_refine_cfg_(map, &out->loc, centroid, &s->rc);
+    trn_loc_refine_cfg_(map, &out->loc, cells, &s->rc);
     if ((st = search(map, local, rover_x, rover_y, win, cfg, s)) != TRN_OK) {
         return st;
     }
     search_result(&s->best, win, cfg, out);
     refine_starts(map, local, rover_x, rover_y, win, out->heading_rad, max_turn, s);
     if (map->cfg.noise_auto != 0 && rescale_noise(map, local, rover_x, rover_y, s, out) != 0) {
-        trn_loc_refine_cfg_(map, &out->loc, centroid, &s->rc);
+        trn_loc_refine_cfg_(map, &out->loc, cells, &s->rc);
         refine_starts(map, local, rover_x, rover_y, win, out->heading_rad, max_turn, s);
     }
     s->far.n = 0;

@@ -69,10 +69,11 @@ trn_status_t trn_loc_highpass_by_map_(const trn_map_t *map, const trn_grid_f32_t
  * neighbours, the noise model's rescale, far basins, shoulders, failure
  * probability, acceptance; statuses as trn_localize_dem_heading's, plus
  * TRN_E_ARG for the bounded search with a heading window or an off-zero
- * centre. centroid: the local cells' centroids (trn_refine_cfg_t), or
- * NULL. The map, max_points and the centroids are checked by the caller. */
+ * centre. cells: what is known of the local cells (trn_local_cells_t), or
+ * NULL: nothing. The map, max_points and the cells are checked by the
+ * caller. */
 trn_status_t trn_loc_heights_(const trn_map_t *map, const trn_grid_f32_t *local,
-                              const float *const centroid[2], int32_t rover_x, int32_t rover_y,
+                              const trn_local_cells_t *cells, int32_t rover_x, int32_t rover_y,
                               const trn_window_t *win, const trn_heading_cfg_t *cfg, void *ws,
                               size_t ws_bytes, trn_heading_result_t *out);
 /* Its workspace bytes for a width x height local DEM and half_steps
@@ -85,7 +86,7 @@ size_t trn_loc_heights_bytes_(const trn_map_t *map, int32_t width, int32_t heigh
 /* trn_localize_dem's voxel path after its argument checks
  * (src/localize.c), and its workspace bytes (0 if refused). */
 trn_status_t trn_loc_voxel_dem_(const trn_map_t *map, const trn_grid_f32_t *local_dem,
-                                const float *const centroid[2], int32_t rover_x, int32_t rover_y,
+                                const trn_local_cells_t *cells, int32_t rover_x, int32_t rover_y,
                                 size_t max_points, const trn_window_t *win, void *ws,
                                 size_t ws_bytes, trn_loc_result_t *out);
 size_t trn_loc_voxel_dem_bytes_(const trn_map_t *map, int32_t width, int32_t height,
@@ -112,10 +113,11 @@ int trn_loc_noise_rejected_(const trn_map_t *map, const trn_grid_f32_t *local, i
                             int32_t ry, const trn_refine_t *at, double heading_rad,
                             const trn_refine_cfg_t *rc, double *scale);
 /* The refinement's noise model: the map's, its sd times out->noise_scale,
- * and the local cells' centroids (NULL: the cells' centres)
+ * and what is known of the local cells (trn_local_cells_t; NULL, or each
+ * pointer NULL: the cells' centres, one measurement a cell)
  * (src/localize_common.c). */
 void trn_loc_refine_cfg_(const trn_map_t *map, const trn_loc_result_t *out,
-                         const float *const centroid[2], trn_refine_cfg_t *rc);
+                         const trn_local_cells_t *cells, trn_refine_cfg_t *rc);
 
 /* The refined answer's covariance's mass beyond TRN_FAIL_RADIUS_CELLS
  * (trn_prob_beyond on cov_cells; 1 if it is not a covariance). */

@@ -290,6 +290,24 @@ int trn_refine_centroids_ok_(const trn_grid_f32_t *local, const float *cx, const
     return 1;
 }
 
+int trn_refine_counts_ok_(const trn_grid_f32_t *local, const float *n)
+{
+    int32_t i, j;
+    if (n == NULL) {
+        return 1;
+    }
+    for (j = 0; j < local->height; ++j) {
+        for (i = 0; i < local->width; ++i) {
+            const size_t k = (size_t)j * (size_t)local->stride + (size_t)i;
+            if (isfinite(local->data[k]) &&
+                !(n[k] >= 1.0f && (double)n[k] <= TRN_POINT_COUNT_MAX)) {
+                return 0;
+            }
+        }
+    }
+    return 1;
+}
+
 static trn_status_t common_args(const trn_grid_f32_t *global, const trn_grid_f32_t *local,
                                 int32_t rover_x, int32_t rover_y, const trn_refine_cfg_t *cfg)
 {
@@ -311,7 +329,10 @@ static trn_status_t common_args(const trn_grid_f32_t *global, const trn_grid_f32
         rover_y > local->height - 1 + TRN_MAX_DIM) {
         return TRN_E_ARG;
     }
-    return trn_refine_centroids_ok_(local, cfg->centroid_x, cfg->centroid_y) ? TRN_OK : TRN_E_ARG;
+    return trn_refine_centroids_ok_(local, cfg->centroid_x, cfg->centroid_y) &&
+                   trn_refine_counts_ok_(local, cfg->point_count)
+               ? TRN_OK
+               : TRN_E_ARG;
 }
 
 /* One pass of trn_refine_noise_scale at variance factor k2 and model
@@ -337,7 +358,7 @@ static int32_t noise_pass(const trn_grid_f32_t *global, const trn_grid_f32_t *lo
                                         s3, &dcb)) {
                 continue;
             }
-            s2 = trn_refine_noise_var_(cfg, i, j, rx, ry);
+            s2 = trn_refine_cell_var_(cfg, local, i, j, rx, ry);
             v = k2 * s2 + m2;
             r2 = h - at->dz_m - s3[0];
             r2 *= r2;
@@ -380,7 +401,7 @@ static double resid_in_clip(const trn_grid_f32_t *global, const trn_grid_f32_t *
         return (double)NAN;
     }
     r = h - at->dz_m - s3[0];
-    *s2 = trn_refine_noise_var_(cfg, i, j, rx, ry);
+    *s2 = trn_refine_cell_var_(cfg, local, i, j, rx, ry);
     return r * r > TRN_REFINE_CLIP * TRN_REFINE_CLIP * (k2 * *s2 + m2) ? (double)NAN : r;
 }
 
@@ -497,7 +518,7 @@ static int32_t relief_pass(const trn_grid_f32_t *global, const trn_grid_f32_t *l
             /* the model's mixed height (trn_refine_sample_mix_'s, from the
              * same two samples) for the clip; the bilinear one for the fit */
             (void)trn_refine_sample_(global, gx, gy, s3);
-            s2 = trn_refine_noise_var_(cfg, i, j, rx, ry);
+            s2 = trn_refine_cell_var_(cfg, local, i, j, rx, ry);
             r = h - at->dz_m - (b3[0] + at->interp_mix * (s3[0] - b3[0]));
             if (!(r * r <= TRN_REFINE_CLIP * TRN_REFINE_CLIP * (s2 + m2))) {
                 continue;

@@ -82,6 +82,33 @@ static inline double trn_refine_noise_var_(const trn_refine_cfg_t *cfg, int32_t 
     return sd * sd;
 }
 
+/* The noise variance of local cell (i, j) of l: the noise model's s^2
+ * (trn_refine_noise_var_), over the cell's point count n where the
+ * configuration gives the counts (trn_refine_cfg_t.point_count): the mean
+ * of n points. The one copy for every refinement pass (the searches at
+ * integer poses take the model's s^2 by range alone). */
+static inline double trn_refine_cell_var_(const trn_refine_cfg_t *cfg, const trn_grid_f32_t *l,
+                                          int32_t i, int32_t j, int32_t rx, int32_t ry)
+{
+    const double s2 = trn_refine_noise_var_(cfg, i, j, rx, ry);
+    if (cfg->point_count != NULL) {
+        return s2 / (double)cfg->point_count[(size_t)j * (size_t)l->stride + (size_t)i];
+    }
+    return s2;
+}
+
+/* The variance, cells^2 per axis, of where in local cell (i, j) of l its
+ * points' unknown centroid lies: n points spread evenly over the cell,
+ * 1 / (12 n); 0 where the configuration gives the centroids or no counts. */
+static inline double trn_refine_cell_jitter_(const trn_refine_cfg_t *cfg, const trn_grid_f32_t *l,
+                                             int32_t i, int32_t j)
+{
+    if (cfg->point_count == NULL || cfg->centroid_x != NULL) {
+        return 0.0;
+    }
+    return 1.0 / (12.0 * (double)cfg->point_count[(size_t)j * (size_t)l->stride + (size_t)i]);
+}
+
 /* Local cell (i, j)'s offset from the rover's cell (rx, ry), cells, into
  * o[0] (east) and o[1] (south): the cell's centre, plus where the
  * configuration gives them (trn_refine_cfg_t.centroid_x, centroid_y) the
@@ -104,6 +131,9 @@ static inline void trn_refine_offset_(const trn_refine_cfg_t *cfg, const trn_gri
  * (a finite height) has a finite centroid within TRN_CENTROID_MAX of its
  * centre in each (the local grid's layout); 0 otherwise. */
 int trn_refine_centroids_ok_(const trn_grid_f32_t *local, const float *cx, const float *cy);
+/* 1 if n is NULL, or every seen cell of local has a finite count n within
+ * [1, TRN_POINT_COUNT_MAX] (the local grid's layout); 0 otherwise. */
+int trn_refine_counts_ok_(const trn_grid_f32_t *local, const float *n);
 
 /* trn_refine_pose_heading without its argument checks (out's pos into pos,
  * the rest into full; full NULL holds the heading: trn_refine_pose): for

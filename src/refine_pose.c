@@ -107,7 +107,7 @@ static void accumulate(const rctx_t *c, const double pose[5], double clip, doubl
                 continue;
             }
             acc->n_all += 1;
-            v = trn_refine_noise_var_(c->cfg, i, j, c->rx, c->ry);
+            v = trn_refine_cell_var_(c->cfg, c->l, i, j, c->rx, c->ry);
             sd = sqrt(v + model2);
             res = h - pose[3] - s3[0];
             u = res / sd;
@@ -263,7 +263,7 @@ static void spline_step(const rctx_t *c, const double p[5], double model2, acc4_
             if (!trn_refine_sample_mix_(c->g, p[0] + tx, p[1] + ty, p[4], s3, &dcb)) {
                 continue;
             }
-            v = trn_refine_noise_var_(c->cfg, i, j, c->rx, c->ry) + model2;
+            v = trn_refine_cell_var_(c->cfg, c->l, i, j, c->rx, c->ry) + model2;
             w = trn_refine_weight_(c->g, p[0] + tx, p[1] + ty, h - p[3] - s3[0], sqrt(v),
                                    TRN_REFINE_CLIP_RELIEF) /
                 v;
@@ -399,7 +399,7 @@ static double refined_ll(const rctx_t *c, const double p[5], double model2)
                 ll += lout;
                 continue;
             }
-            v = trn_refine_noise_var_(c->cfg, i, j, c->rx, c->ry) + model2;
+            v = trn_refine_cell_var_(c->cfg, c->l, i, j, c->rx, c->ry) + model2;
             u = h - p[3] - s3[0];
             ll += log(a * exp(-0.5 * u * u / v) / sqrt(two_pi * v) + (1.0 - a) * k);
         }
@@ -570,7 +570,7 @@ static void steep_pass(const rctx_t *c, const double p[5], double model2, const 
             if (!trn_refine_sample_mix_(c->g, p[0] + tx, p[1] + ty, p[4], s3, &dcb)) {
                 continue;
             }
-            s2 = trn_refine_noise_var_(c->cfg, i, j, c->rx, c->ry);
+            s2 = trn_refine_cell_var_(c->cfg, c->l, i, j, c->rx, c->ry);
             res = h - p[3] - s3[0];
             hw = trn_refine_weight_(c->g, p[0] + tx, p[1] + ty, res, sqrt(s2 + model2),
                                     TRN_REFINE_CLIP_RELIEF);
@@ -583,6 +583,11 @@ static void steep_pass(const rctx_t *c, const double p[5], double model2, const 
                 jt[a] -= g[a] * dcb;
             }
             w = hw / (s2 + model2);
+            /* the points' unknown centroid: a position error of the cell,
+             * its height's error the slope times it (0 with the centroids
+             * or without the counts); the fit (its y and weights) and the
+             * covariance take it, the refinement's weights w do not */
+            s2 += gg * trn_refine_cell_jitter_(c->cfg, c->l, i, j);
             if (var != NULL) {
                 acc_add(acc, jt, w * w * (s2 + var[0] + var[1] * gg), 0.0);
                 continue;
@@ -713,6 +718,12 @@ static int covariance(const rctx_t *c, const double p[5], double model2, const d
         }
     }
     f = sandwich(c, p, model2, inv, g, pos, full, acc, &pos->ll_inflation);
+    if (c->cfg->point_count != NULL) {
+        /* the cells' noise and their centroids' jitter known: the model's
+         * covariance, without the block sandwich's guard against the
+         * errors it did not know (docs/method.md 9.5, "the point counts") */
+        f = 1.0;
+    }
     pos->inflation = f;
     for (q = 0; q < 9 && full != NULL; ++q) {
         full->cov3[q] *= f;

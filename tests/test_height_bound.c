@@ -302,6 +302,7 @@ static void test_bound_holds(void **state)
         rc.fit_noise = fit;
         rc.centroid_x = NULL; /* the cells' centres */
         rc.centroid_y = NULL;
+        rc.point_count = NULL; /* one measurement a cell */
         assert_int_equal(
             trn_height_search(&g, &l, LR, LR, &win, NULL, &rc, 0.95f, 1.0, grid, &hbest), TRN_OK);
         for (i = 0; i < poses; ++i) {
@@ -371,6 +372,7 @@ static void test_mass_within_bound(void **state)
     rc.fit_noise = 1;
     rc.centroid_x = NULL; /* the cells' centres */
     rc.centroid_y = NULL;
+    rc.point_count = NULL; /* one measurement a cell */
     assert_int_equal(trn_height_search(&g, &l, LR, LR, &win, NULL, &rc, 0.95f, 1.0, grid, &m),
                      TRN_OK);
     for (k = 0; k < 3; ++k) { /* ln L over 1, 8 and 64 */
@@ -435,6 +437,7 @@ static void test_hb_edges(void **state)
     rc.fit_noise = 1;
     rc.centroid_x = NULL; /* the cells' centres */
     rc.centroid_y = NULL;
+    rc.point_count = NULL; /* one measurement a cell */
     assert_int_equal(trn_hb_init(&hb, ws, &g, &l, LR, LR, &bad[0], &rc, 0.95f, lazy, &work, 0u),
                      TRN_E_RANGE);
     /* fewer than 8 seen cells: the exhaustive search's NODATA */

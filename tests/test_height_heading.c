@@ -141,6 +141,7 @@ static trn_refine_cfg_t rcfg(void)
     r.fit_noise = g_w.cfg.noise_auto;
     r.centroid_x = NULL; /* the cells' centres */
     r.centroid_y = NULL;
+    r.point_count = NULL; /* one measurement a cell */
     return r;
 }
 

@@ -207,7 +207,7 @@ static void test_against_plain_model(void **state)
 {
     trn_rng_t r;
     trn_grid_f32_t g, l;
-    trn_refine_cfg_t c = {1.0f, 0.01f, 0.0004f, 0.95f, 0, NULL, NULL};
+    trn_refine_cfg_t c = {1.0f, 0.01f, 0.0004f, 0.95f, 0, NULL, NULL, NULL};
     double worst = 0.0;
     int k;
     (void)state;
@@ -227,8 +227,8 @@ static void test_extremes(void **state)
 {
     trn_rng_t r;
     trn_grid_f32_t g, l;
-    trn_refine_cfg_t tiny = {1.0f, 1e-6f, 0.0f, 0.95f, 0, NULL, NULL},
-                     wide = {1.0f, 0.01f, 0.0f, 0.95f, 0, NULL, NULL};
+    trn_refine_cfg_t tiny = {1.0f, 1e-6f, 0.0f, 0.95f, 0, NULL, NULL, NULL},
+                     wide = {1.0f, 0.01f, 0.0f, 0.95f, 0, NULL, NULL, NULL};
     double worst = 0.0;
     int f;
     (void)state;
@@ -249,7 +249,7 @@ static void test_off_map_and_sizes(void **state)
 {
     trn_rng_t r;
     trn_grid_f32_t g, l;
-    trn_refine_cfg_t c = {1.0f, 0.01f, 0.0004f, 0.95f, 0, NULL, NULL};
+    trn_refine_cfg_t c = {1.0f, 0.01f, 0.0004f, 0.95f, 0, NULL, NULL, NULL};
     trn_hs_t s;
     double dz, m, ll;
     size_t n;
@@ -277,7 +277,7 @@ static void test_noise_scale_fitted(void **state)
     static const double k_f[3] = {0.3, 1.0, 3.0};
     trn_rng_t r;
     trn_grid_f32_t g, l;
-    trn_refine_cfg_t c = {1.0f, 0.01f, 0.0f, 0.95f, 1, NULL, NULL};
+    trn_refine_cfg_t c = {1.0f, 0.01f, 0.0f, 0.95f, 1, NULL, NULL, NULL};
     trn_hs_t s;
     double dz, m;
     int32_t i, x, y;

@@ -183,6 +183,7 @@ static void grid_best(const world_t *w, const trn_grid_f32_t *g, const trn_grid_
     rc.fit_noise = w->map.cfg.noise_auto;
     rc.centroid_x = NULL; /* the cells' centres */
     rc.centroid_y = NULL;
+    rc.point_count = NULL; /* one measurement a cell */
     assert_int_equal(
         trn_height_search(g, l, LR, LR, win, NULL, &rc, w->map.cfg.inlier_prob, 1.0, NULL, b),
         TRN_OK);

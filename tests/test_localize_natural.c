@@ -131,6 +131,13 @@ typedef struct {
 /* Zero centroids: the cells' centres (trn_localize_dem_centroids gives
  * trn_localize_dem's answer and status). */
 static const float g_zero_c[LW * LW];
+/* Counts of 1 beside zero centroids (filled in main): one measurement a
+ * cell at its centre, trn_localize_dem_cells's statuses as
+ * trn_localize_dem's. */
+static float g_one_n[LW * LW];
+static const trn_local_cells_t g_one_cells = {g_zero_c, g_zero_c, g_one_n};
+/* Nothing known of the cells: trn_localize_dem, bit for bit. */
+static const trn_local_cells_t g_no_cells = {NULL, NULL, NULL};
 
 static void nat_build(nat_t *w, const trn_map_cfg_t *cfg, const trn_grid_f32_t *g)
 {
@@ -816,6 +823,9 @@ static void test_refine_failure_is_illcond(void **state)
         assert_int_equal(trn_localize_dem_centroids(&w.map, &l, g_zero_c, g_zero_c, LR, LR, MAXPTS,
                                                     &win, w.ws, w.wb, &a),
                          TRN_E_ILLCOND);
+        assert_int_equal(
+            trn_localize_dem_cells(&w.map, &l, &g_one_cells, LR, LR, MAXPTS, &win, w.ws, w.wb, &a),
+            TRN_E_ILLCOND);
     }
     nat_free(&w);
 }
@@ -954,6 +964,9 @@ static void test_ambiguous_acceptance(void **state)
     assert_int_equal(trn_localize_dem_centroids(&w.map, &l, g_zero_c, g_zero_c, LR, LR, MAXPTS,
                                                 &win, w.ws, w.wb, &amb),
                      TRN_E_AMBIGUOUS);
+    assert_int_equal(
+        trn_localize_dem_cells(&w.map, &l, &g_one_cells, LR, LR, MAXPTS, &win, w.ws, w.wb, &amb),
+        TRN_E_AMBIGUOUS);
     nat_free(&w);
     printf("periodic DEM: answer (%.3f, %.3f), failure probability %.3f\n", amb.x, amb.y,
            amb.failure_probability);
@@ -1659,9 +1672,28 @@ static void test_localize_dem_statuses(void **state)
     assert_int_equal(trn_localize_dem_centroids(&w.map, &l, g_zero_c, g_zero_c, LR, LR, MAXPTS,
                                                 &win, ws, wb, &res),
                      TRN_OK);
+    /* and through trn_localize_dem_cells (counts of 1 beside zero centroids) */
+    assert_int_equal(
+        trn_localize_dem_cells(&w.map, &big, &g_one_cells, LR, LR, MAXPTS, &win, ws, wb, &res),
+        TRN_E_SIZE);
+    assert_int_equal(
+        trn_localize_dem_cells(&w.map, &l, &g_one_cells, LR, LR, MAXPTS, &off, ws, wb, &res),
+        TRN_E_RANGE);
+    assert_int_equal(
+        trn_localize_dem_cells(&w.map, &l, &g_one_cells, LR, LR, MAXPTS, &win, ws, wb - 1u, &res),
+        TRN_E_WORKSPACE);
+    assert_int_equal(
+        trn_localize_dem_cells(&w.map, &l, &g_one_cells, LR, LR, 10, &win, ws, wb, &res),
+        TRN_E_CAPACITY);
+    assert_int_equal(
+        trn_localize_dem_cells(&w.map, &l, &g_one_cells, LR, LR, MAXPTS, &win, ws, wb, &res),
+        TRN_OK);
     for (i = 0; i < LW * LW; ++i) {
         l_data[i] = NAN;
     }
+    assert_int_equal(
+        trn_localize_dem_cells(&w.map, &l, &g_one_cells, LR, LR, MAXPTS, &win, ws, wb, &res),
+        TRN_E_NODATA);
     assert_int_equal(trn_localize_dem(&w.map, &l, LR, LR, MAXPTS, &win, ws, wb, &res),
                      TRN_E_NODATA);
     assert_int_equal(trn_localize_dem_centroids(&w.map, &l, g_zero_c, g_zero_c, LR, LR, MAXPTS,
@@ -1694,7 +1726,8 @@ static void make_binned(trn_grid_f32_t *l, float *cx, float *cy, double tx, doub
  * centroids is the truth's within the interpolant's error, where without
  * them it is moved by their common offset (0.29 cells), on both matchers
  * (the voxel matcher's refinement reads them too); zero centroids are
- * trn_localize_dem's answer bit for bit; and its argument checks. */
+ * trn_localize_dem's answer bit for bit, as is trn_localize_dem_cells knowing
+ * nothing of the cells; and its argument checks. */
 static void test_localize_dem_centroids(void **state)
 {
     static float cx[LW * LW], cy[LW * LW], zero[LW * LW];
@@ -1745,6 +1778,12 @@ static void test_localize_dem_centroids(void **state)
         trn_localize_dem_centroids(&w.map, &l, zero, zero, LR, LR, MAXPTS, &win, w.ws, w.wb, &b),
         TRN_OK);
     assert_memory_equal(&a, &b, sizeof a);
+    /* and trn_localize_dem_cells knowing nothing of the cells */
+    memset(&b, 0, sizeof b);
+    assert_int_equal(
+        trn_localize_dem_cells(&w.map, &l, &g_no_cells, LR, LR, MAXPTS, &win, w.ws, w.wb, &b),
+        TRN_OK);
+    assert_memory_equal(&a, &b, sizeof a);
     /* the checks: both or neither; seen cells finite and within half a cell */
     make_binned(&l, cx, cy, 48.0, 47.0, &r);
     assert_int_equal(
@@ -1771,6 +1810,78 @@ static void test_localize_dem_centroids(void **state)
     nat_free(&w);
 }
 
+/* trn_localize_dem_cells: the centroids alone are trn_localize_dem_centroids,
+ * bit for bit (nothing known is trn_localize_dem: test_localize_dem_centroids);
+ * the point counts
+ * reach the refinement (16 points a cell: another covariance, the same
+ * answer within the interpolant's error; on these exact heights the fitted
+ * model variance, not the noise, holds most of it: test_refine.c
+ * test_point_counts has the counts' analytic checks); and its argument
+ * checks. */
+static void test_localize_dem_cells(void **state)
+{
+    static float cx[LW * LW], cy[LW * LW], n[LW * LW];
+    trn_grid_f32_t g, l;
+    trn_map_cfg_t cfg;
+    nat_t w;
+    trn_loc_result_t a, b;
+    trn_local_cells_t cells = {NULL, NULL, NULL};
+    trn_window_t win = window_at(48, 47, 3);
+    trn_rng_t r;
+    double sh, tr_one;
+    int i, k;
+    (void)state;
+    trn_rng_seed(&r, 37);
+    make_global(&g);
+    auto_cfg(&cfg, &g, &sh);
+    nat_build(&w, &cfg, &g);
+    make_binned(&l, cx, cy, 48.2, 47.3, &r);
+    (void)nat_localize(&w, &l, LR, LR, &win, &a); /* sizes the workspace */
+    memset(&a, 0, sizeof a);
+    memset(&b, 0, sizeof b);
+    assert_int_equal(
+        trn_localize_dem_centroids(&w.map, &l, cx, cy, LR, LR, MAXPTS, &win, w.ws, w.wb, &a),
+        TRN_OK);
+    cells.centroid_x = cx;
+    cells.centroid_y = cy;
+    assert_int_equal(
+        trn_localize_dem_cells(&w.map, &l, &cells, LR, LR, MAXPTS, &win, w.ws, w.wb, &b), TRN_OK);
+    assert_memory_equal(&a, &b, sizeof a);
+    tr_one = a.cov_m2[0] + a.cov_m2[1];
+    for (i = 0; i < LW * LW; ++i) {
+        n[i] = isfinite(l_data[i]) ? 16.0f : NAN; /* unseen: not read */
+    }
+    cells.point_count = n;
+    assert_int_equal(
+        trn_localize_dem_cells(&w.map, &l, &cells, LR, LR, MAXPTS, &win, w.ws, w.wb, &b), TRN_OK);
+    printf("cells: covariance trace %.3g m^2 with 16 points a cell, %.3g with one\n",
+           b.cov_m2[0] + b.cov_m2[1], tr_one);
+    assert_true(b.cov_m2[0] != a.cov_m2[0] && b.cov_m2[1] != a.cov_m2[1]);
+    assert_true(hypot(b.x - 48.2, b.y - 47.3) < 0.05);
+    /* the checks: the cells NULL; a seen cell's count below 1 or missing */
+    assert_int_equal(trn_localize_dem_cells(&w.map, &l, NULL, LR, LR, MAXPTS, &win, w.ws, w.wb, &b),
+                     TRN_E_NULL);
+    cells.centroid_y = NULL;
+    assert_int_equal(
+        trn_localize_dem_cells(&w.map, &l, &cells, LR, LR, MAXPTS, &win, w.ws, w.wb, &b),
+        TRN_E_NULL);
+    cells.centroid_y = cy;
+    k = LR * LW + LR + 5; /* in the wedge */
+    assert_true(isfinite(l_data[k]));
+    n[k] = 0.0f;
+    assert_int_equal(
+        trn_localize_dem_cells(&w.map, &l, &cells, LR, LR, MAXPTS, &win, w.ws, w.wb, &b),
+        TRN_E_ARG);
+    n[k] = NAN;
+    assert_int_equal(
+        trn_localize_dem_cells(&w.map, &l, &cells, LR, LR, MAXPTS, &win, w.ws, w.wb, &b),
+        TRN_E_ARG);
+    n[k] = 1.0f;
+    assert_int_equal(
+        trn_localize_dem_cells(&w.map, &l, &cells, LR, LR, MAXPTS, &win, w.ws, w.wb, &b), TRN_OK);
+    nat_free(&w);
+}
+
 static trn_refine_cfg_t rcfg(float k)
 {
     trn_refine_cfg_t c;
@@ -1781,6 +1892,7 @@ static trn_refine_cfg_t rcfg(float k)
     c.fit_noise = 0;
     c.centroid_x = NULL; /* the cells' centres */
     c.centroid_y = NULL;
+    c.point_count = NULL; /* one measurement a cell */
     return c;
 }
 
@@ -2056,6 +2168,7 @@ int main(void)
         cmocka_unit_test(test_corrupt_heights),
         cmocka_unit_test(test_localize_dem_statuses),
         cmocka_unit_test(test_localize_dem_centroids),
+        cmocka_unit_test(test_localize_dem_cells),
         cmocka_unit_test(test_ambiguous_acceptance),
         cmocka_unit_test(test_valley_failure),
         cmocka_unit_test(test_prob_beyond),
@@ -2064,5 +2177,9 @@ int main(void)
         cmocka_unit_test(test_refine_iteration_limits),
         cmocka_unit_test(test_refine_args),
     };
+    int i;
+    for (i = 0; i < LW * LW; ++i) {
+        g_one_n[i] = 1.0f;
+    }
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

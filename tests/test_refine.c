@@ -110,6 +110,7 @@ static trn_refine_cfg_t cfg_of(void)
     c.fit_noise = 0;
     c.centroid_x = NULL; /* the cells' centres */
     c.centroid_y = NULL;
+    c.point_count = NULL; /* one measurement a cell */
     return c;
 }
 
@@ -1215,6 +1216,122 @@ static void test_centroids(void **state)
     assert_memory_equal(&none, &zero, sizeof none);
 }
 
+/* The fields of two refinements that the noise model's sd floor (ln L's
+ * outlier density, trn_refine_t.ll) does not enter, bit for bit. */
+static void assert_same_fit(const trn_refine_t *a, const trn_refine_t *b)
+{
+    int q;
+    assert_true(a->x == b->x && a->y == b->y && a->dz_m == b->dz_m && a->model_m == b->model_m);
+    assert_true(a->interp_mix == b->interp_mix && a->inflation == b->inflation);
+    assert_true(a->n_used == b->n_used && a->n_seen == b->n_seen);
+    for (q = 0; q < 3; ++q) {
+        assert_true(a->cov_cells[q] == b->cov_cells[q]);
+    }
+}
+
+/* A local map whose cells are means of n stereo points
+ * (trn_refine_cfg_t.point_count). Each cell's noise variance is s^2 / n:
+ * with the centroids given, counts of 4 are the noise model at half its sd
+ * and counts of 1 no counts, bit for bit, but for the block sandwich, which
+ * the counts leave out (on smooth errors the model does not know, its factor
+ * 1.7 without them, 1 with them). Without the centroids, the
+ * points' unknown centroid adds |grad|^2 / (12 n) to each cell's variance
+ * in the covariance alone (the pose stays): on exact heights (the fitted
+ * variances 0), at the same s^2 / n (counts 1 at sd s, counts 4 at 2 s),
+ * the covariance's excess over the centroids' is 4 times larger at n = 1.
+ * Counts: a seen cell's finite and within [1, TRN_POINT_COUNT_MAX]; an
+ * unseen cell's not read. */
+static void test_point_counts(void **state)
+{
+    static float zc[LW * LW], n1[LW * LW], n4[LW * LW];
+    trn_grid_f32_t g, l;
+    trn_refine_cfg_t c = cfg_of(), h;
+    trn_refine_t a, b, e1, e4, z1, z4;
+    trn_rng_t r;
+    int i, q, k = LW / 2;
+    double ratio[3], excess = 0.0;
+    (void)state;
+    trn_rng_seed(&r, 41);
+    make_global(&g);
+    for (i = 0; i < LW * LW; ++i) {
+        zc[i] = 0.0f;
+        n1[i] = 1.0f;
+        n4[i] = 4.0f;
+    }
+    /* noisy heights, the centroids given (zero: the centres) */
+    make_local(&l, 30.3, 29.6, 1.0, 1.0, &c, &r);
+    c.centroid_x = c.centroid_y = zc;
+    h = c;
+    h.noise_m *= 0.5f;
+    h.noise_k_per_m *= 0.5f;
+    c.point_count = n4;
+    assert_int_equal(trn_refine_pose(&g, &l, k, k, 30, 30, &c, &a), TRN_OK);
+    assert_int_equal(trn_refine_pose(&g, &l, k, k, 30, 30, &h, &b), TRN_OK);
+    assert_same_fit(&a, &b);
+    c.point_count = n1;
+    h = cfg_of();
+    h.centroid_x = h.centroid_y = zc;
+    assert_int_equal(trn_refine_pose(&g, &l, k, k, 30, 30, &c, &a), TRN_OK);
+    assert_int_equal(trn_refine_pose(&g, &l, k, k, 30, 30, &h, &b), TRN_OK);
+    assert_same_fit(&a, &b);
+    assert_true(a.ll == b.ll && b.inflation == 1.0);
+    /* smooth errors the noise model does not know: without the counts the
+     * block sandwich inflates the covariance; with them (counts of 1 beside
+     * the centroids: the same cells' variances) the covariance is the
+     * model's, the same but for that factor */
+    for (i = 0; i < LW * LW; ++i) {
+        l_data[i] += (float)(0.05 * sin(0.9 * (double)(i % LW)) * cos(0.7 * (double)(i / LW)));
+    }
+    assert_int_equal(trn_refine_pose(&g, &l, k, k, 30, 30, &c, &a), TRN_OK);
+    assert_int_equal(trn_refine_pose(&g, &l, k, k, 30, 30, &h, &b), TRN_OK);
+    printf("point counts: the block sandwich's factor %.3f without them, %.3f with\n", b.inflation,
+           a.inflation);
+    assert_true(b.inflation > 1.5 && a.inflation == 1.0 && a.x == b.x && a.y == b.y);
+    for (q = 0; q < 3; ++q) {
+        assert_true(fabs(a.cov_cells[q] * b.inflation - b.cov_cells[q]) <=
+                    1e-12 * fabs(b.cov_cells[q]));
+    }
+    /* exact heights: the jitter's excess scales as 1 / n */
+    make_local(&l, 30.3, 29.6, 1.0, 0.0, &c, &r);
+    c = cfg_of();
+    c.point_count = n1;
+    assert_int_equal(trn_refine_pose(&g, &l, k, k, 30, 30, &c, &e1), TRN_OK);
+    c.centroid_x = c.centroid_y = zc;
+    assert_int_equal(trn_refine_pose(&g, &l, k, k, 30, 30, &c, &z1), TRN_OK);
+    c = cfg_of();
+    c.noise_m *= 2.0f;
+    c.noise_k_per_m *= 2.0f;
+    c.point_count = n4;
+    assert_int_equal(trn_refine_pose(&g, &l, k, k, 30, 30, &c, &e4), TRN_OK);
+    c.centroid_x = c.centroid_y = zc;
+    assert_int_equal(trn_refine_pose(&g, &l, k, k, 30, 30, &c, &z4), TRN_OK);
+    assert_same_fit(&z1, &z4);
+    assert_true(e1.x == z1.x && e1.y == z1.y && e4.x == z4.x && e4.y == z4.y);
+    for (q = 0; q < 3; ++q) {
+        ratio[q] = (e1.cov_cells[q] - z1.cov_cells[q]) / (e4.cov_cells[q] - z4.cov_cells[q]);
+    }
+    excess = (e4.cov_cells[0] + e4.cov_cells[1]) / (z4.cov_cells[0] + z4.cov_cells[1]) - 1.0;
+    printf("point counts: jitter excess n = 1 over n = 4: %.6f %.6f %.6f; at n = 4 %.2f of the "
+           "trace\n",
+           ratio[0], ratio[1], ratio[2], excess);
+    for (q = 0; q < 3; ++q) {
+        assert_true(fabs(ratio[q] - 4.0) < 1e-6);
+    }
+    assert_true(excess > 0.05);
+    /* the checks */
+    c = cfg_of();
+    c.point_count = n1;
+    n1[7] = 0.5f;
+    assert_int_equal(trn_refine_pose(&g, &l, k, k, 30, 30, &c, &a), TRN_E_ARG);
+    n1[7] = NAN;
+    assert_int_equal(trn_refine_pose(&g, &l, k, k, 30, 30, &c, &a), TRN_E_ARG);
+    n1[7] = (float)(2.0 * TRN_POINT_COUNT_MAX);
+    assert_int_equal(trn_refine_pose(&g, &l, k, k, 30, 30, &c, &a), TRN_E_ARG);
+    n1[7] = 1.0f;
+    n1[k * LW + k] = NAN; /* the rover's cell: unseen */
+    assert_int_equal(trn_refine_pose(&g, &l, k, k, 30, 30, &c, &a), TRN_OK);
+}
+
 static void test_errors(void **state)
 {
     trn_grid_f32_t g, l, flat;
@@ -1610,14 +1727,23 @@ static void test_cfg_auto(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_exact_model),     cmocka_unit_test(test_spline_step),
-        cmocka_unit_test(test_centroids),       cmocka_unit_test(test_answer_variances),
-        cmocka_unit_test(test_noise_coverage),  cmocka_unit_test(test_steep_cells),
-        cmocka_unit_test(test_outliers),        cmocka_unit_test(test_errors),
-        cmocka_unit_test(test_cfg_auto),        cmocka_unit_test(test_height_search),
-        cmocka_unit_test(test_search_blunders), cmocka_unit_test(test_mix),
-        cmocka_unit_test(test_floors),          cmocka_unit_test(test_heading_mix),
-        cmocka_unit_test(test_noise_scale),     cmocka_unit_test(test_noise_scale_errors),
+        cmocka_unit_test(test_exact_model),
+        cmocka_unit_test(test_spline_step),
+        cmocka_unit_test(test_centroids),
+        cmocka_unit_test(test_point_counts),
+        cmocka_unit_test(test_answer_variances),
+        cmocka_unit_test(test_noise_coverage),
+        cmocka_unit_test(test_steep_cells),
+        cmocka_unit_test(test_outliers),
+        cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_cfg_auto),
+        cmocka_unit_test(test_height_search),
+        cmocka_unit_test(test_search_blunders),
+        cmocka_unit_test(test_mix),
+        cmocka_unit_test(test_floors),
+        cmocka_unit_test(test_heading_mix),
+        cmocka_unit_test(test_noise_scale),
+        cmocka_unit_test(test_noise_scale_errors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

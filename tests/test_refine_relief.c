@@ -137,6 +137,7 @@ static trn_refine_cfg_t cfg_of(void)
     c.fit_noise = 0;
     c.centroid_x = NULL; /* the cells' centres */
     c.centroid_y = NULL;
+    c.point_count = NULL; /* one measurement a cell */
     return c;
 }
 

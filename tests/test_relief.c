@@ -66,6 +66,7 @@ static trn_refine_cfg_t rcfg(void)
     c.fit_noise = 0;
     c.centroid_x = NULL; /* the cells' centres */
     c.centroid_y = NULL;
+    c.point_count = NULL; /* one measurement a cell */
     return c;
 }
 

@@ -366,6 +366,36 @@ trn_status_t trn_localize_dem_centroids(const trn_map_t *map, const trn_grid_f32
                                         const trn_window_t *win, void *ws, size_t ws_bytes,
                                         trn_loc_result_t *out);
 
+/** What a rover that bins its stereo points knows of each local cell beyond
+ *  its height, in the local DEM's layout (its stride); each NULL where not
+ *  known. */
+typedef struct {
+    const float *centroid_x;  /**< the points' centroid, cells east of the centre
+                                   (trn_localize_dem_centroids); with centroid_y */
+    const float *centroid_y;  /**< the same, cells south (the grid's rows) */
+    const float *point_count; /**< how many points the height is the mean of
+                                   (trn_refine_cfg_t.point_count) */
+} trn_local_cells_t;
+
+/**
+ * @brief trn_localize_dem_centroids with the cells' point counts too: a
+ * cell that is the mean of n stereo points has the noise variance s(r)^2 /
+ * n of the map's noise model, and without its centroid, a position error
+ * of variance 1 / (12 n) cells^2 per axis (trn_refine_cfg_t.point_count).
+ * Every refinement pass takes them; the searches over integer poses are as
+ * trn_localize_dem's (docs/method.md 9.10, "The point counts").
+ * @param[in] cells the centroids and the counts, each NULL where not
+ *            known (all NULL: trn_localize_dem, bit for bit).
+ * @retval as trn_localize_dem_centroids, plus TRN_E_NULL (cells NULL) and
+ *         TRN_E_ARG (a seen cell's count not finite or outside [1,
+ *         TRN_POINT_COUNT_MAX]). Its workspace is
+ *         trn_localize_dem_workspace_bytes.
+ */
+trn_status_t trn_localize_dem_cells(const trn_map_t *map, const trn_grid_f32_t *local_dem,
+                                    const trn_local_cells_t *cells, int32_t rover_x,
+                                    int32_t rover_y, size_t max_points, const trn_window_t *win,
+                                    void *ws, size_t ws_bytes, trn_loc_result_t *out);
+
 #ifdef __cplusplus
 }
 #endif

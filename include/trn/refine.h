@@ -95,20 +95,23 @@ extern "C" {
  *  centroid_y), cells: a point binned into a cell lies within half a cell of
  *  its centre. */
 #define TRN_CENTROID_MAX 0.5
+/** Largest point count a seen local cell may give (trn_refine_cfg_t.point_count). */
+#define TRN_POINT_COUNT_MAX 1000000.0
 
 /** Height-noise model of the local map, s(r) = noise_m + noise_k_per_m r^2,
- *  and where the local cells were measured. Zero the struct (or set both
- *  centroid pointers NULL) before filling it in. */
+ *  and where and from how many points the local cells were measured. Zero
+ *  the struct (or set the centroid and count pointers NULL) before filling
+ *  it in. */
 typedef struct {
-    float cell_m;            /**< cell of both grids, metres, (0, 1000] */
-    float noise_m;           /**< constant part, metres, (0, 1000] */
-    float noise_k_per_m;     /**< range-squared part, 1/m, [0, 1000] */
-    float inlier_prob;       /**< a of the mixture ln L (trn_refine_t.ll), (0, 1) */
-    int32_t fit_noise;       /**< 1: the searches' pose score fits the noise model's scale per pose
+    float cell_m;             /**< cell of both grids, metres, (0, 1000] */
+    float noise_m;            /**< constant part, metres, (0, 1000] */
+    float noise_k_per_m;      /**< range-squared part, 1/m, [0, 1000] */
+    float inlier_prob;        /**< a of the mixture ln L (trn_refine_t.ll), (0, 1) */
+    int32_t fit_noise;        /**< 1: the searches' pose score fits the noise model's scale per pose
                               (a variance factor in [TRN_NOISE_SCALE2_MIN, TRN_NOISE_SCALE2_MAX]
                               beside the offset and the model variance: docs/method.md 9.2);
                               0: the model as given. The refinements ignore it. 0 or 1. */
-    const float *centroid_x; /**< NULL (both NULL): each local cell's height is the ground at
+    const float *centroid_x;  /**< NULL (both NULL): each local cell's height is the ground at
                                   the cell's centre. Otherwise, per local cell in the local
                                   grid's layout (its stride), where in the cell its height
                                   was measured, cells east of its centre: for a cell that is
@@ -117,7 +120,17 @@ typedef struct {
                                   integer poses do not). Seen cells: finite, within
                                   [-TRN_CENTROID_MAX, TRN_CENTROID_MAX]; unseen cells are not
                                   read (docs/method.md 9.10, "The centroids") */
-    const float *centroid_y; /**< the same, cells south of the centre (the grid's rows) */
+    const float *centroid_y;  /**< the same, cells south of the centre (the grid's rows) */
+    const float *point_count; /**< NULL: each local cell is one measurement, its noise the
+                                  model's s(r). Otherwise, per local cell in the local grid's
+                                  layout, the number n of stereo points whose mean its height
+                                  is: its noise variance is s(r)^2 / n, and without the
+                                  centroids their unknown centroid adds |grad|^2 / (12 n)
+                                  (cells^2 times the slope's square) to the covariance's
+                                  cell variance. Every refinement pass reads it (the searches
+                                  at integer poses do not). Seen cells: finite, within
+                                  [1, TRN_POINT_COUNT_MAX]; unseen cells are not read
+                                  (docs/method.md 9.10, "The point counts") */
 } trn_refine_cfg_t;
 
 /** Best integer pose of trn_height_search. */
@@ -143,7 +156,9 @@ typedef struct {
                                  TRN_REFINE_SYS_Z sds, sqrt(2 / dof), of 1) */
     double inflation;      /**< factor (>= 1) the block sandwich put on the model covariance:
                                  its larger position variance ratio where beyond
-                                 TRN_REFINE_SYS_Z sampling sds of 1, else 1 */
+                                 TRN_REFINE_SYS_Z sampling sds of 1, else 1; 1 where the
+                                 configuration gives the point counts (the cells' noise and
+                                 jitter known: docs/method.md 9.5) */
     double ll_inflation;   /**< the ratio ungated, against the model times max(1, chi2_dof)
                                  (>= 1; the factor before 2026-12-04): ln L's divisor in the
                                  failure probability (trn_localize_dem) */

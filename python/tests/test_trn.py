@@ -49,6 +49,18 @@ def test_localize_equals_cli(cli, dems, gmap):
     assert abs(want["x_m"] - dems["truth"][0]) < 0.05 and abs(want["y_m"] - dems["truth"][1]) < 0.05
 
 
+def refused(gmap, a, gt, wkt, cases):
+    """Each (keywords, reason): Map.localize of the array local map a (or of the file that the
+    keywords' "local" names) with them raises TrnError matching the reason."""
+    for kw, why in cases:
+        args = {"local": a, "transform": gt, "crs": wkt, **kw}
+        if isinstance(args["local"], str):
+            args.pop("transform")
+            args.pop("crs")
+        with pytest.raises(trn.TrnError, match=why):
+            gmap.localize(prior=PRIOR, window_m=0.5, **args)
+
+
 def test_localize_centroids(cli, dems, gmap, tmp_path):
     """A binned local map's centroids given as arrays (centroids=(cx, cy)) equal the command
     line's --centroid-bands 2 on a 3-band file, key for key, and move the answer; each bad
@@ -77,18 +89,47 @@ def test_localize_centroids(cli, dems, gmap, tmp_path):
                          centroids=(zero, zero))["status"] == plain["status"]
     bad = cx.copy()
     bad[5, 7] = 0.7
-    for kw, why in (({"local": dems["local"], "centroids": (cx, cy)}, "for an array local map"),
-                    ({"centroids": (cx[:, :-1], cy)}, "band 2 is 31 x 32 cells"),
-                    ({"centroids": (cx, cy), "centroid_bands": 2}, "give one of them"),
-                    ({"centroids": cx}, "a pair of arrays"),
-                    ({"centroids": (bad, cy)}, "more than 0.5 cells from its centre"),
-                    ({"centroid_bands": 2}, "has 1 band, no band 2")):
-        args = {"local": a, "transform": gt, "crs": wkt, **kw}
-        if isinstance(args["local"], str):
-            args.pop("transform")
-            args.pop("crs")
-        with pytest.raises(trn.TrnError, match=why):
-            gmap.localize(prior=PRIOR, window_m=0.5, **args)
+    refused(gmap, a, gt, wkt, (({"local": dems["local"], "centroids": (cx, cy)}, "for an array local map"),
+                               ({"centroids": (cx[:, :-1], cy)}, "band 2 is 31 x 32 cells"),
+                               ({"centroids": (cx, cy), "centroid_bands": 2}, "give one of them"),
+                               ({"centroids": cx}, "a pair of arrays"),
+                               ({"centroids": (bad, cy)}, "more than 0.5 cells from its centre"),
+                               ({"centroid_bands": 2}, "has 1 band, no band 2")))
+
+
+def test_localize_counts(cli, dems, gmap, tmp_path):
+    """A binned local map's point counts given as an array (counts=n), alone and beside the
+    centroids, equal the command line's --count-band on a file of those bands, key for key;
+    they change the covariance; each bad count input is refused."""
+    gdal = pytest.importorskip("osgeo.gdal")
+    a, gt, wkt = read(dems["local"])
+    rng = np.random.default_rng(5)
+    cx = rng.uniform(-0.4, 0.4, a.shape).astype(np.float32)
+    cy = rng.uniform(-0.4, 0.4, a.shape).astype(np.float32)
+    n = rng.integers(1, 9, a.shape).astype(np.float32)
+    for bands, opts, kw in (((a, n), ("--count-band", 2), {"counts": n}),
+                            ((a, cx, cy, n), ("--centroid-bands", 2, "--count-band", 4),
+                             {"centroids": (cx, cy), "counts": n})):
+        path = str(tmp_path / f"local{len(bands)}.tif")
+        ds = gdal.GetDriverByName("GTiff").Create(path, a.shape[1], a.shape[0], len(bands), gdal.GDT_Float32)
+        ds.SetGeoTransform(gt)
+        for k, band in enumerate(bands):
+            ds.GetRasterBand(k + 1).WriteArray(band)
+        ds = None
+        want = cli.json("localize", "--dem", dems["global"], "--local", path, "--prior", "1002.9,2003.3",
+                        "--window-m", 0.5, *opts)
+        got = gmap.localize(a, prior=PRIOR, window_m=0.5, transform=gt, crs=wkt, **kw)
+        same(got, want, skip=("time_ms",))
+        assert got["point_counts"] is True
+    plain = gmap.localize(a, prior=PRIOR, window_m=0.5, transform=gt, crs=wkt)
+    assert plain["point_counts"] is False and plain["cov_m2"] != got["cov_m2"]
+    low = n.copy()
+    low[5, 7] = 0.5
+    refused(gmap, a, gt, wkt, (({"local": dems["local"], "counts": n}, "for an array local map"),
+                               ({"counts": n[:, :-1]}, "band 2 is 31 x 32 cells"),
+                               ({"counts": n, "count_band": 2}, "give one of them"),
+                               ({"counts": low}, "point count 0.5 is missing or outside"),
+                               ({"count_band": 2}, "has 1 band, no band 2")))
 
 
 class AffineLike:

@@ -531,7 +531,8 @@ class Map:
 
     def localize(self, local: Source, prior: Tuple[float, float], window_m: Optional[float] = None,
                  transform: Any = None, crs: CrsLike = None, nodata: Optional[float] = None,
-                 centroids: Optional[Tuple[Any, Any]] = None, **options: Any) -> LocalizeResult:
+                 centroids: Optional[Tuple[Any, Any]] = None, counts: Any = None,
+                 **options: Any) -> LocalizeResult:
         """The rover's position from its local DEM around prior (x, y map
         metres) within +-window_m metres (None: the command's default).
         local: a 2-D array in the rover frame (rover at 0,0; x east, y north)
@@ -540,21 +541,30 @@ class Map:
         height was measured, cells east and south of the cell's centre
         (binned stereo points: their centroid; within 0.5; NaN where unseen),
         what `trn localize --centroid-bands` reads from a file's bands (for a
-        file, pass centroid_bands=N). Returns the dict of `trn localize
-        --json` (LocalizeResult)."""
-        extra: Sequence[Any] = ()
-        if centroids is not None:
+        file, pass centroid_bands=N). counts: with an array, an array of its
+        shape: how many stereo points each seen cell's height is the mean of
+        (at least 1; NaN where unseen), what `trn localize --count-band`
+        reads (for a file, pass count_band=N). Returns the dict of `trn
+        localize --json` (LocalizeResult)."""
+        extra: List[Any] = []
+        for name, given, band in (("centroids", centroids, "centroid_bands"), ("counts", counts, "count_band")):
+            if given is None:
+                continue
             if isinstance(local, (str, os.PathLike)):
-                raise TrnError("bad_input", "centroids: for an array local map; a file gives its centroids "
-                                            "as bands (centroid_bands=N)")
-            if options.get("centroid_bands") is not None:
-                raise TrnError("bad_input", "centroids and centroid_bands: give one of them")
+                raise TrnError("bad_input", f"{name}: for an array local map; a file gives its {name} "
+                                            f"as bands ({band}=N)")
+            if options.get(band) is not None:
+                raise TrnError("bad_input", f"{name} and {band}: give one of them")
+        if centroids is not None:
             try:
                 cx, cy = centroids
             except (TypeError, ValueError) as e:
                 raise TrnError("bad_input", "centroids: want a pair of arrays (cx, cy)") from e
-            extra = (cx, cy)
+            extra += [cx, cy]
             options["centroid_bands"] = 2
+        if counts is not None:
+            extra.append(counts)
+            options["count_band"] = 1 + len(extra)
         lpath, keep = _raster_source(local, transform, crs, nodata, "local", "local array", extra)
         try:
             argv = _argv("localize", {"dem": self.path, "band": self.band, "local": lpath, "prior": prior,

@@ -118,6 +118,7 @@ class _LocalizeRequired(TypedDict):
     status: str
     refined: bool
     centroids: bool  # --centroid-bands: the refinement read the map at each cell's centroid
+    point_counts: bool  # --count-band: each cell's noise that of the mean of its points
     noise_scale: float
     prior: XY
     window_m: float

@@ -27,6 +27,10 @@ through `trn select` and `trn localize`:
   centroids give the one-band file's answer; a seen cell's centroid missing
   or beyond half a cell, a band that is not there and a heading search are
   refused with one line.
+- Its point counts (--count-band): counts of 1 beside the centroids give the
+  centroids' answer; counts of 16 another covariance, the same answer; a seen
+  cell's count below 1 or missing, a band that is not there and a heading
+  search are refused with one line.
 Maps are small (96 x 96 cells, 40 x 40 local) so the ASan build stays quick.
 """
 import math
@@ -403,5 +407,38 @@ expect_error(1, "--centroid-bands: ", "localize", "--dem", base, "--local", p("l
              "--centroid-bands", "3", *LOC)
 expect_error(2, "--centroid-bands does not apply to a heading search", "localize", "--dem", base, "--local",
              p("local_binned.tif"), "--centroid-bands", "2", "--heading-deg", "1", *LOC)
+
+# ---- 7. its point counts (--count-band) ------------------------------------------------
+ones = np.where(np.isfinite(binned), 1.0, np.nan)
+write_bands(p("local_counts1.tif"), [binned, cx, cy, ones], rover_gt)
+write_bands(p("local_counts16.tif"), [binned, cx, cy, 16.0 * ones], rover_gt)
+r_c1 = run_json("localize", "--dem", base, "--local", p("local_counts1.tif"), "--centroid-bands", "2",
+                "--count-band", "4", *LOC)
+untimed = [{k: v for k, v in r.items() if "time" not in k and k != "point_counts"} for r in (r_c1, r_with)]
+check(untimed[0] == untimed[1] and r_c1.get("point_counts") is True,
+      f"localize: counts of 1 = one measurement a cell ({r_c1} vs {r_with})")
+r_c16 = run_json("localize", "--dem", base, "--local", p("local_counts16.tif"), "--centroid-bands", "2",
+                 "--count-band", "4", *LOC)
+if "x_m" in r_c16:
+    e16 = math.hypot(r_c16["x_m"] - truth[0], r_c16["y_m"] - truth[1])
+    print(f"localize binned, 16 points a cell: error {e16:.4f} m, sigma_x {r_c16['sigma_x_m']:.3g} m "
+          f"(one a cell: {r_with.get('sigma_x_m')})")
+    check(e16 < 0.005 and r_c16["status"] == "ok" and r_c16["cov_m2"] != r_with.get("cov_m2"),
+          f"localize binned, --count-band 4 (16 a cell): error {e16:.4f} m, another covariance")
+else:
+    check(False, f"localize binned, --count-band 4: no position in {r_c16}")
+low = ones.copy()
+low[7, 9] = 0.5
+write_bands(p("local_low.tif"), [binned, low], rover_gt)
+expect_error(1, "local cell (9, 7) is seen but its point count 0.5 is missing or outside [1, ", "localize",
+             "--dem", base, "--local", p("local_low.tif"), "--count-band", "2", *LOC)
+low[7, 9] = np.nan
+write_bands(p("local_low.tif"), [binned, low], rover_gt)
+expect_error(1, "local cell (9, 7) is seen but its point count nan is missing", "localize", "--dem", base,
+             "--local", p("local_low.tif"), "--count-band", "2", *LOC)
+expect_error(1, "--count-band: ", "localize", "--dem", base, "--local", p("local_counts1.tif"),
+             "--count-band", "5", *LOC)
+expect_error(2, "--count-band does not apply to a heading search", "localize", "--dem", base, "--local",
+             p("local_counts1.tif"), "--count-band", "4", "--heading-window-deg", "1", *LOC)
 
 sys.exit(H.finish("cli_dem"))

@@ -333,6 +333,8 @@ CASES = {
         "--local-band": unseen("--local-band", "2", rc=1, needle="band", why="the local DEM has one band"),
         "--centroid-bands": unseen("--centroid-bands", "2", rc=1, needle="--centroid-bands",
                                    why="the local DEM has one band (test_cli_dem.py: its effect)"),
+        "--count-band": unseen("--count-band", "2", rc=1, needle="--count-band",
+                               why="the local DEM has one band (test_cli_dem.py: its effect)"),
         # its effect is the refusal of a larger local DEM
         "--max-local-cells": refused("--max-local-cells", "16", rc=1, needle="16"),
         "--heading-deg": effect("--heading-deg", "3"),

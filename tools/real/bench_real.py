@@ -4,7 +4,7 @@
 
     /usr/bin/python3 tools/real/bench_real.py [--dem ID ...] [--dem-file PATH ...] [--cases N] [--seed S]
         [--radius R] [--resample bilinear|cubic] [--truth-fine K] [--fine-map mean|point]
-        [--fine-local point|mean|binned] [--centroids] [--points-draw D] [--noise-scale F]
+        [--fine-local point|mean|binned] [--centroids] [--counts] [--points-draw D] [--noise-scale F]
         [--outliers P] [--mast-view H]
         [--subcell axis|quad2d] [--prior-miss F] [--miss-max C]
         [--trn PATH] [--trn-mode auto|batch|single]
@@ -147,6 +147,10 @@ def parse_args(argv):
     ap.add_argument("--centroids", action="store_true",
                     help="with --fine-local binned: each local GeoTIFF also holds its cells' points' "
                          "centroids (bands 2 and 3), and trn reads the map there (--centroid-bands 2)")
+    ap.add_argument("--counts", action="store_true",
+                    help="with --fine-local binned: each local GeoTIFF also holds its cells' point counts "
+                         "(the band after the heights and any centroids), and trn reads them "
+                         "(--count-band): a cell's noise is that of the mean of its points")
     ap.add_argument("--points-draw", type=int, default=0, metavar="D",
                     help="with --fine-local binned: draw D of the stereo points and their noise (default "
                          "0, the cases' own); the truths, priors, views and offsets stay those of draw 0, so "
@@ -216,12 +220,17 @@ def parse_args(argv):
     if a.centroids and (a.fine_local != "binned" or a.truth_fine is None):
         raise Fail("--centroids: needs --truth-fine K --fine-local binned (only binned cells have "
                    "centroids)")
+    if a.counts and (a.fine_local != "binned" or a.truth_fine is None):
+        raise Fail("--counts: needs --truth-fine K --fine-local binned (only binned cells have "
+                   "point counts)")
     if a.points_draw != 0 and (a.fine_local != "binned" or a.truth_fine is None):
         raise Fail("--points-draw: needs --truth-fine K --fine-local binned (only binned cells have points)")
     if a.points_draw < 0:
         raise Fail(f"--points-draw {a.points_draw}: must be >= 0")
     if a.centroids:
         a.trn_extra = list(a.trn_extra) + ["--centroid-bands", "2"]
+    if a.counts:
+        a.trn_extra = list(a.trn_extra) + ["--count-band", "4" if a.centroids else "2"]
     a.mast_view = a.mast_view or 0.0
     if a.truth_fine is not None and a.truth_fine < 2:
         raise Fail(f"--truth-fine {a.truth_fine}: must be >= 2")
@@ -514,7 +523,7 @@ def bench_dem(a, dem_id, batch):
                            noise0_m=casemod.CaseParams.noise0_m * a.noise_scale,
                            noise_k=casemod.CaseParams.noise_k * a.noise_scale,
                            local=a.fine_local if a.truth_fine else "point", mast_m=a.mast_view,
-                           centroids=a.centroids, points_draw=a.points_draw,
+                           centroids=a.centroids, counts=a.counts, points_draw=a.points_draw,
                            outlier_frac=a.outliers, prior_miss=a.prior_miss, miss_max_cells=a.miss_max)
     tmp = tempfile.mkdtemp(prefix=f"bench_real_{dem_id}_")
     try:
@@ -560,6 +569,7 @@ def bench_dem(a, dem_id, batch):
                 "opencv_mask": peers.mask_supported(), "truth_fine": a.truth_fine,
                 "fine_map": a.fine_map if a.truth_fine else None,
                 "fine_local": a.fine_local if a.truth_fine else None, "centroids": a.centroids,
+                "counts": a.counts,
                 "points_draw": a.points_draw, "noise_scale": a.noise_scale, "outliers": a.outliers,
                 "mast_view": a.mast_view,
                 "prior_miss": a.prior_miss, "miss_max": a.miss_max if a.prior_miss else None,
@@ -606,7 +616,8 @@ def main(argv):
         batch = trn_has_batch(a.trn) if mode == "auto" else mode == "batch"
         res = {"config": {"cases": a.cases, "seed": a.seed, "radius": a.radius, "resample": a.resample,
                           "subcell": a.subcell, "truth_fine": a.truth_fine, "fine_map": a.fine_map,
-                          "fine_local": a.fine_local, "centroids": a.centroids, "points_draw": a.points_draw,
+                          "fine_local": a.fine_local, "centroids": a.centroids, "counts": a.counts,
+                          "points_draw": a.points_draw,
                           "mast_view": a.mast_view, "noise_scale": a.noise_scale,
                           "outliers": a.outliers, "prior_miss": a.prior_miss,
                           "miss_max": a.miss_max if a.prior_miss else None,

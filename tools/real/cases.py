@@ -150,12 +150,13 @@ def write_global(path, dem, like=None):
     return path
 
 
-def write_local(path, z, c, centroids=None):
+def write_local(path, z, c, centroids=None, counts=None):
     """A rover-frame local DEM GeoTIFF: float32, no CRS, no-data NaN. With centroids
-    (cx, cy), bands 2 and 3 hold them (trn localize --centroid-bands 2)."""
+    (cx, cy), bands 2 and 3 hold them (trn localize --centroid-bands 2); with counts (the
+    cells' point counts), the band after those (trn localize --count-band 2 or 4)."""
     n = z.shape[0]
     r = (n - 1) // 2
-    bands = [z] + ([] if centroids is None else list(centroids))
+    bands = [z] + ([] if centroids is None else list(centroids)) + ([] if counts is None else [counts])
     ds = gdal.GetDriverByName("GTiff").Create(path, z.shape[1], n, len(bands), gdal.GDT_Float32)
     ds.SetGeoTransform((-(r + 0.5) * c, c, 0.0, (r + 0.5) * c, 0.0, -c))
     for k, v in enumerate(bands):
@@ -213,6 +214,7 @@ class CaseParams:
     min_valid: float = 0.95
     local: str = "point"  # with `fine`: "point" | "mean" | "binned" (see make_local)
     centroids: bool = False  # "binned": each case's extra gets the cells' centroids (cx, cy)
+    counts: bool = False  # "binned": each case's extra gets the cells' point counts (n)
     points_draw: int = 0  # "binned": which draw of the points (0: the cases' own; k > 0 another
     #                      draw of the points and their noise, the truths, priors and views kept)
     mast_m: float = 0.0  # > 0: a mast that high sees the cells (mast_visible); 0: every cell in the wedge
@@ -365,7 +367,8 @@ def make_local(dem, truth, p, rng=None, azimuth_deg=0.0, offset_m=0.0, fine=None
     "binned" (with `fine`: binned_points, its own noise). p.mast_m > 0: only cells whose ground a mast
     that high above the rover's ground sees through the true surface (mast_visible). With
     "binned", p.centroids and a dict `extra`: extra["cx"], extra["cy"] are the cells' points'
-    centroids (local cells east and south of each cell's centre; NaN where unseen)."""
+    centroids (local cells east and south of each cell's centre; NaN where unseen); with
+    p.counts, extra["n"] the cells' point counts (NaN where no point fell)."""
     R = p.radius
     src = dem if fine is None else fine
     scale = 1.0 if fine is None else dem.c / fine.c  # source cells per local cell
@@ -379,6 +382,8 @@ def make_local(dem, truth, p, rng=None, azimuth_deg=0.0, offset_m=0.0, fine=None
         h = b.h
         if p.centroids and extra is not None:
             extra["cx"], extra["cy"] = b.cx, b.cy
+        if p.counts and extra is not None:
+            extra["n"] = np.where(b.n > 0, b.n, np.nan).astype(np.float64)
     else:
         # sub-samples per local cell axis: one (its centre), or with "mean" and `fine`
         # the fine cells' count across it, spread evenly (a rover gridding dense stereo
@@ -489,7 +494,7 @@ def write_cases(cases, c, folder):
     for cs in cases:
         cs.path = os.path.join(folder, f"local_{cs.index:05d}.tif")
         cen = (cs.extra["cx"], cs.extra["cy"]) if "cx" in cs.extra else None
-        write_local(cs.path, cs.local, c, cen)
+        write_local(cs.path, cs.local, c, cen, cs.extra.get("n"))
         lines.append(f"{cs.path} {cs.prior[0]!r} {cs.prior[1]!r} {cs.window_m!r}\n")
     lst = os.path.join(folder, "cases.txt")
     with open(lst, "w") as f:

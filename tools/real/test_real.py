@@ -34,6 +34,9 @@ On small synthetic DEMs with analytic surfaces (no download, ~10 s):
 * --fine-local binned: K^2 points a cell on average, their counts varying; on a plane each
   cell equals the plane at its points' centroid, which lies in the cell; the noise is the
   mean of the points' (residuals over sqrt(sum sd_i^2) / n of sd 1); the cases' draws kept;
+* --counts: the cells' point counts, whole and >= 1 where seen, NaN where no point fell (those
+  cells unseen), the heights as without them, written as the GeoTIFF's band after the heights
+  and any centroids; without binned cells bench_real exits 1 with one line;
 * --points-draw D: draw 0 gives the binned heights bit for bit; draws 1 and 2 the same next draw
   of the case's generator and the same seen cells but those no point fell in, with heights that differ from draw 0's and
   from each other; with other constructions, or negative, bench_real exits 1 with one line;
@@ -444,7 +447,8 @@ def test_cli():
                       (["--fine-local", "binned"], "--fine-local binned without --truth-fine"),
                       (["--points-draw", "1"], "--points-draw without binned cells"),
                       (["--truth-fine", "2", "--fine-local", "binned", "--points-draw", "-1"], "--points-draw -1"),
-                      (["--points-draw", "x"], "--points-draw x")):
+                      (["--points-draw", "x"], "--points-draw x"),
+                      (["--counts"], "--counts without binned cells")):
         r = subprocess.run([sys.executable, b] + args, capture_output=True, text=True)
         check(r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1 and r.stdout == "",
               f"bench_real {what}: exit 1, one line ({r.stderr.strip()})")
@@ -545,6 +549,27 @@ def test_binned():
           and not np.array_equal(runs[1][0], runs[2][0], equal_nan=True),
           f"--points-draw 1, 2: the case generator's next draw kept, the seen cells but the empty ones "
           f"({flip} differ), other heights (up to {[round(v, 2) for v in moved]} m apart)")
+    # --counts: the cells' point counts (whole, >= 1) where a point fell, NaN elsewhere, the same
+    # heights as without them; the local GeoTIFF's band after the heights and any centroids
+    with tempfile.TemporaryDirectory() as tmp:
+        for cen in (False, True):
+            pc = cm.CaseParams(radius=8, full_view=True, min_range_cells=0, local="binned", counts=True,
+                               centroids=cen)
+            extra = {}
+            h, _ = cm.make_local(hg, truth, pc, np.random.default_rng(3), 0.0, 0.0, hills_fine, extra=extra)
+            n = extra["n"]
+            seen = np.isfinite(h)
+            whole = bool(np.all(n[seen] >= 1) and np.all(n[seen] == np.round(n[seen]))
+                         and not np.any(seen[np.isnan(n)]))
+            path = os.path.join(tmp, f"local{int(cen)}.tif")
+            cm.write_local(path, h, hg.c, (extra["cx"], extra["cy"]) if cen else None, n)
+            ds = gdal.Open(path)
+            band = ds.GetRasterBand(ds.RasterCount).ReadAsArray().astype(np.float64)
+            check(whole and np.array_equal(h, ref_h, equal_nan=True) and ds.RasterCount == (4 if cen else 2)
+                  and np.array_equal(band, n, equal_nan=True) and 3.0 < float(np.nanmean(n)) < 5.0,
+                  f"--counts{' --centroids' if cen else ''}: counts whole and >= 1 where seen (mean "
+                  f"{np.nanmean(n):.2f}, K = 2), the same heights, band {ds.RasterCount} of the GeoTIFF")
+            ds = None
 
 
 def test_rover_map_error():

@@ -215,10 +215,45 @@ bad:
     return -1;
 }
 
+/* The count band (--count-band N) of the local DEM l read from path into
+ * cnt: the same grid as l, and for every seen cell a finite count within
+ * [1, TRN_POINT_COUNT_MAX]. 0, or -1 with the reason (cnt freed). */
+static int read_counts(const cmd_localize_ctx_t *c, const char *path, const dem_t *l, dem_t *cnt,
+                       char *err, size_t err_len)
+{
+    char why[512];
+    size_t i, n = (size_t)l->width * (size_t)l->height;
+    if (dem_read(path, (int)c->count_band, TRN_MAX_DIM, cnt, why, sizeof why) != 0) {
+        snprintf(err, err_len, "--count-band: %s", why);
+        return -1;
+    }
+    if (cnt->width != l->width || cnt->height != l->height) {
+        snprintf(err, err_len, "--count-band: band %ld is %d x %d cells, the heights %d x %d",
+                 c->count_band, cnt->width, cnt->height, l->width, l->height);
+        goto bad;
+    }
+    for (i = 0; i < n; ++i) {
+        if (isfinite(l->data[i]) &&
+            !(cnt->data[i] >= 1.0f && (double)cnt->data[i] <= TRN_POINT_COUNT_MAX)) {
+            snprintf(err, err_len,
+                     "--count-band: local cell (%zu, %zu) is seen but its point count %g is "
+                     "missing or outside [1, %g]",
+                     i % (size_t)l->width, i / (size_t)l->width, (double)cnt->data[i],
+                     TRN_POINT_COUNT_MAX);
+            goto bad;
+        }
+    }
+    return 0;
+bad:
+    dem_free(cnt);
+    return -1;
+}
+
 int cmd_localize_run(const cmd_localize_ctx_t *c, const char *local_path, const double prior[2],
                      double window_m, cmd_localize_out_t *o, char *err, size_t err_len)
 {
-    dem_t l, cen[2];
+    dem_t l, cen[2], cnt;
+    trn_local_cells_t cells;
     double dx_m, dy_m, t0;
     int rx, ry, rc = CLI_BAD_INPUT;
     trn_grid_f32_t lg;
@@ -228,11 +263,13 @@ int cmd_localize_run(const cmd_localize_ctx_t *c, const char *local_path, const 
 
     memset(o, 0, sizeof *o);
     memset(cen, 0, sizeof cen);
+    memset(&cnt, 0, sizeof cnt);
     if (dem_read(local_path, (int)c->local_band, TRN_MAX_DIM, &l, err, err_len) != 0) {
         return CLI_BAD_INPUT;
     }
     if (check_local(c, &l, err, err_len) != 0 ||
         (c->centroid_band > 0 && read_centroids(c, local_path, &l, cen, err, err_len) != 0) ||
+        (c->count_band > 0 && read_counts(c, local_path, &l, &cnt, err, err_len) != 0) ||
         case_window(c, &l, prior, window_m, &rx, &ry, &dx_m, &dy_m, &win, o, err, err_len) != 0) {
         goto done;
     }
@@ -252,8 +289,11 @@ int cmd_localize_run(const cmd_localize_ctx_t *c, const char *local_path, const 
     if (c->heading) {
         o->st = localize_heading(c, &lg, rx, ry, max_pts, &win, o);
     } else {
-        o->st = trn_localize_dem_centroids(&c->map, &lg, cen[0].data, cen[1].data, rx, ry, max_pts,
-                                           &win, ws, wb, &o->res);
+        cells.centroid_x = cen[0].data;
+        cells.centroid_y = cen[1].data;
+        cells.point_count = cnt.data;
+        o->st = trn_localize_dem_cells(&c->map, &lg, &cells, rx, ry, max_pts, &win, ws, wb,
+                                       &o->res);
     }
     o->time_ms = now_ms() - t0;
     if (o->st != TRN_OK && o->st != TRN_E_ILLCOND && o->st != TRN_E_AMBIGUOUS) {
@@ -267,6 +307,7 @@ done:
     dem_free(&l);
     dem_free(&cen[0]);
     dem_free(&cen[1]);
+    dem_free(&cnt);
     return rc;
 }
 
@@ -300,6 +341,7 @@ void cmd_localize_report_json(FILE *out, const cmd_localize_ctx_t *c, const char
     json_str(&j, "status", status_word(o->st));
     json_bool(&j, "refined", o->res.refined != 0);
     json_bool(&j, "centroids", c->centroid_band > 0);
+    json_bool(&j, "point_counts", c->count_band > 0);
     json_num(&j, "noise_scale", o->res.noise_scale);
     if (c->cfg.match == TRN_MATCH_HEIGHTS) {
         json_str(&j, "search",
@@ -474,6 +516,12 @@ int cmd_localize_parse(int argc, char **argv, cmd_localize_params_t *p)
          "into it), cells east and south of the cell's centre, |c| <= 0.5: the refinement "
          "reads the map there (default: the cells' centres; not with a heading search)",
          0},
+        {"--count-band", CLI_LONG, &p->count_band, 1, 65535, 0, "N",
+         "band N of --local holds each cell's point count n (how many stereo points its height "
+         "is the mean of; >= 1 where seen): its noise is the noise model's over sqrt(n), and "
+         "without --centroid-bands its points' unknown centroid is a position error of "
+         "1 / (12 n) cells^2 (default: one measurement a cell; not with a heading search)",
+         0},
         {"--max-local-cells", CLI_LONG, &p->max_local, 8, TRN_MAX_DIM, 0, "N",
          "largest local map side accepted, cells", 0},
         {"--heading-deg", CLI_DOUBLE, &p->heading_deg, -180.0, 180.0, 0, "H",
@@ -499,7 +547,7 @@ int cmd_localize_parse(int argc, char **argv, cmd_localize_params_t *p)
     cli_opt_t json_opt = {
         "--json", CLI_FLAG, &p->json, 0, 0, 0, NULL, "print one JSON object instead of the summary",
         0};
-    cli_opt_t all[14 + MAPOPT_N];
+    cli_opt_t all[15 + MAPOPT_N];
     const size_t n_all = sizeof all / sizeof all[0];
     cli_cmd_t cmd = {
         "localize",
@@ -517,9 +565,9 @@ int cmd_localize_parse(int argc, char **argv, cmd_localize_params_t *p)
         all, sizeof all / sizeof all[0]};
     int rc;
 
-    memcpy(all, opts, 13 * sizeof opts[0]);
-    mapopt_cli(&p->mo, all + 13);
-    all[13 + MAPOPT_N] = json_opt;
+    memcpy(all, opts, 14 * sizeof opts[0]);
+    mapopt_cli(&p->mo, all + 14);
+    all[14 + MAPOPT_N] = json_opt;
     rc = cli_parse(&cmd, argc, argv);
     if (rc != CLI_OK) {
         return rc;
@@ -537,9 +585,11 @@ int cmd_localize_parse(int argc, char **argv, cmd_localize_params_t *p)
                                       "one or the other (see --help)\n");
         return CLI_USAGE;
     }
-    if (p->centroid_band > 0 && p->heading) {
-        fprintf(cli_message_stream(), "trn localize: --centroid-bands does not apply to a heading "
-                                      "search or turn (--heading-deg, --heading-window-deg)\n");
+    if ((p->centroid_band > 0 || p->count_band > 0) && p->heading) {
+        fprintf(cli_message_stream(),
+                "trn localize: %s does not apply to a heading search or turn "
+                "(--heading-deg, --heading-window-deg)\n",
+                p->centroid_band > 0 ? "--centroid-bands" : "--count-band");
         return CLI_USAGE;
     }
     return localize_check_use(p);
@@ -557,6 +607,7 @@ int cmd_localize_prepare(const cmd_localize_params_t *p, cmd_localize_ctx_t *c, 
     memset(c, 0, sizeof *c);
     c->local_band = p->local_band;
     c->centroid_band = p->centroid_band;
+    c->count_band = p->count_band;
     c->max_local = p->max_local;
     c->heading = p->heading;
     c->heading_deg = p->heading_deg;

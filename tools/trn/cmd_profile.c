@@ -629,6 +629,7 @@ static int world_map(world_t *w, char *err, size_t err_len)
     w->hrc.fit_noise = w->hcfg.noise_auto;
     w->hrc.centroid_x = NULL; /* the cells' centres */
     w->hrc.centroid_y = NULL;
+    w->hrc.point_count = NULL; /* one measurement a cell */
     return 0;
 }
 

@@ -132,6 +132,7 @@ typedef struct {
     double window_m;
     long band, local_band, max_local;
     long centroid_band; /* --centroid-bands N: bands N, N + 1 of --local; 0: none */
+    long count_band;    /* --count-band N: band N of --local, the cells' point counts; 0: none */
     int have_prior;     /* --prior given */
     int heading;        /* search heading too (--heading-window-deg or --heading-deg given) */
     double heading_deg, heading_win_deg; /* centre and half-window, degrees counterclockwise */
@@ -147,7 +148,7 @@ typedef struct {
     trn_map_cfg_t cfg;
     trn_map_t map;
     void *mraw;
-    long local_band, max_local, centroid_band;
+    long local_band, max_local, centroid_band, count_band;
     int heading;
     double heading_deg, heading_win_deg;
 } cmd_localize_ctx_t;
