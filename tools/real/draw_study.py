@@ -4,7 +4,7 @@
 of its own estimate (issue 36 item 4; docs/method.md 9.10, "The covariance's own noise").
 
     /usr/bin/python3 tools/real/draw_study.py --dem ID [--radius R] [--truth-fine K]
-        [--cases N] [--draws M] [--seed S] [--trn PATH] [--out DIR] [-- TRN_ARGS...]
+        [--cases N] [--draws M] [--seed S] [--counts] [--trn PATH] [--out DIR] [-- TRN_ARGS...]
 
 The rover's binned local maps of bench_real.py (--truth-fine K --fine-local binned), N cases,
 each localized M times: draw d (bench_real --points-draw d) scatters other stereo points with
@@ -23,7 +23,8 @@ and differ by what the points put into it. Per case, over its draws:
 * the true over the mean reported trace by fifth of the mean reported trace: whether the
   prediction follows the cases.
 
-Cases whose answer is wrong (error above 1.5 cells) in any draw are left out. Prints one
+With --counts trn is given each cell's point count (bench_real --counts). Cases whose answer
+is wrong (error above 1.5 cells) in any draw are left out. Prints one
 summary and writes OUT/draw_study.json. Errors and covariances in cells."""
 import argparse
 import io
@@ -99,6 +100,8 @@ def parse_args(argv):
     ap.add_argument("--cases", type=int, default=100, help="cases (default 100)")
     ap.add_argument("--draws", type=int, default=40, help="draws of the points a case (default 40)")
     ap.add_argument("--seed", type=int, default=13, help="seed (default 13)")
+    ap.add_argument("--counts", action="store_true",
+                    help="trn is given each cell's point count (bench_real --counts)")
     ap.add_argument("--trn", default=os.path.join(dems.ROOT, "build", "host-release", "trn"))
     ap.add_argument("--out", default=os.path.join(dems.BUILD, "draw_study"))
     a = ap.parse_args(argv)
@@ -135,6 +138,7 @@ def main(argv):
             args = ["--dem", a.dem, "--cases", str(a.cases), "--seed", str(a.seed), "--radius",
                     str(a.radius), "--truth-fine", str(a.truth_fine), "--fine-local", "binned",
                     "--points-draw", str(d), "--trn", a.trn, "--out", out, "--no-plot"]
+            args += ["--counts"] if a.counts else []
             if a.trn_extra:
                 args += ["--"] + a.trn_extra
             log = io.StringIO()
@@ -153,6 +157,7 @@ def main(argv):
         x = x[keep]
         r = analyse(x[:, :, 0:2], x[:, :, 2:5], x[:, :, 5])
         r.update({"dem": a.dem, "radius": a.radius, "truth_fine": a.truth_fine, "seed": a.seed,
+                  "counts": a.counts,
                   "cases_asked": a.cases, "cases_wrong_in_a_draw": int((~keep).sum())})
         os.makedirs(a.out, exist_ok=True)
         with open(os.path.join(a.out, "draw_study.json"), "w") as f:
