@@ -382,8 +382,10 @@ typedef struct {
  * cell that is the mean of n stereo points has the noise variance s(r)^2 /
  * n of the map's noise model, and without its centroid, a position error
  * of variance 1 / (12 n) cells^2 per axis (trn_refine_cfg_t.point_count).
- * Every refinement pass takes them; the searches over integer poses are as
- * trn_localize_dem's (docs/method.md 9.10, "The point counts").
+ * Every refinement pass takes them, and with them the covariance is the
+ * model's without the block sandwich (refinement.inflation 1); the searches
+ * over integer poses are as trn_localize_dem's (docs/method.md 9.4, 9.5,
+ * 9.10 "The point counts").
  * @param[in] cells the centroids and the counts, each NULL where not
  *            known (all NULL: trn_localize_dem, bit for bit).
  * @retval as trn_localize_dem_centroids, plus TRN_E_NULL (cells NULL) and

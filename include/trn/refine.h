@@ -127,7 +127,9 @@ typedef struct {
                                   is: its noise variance is s(r)^2 / n, and without the
                                   centroids their unknown centroid adds |grad|^2 / (12 n)
                                   (cells^2 times the slope's square) to the covariance's
-                                  cell variance. Every refinement pass reads it (the searches
+                                  cell variance, and the covariance leaves out the block
+                                  sandwich (trn_refine_t.inflation 1). Every refinement pass
+                                  reads it (the searches
                                   at integer poses do not). Seen cells: finite, within
                                   [1, TRN_POINT_COUNT_MAX]; unseen cells are not read
                                   (docs/method.md 9.10, "The point counts") */
