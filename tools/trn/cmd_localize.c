@@ -175,6 +175,26 @@ static void case_to_map(const cmd_localize_ctx_t *c, double dx_m, double dy_m,
     o->cov_en[2] = o->res.cov_m2[2] != 0.0 ? -o->res.cov_m2[2] : 0.0;
 }
 
+/* Band `band` of the local DEM file path into out, on the same grid as the
+ * heights l (opt: the option that names it, for the reason). 0, or -1 with
+ * the reason (out freed). */
+static int read_cell_band(const char *path, long band, const char *opt, const dem_t *l, dem_t *out,
+                          char *err, size_t err_len)
+{
+    char why[512];
+    if (dem_read(path, (int)band, TRN_MAX_DIM, out, why, sizeof why) != 0) {
+        snprintf(err, err_len, "%s: %s", opt, why);
+        return -1;
+    }
+    if (out->width != l->width || out->height != l->height) {
+        snprintf(err, err_len, "%s: band %ld is %d x %d cells, the heights %d x %d", opt, band,
+                 out->width, out->height, l->width, l->height);
+        dem_free(out);
+        return -1;
+    }
+    return 0;
+}
+
 /* The centroid bands (--centroid-bands N) of the local DEM l read from
  * path into cen[0] (east) and cen[1] (south): the same grid as l, and for
  * every seen cell finite and within TRN_CENTROID_MAX. 0, or -1 with the
@@ -182,18 +202,11 @@ static void case_to_map(const cmd_localize_ctx_t *c, double dx_m, double dy_m,
 static int read_centroids(const cmd_localize_ctx_t *c, const char *path, const dem_t *l,
                           dem_t cen[2], char *err, size_t err_len)
 {
-    char why[512];
     int k;
     size_t i, n = (size_t)l->width * (size_t)l->height;
     for (k = 0; k < 2; ++k) {
-        if (dem_read(path, (int)c->centroid_band + k, TRN_MAX_DIM, &cen[k], why, sizeof why) != 0) {
-            snprintf(err, err_len, "--centroid-bands: %s", why);
-            goto bad;
-        }
-        if (cen[k].width != l->width || cen[k].height != l->height) {
-            snprintf(err, err_len,
-                     "--centroid-bands: band %ld is %d x %d cells, the heights %d x %d",
-                     c->centroid_band + k, cen[k].width, cen[k].height, l->width, l->height);
+        if (read_cell_band(path, c->centroid_band + k, "--centroid-bands", l, &cen[k], err,
+                           err_len) != 0) {
             goto bad;
         }
     }
@@ -221,16 +234,9 @@ bad:
 static int read_counts(const cmd_localize_ctx_t *c, const char *path, const dem_t *l, dem_t *cnt,
                        char *err, size_t err_len)
 {
-    char why[512];
     size_t i, n = (size_t)l->width * (size_t)l->height;
-    if (dem_read(path, (int)c->count_band, TRN_MAX_DIM, cnt, why, sizeof why) != 0) {
-        snprintf(err, err_len, "--count-band: %s", why);
+    if (read_cell_band(path, c->count_band, "--count-band", l, cnt, err, err_len) != 0) {
         return -1;
-    }
-    if (cnt->width != l->width || cnt->height != l->height) {
-        snprintf(err, err_len, "--count-band: band %ld is %d x %d cells, the heights %d x %d",
-                 c->count_band, cnt->width, cnt->height, l->width, l->height);
-        goto bad;
     }
     for (i = 0; i < n; ++i) {
         if (isfinite(l->data[i]) &&
@@ -240,13 +246,11 @@ static int read_counts(const cmd_localize_ctx_t *c, const char *path, const dem_
                      "missing or outside [1, %g]",
                      i % (size_t)l->width, i / (size_t)l->width, (double)cnt->data[i],
                      TRN_POINT_COUNT_MAX);
-            goto bad;
+            dem_free(cnt);
+            return -1;
         }
     }
     return 0;
-bad:
-    dem_free(cnt);
-    return -1;
 }
 
 int cmd_localize_run(const cmd_localize_ctx_t *c, const char *local_path, const double prior[2],
