@@ -31,6 +31,7 @@ void trn_select_cfg_default(trn_select_cfg_t *cfg)
     cfg->sigma_heading_rad = 0.0f;
     cfg->heading_search = 0;
     cfg->map_sigma_m = 0.02f;
+    cfg->points_per_cell = 0.0f;
 }
 
 /* patch_m in whole cells (nearest, so 2.0 m / 0.1f m is 20, not 19), then
@@ -68,7 +69,9 @@ trn_status_t trn_select_cfg_check(const trn_select_cfg_t *cfg, float cell_m)
           cfg->sigma_heading_rad <= TRN_SELECT_MAX_SIGMA_HEADING_RAD) ||
         cfg->stride_cells < 1 || cfg->stride_cells > 64 ||
         (cfg->heading_search != 0 && cfg->heading_search != 1) ||
-        !(cfg->map_sigma_m >= 0.0f && cfg->map_sigma_m <= 1000.0f)) {
+        !(cfg->map_sigma_m >= 0.0f && cfg->map_sigma_m <= 1000.0f) ||
+        !(cfg->points_per_cell == 0.0f ||
+          (cfg->points_per_cell >= 1.0f && (double)cfg->points_per_cell <= TRN_POINT_COUNT_MAX))) {
         return TRN_E_ARG;
     }
     if ((double)cfg->patch_m / (double)cell_m > (double)TRN_MAX_DIM ||
@@ -573,6 +576,9 @@ static trn_status_t sel_heights_all(const trn_map_t *map, const trn_select_cfg_t
     nm.noise_m = (double)map->cfg.noise_m;
     nm.noise_k = (double)map->cfg.noise_k_per_m;
     nm.map_var = (double)cfg->map_sigma_m * (double)cfg->map_sigma_m;
+    /* a binned local map: the mean of n points, and their centroid's jitter */
+    nm.inv_n = cfg->points_per_cell > 0.0f ? 1.0 / (double)cfg->points_per_cell : 1.0;
+    nm.jitter = cfg->points_per_cell > 0.0f ? nm.inv_n / 12.0 : 0.0;
     if ((st = trn_selh_build_(&map->heights, roi, heading, &nm, ws)) != TRN_OK) {
         return st;
     }

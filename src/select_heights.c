@@ -35,7 +35,8 @@ size_t trn_selh_bytes_(int32_t w, int32_t h, int heading)
 /* The terms of map cell (x, y) into t[SELH_NI] (t[0] = 1, t[1] = w, then w
  * times gx, gy, gx^2, gx gy, gy^2) and its gradient into g: 1 with its four
  * neighbours' heights known, else 0 (t all 0). w = 1 / (the noise model at
- * the cell's range from the rover + the map's error + e^2 / 4). */
+ * the cell's range from the rover, times inv_n, + the jitter times |g|^2 +
+ * the map's error + e^2 / 4). */
 static int cell_terms(const trn_grid_f32_t *hg, const trn_selh_noise_t *nm, int32_t x, int32_t y,
                       double t[SELH_NI], double g[2])
 {
@@ -58,7 +59,8 @@ static int cell_terms(const trn_grid_f32_t *hg, const trn_selh_noise_t *nm, int3
     ux = ((double)x - nm->rxf) * nm->cell;
     uy = ((double)y - nm->ryf) * nm->cell;
     sd = nm->noise_m + nm->noise_k * (ux * ux + uy * uy);
-    w = 1.0 / (sd * sd + nm->map_var + 0.25 * e * e);
+    w = 1.0 / (sd * sd * nm->inv_n + nm->jitter * (g[0] * g[0] + g[1] * g[1]) + nm->map_var +
+               0.25 * e * e);
     t[0] = 1.0;
     t[1] = w;
     t[2] = w * g[0];

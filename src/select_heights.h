@@ -7,7 +7,9 @@
  * differences g = (gx, gy), metres per cell (the bicubic interpolant's
  * gradient at a node), the representation residual e = h - the mean of the
  * four neighbours, metres, and the weight w = 1 / s^2, s^2 the noise model
- * at the cell's range from the rover plus the map's error plus e^2 / 4.
+ * at the cell's range from the rover (over n and plus the centroid's jitter
+ * |g|^2 / (12 n) for a binned map of n points a cell) plus the map's error
+ * plus e^2 / 4.
  * Exact int64 summed-area tables of the count, w, w gx, w gy, w gx^2,
  * w gx gy and w gy^2 give each candidate's sums in four reads per table;
  * each table's terms are quantized to the finest power of two (at most
@@ -27,10 +29,12 @@
 #include "trn/status.h"
 
 /* The noise of the prediction: the rover (cells), the cell (m), the
- * matcher's noise model sd = noise_m + noise_k r^2 (r in m) and the map's
- * error variance (m^2). */
+ * matcher's noise model sd = noise_m + noise_k r^2 (r in m), the map's
+ * error variance (m^2), the share of sd^2 a cell keeps (1 / n for the mean
+ * of n points, else 1) and the centroid's jitter per |g|^2 (cells^2: 1 /
+ * (12 n), else 0). */
 typedef struct {
-    double rxf, ryf, cell, noise_m, noise_k, map_var;
+    double rxf, ryf, cell, noise_m, noise_k, map_var, inv_n, jitter;
 } trn_selh_noise_t;
 
 /* One patch's sums (the tables' units undone): the count of cells with

@@ -140,6 +140,9 @@ static int slow_cov(const hmap_t *h, const trn_select_cfg_t *sc, const trn_candi
 {
     const int half = (int)floor(sc->patch_m / CELL + 0.5) / 2;
     const double ms = sc->map_sigma_m;
+    /* a binned local map of pn points a cell: the noise over pn, the centroid's jitter */
+    const double pn = sc->points_per_cell > 0.0f ? (double)sc->points_per_cell : 1.0;
+    const double jit = sc->points_per_cell > 0.0f ? 1.0 / (12.0 * pn) : 0.0;
     double s[3] = {0, 0, 0}, ss[3][3], n = 0, sw = 0, a, b, d, det, sh, raw;
     double inv[3];
     int x, y, i, j;
@@ -154,12 +157,14 @@ static int slow_cov(const hmap_t *h, const trn_select_cfg_t *sc, const trn_candi
             if (!(isfinite(v) && isfinite(l) && isfinite(r) && isfinite(dn) && isfinite(up))) {
                 continue;
             }
-            /* each cell's own variance: the noise at its range, the map's error, e^2 / 4 */
-            e = v - 0.25 * (l + r + dn + up);
-            sd = h->cfg.noise_m + h->cfg.noise_k_per_m * (ux * ux + uy * uy);
-            w = 1.0 / (sd * sd + ms * ms + 0.25 * e * e);
             j3[0] = 0.5 * (r - l);
             j3[1] = 0.5 * (up - dn);
+            /* each cell's own variance: the noise at its range (of the mean of pn points, plus
+             * their centroid's jitter), the map's error, e^2 / 4 */
+            e = v - 0.25 * (l + r + dn + up);
+            sd = h->cfg.noise_m + h->cfg.noise_k_per_m * (ux * ux + uy * uy);
+            w = 1.0 /
+                (sd * sd / pn + jit * (j3[0] * j3[0] + j3[1] * j3[1]) + ms * ms + 0.25 * e * e);
             j3[2] = j3[1] * (x - rx) - j3[0] * (y - ry);
             for (i = 0; i < 3; ++i) {
                 s[i] += w * j3[i];
@@ -269,7 +274,90 @@ static void test_against_slow(void **state)
     w = against_slow(h, &sc, 30.3f, 40.0f);
     print_message("worst relative difference, heading searched: %.3g\n", w);
     assert_true(w < 1e-4);
+    /* a binned local map: 4 and 1 points a cell, with the heading searched and without */
+    sc.points_per_cell = 4.0f;
+    w = against_slow(h, &sc, 30.3f, 40.0f);
+    assert_true(w < 1e-4);
+    sc.heading_search = 0;
+    sc.points_per_cell = 1.0f;
+    w = against_slow(h, &sc, 35.0f, 33.4f);
+    print_message("worst relative difference, 1 point a cell: %.3g\n", w);
+    assert_true(w < 1e-4);
     free(h->buf);
+    free(h);
+}
+
+/* A binned local map's prediction (points_per_cell n): 0 is the unbinned
+ * prediction bit for bit. Each cell's variance is s^2 / n + |g|^2 / (12 n)
+ * + map + e^2 / 4; on a paraboloid (e = -c at every cell) with no range
+ * term and no map error that is V_i / n + c^2 / 4, V_i = s0^2 + |g_i|^2 /
+ * 12. Each cell's weight at n = 4 is then 4 (V_i + c^2 / 4) / (V_i + c^2)
+ * times its weight at n = 1, between 4 (s0^2 + c^2 / 4) / (s0^2 + c^2) and
+ * 4, and the profiled information (a minimum over the offset of weighted
+ * squares) keeps the bounds: the covariance at n = 1 over that at n = 4
+ * lies between them. Left out, the jitter's 1 / n takes the ratio towards
+ * 1 where |g|^2 / 12 outweighs s0^2 (most cells here). Against the unbinned
+ * s0^2 the jitter widens every candidate. */
+static void test_points_per_cell(void **state)
+{
+    hmap_t *h = malloc(sizeof *h);
+    float *dem = malloc(sizeof(float) * N * N);
+    trn_select_cfg_t sc, s0;
+    run_t r0, r1, r4, rz;
+    size_t i;
+    int x, y;
+    (void)state;
+    rough_dem(h->dem, 7u, 0);
+    hmap_init(h, h->dem);
+    small_cfg(&s0);
+    sc = s0;
+    sc.points_per_cell = 0.0f;
+    assert_int_equal(run_select(h, &s0, 35.0f, 33.4f, 0.0f, &r0), TRN_OK);
+    assert_int_equal(run_select(h, &sc, 35.0f, 33.4f, 0.0f, &rz), TRN_OK);
+    assert_int_equal(r0.res.n_candidates, rz.res.n_candidates);
+    assert_memory_equal(r0.cands, rz.cands, r0.res.n_candidates * sizeof *r0.cands);
+    run_free(&rz);
+    run_free(&r0);
+    free(h->buf);
+    for (y = 0; y < N; ++y) {
+        for (x = 0; x < N; ++x) {
+            dem[y * N + x] = (float)(0.001 * ((x - 30) * (x - 30) + (y - 41) * (y - 41)));
+        }
+    }
+    g_noise_k = 0.0f;
+    hmap_init(h, dem);
+    g_noise_k = 0.002f;
+    small_cfg(&sc);
+    sc.map_sigma_m = 0.0f;
+    sc.points_per_cell = 1.0f;
+    assert_int_equal(run_select(h, &sc, 36.0f, 36.0f, 0.0f, &r1), TRN_OK);
+    sc.points_per_cell = 4.0f;
+    assert_int_equal(run_select(h, &sc, 36.0f, 36.0f, 0.0f, &r4), TRN_OK);
+    sc.points_per_cell = 0.0f;
+    assert_int_equal(run_select(h, &sc, 36.0f, 36.0f, 0.0f, &r0), TRN_OK);
+    assert_int_equal(r1.res.n_candidates, r4.res.n_candidates);
+    assert_true(r1.res.n_informative > 100u);
+    for (i = 0; i < r1.res.n_candidates; ++i) {
+        const trn_candidate_t *a = &r1.cands[i], *b = &r4.cands[i], *c = &r0.cands[i];
+        const double c2 = 0.001 * 0.001, s02 = (double)0.01f * (double)0.01f;
+        const double lo = 4.0 * (s02 + 0.25 * c2) / (s02 + c2); /* 3.970 */
+        int k;
+        if (!a->informative) {
+            continue;
+        }
+        assert_true(b->informative);
+        for (k = 0; k < 2; ++k) {
+            assert_true(a->cov_m2[k] / b->cov_m2[k] >= lo * (1.0 - 1e-6));
+            assert_true(a->cov_m2[k] / b->cov_m2[k] <= 4.0 * (1.0 + 1e-6));
+        }
+        /* the jitter widens the prediction against one unbinned measurement a cell */
+        assert_true(a->cov_m2[0] > c->cov_m2[0] && a->cov_m2[1] > c->cov_m2[1]);
+    }
+    run_free(&r0);
+    run_free(&r1);
+    run_free(&r4);
+    free(h->buf);
+    free(dem);
     free(h);
 }
 
@@ -530,6 +618,22 @@ static void test_errors(void **state)
         trn_select(&h->map, NULL, NULL, &sc, &rv, r.cands, r.cap, ranked, 2u, &res, r.ws, wb),
         TRN_E_ARG);
     small_cfg(&sc);
+    /* the points a cell NaN, negative, between 0 and 1, above TRN_POINT_COUNT_MAX */
+    {
+        const float bad[4] = {NAN, -1.0f, 0.5f, 2.0e6f};
+        for (x = 0; x < 4; ++x) {
+            sc.points_per_cell = bad[x];
+            assert_int_equal(trn_select_cfg_check(&sc, CELL), TRN_E_ARG);
+            assert_int_equal(trn_select(&h->map, NULL, NULL, &sc, &rv, r.cands, r.cap, ranked, 2u,
+                                        &res, r.ws, wb),
+                             TRN_E_ARG);
+        }
+        sc.points_per_cell = (float)TRN_POINT_COUNT_MAX;
+        assert_int_equal(trn_select_cfg_check(&sc, CELL), TRN_OK);
+        sc.points_per_cell = 1.0f;
+        assert_int_equal(trn_select_cfg_check(&sc, CELL), TRN_OK);
+    }
+    small_cfg(&sc);
     /* a heights map without its heights */
     m = h->map;
     m.heights.data = NULL;
@@ -571,10 +675,10 @@ static void test_errors(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_against_slow), cmocka_unit_test(test_ll_is_the_quadratic),
-        cmocka_unit_test(test_paraboloid),   cmocka_unit_test(test_flat_and_plane),
-        cmocka_unit_test(test_holes),        cmocka_unit_test(test_field_same_bits),
-        cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_against_slow),        cmocka_unit_test(test_points_per_cell),
+        cmocka_unit_test(test_ll_is_the_quadratic), cmocka_unit_test(test_paraboloid),
+        cmocka_unit_test(test_flat_and_plane),      cmocka_unit_test(test_holes),
+        cmocka_unit_test(test_field_same_bits),     cmocka_unit_test(test_errors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

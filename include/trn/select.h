@@ -70,7 +70,9 @@
  * hence the weighted centring), w = 1 / s^2 each cell's own variance
  *   s^2 = (noise_m + noise_k_per_m r^2)^2 + map_sigma_m^2 + e^2 / 4,
  * r the cell's range from the rover, the first term the matcher's own
- * noise model (map->cfg), e = h - the mean of its four neighbours (the
+ * noise model (map->cfg; with points_per_cell n > 0, a binned local map,
+ * divided by n and |g|^2 / (12 n) added, its points' centroid's jitter),
+ * e = h - the mean of its four neighbours (the
  * map's representation error: a bilinear interpolant's is at most half of
  * it). The covariance is I^-1 (cells^2, times cell_m^2), ll[d] the expected
  * -d^T I d / 2; a patch with fewer than 3 such cells, or whose I is singular
@@ -122,6 +124,13 @@ typedef struct {
                                    [0, 1000] (default 0.02, eq. 8's S0 of
                                    trn_sigma_global_default); the voxel prediction takes the
                                    map's error from P_G (eq. 8) instead */
+    float points_per_cell;         /**< the height prediction only: the stereo points the rover
+                                   expects to bin into each seen cell of its local map, when it
+                                   passes their counts (trn_localize_dem_cells) but not their
+                                   centroids: each cell's noise is then the model's s^2 / n and
+                                   the jitter of its points' centroid, |g|^2 / (12 n), is added
+                                   (method.md 4); 0 (the default): each cell one measurement at
+                                   its centre, s^2; else [1, TRN_POINT_COUNT_MAX] */
 } trn_select_cfg_t;
 
 /** Largest sigma_heading_rad (0.5 rad, 28.6 deg): the heading's term is the

@@ -174,6 +174,8 @@ def test_select_equals_cli(cli, dems, gmap):
                         ["--sensors", "1000.5,2000.5;1006.0,2006.0", "--max-range-m", 2.5, "--map-config", "paper"]),
                        ({"heading_sigma_deg": 2, "heading_search": 1},
                         ["--heading-sigma-deg", 2, "--heading-search", 1]),
+                       # a rover that bins its points: the points it expects a cell
+                       ({"points_per_cell": 4}, ["--points-per-cell", 4]),
                        ({}, [])):
         want = cli.json("select", "--dem", dems["global"], "--rover", "1003.25,2003.25", *args)
         same(gmap.select(rover=ROVER, **opts), want)

@@ -171,6 +171,7 @@ class _SelectRequired(TypedDict):
     global_error: GlobalError
     map_config_name: str
     predicts: str
+    points_per_cell: float
     sigma_h_m: Optional[float]
     map_config: MapConfig
 
@@ -210,6 +211,7 @@ class _FieldRequired(TypedDict):
     global_error: GlobalError
     map_config_name: str
     predicts: str
+    points_per_cell: float
     sigma_h_m: Optional[float]
     map_config: MapConfig
     field: Raster

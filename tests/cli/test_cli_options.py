@@ -274,6 +274,9 @@ SELMAP = {
     "--global-sigma-m": [effect("--global-sigma-m", "0.2"), effect("--global-sigma-m", "0.2", ctx=VOXEL_SEL)],
     "--global-sigma-k": voxel_pred("--global-sigma-k", "0.05", needle="voxel prediction"),
     "--global-error": voxel_pred("--global-error", p("gerr.tif"), needle="voxel prediction"),
+    # a binned local map's counts: the height prediction's; the voxel prediction refuses it
+    "--points-per-cell": [effect("--points-per-cell", "4"),
+                          refused("--points-per-cell", "4", rc=2, needle="height prediction", ctx=VOXEL_SEL)],
     **MAP_PREDICT,
     "--json": effect(drop=["--json"]),
 }

@@ -378,6 +378,23 @@ for opt, val in (("--global-sigma-k", "0.01"), ("--sensors", f"{rover[0]},{rover
 mv = run_json("select", "--dem", g_tif, *R2, "--match", "voxel")
 check(mv.get("predicts") == "voxel" and mv.get("uncertainty_m") != dflt.get("uncertainty_m"),
       f"--match voxel predicts the voxel matcher: {mv.get('predicts')}")
+# a rover that bins its points (--points-per-cell N, docs/method.md 4): the JSON says N; the mean
+# of 16 points a cell predicts a smaller uncertainty than one measurement a cell, even with its
+# centroid's jitter; one point a cell (the jitter alone) a larger one; the field takes it too
+check(dflt.get("points_per_cell") == 0, f"select: points_per_cell 0 by default ({dflt.get('points_per_cell')})")
+b16 = run_json("select", "--dem", g_tif, *R2, "--points-per-cell", "16")
+b1 = run_json("select", "--dem", g_tif, *R2, "--points-per-cell", "1")
+check(b16.get("points_per_cell") == 16 and 0 < b16.get("uncertainty_m", 0) < dflt.get("uncertainty_m", 0)
+      < b1.get("uncertainty_m", 0),
+      f"--points-per-cell 16 < unbinned < 1: {b16.get('uncertainty_m')}, {dflt.get('uncertainty_m')}, "
+      f"{b1.get('uncertainty_m')}")
+for bad, why in (("0.5", "a binned cell holds at least one point"), ("-1", "--points-per-cell: -1 is out of range"),
+                 ("2e6", "--points-per-cell: 2e+06 is out of range"), ("x", "--points-per-cell: 'x' is not a finite")):
+    expect_error(2 if bad == "0.5" else 1, why, "select", "--dem", g_tif, *R2, "--points-per-cell", bad)
+expect_error(2, "--points-per-cell applies to the height prediction", "select", "--dem", g_tif, *R2,
+             "--match", "voxel", "--points-per-cell", "4")
+expect_error(2, "--points-per-cell applies to the height prediction", "field", "--dem", g_tif, "--out",
+             p("ppc.tif"), "--map-config", "paper", "--points-per-cell", "4")
 # a patch of few cells is warned about on stderr
 rc, out, err = run("select", "--dem", g_tif, "--rover", f"{rover[0]},{rover[1]}", "--max-range-m", "3",
                    "--patch-m", f"{5 * CELL}")

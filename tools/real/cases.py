@@ -292,23 +292,26 @@ class Bins:
     cy: np.ndarray  # and south of it
 
 
-def binned_points(src, fr, fc, R, scale, turn_deg, p, cell_m, gen, noisy=True):
+def binned_points(src, fr, fc, R, scale, turn_deg, p, cell_m, gen, noisy=True, centre=(0, 0)):
     """The issue's rover: stereo points of the true ground (the source surface, bilinear)
     scattered uniformly at random (generator gen) over the local map's square, on
     average one per source cell (scale^2 per local cell, so a cell's count varies), binned
     into the local cells around the rover at its sub-cell position (fr, fc). Each point's
-    noise sd is the model's at its own range; a cell is the mean of its points."""
+    noise sd is the model's at its own range; a cell is the mean of its points. The square
+    is the (2R+1)^2 cells about the local cell `centre` (whole cells east, south of the
+    rover's; (0, 0): about the rover)."""
     m = 2 * R + 1
+    ox, oy = int(centre[0]), int(centre[1])
     npts = int(round(m * m * scale * scale))
-    x = gen.uniform(-R - 0.5, R + 0.5, npts)  # local east, local cells from the rover
-    y = gen.uniform(-R - 0.5, R + 0.5, npts)  # local south
+    x = gen.uniform(ox - R - 0.5, ox + R + 0.5, npts)  # local east, local cells from the rover
+    y = gen.uniform(oy - R - 0.5, oy + R + 0.5, npts)  # local south
     ct, st = math.cos(math.radians(turn_deg)), math.sin(math.radians(turn_deg))
     z = sample(src.z, fr + (-x * st + y * ct) * scale, fc + (x * ct + y * st) * scale)
     sd = p.noise0_m + p.noise_k * (x * x + y * y) * cell_m
     zn = z + gen.standard_normal(npts) * sd if noisy else z
     use = np.isfinite(z)
-    ix = np.clip(np.floor(x + 0.5).astype(int) + R, 0, m - 1)
-    iy = np.clip(np.floor(y + 0.5).astype(int) + R, 0, m - 1)
+    ix = np.clip(np.floor(x + 0.5).astype(int) - ox + R, 0, m - 1)
+    iy = np.clip(np.floor(y + 0.5).astype(int) - oy + R, 0, m - 1)
     cell = (iy * m + ix)[use]
 
     def per_cell(w):
@@ -317,7 +320,7 @@ def binned_points(src, fr, fc, R, scale, turn_deg, p, cell_m, gen, noisy=True):
     with np.errstate(invalid="ignore", divide="ignore"):
         k = np.arange(-R, R + 1, dtype=np.float64)
         return Bins(per_cell(zn) / n, per_cell(z) / n, n, np.sqrt(per_cell(sd * sd)) / n,
-                    per_cell(x) / n - k[None, :], per_cell(y) / n - k[:, None])
+                    per_cell(x) / n - (k + ox)[None, :], per_cell(y) / n - (k + oy)[:, None])
 
 
 def points_generator(rng, p, shape):

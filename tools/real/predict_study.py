@@ -5,8 +5,8 @@ error on real DEMs (issue 36 item 2, "Predicted against achieved"; docs/method.m
 
     /usr/bin/python3 tools/real/predict_study.py [--dem ID ...] [--cases N] [--rovers M] [--seed S]
         [--patch-cells P] [--min-range-cells A] [--max-range-cells B] [--footprint-cells F]
-        [--prior-cells Q] [--window-cells W] [--map-sigma-m S0] [--trn PATH] [--out DIR]
-        [--no-plot] [--smoke] [--reanalyse predict.json]
+        [--prior-cells Q] [--window-cells W] [--map-sigma-m S0] [--truth-fine K [--counts]]
+        [--trn PATH] [--out DIR] [--no-plot] [--smoke] [--reanalyse predict.json]
 
 Per DEM (tools/real/dems.py ids; cached GeoTIFFs under build/real/):
 
@@ -31,6 +31,14 @@ Per DEM (tools/real/dems.py ids; cached GeoTIFFs under build/real/):
    model, read from the select JSON), written as a rover-frame GeoTIFF (the rover at (0, 0), the
    patch at its offset). A prior uniform in +-Q cells per axis about the truth, a window of +-W
    cells; `trn localize --dem D --batch LIST --json` (the default auto configuration).
+   With --truth-fine K (K >= 2) the map is the DEM's K x K block mean (OUT/ID_meanK.tif; the
+   rovers, targets and cells are its) and each local map is a rover's binned stereo points
+   (bench_real.py's --fine-local binned, cases.binned_points): points of the DEM's surface
+   (bilinear) uniform over the patch's cells, K^2 a cell on average, each with the stereo model's
+   noise at its own range, each cell their mean. The draw's strata are the unbinned prediction's,
+   so the targets, maps and priors are the same with --counts, which writes the cells' counts as
+   the patch's band 2, localizes with --count-band 2 and predicts with select --points-per-cell
+   K^2 (the unbinned prediction of the same targets kept as heights_unbinned).
 4. Achieved error |estimate - truth| (m) and per axis; right: within 1.5 cells (bench_real.py);
    the localizer's own failure_probability and status.
 
@@ -136,6 +144,29 @@ def spearman(a, b):
     return float(ra @ rb) / den if den > 0 else None
 
 
+def spearman_ideal(u, sx, sy, rho, n_sim=20, seed=0):
+    """The Spearman correlation that a prediction exactly right in distribution would reach on these
+    cases: u against the lengths of errors drawn from each case's own predicted Gaussian (per-axis
+    sigmas sx, sy, correlation rho), the mean over n_sim draws. It is below 1 because one error is
+    one draw: how far below depends on how widely the cases' predictions spread. None without
+    finite predictions."""
+    u, sx, sy = (np.asarray(v, dtype=np.float64) for v in (u, sx, sy))
+    rho = np.nan_to_num(np.asarray(rho, dtype=np.float64))
+    fin = np.isfinite(u) & np.isfinite(sx) & np.isfinite(sy)
+    if fin.sum() < 3:
+        return None
+    rng = np.random.default_rng(seed)
+    vals = []
+    for _ in range(n_sim):
+        z1, z2 = rng.standard_normal((2, int(fin.sum())))
+        ex = sx[fin] * z1
+        ey = sy[fin] * (rho[fin] * z1 + np.sqrt(np.maximum(0.0, 1.0 - rho[fin] ** 2)) * z2)
+        r = spearman(u[fin], np.hypot(ex, ey))
+        if r is not None:
+            vals.append(r)
+    return float(np.mean(vals)) if vals else None
+
+
 def decile_edges(pred, n_bins=10):
     """Edges of n_bins equal-count bins of the finite predictions (quantiles)."""
     f = np.asarray(pred, dtype=np.float64)
@@ -228,12 +259,34 @@ def local_patch(dem, rover_xy, target_rc, patch_cells, noise_m=0.0, noise_k_per_
     return z, gt, r
 
 
-def write_patch(path, z, gt):
-    ds = gdal.GetDriverByName("GTiff").Create(path, z.shape[1], z.shape[0], 1, gdal.GDT_Float32)
+def binned_patch(fine, dem, rover_xy, target_rc, a, noise_m, noise_k_per_m, offset_m, rng):
+    """The local map of one target for a rover that bins its stereo points (bench_real.py's
+    --fine-local binned, issue 36 item 4): points of the original DEM `fine` (bilinear) uniform over
+    the patch's cells of the map `dem` (K x K fine cells each, K^2 points a cell on average), each
+    with the stereo model's noise at its own range, each cell their mean plus offset_m (NaN: no
+    point). Returns (heights, the rover-frame geotransform, the cells' point counts)."""
+    c, k = dem.c, a.truth_fine
+    fr, fc = dem.frac_index(*rover_xy)
+    kx, ky = patch_offsets((fr, fc), target_rc, a.patch_cells)
+    h = a.patch_cells // 2
+    ffr, ffc = fine.frac_index(*rover_xy)
+    p = casemod.CaseParams(noise0_m=noise_m, noise_k=noise_k_per_m * c)
+    gen = np.random.default_rng(rng.integers(0, 2 ** 63))
+    b = casemod.binned_points(fine, ffr, ffc, h, k, 0.0, p, c, gen, noisy=True,
+                              centre=(int(kx[h, h]), int(ky[h, h])))
+    gt = ((kx[0, 0] - 0.5) * c, c, 0.0, -(ky[0, 0] - 0.5) * c, 0.0, -c)
+    return b.h + offset_m, gt, b.n.astype(np.float64)
+
+
+def write_patch(path, z, gt, counts=None):
+    """A rover-frame local patch (float32, no-data NaN); the points' counts as band 2 when given."""
+    bands = [z] + ([] if counts is None else [np.where(np.isfinite(z), counts, np.nan)])
+    ds = gdal.GetDriverByName("GTiff").Create(path, z.shape[1], z.shape[0], len(bands), gdal.GDT_Float32)
     ds.SetGeoTransform(gt)
-    b = ds.GetRasterBand(1)
-    b.SetNoDataValue(float("nan"))
-    b.WriteArray(z.astype(np.float32))
+    for i, v in enumerate(bands):
+        b = ds.GetRasterBand(i + 1)
+        b.SetNoDataValue(float("nan"))
+        b.WriteArray(np.asarray(v).astype(np.float32))
     ds = None
 
 
@@ -254,13 +307,14 @@ def representation_term(z, target_rc, patch_cells):
 
 
 def fisher_heights(z, target_rc, patch_cells, rover_rc, noise_m, noise_k_per_m, map_sigma_m, cell_m,
-                   representation=True):
+                   representation=True, points_per_cell=0.0):
     """The height prediction's covariance of one candidate (src/select_heights.c's model):
     I = sum w (g - g_w)(g - g_w)^T over the patch's cells with four known neighbours, g the
     central-difference gradient (m per cell), g_w its w-weighted mean, w = 1 / s^2 each cell's own
     s^2 = (noise_m + noise_k r^2)^2 + map_sigma^2 + e^2 / 4 (r the cell's range from the rover at
     fractional (row, col) rover_rc; e the cell's height minus its four neighbours' mean, left out
-    with representation=False); singular where its determinant is below 1e-12 of the squared
+    with representation=False; with points_per_cell n > 0, a binned local map, the noise term over n
+    plus the centroid's jitter |g|^2 / (12 n)); singular where its determinant is below 1e-12 of the squared
     uncentred sum w |g|^2 (a plane, flat ground). Returns (sigma_east_m, sigma_north_m, rho_en,
     u_m); +inf when the information is singular."""
     sr, sc = patch_slices(target_rc, patch_cells, 1)
@@ -276,7 +330,7 @@ def fisher_heights(z, target_rc, patch_cells, rover_rc, noise_m, noise_k_per_m, 
     rows = np.arange(sr.start + 1, sr.stop - 1)[:, None] + 0 * np.arange(sc.start + 1, sc.stop - 1)[None, :]
     cols = np.arange(sc.start + 1, sc.stop - 1)[None, :] + 0 * rows
     r2 = ((rows - rover_rc[0]) ** 2 + (cols - rover_rc[1]) ** 2) * cell_m ** 2
-    s2 = (noise_m + noise_k_per_m * r2) ** 2 + map_sigma_m ** 2
+    s2 = binned_var((noise_m + noise_k_per_m * r2) ** 2, gx, gy, points_per_cell) + map_sigma_m ** 2
     if representation:
         s2 = s2 + e * e / 4.0
     wt = 1.0 / s2[ok]
@@ -291,6 +345,15 @@ def fisher_heights(z, target_rc, patch_cells, rover_rc, noise_m, noise_k_per_m, 
     vx, vy, cxy = d / det * cell_m ** 2, a / det * cell_m ** 2, -b / det * cell_m ** 2
     sx, sy = math.sqrt(vx), math.sqrt(vy)
     return sx, sy, -cxy / (sx * sy), math.sqrt(vx + vy)  # rows point south: rho flips sign
+
+
+def binned_var(s2, gx, gy, points_per_cell):
+    """A cell's stereo variance s2 for a local map binned from points_per_cell n points a cell
+    (src/select_heights.c): s2 / n plus the points' centroid's jitter (gx^2 + gy^2) / (12 n); n = 0:
+    one measurement a cell, s2."""
+    if not points_per_cell > 0:
+        return s2
+    return (s2 + (gx * gx + gy * gy) / 12.0) / points_per_cell
 
 
 def fisher_heights_percell(z, target_rc, patch_cells, s2_cells, cell_m):
@@ -376,12 +439,20 @@ def run(cmd):
     return r.returncode, r.stdout, r.stderr
 
 
-def select(a, dem_path, rover_xy, c, paper, out_map):
+def points_per_cell(a):
+    """The points a binned local cell holds on average that the prediction is told: K^2 with
+    --truth-fine K --counts, else 0 (one measurement a cell)."""
+    return float(a.truth_fine * a.truth_fine) if a.counts else 0.0
+
+
+def select(a, dem_path, rover_xy, c, paper, out_map, ppc=0.0):
     cmd = [a.trn, "select", "--dem", dem_path, "--rover", f"{rover_xy[0]!r},{rover_xy[1]!r}",
            "--patch-m", repr(a.patch_cells * c), "--min-range-m", repr(a.min_range_cells * c),
            "--max-range-m", repr(a.max_range_cells * c), "--footprint-m", repr(a.footprint_cells * c),
            "--stride-cells", "1", "--next-best", "0", "--out-map", out_map, "--json"]
     cmd += ["--map-config", "paper"] if paper else ["--global-sigma-m", repr(a.map_sigma_m)]
+    if ppc > 0:
+        cmd += ["--points-per-cell", repr(ppc)]
     rc, out, err = run(cmd)
     if rc == 3:
         return None, None
@@ -395,7 +466,10 @@ def select(a, dem_path, rover_xy, c, paper, out_map):
 
 
 def localize_batch(a, dem_path, lst, n):
-    rc, out, err = run([a.trn, "localize", "--dem", dem_path, "--batch", lst, "--json"])
+    cmd = [a.trn, "localize", "--dem", dem_path, "--batch", lst, "--json"]
+    if a.counts:
+        cmd += ["--count-band", "2"]
+    rc, out, err = run(cmd)
     lines = [ln for ln in out.splitlines() if ln.strip()]
     if rc != 0 and not lines:
         raise Fail(f"trn localize --batch failed (exit {rc}): {(err.strip().splitlines() or [''])[0]}")
@@ -453,21 +527,25 @@ def map_predictions(dem, cases, a, noise_m, noise_k):
     representation term, per cell; self_similarity), written into the case records; returns the
     relative differences of fisher_heights' u from trn select's raster."""
     c = dem.c
+    ppc = points_per_cell(a)
     fis_rel = []
     for cs in cases:
         tr, tc = cs["target_rc"]
         fr, fc = dem.frac_index(*cs["rover"])
         sx, sy, rho, u = fisher_heights(dem.z, (tr, tc), a.patch_cells, (fr, fc), noise_m, noise_k,
-                                        a.map_sigma_m, c)
+                                        a.map_sigma_m, c, points_per_cell=ppc)
         cs.update(sigma_x_pred_m=sx, sigma_y_pred_m=sy, rho_pred=rho, u_python_m=u)
         if math.isfinite(u) and math.isfinite(cs["u_heights_m"]):
             fis_rel.append(abs(u - cs["u_heights_m"]) / cs["u_heights_m"])
         cs["u_norep_m"] = fisher_heights(dem.z, (tr, tc), a.patch_cells, (fr, fc), noise_m, noise_k,
-                                         a.map_sigma_m, c, representation=False)[3]
+                                         a.map_sigma_m, c, representation=False, points_per_cell=ppc)[3]
         kx, ky = patch_offsets((fr, fc), (tr, tc), a.patch_cells)
         rcell = c * np.hypot(kx, ky)
         rep = representation_term(dem.z, (tr, tc), a.patch_cells)
-        s2 = (noise_m + noise_k * rcell ** 2) ** 2 + a.map_sigma_m ** 2 + rep
+        sr, sc = patch_slices((tr, tc), a.patch_cells, 1)
+        zz = dem.z[sr, sc]
+        gxc, gyc = 0.5 * (zz[1:-1, 2:] - zz[1:-1, :-2]), 0.5 * (zz[2:, 1:-1] - zz[:-2, 1:-1])
+        s2 = binned_var((noise_m + noise_k * rcell ** 2) ** 2, gxc, gyc, ppc) + a.map_sigma_m ** 2 + rep
         cs["u_percell_m"] = fisher_heights_percell(dem.z, (tr, tc), a.patch_cells, s2, c)
         cs["u_bilinear_m"] = fisher_bilinear_percell(dem.z, (fr, fc), kx, ky, s2, c)
         pb, pp, dmin, dbest = self_similarity(dem.z, (tr, tc), a.patch_cells, s2, a.window_cells)
@@ -481,8 +559,14 @@ def study_dem(a, dem_id):
         path = dems.get(dem_id)
     except Exception as e:  # a recipe failed: name it
         raise Fail(f"DEM {dem_id}: {e}")
+    fine = None
+    if a.truth_fine > 1:  # the map a K x K block mean of the DEM; the rover bins points of the DEM
+        fine = casemod.read_dem(path)
+        path = casemod.write_global(os.path.join(a.out, f"{dem_id}_mean{a.truth_fine}.tif"),
+                                    casemod.block_average(fine, a.truth_fine), like=path)
     dem = casemod.read_dem(path)
     c = dem.c
+    ppc = points_per_cell(a)
     rng = np.random.default_rng([a.seed, sum(map(ord, dem_id))])
     h = a.patch_cells // 2
     pad = a.window_cells + int(math.ceil(a.prior_cells)) + 2
@@ -495,10 +579,16 @@ def study_dem(a, dem_id):
         cfg = None
         n_sel = 0
         for i, rv in enumerate(rovers):
+            # the draw's prediction is the unbinned one, so the targets are the same with --counts
             jh, mh = select(a, path, rv, c, False, os.path.join(tmp, "h.tif"))
             jv, mv = select(a, path, rv, c, True, os.path.join(tmp, "v.tif"))
             if jh is None and mh is None:
                 continue  # no candidate informative: nothing to draw here
+            md = mh
+            if ppc > 0:
+                jh, mh = select(a, path, rv, c, False, os.path.join(tmp, "b.tif"), ppc)
+                if mh is None:
+                    raise Fail(f"{dem_id}: --points-per-cell {ppc:g} left no candidate map")
             n_sel += 1
             if jh is not None:
                 if jh.get("predicts") != "heights":
@@ -509,14 +599,14 @@ def study_dem(a, dem_id):
             uv = mv[rr, cc] if mv is not None else np.full(uh.shape, math.inf)
             fr, fcc = dem.frac_index(*rv)
             rng_m = c * np.hypot(rr - fr, cc - fcc)
-            pool.append(np.column_stack([np.full(rr.size, i), rr, cc, uh, uv, rng_m]))
+            pool.append(np.column_stack([np.full(rr.size, i), rr, cc, uh, uv, rng_m, md[rr, cc]]))
         if cfg is None:
             raise Fail(f"{dem_id}: no rover position with an informative candidate")
         pool = np.vstack(pool)
         sel_s = time.perf_counter() - t0
-        uh_all = pool[:, 3]
+        uh_all, ud_all = pool[:, 3], pool[:, 6]
         with np.errstate(divide="ignore"):
-            logu = np.where(np.isfinite(uh_all) & (uh_all > 0), np.log(np.maximum(uh_all, 1e-300)), np.nan)
+            logu = np.where(np.isfinite(ud_all) & (ud_all > 0), np.log(np.maximum(ud_all, 1e-300)), np.nan)
         noise_m, noise_k = float(cfg["noise_m"]), float(cfg["noise_k_per_m"])
         # only targets whose patch and window lie on known map cells (a summed-area table of the
         # missing cells), so the draw's strata hold what can be localized
@@ -537,14 +627,19 @@ def study_dem(a, dem_id):
             ri, tr, tc = int(pool[k, 0]), int(pool[k, 1]), int(pool[k, 2])
             rv = rovers[ri]
             off = float(rng.uniform(-50.0, 50.0))
-            z, gt, _ = local_patch(dem, rv, (tr, tc), a.patch_cells, noise_m, noise_k, off, rng)
+            counts = None
+            if fine is None:
+                z, gt, _ = local_patch(dem, rv, (tr, tc), a.patch_cells, noise_m, noise_k, off, rng)
+            else:
+                z, gt, counts = binned_patch(fine, dem, rv, (tr, tc), a, noise_m, noise_k, off, rng)
             lp = os.path.join(tmp, f"local_{n:05d}.tif")
-            write_patch(lp, z, gt)
+            write_patch(lp, z, gt, counts if a.counts else None)
             d = rng.uniform(-a.prior_cells, a.prior_cells, 2) * c
             prior = (rv[0] + float(d[0]), rv[1] + float(d[1]))
             lines.append(f"{lp} {prior[0]!r} {prior[1]!r} {a.window_cells * c!r}\n")
             cases.append({"rover": list(rv), "target_rc": [tr, tc], "range_m": float(pool[k, 5]),
                           "u_heights_m": float(pool[k, 3]), "u_voxel_m": float(pool[k, 4]),
+                          "u_unbinned_m": float(pool[k, 6]),
                           "prior": list(prior), "offset_m": off})
         lst = os.path.join(tmp, "cases.txt")
         with open(lst, "w") as f:
@@ -596,6 +691,8 @@ def stats(cases, c):
     col = {k: np.array([cs[k] for cs in cases], dtype=np.float64)
            for k in ("u_heights_m", "u_voxel_m", "u_norep_m", "u_percell_m", "u_bilinear_m", "err_m", "ex_m", "ey_m", "failure_prob", "p_beat", "p_post",
                      "sigma_x_pred_m", "sigma_y_pred_m")}
+    # the height prediction without the points a cell (the draw's; a run before it: the same)
+    col["u_unbinned_m"] = np.array([cs.get("u_unbinned_m", cs["u_heights_m"]) for cs in cases], dtype=np.float64)
     right = np.array([cs["right"] for cs in cases], dtype=bool)
     wrong = ~right
     err = col["err_m"]
@@ -603,7 +700,8 @@ def stats(cases, c):
     out = {"n": len(cases), "right": int(right.sum()), "right_rate": float(right.mean()) if cases else None,
            "status": {s: sum(1 for cs in cases if cs["status"] == s) for s in sorted({cs["status"] for cs in cases})}}
     for name, key in (("heights", "u_heights_m"), ("voxel", "u_voxel_m"), ("heights_norep", "u_norep_m"),
-                      ("heights_percell", "u_percell_m"), ("bilinear_percell", "u_bilinear_m")):
+                      ("heights_percell", "u_percell_m"), ("bilinear_percell", "u_bilinear_m"),
+                      ("heights_unbinned", "u_unbinned_m")):
         u = col[key]
         d = {"spearman_all": spearman(u, err), "spearman_right": spearman(u[right], err[right]),
              "finite": int(np.isfinite(u).sum())}
@@ -611,6 +709,9 @@ def stats(cases, c):
                            col["sigma_x_pred_m"] if name == "heights" else None,
                            col["sigma_y_pred_m"] if name == "heights" else None, fps)
         d["deciles"] = dec
+        if name == "heights":
+            rho = np.array([cs.get("rho_pred", 0.0) for cs in cases], dtype=np.float64)
+            d["spearman_ideal"] = spearman_ideal(u, col["sigma_x_pred_m"], col["sigma_y_pred_m"], rho)
         rs = [x["ratio"] for x in dec if x.get("ratio") is not None]
         d["ratio_range"] = [min(rs), max(rs)] if rs else None
         d["deciles_in_band"] = int(sum(0.8 <= r <= 1.25 for r in rs))
@@ -643,9 +744,12 @@ def print_dem(dem_id, r):
           f"{m['time_s']['localize']:.1f} s, map-alone predictions {m['time_s']['predict']:.1f} s; "
           f"python Fisher vs raster: median {fmt(m['fisher_check_median_rel'], '.1e')}, worst "
           f"{fmt(m['fisher_check_worst_rel'], '.1e')}")
-    for name in ("heights", "voxel", "heights_norep", "heights_percell", "bilinear_percell"):
+    for name in ("heights", "voxel", "heights_norep", "heights_percell", "bilinear_percell", "heights_unbinned"):
+        if name not in s:  # a run's JSON from before the name was added
+            continue
         d = s[name]
-        print(f"  {name:15s} Spearman all {fmt(d['spearman_all'], '.3f')}, right {fmt(d['spearman_right'], '.3f')}; "
+        ideal = f" (exact prediction {fmt(d['spearman_ideal'], '.3f')})" if d.get("spearman_ideal") is not None else ""
+        print(f"  {name:15s} Spearman all {fmt(d['spearman_all'], '.3f')}{ideal}, right {fmt(d['spearman_right'], '.3f')}; "
               f"finite {d['finite']}; decile ratio {fmt(d['ratio_range'] and d['ratio_range'][0], '.2f')}-"
               f"{fmt(d['ratio_range'] and d['ratio_range'][1], '.2f')}, {d['deciles_in_band']} of "
               f"{len(d['deciles'])} in [0.8, 1.25]")
@@ -741,6 +845,14 @@ def parse_args(argv):
     ap.add_argument("--map-sigma-m", type=float, default=0.0,
                     help="the map's height error told to the height prediction (--global-sigma-m; default 0: "
                          "the local maps are sampled from the map itself)")
+    ap.add_argument("--truth-fine", type=int, default=1,
+                    help="K >= 2: the map is the DEM's K x K block mean and each local map the rover's "
+                         "binned stereo points of the DEM, K^2 a cell on average (default 1: the DEM "
+                         "sampled at the cells)")
+    ap.add_argument("--counts", action="store_true",
+                    help="with --truth-fine K: the rover passes its cells' point counts (localize "
+                         "--count-band) and the prediction is told K^2 points a cell (select "
+                         "--points-per-cell)")
     ap.add_argument("--trn", default=os.path.join(dems.ROOT, "build", "host-release", "trn"))
     ap.add_argument("--out", default=os.path.join(dems.BUILD, "predict"), help="output folder (default build/real/predict)")
     ap.add_argument("--no-plot", action="store_true")
@@ -765,6 +877,10 @@ def parse_args(argv):
         raise Fail("--window-cells must be >= 2 and above --prior-cells >= 0")
     if not (a.map_sigma_m >= 0 and math.isfinite(a.map_sigma_m)):
         raise Fail(f"--map-sigma-m {a.map_sigma_m}: must be finite and >= 0")
+    if a.truth_fine < 1 or a.truth_fine > 16:
+        raise Fail(f"--truth-fine {a.truth_fine}: must be in 1..16")
+    if a.counts and a.truth_fine < 2:
+        raise Fail("--counts needs --truth-fine K >= 2 (a binned local map)")
     if a.reanalyse:
         if not os.path.isfile(a.reanalyse):
             raise Fail(f"--reanalyse {a.reanalyse}: no such file")
@@ -814,7 +930,8 @@ def main(argv):
         else:
             res = {"config": {k: getattr(a, k) for k in ("cases", "rovers", "seed", "patch_cells",
                                                           "min_range_cells", "max_range_cells", "footprint_cells",
-                                                          "prior_cells", "window_cells", "map_sigma_m", "trn")},
+                                                          "prior_cells", "window_cells", "map_sigma_m",
+                                                          "truth_fine", "counts", "trn")},
                    "dems": {}}
             for d in a.dem:
                 print(f"predict_study: {d} ...", file=sys.stderr, flush=True)

@@ -21,6 +21,7 @@
 * --smoke (needs build/host-release/trn and the rock field, tools/real/dems.py): the smoke run
   (60 cases on the rock field) completes; its numbers are printed, no goal is checked.
 """
+import argparse
 import math
 import os
 import subprocess
@@ -164,6 +165,58 @@ def test_local_map():
     check(abs(sd - 1) < 0.03, f"noise over its model sd: sd {sd:.3f}")
 
 
+def test_binned_patch():
+    """--truth-fine K: the patch binned from the fine DEM's points, on the map's lattice about the
+    target, each cell the plane at its points' centroid; the counts as band 2."""
+    fine = synth_dem(plane, n=240, c=1.0)
+    K, P = 2, 7
+    dem = cm.block_average(fine, K)
+    c = dem.c
+    rover = (fine.x0 + 100.37 * fine.c, fine.y0 - 97.81 * fine.c)
+    target = (30, 66)  # the map's row, col
+    a = argparse.Namespace(truth_fine=K, patch_cells=P)
+    z, gt, n = ps.binned_patch(fine, dem, rover, target, a, 0.0, 0.0, 4.5, np.random.default_rng(3))
+    fr, fc = dem.frac_index(*rover)
+    kx, ky = ps.patch_offsets((fr, fc), target, P)
+    # the cell centres as local_patch places them; every point of a cell lies within half a cell
+    _, gt0, _ = ps.local_patch(dem, rover, target, P)
+    check(gt == gt0, "binned patch: local_patch's rover-frame geotransform")
+    check(n.sum() == P * P * K * K and n.min() >= 0 and abs(n.mean() - K * K) < 1e-9,
+          f"binned patch: {int(n.sum())} points, K^2 = {K * K} a cell on average")
+    # the plane's value at a cell's centre is within its slope times half a cell of the mean
+    xc, yc = rover[0] + kx * c, rover[1] - ky * c
+    slope = math.hypot(0.3, 0.7) * 0.5 * c * math.sqrt(2)
+    d = np.nanmax(np.abs(z - 4.5 - plane(xc, yc)))
+    check(d <= slope + 1e-9 and np.isnan(z[n == 0]).all(),
+          f"binned patch: each cell the plane near its centre (max {d:.3f} <= {slope:.3f} m); empty cells NaN")
+    with tempfile.TemporaryDirectory() as tmp:
+        p = os.path.join(tmp, "b.tif")
+        ps.write_patch(p, z, gt, n)
+        ds = gdal.Open(p)
+        check(ds.RasterCount == 2 and np.array_equal(ds.GetRasterBand(2).ReadAsArray()[n > 0], n[n > 0]),
+              "binned patch written: the counts as band 2")
+    # the variance the prediction takes: s^2 / n + |g|^2 / (12 n); n = 0 is s^2
+    s2, gx, gy = np.array([4.0, 1.0]), np.array([3.0, 0.0]), np.array([4.0, 0.0])
+    check(np.array_equal(ps.binned_var(s2, gx, gy, 0.0), s2) and
+          np.allclose(ps.binned_var(s2, gx, gy, 4.0), [(4.0 + 25.0 / 12.0) / 4.0, 0.25]),
+          "binned_var: s^2 / n plus the jitter |g|^2 / (12 n); unbinned s^2")
+
+
+def test_spearman_ideal():
+    """An exact prediction's Spearman: near 1 when the predictions spread over decades, low when
+    they hardly differ (one error is one draw), and the same for errors drawn as it draws them."""
+    rng = np.random.default_rng(2)
+    wide = np.exp(rng.uniform(0, math.log(1e4), 1000))
+    narrow = np.exp(rng.uniform(0, math.log(2.0), 1000))
+    r_wide = ps.spearman_ideal(wide * math.sqrt(2), wide, wide, np.zeros(1000))
+    r_narrow = ps.spearman_ideal(narrow * math.sqrt(2), narrow, narrow, np.zeros(1000))
+    e = np.hypot(wide * rng.standard_normal(1000), wide * rng.standard_normal(1000))
+    r_drawn = ps.spearman(wide, e)
+    check(r_wide > 0.9 and r_narrow < 0.4 and abs(r_drawn - r_wide) < 0.03,
+          f"exact prediction's Spearman: {r_wide:.3f} over four decades, {r_narrow:.3f} over a factor 2; "
+          f"errors drawn alike {r_drawn:.3f}")
+
+
 def test_fisher():
     a, P, c = 0.01, 9, 1.5
 
@@ -265,6 +318,8 @@ def main(argv):
     test_deciles()
     test_draw()
     test_local_map()
+    test_binned_patch()
+    test_spearman_ideal()
     test_fisher()
     test_self_similarity()
     if "--smoke" in argv:

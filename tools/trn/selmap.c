@@ -51,6 +51,7 @@ void selmap_opts_default(selmap_opts_t *o, long stride_cells)
     o->gsig_m = -1.0;
     o->gsig_k = -1.0;
     o->gerr = NULL;
+    o->points_per_cell = 0.0;
 }
 
 void selmap_gerr_opts(selmap_opts_t *o, cli_opt_t *d)
@@ -196,6 +197,7 @@ void selmap_json_config(json_t *j, const selmap_opts_t *o, const trn_map_cfg_t *
     json_obj_end(j);
     json_str(j, "map_config_name", o->mo.config);
     json_str(j, "predicts", cfg->match == (int32_t)TRN_MATCH_HEIGHTS ? "heights" : "voxel");
+    json_num(j, "points_per_cell", o->points_per_cell);
     json_num(j, "sigma_h_m", sigma_h);
     mapopt_json(j, cfg);
 }
@@ -232,6 +234,12 @@ void selmap_opts(selmap_opts_t *o, cli_opt_t *d)
          "least distance between ranked targets, m", 0},
         {"--sensors", CLI_STRING, &o->sensors, 0, 0, 0, "X,Y[;X,Y..]",
          "where the global map was sensed from, map m, up to 64 (default: the DEM's centre)", 0},
+        {"--points-per-cell", CLI_DOUBLE, &o->points_per_cell, 0.0, TRN_POINT_COUNT_MAX, 0, "N",
+         "the height prediction for a rover that bins its stereo points and passes their counts "
+         "(localize --count-band): the points it expects in each seen cell, each cell then the "
+         "mean of N, with its points' centroid's jitter (docs/method.md 4) (default 0: one "
+         "measurement a cell; else at least 1)",
+         0},
         {"--outlier-density", CLI_DOUBLE, &o->outlier_k, 1e-30, 1e30, 0, "K",
          "the map's outlier density K of ln p, 1/m (default: from the DEM; a tile of a larger map "
          "takes the whole map's, the JSON's outlier_density_per_m)",
@@ -273,6 +281,21 @@ int selmap_check_use(const char *cmd, const selmap_opts_t *o)
                 "paper); the height prediction reads the DEM's heights and its error as one sd, "
                 "--global-sigma-m\n",
                 cmd, voxel_only);
+        return CLI_USAGE;
+    }
+    if (o->points_per_cell > 0.0 && o->points_per_cell < 1.0) {
+        fprintf(cli_message_stream(),
+                "trn %s: --points-per-cell %g: a binned cell holds at least one point (0: one "
+                "measurement a cell)\n",
+                cmd, o->points_per_cell);
+        return CLI_USAGE;
+    }
+    if (o->points_per_cell > 0.0 && !mapopt_heights(&o->mo)) {
+        fprintf(cli_message_stream(),
+                "trn %s: --points-per-cell applies to the height prediction; the voxel "
+                "prediction (--match voxel, or --map-config paper) models a probability map, not "
+                "binned heights\n",
+                cmd);
         return CLI_USAGE;
     }
     if (o->heading_search == 1 && !(o->heading_sigma_deg > 0.0)) {
@@ -367,6 +390,7 @@ static int select_rules(selmap_t *w, const selmap_opts_t *o, double cell, char *
     if (o->gsig_m >= 0.0) { /* the height prediction's DEM error (select.h) */
         c->map_sigma_m = (float)o->gsig_m;
     }
+    c->points_per_cell = (float)o->points_per_cell;
     if ((st = trn_select_cfg_check(c, (float)cell)) != TRN_OK) {
         if (o->patch_m / cell < 2.5) {
             snprintf(err, err_len,
@@ -518,6 +542,10 @@ void selmap_print_config(const selmap_opts_t *o, const trn_map_cfg_t *cfg)
         printf(
             "predicts     the height matcher: noise %.4g m + %.4g/m r^2, the DEM's error %.4g m\n",
             (double)cfg->noise_m, (double)cfg->noise_k_per_m, (double)gm.sigma_min_m);
+        if (o->points_per_cell > 0.0) {
+            printf("binned       %.4g points a cell: noise over them, their centroid's jitter\n",
+                   o->points_per_cell);
+        }
         return;
     }
     printf("predicts     the voxel matcher (eqs. 8-9, 6)\n");

@@ -50,11 +50,14 @@ typedef struct {
     double gsig_m;       /* global map's error at its sensor, m; < 0: trn_sigma_global_default */
     double gsig_k;       /* its growth with squared range, 1/m; < 0: trn_sigma_global_default */
     const char *gerr;    /* per-cell error raster (m, the DEM's grid), or NULL */
+    /* the height prediction: the points the rover bins into a cell
+     * (trn_select_cfg_t.points_per_cell); 0: one measurement a cell */
+    double points_per_cell;
 } selmap_opts_t;
 
-/* The selection options (13), the global map's error model (3), the map
+/* The selection options (14), the global map's error model (3), the map
  * configuration (MAPOPT_N), in that order. */
-#define SELMAP_N_SEL_OPTS 13
+#define SELMAP_N_SEL_OPTS 14
 #define SELMAP_N_GERR_OPTS 3
 #define SELMAP_N_OPTS (SELMAP_N_SEL_OPTS + SELMAP_N_GERR_OPTS + MAPOPT_N)
 
