@@ -14,7 +14,7 @@
 
 static int rcfg_ok(const trn_refine_cfg_t *cfg)
 {
-    return cfg->cell_m > 0.0f && cfg->cell_m <= 1000.0f && cfg->noise_m > 0.0f &&
+    return cfg->cell_m > 0.0f && cfg->cell_m <= TRN_CELL_MAX_M && cfg->noise_m > 0.0f &&
            cfg->noise_m <= 1000.0f && cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f &&
            (cfg->fit_noise == 0 || cfg->fit_noise == 1);
 }

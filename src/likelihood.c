@@ -27,8 +27,8 @@ trn_status_t trn_lik_cfg_check(const trn_lik_cfg_t *cfg)
     if (cfg == NULL) {
         return TRN_E_NULL;
     }
-    if (!(cfg->cell_m > 0.0f && cfg->cell_m <= 1000.0f) ||
-        !(cfg->sigma_m > 0.0f && cfg->sigma_m <= 1000.0f) ||
+    if (!(cfg->cell_m > 0.0f && cfg->cell_m <= TRN_CELL_MAX_M) ||
+        !(cfg->sigma_m > 0.0f && cfg->sigma_m <= TRN_CELL_MAX_M) ||
         !(cfg->inlier_prob > 0.0f && cfg->inlier_prob < 1.0f) || cfg->cap < 3u ||
         cfg->cap > TRN_CHAMFER_CAP_MAX) {
         return TRN_E_ARG;

@@ -261,7 +261,7 @@ trn_status_t trn_map_cfg_auto(trn_map_cfg_t *cfg, const trn_grid_f32_t *dem, flo
     c.min_exclusion_cells = 1; /* failure: the answer 2 or more cells off (1.5 radial) */
     c.max_failure_prob = (float)TRN_MAP_MAX_FAILURE_PROB_AUTO;
     c.noise_auto = 1;
-    if (!(cell_m > 0.0f && cell_m <= 1000.0f) || trn_map_cfg_check(&c) != TRN_OK) {
+    if (!(cell_m > 0.0f && cell_m <= TRN_CELL_MAX_M) || trn_map_cfg_check(&c) != TRN_OK) {
         return TRN_E_ARG;
     }
     need = cfg_auto_carve(dem->width, dem->height, &hp_at, &hpws_at);

@@ -321,7 +321,7 @@ static trn_status_t common_args(const trn_grid_f32_t *global, const trn_grid_f32
     if ((cfg->centroid_x == NULL) != (cfg->centroid_y == NULL)) {
         return TRN_E_NULL;
     }
-    if (!(cfg->cell_m > 0.0f && cfg->cell_m <= 1000.0f) ||
+    if (!(cfg->cell_m > 0.0f && cfg->cell_m <= TRN_CELL_MAX_M) ||
         !(cfg->noise_m > 0.0f && cfg->noise_m <= 1000.0f) ||
         !(cfg->noise_k_per_m >= 0.0f && cfg->noise_k_per_m <= 1000.0f) ||
         (cfg->fit_noise != 0 && cfg->fit_noise != 1) || rover_x < -TRN_MAX_DIM ||

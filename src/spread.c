@@ -60,7 +60,7 @@ static trn_status_t check_common(const trn_kernels_t *k, const trn_sigma_model_t
     if ((st = trn_sigma_model_check(m)) != TRN_OK) {
         return st;
     }
-    if (!(cell_m > 0.0f && cell_m <= 1000.0f)) {
+    if (!(cell_m > 0.0f && cell_m <= TRN_CELL_MAX_M)) {
         return TRN_E_ARG;
     }
     return TRN_OK;

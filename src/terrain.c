@@ -14,7 +14,8 @@ trn_status_t trn_terrain_cfg_check(const trn_terrain_cfg_t *cfg)
     if (cfg == NULL) {
         return TRN_E_NULL;
     }
-    if (!pos_finite_le(cfg->cell_m, 1000.0f) || !pos_finite_le(cfg->zbin_m, 1000.0f) ||
+    if (!pos_finite_le(cfg->cell_m, TRN_CELL_MAX_M) ||
+        !pos_finite_le(cfg->zbin_m, TRN_CELL_MAX_M) ||
         !(cfg->highpass_half_m >= cfg->cell_m && cfg->highpass_half_m <= 1.0e6f)) {
         return TRN_E_ARG;
     }

@@ -930,13 +930,20 @@ static void test_edges_search(void **state)
         bad[i] = rc;
     }
     bad[0].cell_m = 0.0f;
-    bad[1].cell_m = 2000.0f;
+    bad[1].cell_m = nextafterf(TRN_CELL_MAX_M, INFINITY); /* the next float above the bound */
     bad[2].noise_m = 0.0f;
     bad[3].noise_m = 2000.0f;
     bad[4].noise_k_per_m = -1.0f;
     bad[5].noise_k_per_m = 2000.0f;
     bad[6].fit_noise = 2; /* 0 or 1 */
     bad[7].fit_noise = -1;
+    /* the coarsest cell passes the check; the refinement then runs (and finds these heights
+     * ill-conditioned at such cells), so only the bound is probed */
+    bad[0].cell_m = TRN_CELL_MAX_M;
+    assert_int_not_equal(
+        trn_refine_pose_heading(&g_w.map.heights, &g_lg, LR, LR, 60, 60, 0.0, 0.1, &bad[0], &o),
+        TRN_E_ARG);
+    bad[0].cell_m = 0.0f;
     for (i = 0; i < 8; ++i) {
         assert_int_equal(trn_height_search_heading(&g_w.map.heights, &g_lg, LR, LR, &win, &c,
                                                    &bad[i], 0.9f, g_ws, wb, NULL, &b),

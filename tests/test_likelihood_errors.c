@@ -69,7 +69,9 @@ static void test_lik_cfg_each_field(void **state)
     c.cell_m = 0.0f;
     assert_int_equal(trn_lik_cfg_check(&c), TRN_E_ARG);
     c = ok;
-    c.cell_m = 1000.5f;
+    c.cell_m = TRN_CELL_MAX_M;
+    assert_int_equal(trn_lik_cfg_check(&c), TRN_OK);
+    c.cell_m = nextafterf(TRN_CELL_MAX_M, INFINITY);
     assert_int_equal(trn_lik_cfg_check(&c), TRN_E_ARG);
     c = ok;
     c.cell_m = NAN;
@@ -77,8 +79,10 @@ static void test_lik_cfg_each_field(void **state)
     c = ok;
     c.sigma_m = -1.0f;
     assert_int_equal(trn_lik_cfg_check(&c), TRN_E_ARG);
-    c = ok;
-    c.sigma_m = 1000.5f;
+    c = ok; /* s: one cell in the map configurations, so the cell's bound */
+    c.sigma_m = TRN_CELL_MAX_M;
+    assert_int_equal(trn_lik_cfg_check(&c), TRN_OK);
+    c.sigma_m = nextafterf(TRN_CELL_MAX_M, INFINITY);
     assert_int_equal(trn_lik_cfg_check(&c), TRN_E_ARG);
     c = ok;
     c.inlier_prob = 0.0f;

@@ -2093,10 +2093,10 @@ static void test_refine_args(void **state)
     make_global(&g);
     (void)make_wedge(&l, 40.0, 40.0, 0.0, 0.0);
     b = c;
-    b.cell_m = 1000.0f;
+    b.cell_m = TRN_CELL_MAX_M;
     assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 40, &b, &out), TRN_OK);
     b = c;
-    b.cell_m = 1000.5f;
+    b.cell_m = nextafterf(TRN_CELL_MAX_M, INFINITY);
     assert_int_equal(trn_refine_pose(&g, &l, LR, LR, 40, 40, &b, &out), TRN_E_ARG);
     b = c;
     b.cell_m = NAN;

@@ -116,7 +116,9 @@ static void test_kernel_map_clauses(void **state)
     mb.k_per_m = NAN;
     assert_int_equal(KM(&k, &mb, CELL, s, 1, &win, idx, 80), TRN_E_ARG);
     assert_int_equal(KM(&k, &m, 0.0f, s, 1, &win, idx, 80), TRN_E_ARG);
-    assert_int_equal(KM(&k, &m, 1000.5f, s, 1, &win, idx, 80), TRN_E_ARG);
+    assert_int_equal(KM(&k, &m, TRN_CELL_MAX_M, s, 1, &win, idx, 80), TRN_OK);
+    assert_int_equal(KM(&k, &m, nextafterf(TRN_CELL_MAX_M, INFINITY), s, 1, &win, idx, 80),
+                     TRN_E_ARG);
     assert_int_equal(KM(&k, &m, CELL, s, 0, &win, idx, 80), TRN_E_SIZE);
     assert_int_equal(KM(&k, &m, CELL, s, TRN_SPREAD_MAX_SENSORS + 1, &win, idx, 80), TRN_E_SIZE);
     wb = win;
@@ -340,7 +342,7 @@ static void test_select_cfg_clauses(void **state)
     (void)state;
     small_cfg(&c);
     assert_int_equal(trn_select_cfg_check(&c, CELL), TRN_OK);
-    assert_int_equal(trn_select_cfg_check(&c, 1000.5f), TRN_E_ARG);
+    assert_int_equal(trn_select_cfg_check(&c, nextafterf(TRN_CELL_MAX_M, INFINITY)), TRN_E_ARG);
     b = c;
     b.max_range_m = 0.0f;
     assert_int_equal(trn_select_cfg_check(&b, CELL), TRN_E_ARG);

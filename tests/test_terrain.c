@@ -193,7 +193,7 @@ static void test_cfg_check(void **state)
     c = make_cfg(1.0f, 1.0f, 2.0f, 16);
     assert_int_equal(trn_terrain_cfg_check(&c), TRN_OK);
     assert_int_equal(trn_terrain_cfg_check(NULL), TRN_E_NULL);
-    /* cell_m: (0, 1000] */
+    /* cell_m: (0, TRN_CELL_MAX_M] */
     c = make_cfg(0.0f, 1.0f, 2.0f, 16);
     assert_int_equal(trn_terrain_cfg_check(&c), TRN_E_ARG);
     c = make_cfg(-1.0f, 1.0f, 2.0f, 16);
@@ -202,11 +202,11 @@ static void test_cfg_check(void **state)
     assert_int_equal(trn_terrain_cfg_check(&c), TRN_E_ARG);
     c = make_cfg(INFINITY, 1.0f, 2.0f, 16);
     assert_int_equal(trn_terrain_cfg_check(&c), TRN_E_ARG);
-    c = make_cfg(1000.5f, 1.0f, 1000.0f, 16);
+    c = make_cfg(nextafterf(TRN_CELL_MAX_M, INFINITY), 1.0f, 2.0f * TRN_CELL_MAX_M, 16);
     assert_int_equal(trn_terrain_cfg_check(&c), TRN_E_ARG);
-    c = make_cfg(1000.0f, 1.0f, 1000.0f, 16);
+    c = make_cfg(TRN_CELL_MAX_M, 1.0f, TRN_CELL_MAX_M, 16);
     assert_int_equal(trn_terrain_cfg_check(&c), TRN_OK);
-    /* zbin_m: (0, 1000] */
+    /* zbin_m: (0, TRN_CELL_MAX_M], the cell's bound (= cell_m in the scaled configuration) */
     c = make_cfg(1.0f, 0.0f, 2.0f, 16);
     assert_int_equal(trn_terrain_cfg_check(&c), TRN_E_ARG);
     c = make_cfg(1.0f, -0.5f, 2.0f, 16);
@@ -215,9 +215,9 @@ static void test_cfg_check(void **state)
     assert_int_equal(trn_terrain_cfg_check(&c), TRN_E_ARG);
     c = make_cfg(1.0f, INFINITY, 2.0f, 16);
     assert_int_equal(trn_terrain_cfg_check(&c), TRN_E_ARG);
-    c = make_cfg(1.0f, 1001.0f, 2.0f, 16);
+    c = make_cfg(1.0f, nextafterf(TRN_CELL_MAX_M, INFINITY), 2.0f, 16);
     assert_int_equal(trn_terrain_cfg_check(&c), TRN_E_ARG);
-    c = make_cfg(1.0f, 1000.0f, 2.0f, 16);
+    c = make_cfg(1.0f, TRN_CELL_MAX_M, 2.0f, 16);
     assert_int_equal(trn_terrain_cfg_check(&c), TRN_OK);
     /* highpass_half_m: [cell_m, 1e6] */
     c = make_cfg(1.0f, 1.0f, 0.99f, 16);
@@ -662,7 +662,7 @@ static void test_highpass_missing(void **state)
     }
 }
 
-/* A configuration trn_terrain_cfg_check accepts (cell_m in (0, 1000],
+/* A configuration trn_terrain_cfg_check accepts (cell_m in (0, TRN_CELL_MAX_M],
  * highpass_half_m in [cell_m, 1e6]) whose box is wider than any grid: the
  * box is then the whole grid and H' = H - mean(H). */
 static void test_highpass_box_wider_than_grid(void **state)

@@ -37,8 +37,9 @@ extern "C" {
 
 /** Sensor-model parameters of the likelihood. */
 typedef struct {
-    float cell_m;      /**< voxel side, metres, (0, 1000] */
-    float sigma_m;     /**< s: standard deviation of inlier distances, metres, (0, 1000] */
+    float cell_m;      /**< voxel side, metres, (0, TRN_CELL_MAX_M] */
+    float sigma_m;     /**< s: standard deviation of inlier distances, metres,
+                            (0, TRN_CELL_MAX_M] (the map configurations set one cell) */
     float inlier_prob; /**< a: probability a local voxel is an inlier, (0, 1) (paper: 0.95) */
     uint8_t cap;       /**< distance cap of the transform, chamfer units, 3..TRN_CHAMFER_CAP_MAX */
 } trn_lik_cfg_t;

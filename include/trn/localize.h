@@ -261,7 +261,7 @@ size_t trn_map_cfg_auto_workspace_bytes(int32_t width, int32_t height);
  * trn_map_cfg_default. The noise model is the caller's (cfg->noise_m,
  * cfg->noise_k_per_m on entry are kept).
  * @param[in,out] cfg  noise_m and noise_k_per_m read; everything else written.
- * @param[in] cell_m   the DEM's cell, metres.
+ * @param[in] cell_m   the DEM's cell, metres, (0, TRN_CELL_MAX_M].
  * @param[out] sigma_h_m sigma_H (may be NULL).
  * @retval TRN_OK, TRN_E_NULL, TRN_E_ARG (cell or noise out of range),
  *         TRN_E_SIZE, TRN_E_WORKSPACE (ws below trn_map_cfg_auto_workspace_bytes

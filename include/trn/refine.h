@@ -103,7 +103,7 @@ extern "C" {
  *  the struct (or set the centroid and count pointers NULL) before filling
  *  it in. */
 typedef struct {
-    float cell_m;             /**< cell of both grids, metres, (0, 1000] */
+    float cell_m;             /**< cell of both grids, metres, (0, TRN_CELL_MAX_M] */
     float noise_m;            /**< constant part, metres, (0, 1000] */
     float noise_k_per_m;      /**< range-squared part, 1/m, [0, 1000] */
     float inlier_prob;        /**< a of the mixture ln L (trn_refine_t.ll), (0, 1) */

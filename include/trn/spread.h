@@ -81,7 +81,7 @@ trn_status_t trn_sigma_model_check(const trn_sigma_model_t *m);
 /**
  * @brief Kernel index of every cell of a window: sigma from the distance of
  * the cell centre to the nearest sensing position, nearest kernel in log-sigma.
- * @param[in]  k, m, cell_m  kernels (built), model, cell side (m, (0, 1000]).
+ * @param[in]  k, m, cell_m  kernels (built), model, cell side (m, (0, TRN_CELL_MAX_M]).
  * @param[in]  sensors       n_sensors positions (1..TRN_SPREAD_MAX_SENSORS), global cells, finite.
  * @param[in]  win           inclusive window of global cells (any, may lie off a map).
  * @param[out] idx           row-major kernel indices, window width per row.

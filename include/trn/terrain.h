@@ -30,10 +30,10 @@ extern "C" {
 
 /** Terrain-to-occupancy parameters, shared by the global and local maps. */
 typedef struct {
-    float cell_m; /**< grid cell side, metres, (0, 1000] */
-    float zbin_m; /**< height bin, metres, (0, 1000]; = cell_m for cubic voxels */
+    float cell_m; /**< grid cell side, metres, (0, TRN_CELL_MAX_M] */
+    float zbin_m; /**< height bin, metres, (0, TRN_CELL_MAX_M]; = cell_m for cubic voxels */
     float
-        highpass_half_m; /**< half-width of the smoothing box, metres, [cell_m, 1e6] (ten 1 km cells and more) */
+        highpass_half_m; /**< half-width of the smoothing box, metres, [cell_m, 1e6] (ten TRN_CELL_MAX_M cells and more) */
     int32_t nz; /**< height bins, 1..TRN_MAX_ZBINS */
 } trn_terrain_cfg_t;
 

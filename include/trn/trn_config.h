@@ -64,6 +64,19 @@
 #define TRN_MAX_HEADING_STEPS 1441
 #endif
 
+/**
+ * Coarsest map cell the core accepts, metres: every check of a cell side
+ * (and of the height bin, which equals the cell in the scaled map
+ * configuration, and of the inlier spread s, one cell there too) allows
+ * (0, TRN_CELL_MAX_M]. 10 km: a 900 m DEM averaged 4 x 4 has 3.6 km cells,
+ * and the bound keeps the cell arithmetic (distances of up to
+ * TRN_CHAMFER_CAP_MAX / 3 cells, ranges of TRN_MAX_DIM cells, their squares)
+ * far from the float limits.
+ */
+#ifndef TRN_CELL_MAX_M
+#define TRN_CELL_MAX_M 10000.0f
+#endif
+
 /** Fixed-point scale of log-likelihood tables: table units per nat. */
 #ifndef TRN_LNP_SCALE
 #define TRN_LNP_SCALE 65536
@@ -109,5 +122,12 @@
 #if TRN_STACK_LIMIT_BYTES < 256
 #error "TRN_STACK_LIMIT_BYTES must be at least 256"
 #endif
+
+/* TRN_CELL_MAX_M is a float, which #if cannot compare: a negative array
+ * size stops the build instead when it is outside [1, 100000] m (up to
+ * 100 km, the automatic configuration's 10-cell high-pass box stays within
+ * the 10^6 m trn_terrain_cfg_check allows). */
+typedef char trn_config_cell_max_m_must_be_in_1_to_100000
+    [((long)(TRN_CELL_MAX_M) >= 1L && (long)(TRN_CELL_MAX_M) <= 100000L) ? 1 : -1];
 
 #endif /* TRN_CONFIG_H */

@@ -14,6 +14,7 @@
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -354,6 +355,13 @@ static void test_params_check(void **state)
         p.window_m = 100.0;
         p.cell_m = 101.0;
         assert_non_null(exp_params_check(&p));
+        {
+            /* above the core's coarsest cell: the message names its bound */
+            char want[64];
+            p.cell_m = (double)TRN_CELL_MAX_M * 1.001;
+            snprintf(want, sizeof want, "cell size must be in (0, %g] m", (double)TRN_CELL_MAX_M);
+            assert_string_equal(exp_params_check(&p), want);
+        }
         p.cell_m = 50.0;
         p.patch_m = NAN;
         assert_non_null(exp_params_check(&p));

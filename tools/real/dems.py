@@ -323,7 +323,8 @@ def make_merewether(out):
 def lola_polar_800(src, out):
     """A LOLA polar DEM (int16 metres, no-data -32768, 1600 m cells, its own polar
     stereographic projection and lunar CRS) as a float32 GeoTIFF resampled (bilinear)
-    to 800 m on the same projection: trn's core accepts cells up to 1000 m."""
+    to 800 m on the same projection (made when trn's core accepted cells up to 1000 m; it
+    now takes up to TRN_CELL_MAX_M, 10 km, and the benchmark keeps the 800 m DEMs)."""
     float_nan_tif(src, out + ".part.tif", -32768)
     gdal.Warp(out + ".800.tif", out + ".part.tif", xRes=800.0, yRes=800.0, resampleAlg="bilinear",
               outputType=gdal.GDT_Float32, srcNodata=float("nan"), dstNodata=float("nan"),
@@ -338,9 +339,9 @@ def make_lola_south(out):
     lola_dem_south.tif, a LOLA (Lunar Orbiter Laser Altimeter) DEM of the Moon's
     south polar region: 762 x 762 cells of 1600 m, polar stereographic (sphere of
     1737.4 km, origin the south pole), int16 metres (-9025 .. 6907), craters of all
-    sizes. trn's core accepts cells up to 1000 m, so it is resampled (bilinear, its
-    own projection and lunar CRS) to 800 m, half the native cell: the heights carry
-    no detail finer than 1600 m."""
+    sizes. trn's core accepted cells up to 1000 m when it was added, so it is resampled
+    (bilinear, its own projection and lunar CRS) to 800 m, half the native cell: the
+    heights carry no detail finer than 1600 m."""
     import shutil
     import zipfile
     tmp, whl = pip_fetch("lunar-toolkit==0.1.0")

@@ -262,9 +262,12 @@ const char *exp_params_check(const exp_params_t *p)
         return "the DEM must be 16..1024 cells a side (cut a larger one, e.g. gdal_translate "
                "-srcwin)";
     }
-    if (!(p->cell_m > 0.0 && p->cell_m <= (p->dem != NULL ? 1000.0 : 10.0))) {
-        return p->dem != NULL ? "cell size must be in (0, 1000] m"
-                              : "cell size must be in (0, 10] m";
+    if (!(p->cell_m > 0.0 && p->cell_m <= (p->dem != NULL ? (double)TRN_CELL_MAX_M : 10.0))) {
+        /* the core's bound, printed from its constant (trn_config.h) */
+        static char cell_why[64];
+        snprintf(cell_why, sizeof cell_why, "cell size must be in (0, %g] m",
+                 p->dem != NULL ? (double)TRN_CELL_MAX_M : 10.0);
+        return cell_why;
     }
     if (p->global_error != NULL && p->dem == NULL) {
         return "an error raster needs a given DEM";

@@ -32,13 +32,13 @@ void mapopt_cli(mapopt_t *m, cli_opt_t *o)
          "map configuration: auto (from the DEM, docs/method.md 9; default) or paper (as in the "
          "paper, scaled to the cell)",
          0},
-        {"--zbin-m", CLI_DOUBLE, &m->zbin_m, 1e-6, 1000.0, 0, "M",
+        {"--zbin-m", CLI_DOUBLE, &m->zbin_m, 1e-6, (double)TRN_CELL_MAX_M, 0, "M",
          "height bin, metres (default: from --map-config)", 0},
         {"--nz", CLI_LONG, &m->nz, 1, TRN_MAX_ZBINS, 0, "N",
          "number of height bins (default: from --map-config)", 0},
         {"--highpass-m", CLI_DOUBLE, &m->highpass_m, 1e-6, 1e6, 0, "M",
          "high-pass half-width, metres (default " MAPOPT_STR(TRN_MAP_HIGHPASS_CELLS) " cells)", 0},
-        {"--sigma-m", CLI_DOUBLE, &m->sigma_m, 1e-6, 1000.0, 0, "M",
+        {"--sigma-m", CLI_DOUBLE, &m->sigma_m, 1e-6, (double)TRN_CELL_MAX_M, 0, "M",
          "inlier standard deviation s, metres (default one cell)", 0},
         {"--inlier-prob", CLI_DOUBLE, &m->inlier_prob, 0.01, 0.99, 0, "A",
          "inlier probability a (default " MAPOPT_STR(TRN_MAP_INLIER_PROB_DEFAULT) ")", 0},
@@ -188,9 +188,9 @@ int mapopt_config(const mapopt_t *m, const float *data, int width, int height, d
         snprintf(err, err_len, "--match must be voxel or heights, not '%s'", m->match);
         return -1;
     }
-    if (!(cell_m > 0.0 && cell_m <= 1000.0)) {
-        snprintf(err, err_len, "cell size %g m is outside the (0, 1000] m the core accepts",
-                 cell_m);
+    if (!(cell_m > 0.0 && cell_m <= (double)TRN_CELL_MAX_M)) {
+        snprintf(err, err_len, "cell size %g m is outside the (0, %g] m the core accepts", cell_m,
+                 (double)TRN_CELL_MAX_M);
         return -1;
     }
     trn_map_cfg_default(cfg);
