@@ -57,7 +57,7 @@ trn_status_t trn_select_cfg_check(const trn_select_cfg_t *cfg, float cell_m)
     if ((st = trn_sigma_model_check(&cfg->local_sigma)) != TRN_OK) {
         return st;
     }
-    if (!(cell_m > 0.0f && cell_m <= 1000.0f) ||
+    if (!(cell_m > 0.0f && cell_m <= TRN_CELL_MAX_M) ||
         !(cfg->max_range_m > 0.0f && cfg->max_range_m <= 1.0e6f) ||
         !(cfg->min_range_m >= 0.0f && cfg->min_range_m <= cfg->max_range_m) ||
         !(cfg->pan_min_rad >= (float)-SEL_PI && cfg->pan_max_rad <= (float)SEL_PI &&

@@ -351,6 +351,8 @@ static void test_select_cfg_clauses(void **state)
     b.max_range_m = 1.0e6f; /* 1000 cells of 1 km, a 5-cell patch: accepted */
     b.patch_m = 5000.0f;
     assert_int_equal(trn_select_cfg_check(&b, 1000.0f), TRN_OK);
+    b.patch_m = 5.0f * TRN_CELL_MAX_M; /* the coarsest cell the core takes, a 5-cell patch */
+    assert_int_equal(trn_select_cfg_check(&b, TRN_CELL_MAX_M), TRN_OK);
     b = c;
     b.min_range_m = -0.1f;
     assert_int_equal(trn_select_cfg_check(&b, CELL), TRN_E_ARG);

@@ -509,9 +509,9 @@ int selmap_prepare(selmap_t *w, const char *dem_path, const selmap_opts_t *o, ch
         snprintf(err, err_len, "--dem: %s", why);
         return CLI_BAD_INPUT;
     }
-    if (w->dem.cell_m > 1000.0) {
-        snprintf(err, err_len, "cell size %g m is above the 1000 m the core accepts",
-                 w->dem.cell_m);
+    if (w->dem.cell_m > (double)TRN_CELL_MAX_M) {
+        snprintf(err, err_len, "cell size %g m is above the %g m the core accepts", w->dem.cell_m,
+                 (double)TRN_CELL_MAX_M);
         goto fail;
     }
     if (select_rules(w, o, w->dem.cell_m, err, err_len) != 0 ||
