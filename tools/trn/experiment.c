@@ -955,11 +955,11 @@ static int world_rules(world_t *w, const exp_params_t *p, exp_result_t *out, cha
         snprintf(err, err_len,
                  "selection rules rejected for %g m cells (range %g..%g m, patch %g m, footprint "
                  "%g m): %s "
-                 "(trn_select takes ranges and patches up to 1000 m, footprints up to 100 m, "
-                 "patches of 3+ cells: "
-                 "give --max-range-m, --patch-m, --footprint-m)",
+                 "(trn_select takes ranges and patches up to 1e6 m and %d cells, footprints up "
+                 "to 1e5 m, patches of 3+ cells: give --max-range-m, --patch-m, --footprint-m)",
                  p->cell_m, (double)w->scfg.min_range_m, (double)w->scfg.max_range_m,
-                 (double)w->scfg.patch_m, (double)w->scfg.footprint_radius_m, trn_strerror(st));
+                 (double)w->scfg.patch_m, (double)w->scfg.footprint_radius_m, trn_strerror(st),
+                 TRN_MAX_DIM);
         return -1;
     }
     pc = (int)floor((double)w->scfg.patch_m / (double)w->cellf + 0.5);
