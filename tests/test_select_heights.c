@@ -579,6 +579,20 @@ static void test_field_same_bits(void **state)
     assert_memory_equal(e1, e2, n);
     assert_int_equal(s1.evaluations, s2.evaluations);
     assert_true(s1.best_m == s2.best_m && isfinite(s1.best_m));
+    {
+        /* a rover that bins 4 points a cell: the two paths still agree, and the field differs */
+        const double unbinned_best = s1.best_m;
+        sc.points_per_cell = 4.0f;
+        assert_int_equal(
+            trn_field(&w.map, &w.k, &w.pg, &sc, &fc, 0.2f, &area, &g1, e1, n, &s1, ws1, b1),
+            TRN_OK);
+        assert_int_equal(
+            trn_field_fast(&w.map, &w.k, &w.pg, &sc, &fc, 0.2f, &area, &g2, e2, n, &s2, ws2, b2),
+            TRN_OK);
+        assert_memory_equal(o1, o2, n * sizeof(float));
+        assert_memory_equal(e1, e2, n);
+        assert_true(s1.best_m == s2.best_m && s1.best_m != unbinned_best);
+    }
     free(ws1);
     free(ws2);
     free(o1);
